@@ -1,0 +1,105 @@
+"""Integration driver: method versus driver, as in scipy.integrate's ``OdeSolver``.
+
+``integrate`` runs any right-hand side through ``scipy.integrate.solve_ivp`` (dense output
+evaluated at the requested sample times), counts right-hand-side evaluations itself and
+measures wall and CPU time, and returns a :class:`Trajectory`.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from gyro_instrument.core.errors import IntegrationError
+
+
+@dataclass
+class Trajectory:
+    """Result of an integration.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Sample times in seconds.
+    y : ndarray, shape (n, m)
+        State at the sample times.
+    nfev : int
+        Number of right-hand-side evaluations (counted by the driver).
+    wall_time_s, cpu_time_s : float
+        Elapsed wall-clock and process CPU time of the integration.
+    method : str
+        Integrator name.
+    meta : dict
+        Free-form information (tolerances, step counts).
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    nfev: int
+    wall_time_s: float
+    cpu_time_s: float
+    method: str
+    meta: dict = field(default_factory=dict)
+
+
+class _Counted:
+    __slots__ = ("f", "n")
+
+    def __init__(self, f):
+        self.f = f
+        self.n = 0
+
+    def __call__(self, t, y):
+        self.n += 1
+        return self.f(t, y)
+
+
+def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf):
+    """Integrate ``dy/dt = rhs(t, y)`` from ``t_eval[0]`` and sample at ``t_eval``.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, y) -> dy/dt`` with ``y`` a 1-D array.
+    y0 : array_like
+        Initial state at ``t_eval[0]``.
+    t_eval : array_like
+        Increasing sample times in seconds (at least one).
+    method : str
+        Any ``solve_ivp`` method name (default DOP853, Hairer's 8(5,3) pair).
+    rtol, atol : float
+        Tolerances passed to the solver.
+    max_step : float
+        Largest step in seconds.
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    IntegrationError
+        If the solver fails or the state becomes non-finite.
+    """
+    t_eval = np.asarray(t_eval, dtype=float)
+    y0 = np.asarray(y0, dtype=float)
+    if t_eval.ndim != 1 or t_eval.size == 0:
+        raise IntegrationError("t_eval must be a non-empty 1-D array of times")
+    if not np.all(np.isfinite(y0)):
+        raise IntegrationError(f"initial state is not finite: {y0}")
+    counted = _Counted(rhs)
+    w0, c0 = time.perf_counter(), time.process_time()
+    if t_eval.size == 1 or t_eval[-1] == t_eval[0]:
+        y = y0[:, None].repeat(t_eval.size, axis=1)
+        return Trajectory(t_eval, y, 0, 0.0, 0.0, method)
+    sol = solve_ivp(counted, (t_eval[0], t_eval[-1]), y0, method=method, t_eval=t_eval,
+                    rtol=rtol, atol=atol, max_step=max_step)
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    if sol.status < 0:
+        raise IntegrationError(f"{method} failed at t = {sol.t[-1] if sol.t.size else t_eval[0]:.6g} s: "
+                               f"{sol.message}")
+    if not np.all(np.isfinite(sol.y)):
+        raise IntegrationError(f"{method} produced a non-finite state")
+    return Trajectory(sol.t, sol.y, counted.n, wall, cpu, method,
+                      {"rtol": rtol, "atol": atol, "nsteps": int(getattr(sol, "nfev", 0))})

@@ -1,0 +1,128 @@
+"""Declarative parameter specifications and their validation.
+
+Every instrument, effect and scene section declares its parameters as :class:`Param` objects
+(name with its unit, type, default, valid range, documentation). One validator turns a raw
+mapping (from YAML, the CLI's ``--set`` or ROS parameters) into checked values, raising
+:class:`SceneError` that names the field, the value and the valid range.
+"""
+
+import difflib
+import math
+from dataclasses import dataclass
+
+from gyro_instrument.core.errors import SceneError
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: ``name`` carries its unit (``length_m``), ``kind`` is one of
+    ``float``, ``int``, ``bool``, ``str``, ``vec3``; ``low``/``high`` bound numbers (``open_low``
+    and ``open_high`` make a bound strict); ``choices`` restricts strings."""
+
+    name: str
+    kind: str = "float"
+    default: object = REQUIRED
+    low: float = -math.inf
+    high: float = math.inf
+    open_low: bool = False
+    open_high: bool = False
+    choices: tuple = ()
+    doc: str = ""
+
+    def describe_range(self):
+        """Human-readable valid range, as quoted in error messages and docs."""
+        if self.kind == "bool":
+            return "must be true or false"
+        if self.kind == "str":
+            return f"must be one of {', '.join(self.choices)}" if self.choices else "must be a string"
+        lo = "(" if self.open_low else "["
+        hi = ")" if self.open_high else "]"
+        what = "an integer" if self.kind == "int" else "a finite number"
+        if self.kind == "vec3":
+            return "must be a list of 3 finite numbers, not all zero"
+        if math.isinf(self.low) and math.isinf(self.high):
+            return f"must be {what}"
+        return f"must be {what} in {lo}{_fmt(self.low)}, {_fmt(self.high)}{hi}"
+
+    def check(self, field, value):
+        """Return the validated, converted value or raise :class:`SceneError`."""
+        if self.kind == "bool":
+            if isinstance(value, bool):
+                return value
+            raise SceneError(field, value, self.describe_range())
+        if self.kind == "str":
+            if not isinstance(value, str) or (self.choices and value not in self.choices):
+                raise SceneError(field, value, self.describe_range())
+            return value
+        if self.kind == "vec3":
+            if (not isinstance(value, (list, tuple)) or len(value) != 3
+                    or not all(_is_number(v) and math.isfinite(float(v)) for v in value)
+                    or all(float(v) == 0.0 for v in value)):
+                raise SceneError(field, value, self.describe_range())
+            return tuple(float(v) for v in value)
+        if not _is_number(value):
+            raise SceneError(field, value, self.describe_range())
+        if self.kind == "int":
+            if isinstance(value, float) and not value.is_integer():
+                raise SceneError(field, value, self.describe_range())
+            value = int(value)
+        else:
+            value = float(value)
+        if not math.isfinite(value):
+            raise SceneError(field, value, self.describe_range())
+        too_low = value < self.low or (self.open_low and value == self.low)
+        too_high = value > self.high or (self.open_high and value == self.high)
+        if too_low or too_high:
+            raise SceneError(field, value, self.describe_range())
+        return value
+
+
+def _is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _fmt(x):
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:g}"
+
+
+def validate_params(prefix, params, raw):
+    """Validate ``raw`` (a mapping) against ``params`` (a sequence of :class:`Param`).
+
+    Unknown keys are refused with a close-match suggestion; missing required keys are
+    refused; defaults fill the rest.
+
+    Returns
+    -------
+    dict
+        name -> checked value.
+    """
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, dict):
+        raise SceneError(prefix, raw, "must be a mapping of key: value")
+    by_name = {p.name: p for p in params}
+    for key in raw:
+        if key not in by_name:
+            raise SceneError(f"{prefix}.{key}" if prefix else str(key), raw[key],
+                             unknown_key_hint(key, by_name))
+    out = {}
+    for p in params:
+        field = f"{prefix}.{p.name}" if prefix else p.name
+        if p.name in raw:
+            out[p.name] = p.check(field, raw[p.name])
+        elif p.default is REQUIRED:
+            raise SceneError(field, None, f"is required; {p.describe_range()}")
+        else:
+            out[p.name] = p.default
+    return out
+
+
+def unknown_key_hint(key, known):
+    """Message for an unknown key, with the closest known key when one is near."""
+    close = difflib.get_close_matches(str(key), list(known), n=1)
+    hint = f"unknown key (did you mean '{close[0]}'?)" if close else "unknown key"
+    return f"{hint}; valid keys: {', '.join(sorted(known))}"

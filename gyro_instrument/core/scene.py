@@ -1,0 +1,217 @@
+"""Frozen, validated scenes loaded from YAML, with ``--set key.path=value`` overrides.
+
+A scene names the site, the instruments and the list of effects; nothing else is simulated.
+The core knows no instrument: the caller passes the instrument and effect registries (the
+``instruments`` package does, in :func:`gyro_instrument.instruments.load_scene`).
+
+Layout::
+
+    name: quet_paris
+    description: ...
+    site: {latitude_deg: 48.85, earth_rate_rad_s: 7.292115e-5, gravity_m_s2: 9.81}
+    duration_s: 600
+    sample_rate_hz: 20
+    seed: 1
+    effects: {earth_rotation: {}, finite_amplitude: {}, spin_decay: {time_constant_s: 3600}}
+    sensor: {noise_rad: 1.0e-4, quantization_rad: 0.0}
+    instruments:
+      gyro_h: {type: plane_gyroscope, plane: horizontal, ...}
+
+An instrument may carry its own ``effects:`` list of names, a subset of the scene's.
+"""
+
+import math
+import os
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import yaml
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.params import Param, unknown_key_hint, validate_params
+from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S, Site
+
+SITE_PARAMS = (
+    Param("latitude_deg", low=-90.0, high=90.0, doc="geodetic latitude, degrees (north positive)"),
+    Param("earth_rate_rad_s", default=SIDEREAL_RATE_RAD_S, low=0.0, high=1.0,
+          doc="Earth rotation rate n, rad/s (sidereal 7.2921150e-5)"),
+    Param("gravity_m_s2", default=None, low=0.0, high=1000.0, open_low=True,
+          doc="local gravity, m/s^2 (default: WGS-84 normal gravity at the latitude)"),
+)
+
+TOP_PARAMS = (
+    Param("name", kind="str", default="scene", doc="scene name"),
+    Param("description", kind="str", default="", doc="free text"),
+    Param("duration_s", default=600.0, low=0.0, high=1.0e7, open_low=True,
+          doc="simulated time per instrument, s"),
+    Param("sample_rate_hz", default=20.0, low=0.0, high=1.0e4, open_low=True,
+          doc="output sample rate, Hz"),
+    Param("seed", kind="int", default=0, low=0, high=2 ** 63 - 1, doc="random seed (sensor noise)"),
+)
+
+SECTIONS = ("site", "effects", "instruments", "sensor", "estimator")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Build it with :func:`load_scene`; it is immutable."""
+
+    name: str
+    description: str
+    site: Site
+    duration_s: float
+    sample_rate_hz: float
+    seed: int
+    effects: MappingProxyType        # effect name -> Effect instance
+    instruments: MappingProxyType    # instrument name -> (type name, validated params, effect names)
+    sensor: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    estimator: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    source: str = ""
+    raw: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+
+
+def read_yaml(path):
+    """Read a scene file; a missing, unreadable, empty or non-mapping file is a SceneError."""
+    if not os.path.exists(path):
+        raise SceneError("scene", path, "file not found; give a shipped scene name or an existing YAML path")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = yaml.safe_load(fh)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError("scene", path, f"cannot be read ({exc.__class__.__name__}: {exc})") from None
+    except yaml.YAMLError as exc:
+        msg = str(exc).replace("\n", " ")
+        raise SceneError("scene", path, f"is not valid YAML ({msg})") from None
+    if data is None:
+        raise SceneError("scene", path, "is empty; a scene needs at least site and instruments")
+    if not isinstance(data, dict):
+        raise SceneError("scene", path, f"must be a YAML mapping, not a {type(data).__name__}")
+    return data
+
+
+def parse_override(text):
+    """Split ``key.path=value`` into (['key', 'path'], value parsed as YAML)."""
+    if "=" not in text:
+        raise SceneError("--set", text, "must look like key.path=value, e.g. site.latitude_deg=-33.87")
+    key, _, value = text.partition("=")
+    key = key.strip()
+    if not key or any(not part for part in key.split(".")):
+        raise SceneError("--set", text, "must look like key.path=value, e.g. site.latitude_deg=-33.87")
+    try:
+        parsed = yaml.safe_load(value) if value.strip() else ""
+    except yaml.YAMLError:
+        parsed = value
+    return key.split("."), parsed
+
+
+def apply_overrides(data, overrides):
+    """Return a copy of ``data`` with each ``key.path=value`` override applied."""
+    import copy
+    data = copy.deepcopy(data)
+    for text in overrides or ():
+        path, value = parse_override(text) if isinstance(text, str) else text
+        node = data
+        for i, part in enumerate(path[:-1]):
+            nxt = node.get(part) if isinstance(node, dict) else None
+            if nxt is None:
+                nxt = {}
+                node[part] = nxt
+            if not isinstance(nxt, dict):
+                raise SceneError(".".join(path[:i + 1]), nxt, "is not a mapping; cannot set a key inside it")
+            node = nxt
+        node[path[-1]] = value
+    return data
+
+
+def build_scene(data, instrument_registry, effect_registry, sensor_params=(), estimator_params=(),
+                source=""):
+    """Validate a raw scene mapping and build a frozen :class:`Scene`.
+
+    Parameters
+    ----------
+    data : dict
+        The raw scene (already overridden).
+    instrument_registry : dict
+        type name -> instrument class with ``PARAMS`` and ``SUPPORTED_EFFECTS``.
+    effect_registry : dict
+        effect name -> :class:`~gyro_instrument.core.effect.Effect` subclass.
+    sensor_params, estimator_params : sequence of Param
+        Specifications of the optional ``sensor`` and ``estimator`` sections.
+    """
+    if not isinstance(data, dict):
+        raise SceneError("scene", data, "must be a YAML mapping")
+    known = {p.name for p in TOP_PARAMS} | set(SECTIONS)
+    for key in data:
+        if key not in known:
+            raise SceneError(str(key), data[key], unknown_key_hint(key, known))
+    top = validate_params("", TOP_PARAMS, {k: v for k, v in data.items() if k not in SECTIONS})
+    if "site" not in data:
+        raise SceneError("site", None, "is required (a mapping with latitude_deg)")
+    site_raw = validate_params("site", SITE_PARAMS, data["site"])
+    site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"])
+
+    effects_raw = data.get("effects") or {}
+    if isinstance(effects_raw, list):
+        if not all(isinstance(e, str) for e in effects_raw):
+            raise SceneError("effects", effects_raw, "must be a list of effect names or a mapping name: {params}")
+        effects_raw = {e: {} for e in effects_raw}
+    if not isinstance(effects_raw, dict):
+        raise SceneError("effects", effects_raw, "must be a list of effect names or a mapping name: {params}")
+    effects = {}
+    for name, params in effects_raw.items():
+        if name not in effect_registry:
+            raise SceneError(f"effects.{name}", params, unknown_key_hint(name, effect_registry))
+        if params is None:
+            params = {}
+        if not isinstance(params, dict):
+            raise SceneError(f"effects.{name}", params, "must be a mapping of parameters (or {})")
+        effects[name] = effect_registry[name](**params)
+
+    inst_raw = data.get("instruments")
+    if not isinstance(inst_raw, dict) or not inst_raw:
+        raise SceneError("instruments", inst_raw, "must be a non-empty mapping of name: {type: ..., ...}")
+    instruments = {}
+    used = set()
+    for iname, spec in inst_raw.items():
+        prefix = f"instruments.{iname}"
+        if not isinstance(iname, str) or not iname.replace("_", "").isalnum():
+            raise SceneError(prefix, iname, "instrument names must be letters, digits and underscores")
+        if not isinstance(spec, dict):
+            raise SceneError(prefix, spec, "must be a mapping with at least 'type'")
+        spec = dict(spec)
+        itype = spec.pop("type", None)
+        if itype not in instrument_registry:
+            raise SceneError(f"{prefix}.type", itype, f"must be one of {', '.join(sorted(instrument_registry))}")
+        cls = instrument_registry[itype]
+        names = spec.pop("effects", None)
+        if names is None:
+            names = [e for e in effects if e in cls.SUPPORTED_EFFECTS]
+        else:
+            if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
+                raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
+            for e in names:
+                if e not in effects:
+                    raise SceneError(f"{prefix}.effects", e,
+                                     f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
+                if e not in cls.SUPPORTED_EFFECTS:
+                    raise SceneError(f"{prefix}.effects", e,
+                                     f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
+        used.update(names)
+        params = validate_params(prefix, cls.PARAMS, spec)
+        if hasattr(cls, "check_params"):
+            cls.check_params(prefix, params)
+        instruments[iname] = (itype, MappingProxyType(params), tuple(names))
+    for e in effects:
+        if e not in used:
+            supporters = sorted(t for t, c in instrument_registry.items() if e in c.SUPPORTED_EFFECTS)
+            raise SceneError(f"effects.{e}", effects_raw[e] or {},
+                             f"is not supported by any instrument in this scene; instruments that support it: "
+                             f"{', '.join(supporters) or 'none'}")
+    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
+    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
+                 if estimator_params or data.get("estimator") else {})
+    return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
+                 sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
+                 effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
+                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
+                 source=source, raw=MappingProxyType(data))

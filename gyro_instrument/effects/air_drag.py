@@ -1,0 +1,28 @@
+"""Air drag on a pendulum bob: linear (Stokes) and quadratic (Newton) terms.
+
+Quet mentions the pendulum in air as a separate memoir (end of sec. 4); here the drag
+acceleration is −(2/τ) v − c_q |v| v, so small linear-drag swings decay as e^(−t/τ).
+"""
+
+import numpy as np
+
+from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.params import Param
+
+
+class AirDrag(Effect):
+    """Drag on a point bob."""
+
+    name = "air_drag"
+    summary = "air drag on the bob: linear (time constant tau) plus quadratic"
+    PARAMS = (Param("time_constant_s", default=7200.0, low=0.0, open_low=True,
+                    doc="e-folding time of the amplitude under linear drag"),
+              Param("quadratic_per_m", default=0.0, low=0.0,
+                    doc="quadratic drag coefficient c_q (acceleration = c_q |v|^2), 1/m"))
+
+    def relative_size(self, scales):
+        return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
+
+    def acceleration(self, v):
+        """Drag acceleration −(2/τ) v − c_q |v| v."""
+        return -(2.0 / self.time_constant_s) * v - self.quadratic_per_m * np.linalg.norm(v) * v

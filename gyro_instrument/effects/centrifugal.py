@@ -1,0 +1,37 @@
+"""Centrifugal terms, second order in the Earth rate n.
+
+Quet sec. 1 §IV eq. (19): −u'', −v'', −w'' are the centrifugal force at the point. Local
+gravity g is measured at the instrument's rest point and already holds the centrifugal part
+there; what remains is the gradient −Ω × (Ω × δr) over the displacement δr from that point.
+For a rigid body about a fixed point, the O(Ω²) inertia torque is Ω × I Ω (body axes).
+For the directing-plane gyroscope this is the term (μ − 1) n² sin² ω cos u sin u that
+eqs. (1)–(3) of sec. 4 §1 drop; its relative size is n / (μ ρ0).
+"""
+
+import numpy as np
+
+from gyro_instrument.core.effect import Effect
+
+
+class Centrifugal(Effect):
+    """O(n²) centrifugal-gradient terms."""
+
+    name = "centrifugal"
+    summary = "centrifugal gradient, second order in the Earth rate n"
+
+    def relative_size(self, scales):
+        n = scales["earth_rate_rad_s"]
+        if scales.get("gyro_rate_rad_s"):
+            return n / scales["gyro_rate_rad_s"], "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
+        w0 = scales["restoring_rate_rad_s"]
+        return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
+
+
+def centrifugal_gradient_acceleration(omega, dr):
+    """−Ω × (Ω × δr): change of the centrifugal acceleration over the displacement δr."""
+    return -np.cross(omega, np.cross(omega, dr))
+
+
+def rigid_body_inertia_torque_quadratic(inertia, omega_b):
+    """Part of the inertia torque quadratic in Ω: Ω × I Ω (body axes)."""
+    return np.cross(omega_b, inertia @ omega_b)

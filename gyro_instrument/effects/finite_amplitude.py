@@ -1,0 +1,27 @@
+"""Finite amplitude: exact trigonometry instead of the small-angle (linear) model.
+
+With this effect an instrument keeps sin u in its restoring torque (Quet sec. 4 §1 item 6:
+"grandes et petites, suivent les mêmes lois que celles des pendules"); without it, the
+linearised model is integrated (sin u → u, the pendulum's Binet ellipse). The one-swing
+duration grows as (2/π) K(sin(a/2)) ≈ 1 + a²/16 (pendulum law; sec. 2 eq. 42).
+"""
+
+import numpy as np
+
+from gyro_instrument.core.effect import Effect
+
+
+class FiniteAmplitude(Effect):
+    """Exact trigonometric restoring law (otherwise the small-angle model)."""
+
+    name = "finite_amplitude"
+    summary = "exact trigonometry (sin u) instead of the small-angle model (u)"
+
+    def relative_size(self, scales):
+        a = scales.get("amplitude_rad", 0.0)
+        return a * a / 16.0, "a^2 / 16 (relative period change, sec. 2 eq. 42)"
+
+
+def restoring_sine(u, exact):
+    """sin u when ``exact`` (finite amplitude listed), else u (small-angle model)."""
+    return np.sin(u) if exact else u

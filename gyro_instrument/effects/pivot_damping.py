@@ -1,0 +1,24 @@
+"""Pivot damping: viscous friction at a hinge.
+
+A torque −2 J q̇ / τ on a hinge of swinging inertia J makes small oscillations decay as
+e^(−t/τ) in amplitude. Applied to the swinging hinges of gyroscopes and compound pendulums.
+"""
+
+from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.params import Param
+
+
+class PivotDamping(Effect):
+    """Viscous damping at the swinging hinges."""
+
+    name = "pivot_damping"
+    summary = "viscous friction at the swinging hinges (amplitude time constant tau)"
+    PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
+                    doc="e-folding time of the oscillation amplitude"),)
+
+    def relative_size(self, scales):
+        return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
+
+    def rate(self):
+        """Damping rate 2/τ (per second) multiplying J q̇ in the hinge torque."""
+        return 2.0 / self.time_constant_s

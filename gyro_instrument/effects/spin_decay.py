@@ -1,0 +1,25 @@
+"""Spin decay from bearing friction.
+
+A viscous bearing torque −C ρ / τ on the rotor's relative spin ρ: the spin decays as e^(−t/τ),
+and with it the gyroscopic restoring torque μ n ρ sin ω (Quet sec. 4 §1 eq. 9), so the swing
+duration grows as ρ^(−1/2) and, adiabatically, the amplitude as ρ^(−1/4).
+"""
+
+from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.params import Param
+
+
+class SpinDecay(Effect):
+    """Viscous bearing friction on the rotor."""
+
+    name = "spin_decay"
+    summary = "rotor spin decay from bearing friction (time constant tau)"
+    PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
+                    doc="e-folding time of the rotor's relative spin"),)
+
+    def relative_size(self, scales):
+        return scales["duration_s"] / self.time_constant_s, "duration / tau (spin lost over the run)"
+
+    def spin_torque_per_inertia(self, spin_rate_rad_s):
+        """Angular deceleration −ρ/τ of the rotor (torque divided by C)."""
+        return -spin_rate_rad_s / self.time_constant_s

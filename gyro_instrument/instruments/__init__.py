@@ -1,0 +1,10 @@
+"""Instruments: the kinematics of each instrument and the papers' predictions beside it.
+
+``REGISTRY`` maps the ``type`` used in scene files to the instrument class.
+"""
+
+from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
+
+REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope,)}
+
+__all__ = ["REGISTRY", "PlaneGyroscope"]

@@ -1,0 +1,209 @@
+"""Directing-plane gyroscope: Quet 1853 sec. 4 §1 (the gyrocompass), and its cone variant.
+
+A body of revolution (moments A, C; μ = C/A) has its centre of mass fixed; its axis may turn
+only in a plane fixed on the Earth (or on a cone of half-angle ε). Axes: ``oz`` the plane
+normal, ``ox`` the projection of the north part of Earth's axis on the plane, ``oy = oz × ox``;
+u is the angle of the rotor axis from ``ox``, counter-clockwise about ``oz``; ρ the relative
+spin about the axis; ω the angle between the normal and Earth's axis.
+
+Reduced model (``model: reduced``), exact for the rigid body when ``earth_rotation`` and
+``centrifugal`` are both listed — the Lagrangian L = ½C(φ̇ + n sin ω cos u)² + ½A[(u̇ + r)² +
+(n sin ω sin u)²] gives::
+
+    u'' = −μ n sin ω ρ sin u − (μ − 1) n² sin² ω cos u sin u      (eq. 2 plus the dropped O(n²))
+    d(ρ + n sin ω cos u) = 0                                       (eq. 3)
+
+Quet's eq. (2) is the first term alone (``centrifugal`` absent). Small swings last
+T = π / √(μ n ρ0 sin ω) (eq. 9: one swing, HALF the period); finite amplitude a multiplies
+this by (2/π) K(sin(a/2)) (item 6: pendulum law). Hence n = π² / (μ ρ0 T² sin ω) (eq. 10;
+item 8's printed π/(μρ0T²) is a misprint) and item 9: (T_m / T_h)² = cos γ.
+
+Cone (``cone_half_angle_deg`` < 90): T = π √(sin ε / (μ n ρ0 sin ω)) (sec. 4 §1, end; the
+printed second equation lacks a factor sin ε, the period is right). Integrated with the
+generic :class:`~gyro_instrument.instruments.chain.HingeChain`; u is then the azimuth of
+the axis about the cone axis, from the half-plane toward Earth's north axis.
+"""
+
+import math
+
+import numpy as np
+from scipy.special import ellipk
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.params import Param
+from gyro_instrument.core.site import plane_frame
+from gyro_instrument.effects.finite_amplitude import restoring_sine
+from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
+
+
+def plane_normal_enu(plane, normal_enu, site):
+    """Normal of the named directing plane in ENU.
+
+    ``horizontal``: up (u counter-clockwise from north seen from above); ``meridian``: east;
+    ``polar`` (normal along Earth's axis, Quet item 4: no restoring torque); ``custom``: given.
+    """
+    if plane == "horizontal":
+        return np.array([0.0, 0.0, 1.0])
+    if plane == "meridian":
+        return np.array([1.0, 0.0, 0.0])
+    if plane == "polar":
+        return site.earth_axis_north_enu()
+    return np.asarray(normal_enu, dtype=float)
+
+
+def swing_duration_small_s(mu, earth_rate, spin, sin_omega, sin_eps=1.0):
+    """One-swing duration of small oscillations, T = π √(sin ε / (μ n ρ0 sin ω)) (eq. 9 and
+    the cone variant); ``inf`` when there is no restoring torque (items 1–4)."""
+    k = mu * earth_rate * spin * sin_omega
+    if k <= 0.0:
+        return math.inf
+    return math.pi * math.sqrt(sin_eps / k)
+
+
+def finite_amplitude_factor(amplitude_rad):
+    """(2/π) K(sin(a/2)) — the pendulum's finite-amplitude factor on the period (item 6)."""
+    m = math.sin(abs(amplitude_rad) / 2.0) ** 2
+    return 2.0 / math.pi * float(ellipk(m))
+
+
+class PlaneGyroscope(Instrument):
+    """Gyroscope whose axis turns in a directing plane (or on a cone) fixed on the Earth."""
+
+    type_name = "plane_gyroscope"
+    summary = "rotor axis held in a directing plane or cone (Quet sec. 4 §1)"
+    PARAMS = (
+        Param("plane", kind="str", default="horizontal", choices=("horizontal", "meridian", "polar", "custom"),
+              doc="directing plane: horizontal, meridian, polar (normal along Earth's axis) or custom"),
+        Param("normal_enu", kind="vec3", default=None, doc="plane normal in ENU when plane = custom"),
+        Param("cone_half_angle_deg", default=90.0, low=0.0, high=90.0, open_low=True,
+              doc="half-angle ε of the directing cone about the normal; 90 = plane"),
+        Param("inertia_ratio", default=2.0, low=0.0, high=2.0, open_low=True,
+              doc="μ = C/A, axial over transverse moment (≤ 2 for a rigid body of revolution)"),
+        Param("transverse_inertia_kg_m2", default=1.0e-3, low=0.0, open_low=True, doc="A, kg m^2"),
+        Param("spin_rate_rad_s", default=2 * math.pi * 100.0, low=-1.0e6, high=1.0e6,
+              doc="initial relative spin ρ0 about the axis, rad/s (positive: Earth's sense when u = 0)"),
+        Param("initial_angle_deg", default=math.degrees(0.1), low=-180.0, high=180.0,
+              doc="initial angle u0 of the axis from the equilibrium line, degrees"),
+        Param("initial_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6, doc="initial u̇0, degrees/s"),
+        Param("model", kind="str", default="reduced", choices=("reduced", "chain"),
+              doc="reduced 1-DOF equation or the generic hinge chain (cone: always chain)"),
+        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+    )
+    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay",
+                                   "pivot_damping"})
+    COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),
+               Column("angle_rate", "rad/s", "du/dt"),
+               Column("spin_rate", "rad/s", "ρ: relative spin of the rotor about its axis"))
+
+    @classmethod
+    def check_params(cls, prefix, p):
+        if p["plane"] == "custom" and p["normal_enu"] is None:
+            raise SceneError(f"{prefix}.normal_enu", None, "is required when plane = custom (3 numbers, ENU)")
+
+    def __init__(self, name, site, params, effects):
+        super().__init__(name, site, params, effects)
+        self.normal = plane_normal_enu(self.plane, self.normal_enu, site)
+        self.frame, self.sin_omega = plane_frame(self.normal, site)
+        self.eps = math.radians(self.cone_half_angle_deg)
+        self.is_cone = self.cone_half_angle_deg < 90.0
+        self.mu = self.inertia_ratio
+        self.A = self.transverse_inertia_kg_m2
+        self.C = self.mu * self.A
+        self.u0 = math.radians(self.initial_angle_deg)
+        self.ud0 = math.radians(self.initial_rate_deg_s)
+
+    # ---------------------------------------------------------------- predictions
+    def predictions(self):
+        """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients."""
+        n = self.site.earth_rate_rad_s
+        T0 = swing_duration_small_s(self.mu, n, self.spin_rate_rad_s, self.sin_omega,
+                                    math.sin(self.eps) if self.is_cone else 1.0)
+        return {"sin_omega": self.sin_omega,
+                "swing_duration_small_s": T0,
+                "swing_duration_s": T0 * finite_amplitude_factor(self.u0) if math.isfinite(T0) else math.inf,
+                "period_s": 2.0 * T0,
+                "conserved_spin_rad_s": self.spin_rate_rad_s + n * self.sin_omega * math.cos(self.u0)}
+
+    def scales(self, duration_s):
+        n = self.site.earth_rate_rad_s
+        T0 = self.predictions()["swing_duration_small_s"]
+        return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.spin_rate_rad_s) or None,
+                "restoring_rate_rad_s": math.pi / T0 if math.isfinite(T0) else 0.0,
+                "amplitude_rad": abs(self.u0), "duration_s": duration_s}
+
+    # ---------------------------------------------------------------- models
+    def reduced_rhs(self):
+        """Right-hand side of the reduced model for y = [u, u̇, ρ]; only listed effects."""
+        p = self.site.earth_rate_rad_s * self.sin_omega
+        mu = self.mu
+        rot = self.has("earth_rotation")
+        cen = self.has("centrifugal")
+        exact = self.has("finite_amplitude")
+        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
+        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
+
+        def rhs(t, y):
+            u, ud, rho = y
+            s = math.sin(u) if exact else u
+            udd = 0.0
+            rhod = 0.0
+            if rot:
+                udd -= mu * p * rho * s
+                rhod += p * math.sin(u) * ud
+            if cen:
+                udd -= (mu - 1.0) * p * p * math.cos(u) * s
+            if damp:
+                udd -= damp * ud
+            if tau_s:
+                rhod -= rho / tau_s
+            return np.array([ud, udd, rhod])
+        return rhs
+
+    def build_chain(self):
+        """The same instrument as a hinge chain: swing hinge about the normal (massless frame),
+        an optional fixed tilt to the cone, then the rotor's spin hinge."""
+        links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)))]
+        # Rotor axis along body x; tilt about y by (π/2 − ε) puts it at ε from the normal.
+        tilt = axis_rotation([0.0, 1.0, 0.0], -(math.pi / 2 - self.eps)) if self.is_cone else np.eye(3)
+        links.append(Link("rotor", np.array([1.0, 0.0, 0.0]), np.diag([self.C, self.A, self.A]),
+                          pre_rotation=tilt))
+        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
+        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
+        J = self.A * (math.sin(self.eps) ** 2 if self.is_cone else 1.0)
+        C = self.C
+        torques = None
+        if damp or tau_s:
+            def torques(q, qd, w_axis):
+                out = np.zeros(2)
+                if damp:
+                    out[0] = -damp * J * qd[0]
+                if tau_s:
+                    out[1] = -C * w_axis[1] / tau_s
+                return out
+        g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
+        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
+                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
+                          hinge_torques=torques)
+
+    def simulate(self, t, model=None):
+        """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0."""
+        model = "chain" if self.is_cone else (model or self.model)
+        t = np.asarray(t, dtype=float)
+        if model == "reduced":
+            if not self.has("finite_amplitude") and abs(self.u0) > 0.5:
+                pass  # the linear model is what the scene asks for; the describe table shows its cost
+            traj = integrate(self.reduced_rhs(), [self.u0, self.ud0, self.spin_rate_rad_s], t,
+                             rtol=self.rtol, atol=1e-13)
+            u, ud, rho = traj.y
+            return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj)
+        chain = self.build_chain()
+        # ρ = φ̇ + u̇ cos ε (the frame's rate has a component cos ε along a cone axis).
+        cos_eps = math.cos(self.eps) if self.is_cone else 0.0
+        phid0 = self.spin_rate_rad_s - self.ud0 * cos_eps
+        traj = integrate(chain.rhs, [self.u0, 0.0, self.ud0, phid0], t, rtol=self.rtol, atol=1e-13)
+        u, phi, ud, phid = traj.y
+        rho = phid + ud * cos_eps
+        return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj,
+                          extra={"rotor_angle": phi, "chain": chain})
