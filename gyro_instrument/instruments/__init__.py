@@ -3,8 +3,9 @@
 ``REGISTRY`` maps the ``type`` used in scene files to the instrument class.
 """
 
+from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
-REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope,)}
+REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum)}
 
-__all__ = ["REGISTRY", "PlaneGyroscope"]
+__all__ = ["REGISTRY", "CompoundPendulum", "PlaneGyroscope", "SphericalPendulum"]

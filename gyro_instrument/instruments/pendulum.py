@@ -1,0 +1,355 @@
+"""Foucault (spherical) pendulum and compound pendulum on the rotating Earth.
+
+Quet 1853 sec. 2. The bob, at r (ENU, from the suspension point; |r| = l), obeys eq. (21)
+in vector form::
+
+    r̈ = g + [−2 Ω × ṙ]_(earth_rotation) + [−Ω × (Ω × (r − r_rest))]_(centrifugal)
+        + [drag]_(air_drag) − λ r
+
+with g = (0, 0, −g) the plumb-line gravity at the rest point r_rest = (0, 0, −l) (it holds the
+centrifugal part there, sec. 2 §I) and the tension λ r from the constraint (23), |r| = l:
+λ = (ṙ·ṙ + r·F + 2a r·ṙ + b² C)/|r|², C = (|r|² − l²)/2, where the Baumgarte terms (a, b of the
+order of √(g/l)) damp any numerical drift of the constraint and vanish on the exact solution.
+Cartesian coordinates have no singularity, so any launch and any amplitude up to the inverted
+position is allowed. Without ``finite_amplitude`` the linear (small-angle) model is
+integrated: the horizontal motion ẍ = −(g/l) x + Coriolis ..., whose exact solution is Binet's
+ellipse turning at −k (:func:`binet_ellipse`).
+
+Predictions (sec. 2): the swing plane turns at k = n sin γ, clockwise seen from above in the
+north (compass azimuth increasing); the quarter period (42) — exact form
+:func:`quarter_period_s`; released from rest at θ0, the minimum deflection β = √(l/g) k sin θ0
+cos(θ0/2) (§II) and the apsides turn at k (1 − (3/8) θ0 sin θ0 cos(θ0/2)) (§III).
+
+The compound pendulum (sec. 3 §VI) is a body of revolution hung from a point of its axis, CM
+at distance l, moments A (about the pivot, transverse) and C (axial): it moves like a simple
+pendulum of length λ = A / (M l) when μ = C/A is small and ρ0 ≈ 0 (eq. 57).
+"""
+
+import math
+
+import numpy as np
+from scipy.special import ellipk
+
+from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.params import Param
+from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.chain import HingeChain, Link
+
+PENDULUM_COLUMNS = (
+    Column("deflection", "rad", "θ: angle of the bob from the downward vertical"),
+    Column("azimuth", "rad", "ψ: compass azimuth of the bob's horizontal position (0 north, clockwise), unwrapped"),
+    Column("swing_azimuth", "rad", "instantaneous swing-plane azimuth (compass, modulo π, unwrapped) from the "
+                                   "Fradkin tensor ω0² r rᵀ + v vᵀ of the horizontal motion"),
+    Column("x_east", "m", "bob east of the suspension point"),
+    Column("y_north", "m", "bob north of the suspension point"),
+    Column("z_up", "m", "bob height relative to the suspension point (negative below)"),
+)
+
+
+def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
+    """Exact time from maximum deflection α to minimum deflection β of a spherical pendulum.
+
+    Quet's eq. (42) gives the series (π/2)√(l/g)(1 + (α² + β²)/16); the exact value, from the
+    energy and area integrals (26)–(27) with z = cos θ, is
+
+        T = √(2l/g) K(m) / √(z3 − z1),  m = (z3 − z2)/(z3 − z1),
+
+    z2 = cos α, z3 = cos β, z1 = −(1 + z2 z3)/(z2 + z3) (the third root of the cubic).
+    For β = 0 this is √(l/g) K(sin²(α/2)), the plane pendulum. A quarter period (sec. 2 convention).
+    """
+    z2, z3 = math.cos(alpha_rad), math.cos(beta_rad)
+    if abs(z3 - z2) < 1e-15:
+        # Conical pendulum: no radial oscillation; return the small-oscillation limit about it.
+        z2 = z3 - 1e-15
+    z1 = -(1.0 + z2 * z3) / (z2 + z3) if (z2 + z3) != 0.0 else -math.inf
+    if not math.isfinite(z1):
+        return math.inf
+    m = (z3 - z2) / (z3 - z1)
+    return math.sqrt(2.0 * length_m / gravity_m_s2) * float(ellipk(m)) / math.sqrt(z3 - z1)
+
+
+def quarter_period_series_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
+    """Quet's series (42): T = (π/2) √(l/g) (1 + (α² + β²)/16) (a quarter period)."""
+    return 0.5 * math.pi * math.sqrt(length_m / gravity_m_s2) * (1.0 + (alpha_rad ** 2 + beta_rad ** 2) / 16.0)
+
+
+def apsidal_rate_from_rest_rad_s(k_rad_s, theta0_rad):
+    """Apsides' rate for a release from rest at θ0: k (1 − (3/8) θ0 sin θ0 cos(θ0/2)) (sec. 2 §III)."""
+    return k_rad_s * (1.0 - 0.375 * theta0_rad * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0))
+
+
+def min_deflection_from_rest_rad(length_m, gravity_m_s2, k_rad_s, theta0_rad):
+    """Minimum deflection after a release from rest, β = √(l/g) k sin θ0 cos(θ0/2) (sec. 2 §II)."""
+    return math.sqrt(length_m / gravity_m_s2) * k_rad_s * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0)
+
+
+def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0):
+    """Exact solution of the linear model with the vertical Earth-rate component only.
+
+    ẍ = −ω0² x + 2k ẏ, ÿ = −ω0² y − 2k ẋ (ENU, k = n sin γ) has, with z = x + i y,
+    z = e^(−ikt) (P e^(iΩt) + Q e^(−iΩt)), Ω = √(ω0² + k²): Binet's ellipse of frequency Ω
+    turning at −k (clockwise from above for k > 0).
+    """
+    w0sq = gravity_m_s2 / length_m
+    W = math.sqrt(w0sq + k_rad_s ** 2)
+    z0 = complex(x0, y0)
+    zd0 = complex(vx0, vy0)
+    # z(0) = P + Q; ż(0) = i(W − k) P − i(W + k) Q
+    P = (zd0 + 1j * (W + k_rad_s) * z0) / (2j * W)
+    Q = z0 - P
+    t = np.asarray(t, dtype=float)
+    z = np.exp(-1j * k_rad_s * t) * (P * np.exp(1j * W * t) + Q * np.exp(-1j * W * t))
+    return z.real, z.imag
+
+
+def pendulum_columns(pos, vel, omega0_sq):
+    """Derived columns from bob positions/velocities (arrays (3, m), ENU)."""
+    x, y, z = pos
+    vx, vy = vel[0], vel[1]
+    rh = np.hypot(x, y)
+    deflection = np.arctan2(rh, -z)
+    azimuth = np.unwrap(np.arctan2(x, y))
+    # Fradkin tensor in (north, east) axes: its major axis is the swing plane.
+    n, e, vn, ve = y, x, vy, vx
+    tnn = omega0_sq * n * n + vn * vn
+    tee = omega0_sq * e * e + ve * ve
+    tne = omega0_sq * n * e + vn * ve
+    swing = 0.5 * np.unwrap(np.arctan2(2.0 * tne, tnn - tee))
+    return {"deflection": deflection, "azimuth": azimuth, "swing_azimuth": swing,
+            "x_east": x, "y_north": y, "z_up": z}
+
+
+class SphericalPendulum(Instrument):
+    """Foucault pendulum: a point bob on a massless rod, Cartesian rotating-frame model."""
+
+    type_name = "spherical_pendulum"
+    summary = "Foucault pendulum, point bob, any launch and amplitude (Quet sec. 2)"
+    PARAMS = (
+        Param("length_m", default=67.0, low=0.0, high=1.0e4, open_low=True, doc="rod length l, m"),
+        Param("initial_deflection_deg", default=2.0, low=0.0, high=180.0, doc="θ0 from the downward vertical"),
+        Param("initial_azimuth_deg", default=90.0, low=-360.0, high=360.0,
+              doc="compass azimuth of the release point (0 north, 90 east)"),
+        Param("radial_speed_m_s", default=0.0, low=-1.0e3, high=1.0e3, doc="launch speed away from the vertical"),
+        Param("transverse_speed_m_s", default=0.0, low=-1.0e3, high=1.0e3,
+              doc="launch speed perpendicular to the release plane (u0 of sec. 2 §IV), positive clockwise "
+                  "seen from above (toward increasing azimuth)"),
+        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+    )
+    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"})
+    COLUMNS = PENDULUM_COLUMNS
+
+    def __init__(self, name, site, params, effects):
+        super().__init__(name, site, params, effects)
+        self.l = self.length_m
+        self.g = site.gravity_m_s2
+        self.theta0 = math.radians(self.initial_deflection_deg)
+        self.psi0 = math.radians(self.initial_azimuth_deg)
+
+    def initial_state(self):
+        """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
+        st, ct = math.sin(self.theta0), math.cos(self.theta0)
+        sp, cp = math.sin(self.psi0), math.cos(self.psi0)
+        r = self.l * np.array([st * sp, st * cp, -ct])
+        e_rad = np.array([ct * sp, ct * cp, st])        # ∂r/∂θ / l
+        e_az = np.array([cp, -sp, 0.0])                 # ∂r/∂ψ direction (clockwise from above)
+        if st == 0.0:
+            e_az = np.array([cp, -sp, 0.0])
+        v = self.radial_speed_m_s * e_rad + self.transverse_speed_m_s * e_az
+        return r, v
+
+    def predictions(self):
+        k = self.site.k_vertical_rad_s
+        beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
+        return {"foucault_rate_rad_s": k,
+                "foucault_rate_deg_h": math.degrees(k) * 3600.0,
+                "full_turn_h": (2 * math.pi / abs(k) / 3600.0) if k else math.inf,
+                "quarter_period_s": quarter_period_s(self.l, self.g, self.theta0, beta),
+                "quarter_period_series_s": quarter_period_series_s(self.l, self.g, self.theta0, beta),
+                "min_deflection_from_rest_rad": beta,
+                "apsidal_rate_from_rest_rad_s": apsidal_rate_from_rest_rad_s(k, self.theta0)}
+
+    def scales(self, duration_s):
+        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
+                "restoring_rate_rad_s": math.sqrt(self.g / self.l), "amplitude_rad": self.theta0,
+                "duration_s": duration_s}
+
+    def rhs_exact(self):
+        """Cartesian constrained right-hand side for y = [r, v] (ENU); only listed effects."""
+        l2 = self.l * self.l
+        g = self.g
+        om = self.site.earth_rate_enu()
+        ox, oy, oz = om
+        cor = self.has("earth_rotation")
+        cen = self.has("centrifugal")
+        drag = self.effect("air_drag")
+        a_b = 2.0 * math.sqrt(g / self.l)
+        b2 = g / self.l
+        zr = -self.l
+
+        def rhs(t, y):
+            x, yy, z, vx, vy, vz = y
+            fx, fy, fz = 0.0, 0.0, -g
+            if cor:
+                fx -= 2.0 * (oy * vz - oz * vy)
+                fy -= 2.0 * (oz * vx - ox * vz)
+                fz -= 2.0 * (ox * vy - oy * vx)
+            if cen:
+                dz = z - zr
+                od = ox * x + oy * yy + oz * dz
+                o2 = ox * ox + oy * oy + oz * oz
+                fx += o2 * x - od * ox
+                fy += o2 * yy - od * oy
+                fz += o2 * dz - od * oz
+            if drag is not None:
+                ax, ay, az = drag.acceleration(np.array([vx, vy, vz]))
+                fx += ax
+                fy += ay
+                fz += az
+            r2 = x * x + yy * yy + z * z
+            rv = x * vx + yy * vy + z * vz
+            lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv
+                   + 0.5 * b2 * (r2 - l2)) / r2
+            return np.array([vx, vy, vz, fx - lam * x, fy - lam * yy, fz - lam * z])
+        return rhs
+
+    def rhs_linear(self):
+        """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x + Coriolis
+        (vertical and horizontal Earth-rate parts on the horizontal velocity) + listed effects."""
+        w0sq = self.g / self.l
+        om = self.site.earth_rate_enu()
+        cor = self.has("earth_rotation")
+        cen = self.has("centrifugal")
+        drag = self.effect("air_drag")
+
+        def rhs(t, y):
+            x, yy, vx, vy = y
+            a = np.array([-w0sq * x, -w0sq * yy, 0.0])
+            v = np.array([vx, vy, 0.0])
+            if cor:
+                a += -2.0 * np.cross(om, v)
+            if cen:
+                a += -np.cross(om, np.cross(om, np.array([x, yy, 0.0])))
+            if drag is not None:
+                a += drag.acceleration(v)
+            return np.array([vx, vy, a[0], a[1]])
+        return rhs
+
+    def simulate(self, t, **options):
+        t = np.asarray(t, dtype=float)
+        r0, v0 = self.initial_state()
+        w0sq = self.g / self.l
+        if self.has("finite_amplitude"):
+            traj = integrate(self.rhs_exact(), np.concatenate([r0, v0]), t, rtol=self.rtol,
+                             atol=1e-12 * self.l)
+            pos, vel = traj.y[:3], traj.y[3:]
+        else:
+            traj = integrate(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t, rtol=self.rtol,
+                             atol=1e-12 * self.l)
+            x, y, vx, vy = traj.y
+            rh2 = x * x + y * y
+            pos = np.vstack([x, y, -np.sqrt(np.maximum(self.l ** 2 - rh2, 0.0))])
+            vel = np.vstack([vx, vy, np.zeros_like(vx)])
+        cols = pendulum_columns(pos, vel, w0sq)
+        return Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
+
+
+class CompoundPendulum(Instrument):
+    """Compound pendulum (Quet sec. 3 §VI): a body of revolution hung from a point of its axis.
+
+    Integrated with the generic :class:`HingeChain`: two massless Cardan hinges (about east,
+    then about the new north) carry the body, which spins about its own axis. The Cardan pair
+    is singular only with the axis horizontal along east–west, so deflections stay below 90°.
+    """
+
+    type_name = "compound_pendulum"
+    summary = "body of revolution hung from a point of its axis (Quet sec. 3 §VI)"
+    PARAMS = (
+        Param("mass_kg", default=10.0, low=0.0, open_low=True, doc="M"),
+        Param("com_distance_m", default=1.0, low=0.0, open_low=True, doc="l: pivot to centre of mass"),
+        Param("transverse_inertia_kg_m2", default=10.0, low=0.0, open_low=True,
+              doc="A: moment about a transverse axis through the pivot (≥ M l²)"),
+        Param("axial_inertia_kg_m2", default=0.01, low=0.0, open_low=True, doc="C: moment about the figure axis"),
+        Param("spin_rate_rad_s", default=0.0, low=-1.0e5, high=1.0e5, doc="initial relative spin ρ0"),
+        Param("initial_deflection_deg", default=5.0, low=0.0, high=80.0, open_low=False,
+              doc="θ0 (below 90°: Cardan hinges)"),
+        Param("initial_azimuth_deg", default=90.0, low=-360.0, high=360.0, doc="compass azimuth of the release"),
+        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+    )
+    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "pivot_damping", "spin_decay"})
+    COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "relative spin about the figure axis"),)
+
+    @classmethod
+    def check_params(cls, prefix, p):
+        from gyro_instrument.core.errors import SceneError
+        ml2 = p["mass_kg"] * p["com_distance_m"] ** 2
+        if p["transverse_inertia_kg_m2"] < ml2 * (1 - 1e-12):
+            raise SceneError(f"{prefix}.transverse_inertia_kg_m2", p["transverse_inertia_kg_m2"],
+                             f"must be >= M l^2 = {ml2:g} (parallel-axis theorem)")
+
+    def __init__(self, name, site, params, effects):
+        super().__init__(name, site, params, effects)
+        self.A = self.transverse_inertia_kg_m2
+        self.C = self.axial_inertia_kg_m2
+        self.M = self.mass_kg
+        self.lc = self.com_distance_m
+        self.equivalent_length_m = self.A / (self.M * self.lc)
+        self.theta0 = math.radians(self.initial_deflection_deg)
+        self.psi0 = math.radians(self.initial_azimuth_deg)
+
+    def predictions(self):
+        k = self.site.k_vertical_rad_s
+        lam = self.equivalent_length_m
+        g = self.site.gravity_m_s2
+        return {"equivalent_length_m": lam, "foucault_rate_rad_s": k,
+                "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0)}
+
+    def scales(self, duration_s):
+        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
+                "restoring_rate_rad_s": math.sqrt(self.site.gravity_m_s2 / self.equivalent_length_m),
+                "amplitude_rad": self.theta0, "duration_s": duration_s}
+
+    def build_chain(self):
+        links = [Link("cardan_east", np.array([1.0, 0.0, 0.0]), np.zeros((3, 3))),
+                 Link("cardan_north", np.array([0.0, 1.0, 0.0]), np.zeros((3, 3))),
+                 Link("body", np.array([0.0, 0.0, -1.0]), np.diag([self.A, self.A, self.C]),
+                      mass_kg=self.M, com_m=np.array([0.0, 0.0, -self.lc]))]
+        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
+        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
+        A, C = self.A, self.C
+        torques = None
+        if damp or tau_s:
+            def torques(q, qd, w_axis):
+                out = np.zeros(3)
+                if damp:
+                    out[0] = -damp * A * qd[0]
+                    out[1] = -damp * A * qd[1]
+                if tau_s:
+                    out[2] = -C * w_axis[2] / tau_s
+                return out
+        return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
+                          np.array([0.0, 0.0, -self.site.gravity_m_s2]),
+                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
+                          hinge_torques=torques)
+
+    def simulate(self, t, **options):
+        t = np.asarray(t, dtype=float)
+        chain = self.build_chain()
+        d = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
+                      -math.cos(self.theta0)])
+        # Body axis (0,0,-1) after Rx(a) Ry(b) is (−sin b, cos b sin a, −cos b cos a).
+        b = math.asin(-d[0])
+        a = math.atan2(d[1], -d[2])
+        traj = integrate(chain.rhs, [a, b, 0.0, 0.0, 0.0, self.spin_rate_rad_s], t, rtol=self.rtol, atol=1e-13)
+        qa, qb, qs, qda, qdb, qds = traj.y
+        lc = self.lc
+        pos = lc * np.vstack([-np.sin(qb), np.cos(qb) * np.sin(qa), -np.cos(qb) * np.cos(qa)])
+        # velocity of the CM by differentiating the expression
+        vel = lc * np.vstack([-np.cos(qb) * qdb,
+                              -np.sin(qb) * qdb * np.sin(qa) + np.cos(qb) * np.cos(qa) * qda,
+                              np.sin(qb) * qdb * np.cos(qa) + np.cos(qb) * np.sin(qa) * qda])
+        cols = pendulum_columns(pos, vel, self.site.gravity_m_s2 / self.equivalent_length_m)
+        # Relative spin about the figure axis: the body's hinge rate plus the Cardan frame's
+        # rotation component along the axis (only the north hinge's axis after the east one
+        # has no component along the body axis; the east hinge's does: −sin b).
+        cols["spin_rate"] = qds + qda * np.sin(qb) * 1.0
+        return Simulation(t, cols, traj, extra={"chain": chain})

@@ -1,0 +1,199 @@
+"""Foucault and compound pendulums against Quet 1853 sec. 2 and sec. 3 §VI.
+
+References: eq. (42) and its exact elliptic form (physics_notes: 'test against the elliptic
+integral, not the series'); §II minimum deflection β = √(l/g) k sin θ0 cos(θ0/2); §III apsides'
+rate k(1 − (3/8) θ0 sin θ0 cos(θ0/2)); Binet's turning ellipse for the linear model; eq. (57)
+equivalent length λ = A/(Ml).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import ellipk
+
+from gyro_instrument.core.site import Site
+from gyro_instrument.estimators.crossings import local_maxima
+from gyro_instrument.instruments.pendulum import (CompoundPendulum, SphericalPendulum, binet_ellipse,
+                                                  quarter_period_s, quarter_period_series_s)
+
+FULL = ("earth_rotation", "finite_amplitude")
+PARIS = Site.from_degrees(48.8462)   # the Panthéon
+
+
+def apsides(sim):
+    """Times, azimuths (compass, folded modulo π onto a continuous line) and deflections at
+    the maxima of the horizontal distance."""
+    x, y = sim.columns["x_east"], sim.columns["y_north"]
+    t = sim.t
+    ta, rh2 = local_maxima(t, x * x + y * y)
+    az = np.arctan2(np.interp(ta, t, x), np.interp(ta, t, y))
+    az = np.unwrap(2.0 * az) / 2.0
+    return ta, az, np.sqrt(rh2)
+
+
+def test_apsides_turn_at_quet_rate_from_rest(build):
+    # §III: released from rest at θ0 the apsides turn at k(1 − (3/8) θ0 sin θ0 cos(θ0/2)).
+    # 67 m, θ0 = 2°, one hour, released east-west (the k' = n cos γ residual, ~2e-5 relative
+    # for a north-south swing, is ~0 east-west: physics_notes). Tolerance: 2 % of the
+    # correction term (4.6e-4 k), as the issue asks.
+    p = build(SphericalPendulum, PARIS, FULL, length_m=67.0, initial_deflection_deg=2.0, initial_azimuth_deg=90.0,
+              rtol=1e-12)
+    t = np.arange(0.0, 3600.0, 0.02)
+    ta, az, _ = apsides(p.simulate(t))
+    slope = np.polyfit(ta, az, 1)[0]
+    k = PARIS.k_vertical_rad_s
+    th0 = math.radians(2.0)
+    correction = 0.375 * th0 * math.sin(th0) * math.cos(th0 / 2)
+    measured_correction = 1.0 - slope / k
+    assert measured_correction == pytest.approx(correction, rel=0.02)
+
+
+def test_precession_sense_and_rate_foucault(build):
+    # Sec. 2: the plane turns with the Sun's apparent motion (compass azimuth increasing in the
+    # north, decreasing in the south) at k = n sin γ: 11.326 °/h at Paris (physics_notes).
+    assert math.degrees(PARIS.k_vertical_rad_s) * 3600 == pytest.approx(11.326, abs=1e-3)
+    t = np.arange(0.0, 900.0, 0.05)
+    for lat, sign in ((48.85, 1.0), (-33.9, -1.0)):
+        p = build(SphericalPendulum, Site.from_degrees(lat), FULL, length_m=67.0, initial_deflection_deg=0.5)
+        ta, az, _ = apsides(p.simulate(t))
+        assert np.sign(np.polyfit(ta, az, 1)[0]) == sign
+
+
+def test_minimum_deflection_from_rest_section2(build):
+    # §II: β = √(l/g) k sin θ0 cos(θ0/2) (the printed 0.028 mm uses √(g/l) for √(l/g):
+    # physics_notes; the right value for 67 m at 2° is 0.33 mm of bob travel). Measured as the
+    # minimum of the deflection over a few swings; tolerance 2 %: β carries O(θ0²) corrections
+    # of relative size ~1e-3 and the sampled minimum is refined by a parabola.
+    p = build(SphericalPendulum, PARIS, FULL, length_m=67.0, initial_deflection_deg=2.0, rtol=1e-12)
+    t = np.arange(0.0, 60.0, 0.01)
+    s = p.simulate(t)
+    pos, vel = s.extra["position_enu"], s.extra["velocity_enu"]
+    # Near the bottom the path is straight to 1e-10 m over a sample (curvature radius a²/b ≈
+    # 1.6e4 m), so the miss distance |r_h × v_h| / |v_h| at the sample nearest each passage is
+    # the minimum horizontal distance; divided by l it is the minimum deflection.
+    rh = np.hypot(pos[0], pos[1])
+    near = np.nonzero((rh[1:-1] < rh[:-2]) & (rh[1:-1] <= rh[2:]))[0] + 1
+    miss = np.abs(pos[0, near] * vel[1, near] - pos[1, near] * vel[0, near]) / np.hypot(vel[0, near], vel[1, near])
+    beta = np.median(miss) / 67.0
+    assert beta == pytest.approx(p.predictions()["min_deflection_from_rest_rad"], rel=0.02)
+
+
+@pytest.mark.parametrize("amp_deg", [1.0, 30.0, 90.0, 150.0, 170.0])
+def test_quarter_period_matches_elliptic_form_eq42(build, amp_deg):
+    # Eq. (42), exact form: the time from maximum to minimum deflection is
+    # √(l/g) K(sin²(α/2)) for a plane swing. Measured as half the interval between successive
+    # apsides, with n = 0 effects off so the swing is exactly planar. Tolerance 1e-6: apsides
+    # are refined by a parabola on 1e-3 s samples; the series form is checked to be far off at
+    # large amplitude (physics_notes: 59 % at 179°).
+    site = Site.from_degrees(48.85)
+    l = 10.0
+    p = build(SphericalPendulum, site, ("finite_amplitude",), length_m=l, initial_deflection_deg=amp_deg, rtol=1e-12)
+    Tq = quarter_period_s(l, site.gravity_m_s2, math.radians(amp_deg))
+    assert Tq == pytest.approx(math.sqrt(l / site.gravity_m_s2) * ellipk(math.sin(math.radians(amp_deg) / 2) ** 2),
+                               rel=1e-12)
+    t = np.arange(0.0, 8.5 * Tq, 1e-3)
+    s = p.simulate(t)
+    ta, _ = local_maxima(t, -s.columns["z_up"])
+    interval = np.polyfit(np.arange(ta.size), ta, 1)[0]    # apsides every half period = 2 Tq
+    assert interval / 2.0 == pytest.approx(Tq, rel=1e-6)
+    if amp_deg >= 150:
+        assert abs(quarter_period_series_s(l, site.gravity_m_s2, math.radians(amp_deg)) / Tq - 1) > 0.1
+
+
+def test_spherical_quarter_period_with_minor_axis(build):
+    # Exact spherical form (α, β ≠ 0): launch from 40° with a transverse speed, measure the
+    # time between a maximum and the next minimum of the deflection. Tolerance 1e-5 (the
+    # extrema are located by a parabola on 1e-3 s samples).
+    site = Site.from_degrees(0.0)
+    p = build(SphericalPendulum, site, ("finite_amplitude",), length_m=2.0, initial_deflection_deg=40.0,
+              transverse_speed_m_s=1.0, rtol=1e-12)
+    t = np.arange(0.0, 20.0, 1e-3)
+    d = p.simulate(t).columns["deflection"]
+    tmax, dmax = local_maxima(t, d)
+    tmin, dmin = local_maxima(t, -d)
+    alpha, beta = dmax.mean(), -dmin.mean()
+    Tq = quarter_period_s(2.0, site.gravity_m_s2, alpha, beta)
+    assert np.mean(np.diff(tmax)) / 2 == pytest.approx(Tq, rel=1e-5)
+
+
+def test_linear_model_is_binet_turning_ellipse(build):
+    # Without finite_amplitude and centrifugal, and with the horizontal Earth-rate component
+    # acting only on vertical velocity (zero in the linear model), the motion is exactly Binet's
+    # ellipse turning at −k (closed form in binet_ellipse). Tolerance 1e-9 of the amplitude.
+    p = build(SphericalPendulum, PARIS, ("earth_rotation",), length_m=67.0, initial_deflection_deg=1.0,
+              transverse_speed_m_s=0.01, rtol=1e-12)
+    t = np.linspace(0.0, 1200.0, 2001)
+    s = p.simulate(t)
+    r0, v0 = p.initial_state()
+    x, y = binet_ellipse(t, 67.0, PARIS.gravity_m_s2, PARIS.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1])
+    amp = 67.0 * math.sin(math.radians(1.0))
+    assert np.max(np.hypot(s.columns["x_east"] - x, s.columns["y_north"] - y)) < 1e-9 * amp * 10
+
+
+def test_small_amplitude_exact_model_follows_binet(build):
+    # At 1e-3 rad the full nonlinear model follows Binet's ellipse up to O(a²) effects:
+    # period shift a²/16 ≈ 6e-8 over ~36 periods (phase 1.4e-5 rad) plus k' terms of order
+    # n cos γ ... ; tolerance 1e-4 of the amplitude.
+    p = build(SphericalPendulum, PARIS, FULL, length_m=67.0, initial_deflection_deg=math.degrees(1e-3))
+    t = np.linspace(0.0, 600.0, 3001)
+    s = p.simulate(t)
+    r0, v0 = p.initial_state()
+    x, y = binet_ellipse(t, 67.0, PARIS.gravity_m_s2, PARIS.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1])
+    amp = 67.0 * 1e-3
+    assert np.max(np.hypot(s.columns["x_east"] - x, s.columns["y_north"] - y)) < 1e-4 * amp
+
+
+def test_invariants_constraint_and_energy(build):
+    # Constraint (23) |r| = l held by the Baumgarte-stabilised tension to 1e-9 l; energy (24)
+    # ½v² + g z is conserved (the Coriolis force does no work) to 1e-9 of g l over 20 minutes
+    # at 60° amplitude. Regressions (e.g. a wrong tension) break these by orders of magnitude.
+    p = build(SphericalPendulum, PARIS, FULL + ("centrifugal",), length_m=5.0, initial_deflection_deg=60.0,
+              rtol=1e-12)
+    s = p.simulate(np.linspace(0.0, 1200.0, 24001))
+    pos, vel = s.extra["position_enu"], s.extra["velocity_enu"]
+    assert np.max(np.abs(np.linalg.norm(pos, axis=0) - 5.0)) < 1e-9 * 5.0
+    g = PARIS.gravity_m_s2
+    # with the centrifugal gradient the conserved energy gains −½|Ω × (r − r_rest)|²
+    om = PARIS.earth_rate_enu()
+    dr = pos - np.array([[0.0], [0.0], [-5.0]])
+    cf = 0.5 * np.sum(np.cross(om, dr.T) ** 2, axis=1)
+    E = 0.5 * np.sum(vel ** 2, axis=0) + g * pos[2] - cf
+    assert np.ptp(E) < 1e-9 * g * 5.0
+
+
+def test_near_inverted_launch_is_regular(build):
+    # Any amplitude up to near-inverted. Without Earth rotation a 179.9° release returns to
+    # 179.9° after one period 4 Tq, Tq = √(l/g) K(sin²(89.95°)) (tolerance 1e-5 degree: the
+    # apex is flat, so a timing error δt shows as ½ (g/l) sin(0.1°) δt²). With Earth rotation
+    # the path near the unstable top is very sensitive, so there only the constraint (23) and
+    # the energy (24) are asserted (Coriolis does no work): both to 1e-8.
+    Tq = quarter_period_s(1.0, PARIS.gravity_m_s2, math.radians(179.9))
+    t = np.linspace(0.0, 4 * Tq, 40001)
+    p = build(SphericalPendulum, PARIS, ("finite_amplitude",), length_m=1.0, initial_deflection_deg=179.9,
+              rtol=1e-13)
+    s = p.simulate(t)
+    assert math.degrees(s.columns["deflection"][-1]) == pytest.approx(179.9, abs=1e-5)
+    p = build(SphericalPendulum, PARIS, FULL, length_m=1.0, initial_deflection_deg=179.9, rtol=1e-12)
+    s = p.simulate(t)
+    pos, vel = s.extra["position_enu"], s.extra["velocity_enu"]
+    assert np.max(np.abs(np.linalg.norm(pos, axis=0) - 1.0)) < 1e-8
+    E = 0.5 * np.sum(vel ** 2, axis=0) + PARIS.gravity_m_s2 * pos[2]
+    assert np.ptp(E) < 1e-8 * PARIS.gravity_m_s2
+
+
+def test_compound_pendulum_equivalent_length_eq57(build):
+    # Eq. (57): with μ = C/A small and ρ0 = 0 the compound pendulum is a simple pendulum of
+    # length λ = A/(Ml). Quarter periods agree to 1e-6 (the O(μ) and O(n) couplings are ~1e-5
+    # of the precession, not of the period); the swing plane turns at k within 2 %.
+    A, M, lc = 30.0, 10.0, 1.5      # λ = 2 m
+    site = Site.from_degrees(48.85)
+    cp = build(CompoundPendulum, site, ("earth_rotation",), transverse_inertia_kg_m2=A, mass_kg=M,
+               com_distance_m=lc, axial_inertia_kg_m2=1e-3, initial_deflection_deg=5.0, rtol=1e-12)
+    lam = cp.predictions()["equivalent_length_m"]
+    assert lam == pytest.approx(2.0)
+    Tq = quarter_period_s(lam, site.gravity_m_s2, math.radians(5.0))
+    t = np.arange(0.0, 40 * Tq, 2e-3)
+    s = cp.simulate(t)
+    ta, _ = local_maxima(t, -s.columns["z_up"])
+    assert np.polyfit(np.arange(ta.size), ta, 1)[0] / 2 == pytest.approx(Tq, rel=1e-6)
