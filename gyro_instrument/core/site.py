@@ -19,7 +19,9 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 
-#: Sidereal rotation rate of the Earth, 2π / 86164.0905 s (IERS Conventions 2010, Ω = 7.292115e-5).
+#: Earth's rotation rate relative to the stars (IERS Conventions 2010 / GRS80: 7.292115e-5 rad/s),
+#: 2π / 86164.0989 s (the stellar day). physics_notes writes 2π / 86164.0905 s, which is the mean
+#: sidereal day (relative to the precessing equinox) and gives 7.2921159e-5: 1.2e-7 higher.
 SIDEREAL_RATE_RAD_S = 7.2921150e-5
 
 #: Quet's value n = 1/13713 s⁻¹ (sec. 2), kept for reproducing his printed numbers.

@@ -23,8 +23,7 @@ class EarthRotation(Effect):
         if scales.get("gyro_rate_rad_s"):
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
         n = scales["earth_rate_rad_s"]
-        w0 = scales["restoring_rate_rad_s"]
-        return n / w0, "n / omega0 (Coriolis over restoring acceleration per unit speed)"
+        return n * scales["duration_s"], "n * duration (swing-plane turn over the run, rad, at most)"
 
 
 def coriolis_acceleration(omega, v):

@@ -1,0 +1,217 @@
+"""``gyro-instrument``: command-line front end.
+
+Subcommands: ``describe`` (instruments, active effects and every supported effect's
+estimated size), ``simulate`` (CSV of every instrument channel), and the later stages.
+Bad input exits with status 2 and one line naming the field, the value and the valid range.
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+from gyro_instrument.core.errors import IntegrationError, SceneError
+from gyro_instrument.effects import REGISTRY as EFFECTS
+
+EXIT_BAD_INPUT = 2
+
+
+def add_scene_arguments(parser):
+    """The scene arguments shared by every subcommand (and mirrored by the ROS parameters)."""
+    parser.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a scene value, e.g. --set site.latitude_deg=-33.87 "
+                             "--set instruments.pendulum.length_m=20 (repeatable)")
+    parser.add_argument("--duration-s", type=float, default=None,
+                        help="simulated time per instrument, s (default: the scene's duration_s)")
+
+
+def scene_from_args(args):
+    """Load the scene named on the command line with its overrides."""
+    from gyro_instrument.scenes import load_scene
+    overrides = list(args.overrides)
+    if getattr(args, "duration_s", None) is not None:
+        overrides.append(f"duration_s={args.duration_s!r}")
+    return load_scene(args.scene, overrides)
+
+
+def sample_times(scene):
+    """Sample times 0, 1/f, ... up to the scene's duration (inclusive when it falls on a sample)."""
+    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    return np.arange(n) / scene.sample_rate_hz
+
+
+def check_writable(path, field="--out"):
+    """Refuse an output path that cannot be written, before any simulation starts."""
+    directory = os.path.dirname(os.path.abspath(path)) or "."
+    if os.path.isdir(path):
+        raise SceneError(field, path, "is a directory; give a file path")
+    if not os.path.isdir(directory):
+        raise SceneError(field, path, f"directory {directory} does not exist")
+    if not os.access(directory, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise SceneError(field, path, "is not writable")
+
+
+def to_jsonable(x):
+    """Floats for JSON: non-finite values become None (never NaN or Infinity)."""
+    if isinstance(x, dict):
+        return {k: to_jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [to_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+# ----------------------------------------------------------------------------- describe
+def describe(scene):
+    """Dict describing a scene: site, instruments, active effects, effect sizes, predictions."""
+    from gyro_instrument.scenes import build_instruments
+    insts = build_instruments(scene)
+    out = {"scene": scene.name, "description": scene.description, "source": scene.source,
+           "site": {"latitude_deg": scene.site.latitude_deg, "earth_rate_rad_s": scene.site.earth_rate_rad_s,
+                    "gravity_m_s2": scene.site.gravity_m_s2},
+           "duration_s": scene.duration_s, "sample_rate_hz": scene.sample_rate_hz, "seed": scene.seed,
+           "scene_effects": list(scene.effects), "instruments": {}}
+    for name, inst in insts.items():
+        scales = inst.scales(scene.duration_s)
+        effects = {}
+        for ename in sorted(inst.SUPPORTED_EFFECTS):
+            eff = scene.effects.get(ename) or EFFECTS[ename]()
+            size, formula = eff.relative_size(scales)
+            effects[ename] = {"active": inst.has(ename), "relative_size": float(size), "formula": formula}
+        out["instruments"][name] = {"type": inst.type_name, "summary": inst.summary,
+                                    "parameters": dict(inst.params), "effects": effects,
+                                    "predictions": inst.predictions(),
+                                    "columns": [f"{name}.{c.name} [{c.unit}]" for c in inst.COLUMNS]}
+    return to_jsonable(out)
+
+
+def print_description(d, stream=None):
+    w = (stream or sys.stdout).write
+    s = d["site"]
+    w(f"scene {d['scene']}: {d['description']}\n")
+    w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s, "
+      f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
+    w(f"  effects listed: {', '.join(d['scene_effects']) or 'none'}\n")
+    for name, inst in d["instruments"].items():
+        w(f"\n  {name} ({inst['type']}): {inst['summary']}\n")
+        w(f"    {'effect':<18}{'active':<8}{'relative size':>14}  estimate\n")
+        for ename, e in inst["effects"].items():
+            size = e["relative_size"]
+            size_txt = f"{size:.3g}" if size is not None else "n/a"
+            w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
+        preds = ", ".join(f"{k} = {v:.10g}" if isinstance(v, float) else f"{k} = {v}"
+                          for k, v in inst["predictions"].items())
+        w(f"    predictions: {preds}\n")
+        w(f"    columns: {', '.join(inst['columns'])}\n")
+
+
+# ----------------------------------------------------------------------------- simulate
+def simulate_scene(scene, progress=None):
+    """Simulate every instrument of a scene on the common sample grid.
+
+    Returns
+    -------
+    t : ndarray
+    columns : dict
+        ``<instrument>.<column>`` -> array (radians, rad/s, metres).
+    sims : dict
+        instrument name -> Simulation (nfev, wall time).
+    """
+    from gyro_instrument.scenes import build_instruments
+    t = sample_times(scene)
+    columns, sims = {}, {}
+    for name, inst in build_instruments(scene).items():
+        if progress:
+            progress(f"simulating {name} ({inst.type_name}) for {scene.duration_s:g} s")
+        sim = inst.simulate(t)
+        sims[name] = sim
+        for c in inst.COLUMNS:
+            columns[f"{name}.{c.name}"] = sim.columns[c.name]
+    return t, columns, sims
+
+
+def write_csv(path, t, columns):
+    """CSV: first column ``time_s``, then one column per channel, full float precision."""
+    keys = list(columns)
+    tmp = f"{path}.partial"
+    with open(tmp, "w", newline="") as fh:
+        wr = csv.writer(fh)
+        wr.writerow(["time_s"] + keys)
+        data = np.column_stack([t] + [columns[k] for k in keys])
+        for row in data:
+            wr.writerow([repr(float(v)) for v in row])
+    os.replace(tmp, path)
+
+
+# ----------------------------------------------------------------------------- main
+def build_parser():
+    parser = argparse.ArgumentParser(
+        prog="gyro-instrument",
+        description="Gyrocompass and Foucault pendulum on the rotating Earth (Quet 1853, Puiseux 1852).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("scenes", help="list the shipped scenes")
+    p = sub.add_parser("describe", help="list a scene's instruments, active effects and the estimated size of "
+                                        "every effect each instrument supports")
+    add_scene_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV")
+    add_scene_arguments(p)
+    p.add_argument("--out", required=True, metavar="FILE.csv",
+                   help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    return parser
+
+
+def main(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return run_command(args)
+    except SceneError as exc:
+        print(f"gyro-instrument: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except IntegrationError as exc:
+        print(f"gyro-instrument: integration failed: {exc}", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print("gyro-instrument: interrupted", file=sys.stderr)
+        return 130
+
+
+def run_command(args):
+    if args.command == "scenes":
+        from gyro_instrument.scenes import shipped_scene_names
+        print("\n".join(shipped_scene_names()))
+        return 0
+    if args.command == "describe":
+        d = describe(scene_from_args(args))
+        if args.json:
+            print(json.dumps(d, indent=2))
+        else:
+            print_description(d)
+        return 0
+    if args.command == "simulate":
+        check_writable(args.out)
+        scene = scene_from_args(args)
+        progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+        t, columns, sims = simulate_scene(scene, progress)
+        write_csv(args.out, t, columns)
+        if progress:
+            nfev = sum(s.trajectory.nfev for s in sims.values())
+            wall = sum(s.trajectory.wall_time_s for s in sims.values())
+            progress(f"wrote {args.out}: {t.size} rows x {len(columns) + 1} columns "
+                     f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
+        return 0
+    raise AssertionError(args.command)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

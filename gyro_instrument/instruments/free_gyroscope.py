@@ -1,0 +1,443 @@
+"""Free gyroscope: Quet 1853 sec. 4 §II (the axis moves like a parallactic telescope).
+
+A body of revolution (transverse moment A, axial moment C, μ = C/A) turns freely about its
+fixed centre of mass; no torque acts on it. Its axis is held at rest relative to the Earth in
+any direction, the body is given a relative spin ρ0 about the axis, and the axis is released
+at the first sample time ``t[0]`` (Quet's problem statement, §II).
+
+Frames and angles
+-----------------
+ENU at the site (x east, y north, z up); ê = (0, cos γ, sin γ) the north part of Earth's
+axis. The initial axis is given by ``initial_axis_altitude_deg`` and
+``initial_axis_azimuth_deg`` (compass: 0 north, 90 east, clockwise seen from above); the
+positive spin ρ0 turns right-handed about that direction. θ0 below is the angle between the
+axis and the NORTH part of Earth's axis, cos θ0 = k0·ê. Quet measures his θ from the SOUTH
+part (his ``oz`` is "parallèle à la partie australe de l'axe terrestre"), so his
+cos θ0 = −cos θ0 here; sin θ0 is the same. Output columns: ``axis_altitude`` and
+``axis_azimuth`` (compass, unwrapped), the axis' equatorial coordinates relative to the Earth
+``declination`` and ``hour_angle`` (from the local meridian, positive toward the west,
+unwrapped: a star's hour angle grows at +n) and the relative spin ``spin_rate`` (Quet's ρ).
+
+Closed form (``model: analytic``, default)
+------------------------------------------
+In an inertial frame (ENU frozen at release) the Earth turns at Ω = n ê, the body starts with
+absolute angular velocity ω0 = ρ0 k0 + Ω and the torque-free symmetric top is solved exactly:
+
+* the absolute spin ω3 = ω·k = ρ0 + n cos θ0 is constant (Quet eq. (1)–(2): d(ρ − n cos θ)
+  = 0 in his sign convention);
+* the angular momentum L = A ω0 + (C − A) ω3 k0 is constant;
+* the axis precesses about L with angular velocity Λ = L/A: k(t) = Rot(Λ t) k0, on a cone of
+  half-angle β, sin β = A n sin θ0 / |L|, at the rate λ = |L|/A =
+  √(n² sin²θ0 + μ² ω3²) — Quet's h (eq. 22 exactly for μ = 1; eq. 50 to first order);
+* the body turns about its own axis at (1 − μ) ω3 relative to that precessing frame.
+
+The axis relative to the Earth is Rot(ê, −n t) k(t). Nothing is expanded in n/ρ0: the
+inertial-frame solution carries every n² (centrifugal) term exactly, so there is no separate
+``centrifugal`` switch; ``earth_rotation`` absent means n = 0 in the model (the axis stays
+put). The cost is independent of the horizon, so a day or a year costs the same as a second:
+this is the "averaging" that resolving the nutation numerically (~1e9 right-hand-side
+evaluations per day) would otherwise need, and it is exact rather than averaged.
+
+Everything is built from vectors (no Euler angles), so no initial direction is singular:
+the axis may start on, or within any distance of, either part of Earth's axis. (Quet's
+expansions, eqs. (11), (53), are stated to need cos θ0 away from −1; with ρ0 ≫ n the
+condition 1 + cos θ0 > 2 n sin²θ0/(μ ρ0) actually holds arbitrarily near the pole, because
+sin²θ0 vanishes as fast as 1 + cos θ0; what is singular there is the Euler angle ψ.) Only the
+hour angle itself is undefined for an axis exactly on Earth's axis (it is then reported as the
+``atan2`` of two roundoff-sized numbers, finite but meaningless).
+
+Predictions (Quet eqs. 16, 19, 47, 48)
+--------------------------------------
+* Mean rate of the axis about Earth's axis: V = n, westward (opposite to the Earth's rotation;
+  eq. 47). In the closed form it is exactly n whenever the nutation cone does not enclose
+  Earth's axis (the inertial azimuth of k about ê is then periodic); otherwise n ∓ λ.
+* Nutation: circular, diameter 2 n sin θ0/(μ ρ0) (eqs. 16, 19; exact: 2β), period
+  2π/h ≈ 2π/(μ ρ0) (exact: 2π/λ, λ = |L|/A). The text once prints 2π/n: a misprint.
+  ρ0 = 60 rad/s, μ = 1: 2n/ρ0 = 2.43e-6 rad = 0.50″.
+* Zero spin: Quet (§II, item 1) concludes that the body stays in relative equilibrium. That
+  holds to first order in n only. Exactly, a body co-rotating with the Earth keeps
+  co-rotating only if Ω is a principal axis (μ = 1, or the axis along or across Earth's
+  axis): otherwise L = I Ω is not parallel to Ω and the centrifugal torque (C − A) n² sin θ0
+  cos θ0 — dropped by Quet's "relative vis viva" integral, eq. (2), which is exact only for
+  μ = 1 (the exact integral is T_rel − ½ Ωᵀ I Ω) — turns the axis: its declination starts
+  moving as ½ (μ − 1) n² sin θ0 cos θ0 t² (≈ 1° in an hour for μ = 2, θ0 = 45°).
+  In general d²(cos θ)/dt² = n sin²θ0 [μ ρ0 + (μ − 1) n cos θ0] at release; Quet's eq. (9)
+  gives only the first term.
+
+Numerical path (``model: numerical``)
+-------------------------------------
+The unit quaternion q (body → inertial, scalar first; body z is the figure axis) and the
+body-axis angular velocity are integrated in the inertial frame with DOP853 (Euler's
+equations ω̇1 = (1 − μ) ω3 ω2, ω̇2 = (μ − 1) ω3 ω1, ω̇3 = 0 and q̇ = ½ q ⊗ (0, ω) plus a
+Baumgarte term κ (1 − |q|²) q that holds |q| at 1); q is renormalised before use. For
+cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
+"""
+
+import math
+import time
+
+import numpy as np
+
+from gyro_instrument.core.integrate import Trajectory, integrate
+from gyro_instrument.core.params import Param
+from gyro_instrument.instruments.base import Column, Instrument, Simulation
+
+# ----------------------------------------------------------------------------- quaternions
+
+
+def quat_mul(a, b):
+    """Hamilton product a ⊗ b of quaternions (scalar first), broadcasting over leading axes."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
+                     aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw], axis=-1)
+
+
+def quat_from_rotvec(axis_unit, angle):
+    """Quaternions of rotations by ``angle`` (array, rad) about one unit ``axis_unit``."""
+    half = 0.5 * np.asarray(angle, dtype=float)
+    s = np.sin(half)
+    return np.concatenate([np.cos(half)[..., None], s[..., None] * np.asarray(axis_unit, dtype=float)], axis=-1)
+
+
+def quat_to_matrix(q):
+    """Rotation matrices (..., 3, 3) of (not necessarily unit) quaternions (..., 4)."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def quat_from_matrix(R):
+    """Unit quaternion (scalar first) of one rotation matrix (Shepperd's method)."""
+    R = np.asarray(R, dtype=float)
+    tr = np.trace(R)
+    cands = [tr, R[0, 0], R[1, 1], R[2, 2]]
+    i = int(np.argmax(cands))
+    if i == 0:
+        w = 0.5 * math.sqrt(1.0 + tr)
+        q = [w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)]
+    elif i == 1:
+        x = 0.5 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / (4 * x), x, (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)]
+    elif i == 2:
+        y = 0.5 * math.sqrt(1.0 - R[0, 0] + R[1, 1] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), y, (R[1, 2] + R[2, 1]) / (4 * y)]
+    else:
+        z = 0.5 * math.sqrt(1.0 - R[0, 0] - R[1, 1] + R[2, 2])
+        q = [(R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z), z]
+    q = np.array(q)
+    return q / np.linalg.norm(q) * (1.0 if q[0] >= 0 else -1.0)
+
+
+def rotate_about(v, axis_unit, angle):
+    """Rotate vectors ``v`` (..., 3) about a unit axis by ``angle`` (broadcast), Rodrigues'
+    formula with 1 − cos φ written 2 sin²(φ/2) (no cancellation at small angles)."""
+    v = np.asarray(v, dtype=float)
+    a = np.asarray(axis_unit, dtype=float)
+    ang = np.asarray(angle, dtype=float)[..., None]
+    return (v * np.cos(ang) + np.cross(a, v) * np.sin(ang)
+            + a * (v @ a)[..., None] * (2.0 * np.sin(0.5 * ang) ** 2))
+
+
+# ----------------------------------------------------------------------------- geometry
+
+
+def axis_from_alt_az(altitude_rad, azimuth_rad):
+    """Unit ENU vector at ``altitude_rad`` above the horizon, compass ``azimuth_rad``."""
+    ca = math.cos(altitude_rad)
+    return np.array([ca * math.sin(azimuth_rad), ca * math.cos(azimuth_rad), math.sin(altitude_rad)])
+
+
+def equatorial_basis(site):
+    """ENU unit vectors (m, w, ê): m toward the local meridian's equator point (hour angle 0),
+    w toward the west (hour angle +90°), ê the north part of Earth's axis."""
+    g = site.latitude_rad
+    return (np.array([0.0, -math.sin(g), math.cos(g)]), np.array([-1.0, 0.0, 0.0]),
+            site.earth_axis_north_enu())
+
+
+def body_frame(k0):
+    """A rotation matrix (columns b1, b2, k0) whose third column is the unit axis ``k0``."""
+    ref = np.eye(3)[int(np.argmin(np.abs(k0)))]
+    b1 = ref - np.dot(ref, k0) * k0
+    b1 /= np.linalg.norm(b1)
+    return np.column_stack([b1, np.cross(k0, b1), k0])
+
+
+def angle_between(a, b):
+    """Angle between two vectors, rad, accurate at 0 and π (atan2 of |a×b| and a·b)."""
+    return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
+
+
+# ----------------------------------------------------------------------------- instrument
+
+
+class FreeGyroscope(Instrument):
+    """Torque-free body of revolution released with its axis at rest relative to the Earth.
+
+    Parameters (``PARAMS``)
+    -----------------------
+    initial_axis_altitude_deg, initial_axis_azimuth_deg : float
+        Initial direction of the (positive-spin) figure axis: altitude above the horizon and
+        compass azimuth (0 north, clockwise), degrees.
+    inertia_ratio : float
+        μ = C/A, in (0, 2].
+    transverse_inertia_kg_m2 : float
+        A, kg m² (sets the scale of L and of the energy only; the motion depends on μ).
+    spin_rate_rad_s : float
+        ρ0, the initial spin about the axis relative to the Earth, rad/s (Quet's ρ0).
+    model : {"analytic", "numerical"}
+        Exact closed form (default) or quaternion integration (short horizons).
+    rtol : float
+        Relative tolerance of the numerical path.
+    """
+
+    type_name = "free_gyroscope"
+    summary = "torque-free body of revolution: parallactic motion and nutation (Quet sec. 4 §II)"
+    PARAMS = (
+        Param("initial_axis_altitude_deg", default=0.0, low=-90.0, high=90.0,
+              doc="initial axis altitude above the horizon, degrees"),
+        Param("initial_axis_azimuth_deg", default=90.0, low=-360.0, high=360.0,
+              doc="initial axis compass azimuth (0 north, 90 east, clockwise), degrees"),
+        Param("inertia_ratio", default=2.0, low=0.0, high=2.0, open_low=True,
+              doc="μ = C/A, axial over transverse moment (≤ 2 for a rigid body of revolution)"),
+        Param("transverse_inertia_kg_m2", default=1.0e-3, low=0.0, open_low=True, doc="A, kg m^2"),
+        Param("spin_rate_rad_s", default=60.0, low=-1.0e6, high=1.0e6,
+              doc="initial spin ρ0 about the axis relative to the Earth, rad/s (right-handed "
+                  "about the axis direction; Quet's example 60)"),
+        Param("model", kind="str", default="analytic", choices=("analytic", "numerical"),
+              doc="analytic: exact torque-free closed form; numerical: quaternion + DOP853"),
+        Param("rtol", default=1e-12, low=1e-14, high=1e-3, doc="numerical path relative tolerance"),
+    )
+    SUPPORTED_EFFECTS = frozenset({"earth_rotation"})
+    COLUMNS = (
+        Column("axis_altitude", "rad", "altitude of the figure axis above the horizon"),
+        Column("axis_azimuth", "rad", "compass azimuth of the axis (0 north, clockwise), unwrapped"),
+        Column("hour_angle", "rad", "hour angle of the axis relative to the Earth (westward), unwrapped"),
+        Column("declination", "rad", "declination of the axis (angle above the equatorial plane)"),
+        Column("spin_rate", "rad/s", "ρ: spin of the body about its axis relative to the Earth"),
+    )
+
+    def __init__(self, name, site, params, effects):
+        super().__init__(name, site, params, effects)
+        self.mu = self.inertia_ratio
+        self.A = self.transverse_inertia_kg_m2
+        self.C = self.mu * self.A
+        self.rho0 = self.spin_rate_rad_s
+        self.k0 = axis_from_alt_az(math.radians(self.initial_axis_altitude_deg),
+                                   math.radians(self.initial_axis_azimuth_deg))
+        self.e_axis = site.earth_axis_north_enu()
+        self.eq_m, self.eq_w, _ = equatorial_basis(site)
+        self.R0 = body_frame(self.k0)
+        self.q0 = quat_from_matrix(self.R0)
+        self.theta0 = angle_between(self.k0, self.e_axis)
+
+    # ---------------------------------------------------------------- constants of motion
+    def model_rate(self):
+        """n used by the model: the site's Earth rate with ``earth_rotation`` listed, else 0."""
+        return self.site.earth_rate_rad_s if self.has("earth_rotation") else 0.0
+
+    def motion_constants(self, n=None):
+        """Exact constants of the torque-free motion (inertial frame = ENU at release).
+
+        Parameters
+        ----------
+        n : float, optional
+            Earth rate, rad/s (default: :meth:`model_rate`).
+
+        Returns
+        -------
+        dict
+            ``omega0`` absolute angular velocity at release (rad/s, ENU); ``omega3`` absolute
+            spin ρ0 + n cos θ0 (rad/s, constant); ``Lambda`` = L/A (rad/s, the precession
+            vector of the axis); ``lam`` = |L|/A (rad/s); ``sigma`` = (1 − μ) ω3, the body's
+            rate about its axis relative to the precessing frame (rad/s); ``beta`` the cone
+            half-angle between k0 and L (rad).
+        """
+        n = self.model_rate() if n is None else n
+        omega0 = self.rho0 * self.k0 + n * self.e_axis
+        omega3 = float(np.dot(omega0, self.k0))
+        Lam = omega0 + (self.mu - 1.0) * omega3 * self.k0
+        lam = float(np.linalg.norm(Lam))
+        beta = angle_between(self.k0, Lam) if lam > 0.0 else 0.0
+        return {"omega0": omega0, "omega3": omega3, "Lambda": Lam, "lam": lam,
+                "sigma": (1.0 - self.mu) * omega3, "beta": beta}
+
+    # ---------------------------------------------------------------- predictions
+    def predictions(self):
+        """Quet's predictions (eqs. 16, 19, 22, 47, 48, 50) beside the exact closed-form values.
+
+        Returns
+        -------
+        dict
+            ``theta0_rad``: angle between the axis and the north part of Earth's axis;
+            ``theta0_quet_rad``: Quet's θ0, from the south part (π − θ0);
+            ``mean_axis_rate_rad_s``: V = n, westward (eq. 47: hour angle grows at +n);
+            ``mean_hour_angle_rate_exact_rad_s``: the closed form's long-run rate (n unless the
+            nutation cone encloses Earth's axis);
+            ``nutation_diameter_rad``: 2 n sin θ0/(μ ρ0) (eqs. 16, 19; printed 2n sin θ0/ρ0 for
+            μ = 1 in eq. 48); ``nutation_diameter_exact_rad``: 2β;
+            ``nutation_period_s``: 2π/(μ ρ0); ``nutation_period_quet_h_s``: 2π/h with Quet's
+            h (eq. 22 for μ = 1, eq. 50 otherwise); ``nutation_period_exact_s``: 2π A/|L|;
+            ``relative_spin_law``: ρ = ρ0 + n (cos θ_Q − cos θ0_Q) (eq. 7; printed here in the
+            north-axis form ρ0 + n (cos θ0 − cos θ));
+            ``initial_cos_theta_acceleration_rad_s2``: d²(cos θ)/dt² at release, exact,
+            n sin²θ0 [μ ρ0 + (μ − 1) n cos θ0] (Quet's eq. 9 keeps only n μ ρ0 sin²θ0);
+            ``relative_equilibrium_exact``: True when the zero-spin body stays at rest relative
+            to the Earth exactly (μ = 1, axis along or across Earth's axis, or n = 0).
+        """
+        n = self.model_rate()
+        mu, rho0, th = self.mu, self.rho0, self.theta0
+        s, c = math.sin(th), math.cos(th)
+        k = self.motion_constants(n)
+        lam, beta, Lam = k["lam"], k["beta"], k["Lambda"]
+        # Winding of the inertial azimuth of k about ê: ±λ when the cone encloses ±ê.
+        mean_rate = n
+        if lam > 0.0:
+            if angle_between(Lam, self.e_axis) < beta:
+                mean_rate = n - lam
+            elif angle_between(Lam, -self.e_axis) < beta:
+                mean_rate = n + lam
+        cq = -c          # Quet's cos θ0 (θ from the south part of Earth's axis)
+        h_quet = math.sqrt(max(rho0 * (rho0 - 2 * n * cq) + n * n, 0.0)) if mu == 1.0 else \
+            mu * math.sqrt(max(rho0 * (rho0 - 2 * n * cq), 0.0))
+        gyro = mu * abs(rho0)
+        return {
+            "theta0_rad": th,
+            "theta0_quet_rad": math.pi - th,
+            "mean_axis_rate_rad_s": n,
+            "mean_hour_angle_rate_exact_rad_s": mean_rate,
+            "nutation_diameter_rad": 2.0 * n * s / gyro if gyro > 0 else math.inf,
+            "nutation_diameter_exact_rad": 2.0 * beta,
+            "nutation_period_s": 2.0 * math.pi / gyro if gyro > 0 else math.inf,
+            "nutation_period_quet_h_s": 2.0 * math.pi / h_quet if h_quet > 0 else math.inf,
+            "nutation_period_exact_s": 2.0 * math.pi / lam if lam > 0 else math.inf,
+            "absolute_spin_rad_s": k["omega3"],
+            "initial_cos_theta_acceleration_rad_s2": n * s * s * (mu * rho0 + (mu - 1.0) * n * c),
+            "relative_equilibrium_exact": bool(n == 0.0 or mu == 1.0 or s < 1e-15 or abs(c) < 1e-15),
+        }
+
+    def scales(self, duration_s):
+        """Scales for effect-size estimates. There is no restoring torque; the free-precession
+        (nutation) rate |L|/A stands in for ``restoring_rate_rad_s`` (inf if the body is at rest
+        in a non-rotating world), and ``amplitude_rad`` is the nutation radius β."""
+        n = self.site.earth_rate_rad_s
+        k = self.motion_constants(n)
+        lam = k["lam"] if k["lam"] > 0.0 else math.inf
+        return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.rho0) or None,
+                "restoring_rate_rad_s": lam, "amplitude_rad": k["beta"], "duration_s": duration_s}
+
+    # ---------------------------------------------------------------- solution paths
+    def analytic_state(self, tau):
+        """Closed-form state at times ``tau`` (s since release), as rows of
+        [q (body → inertial, scalar first, 4), ω in body axes (3)], shape (7, m)."""
+        k = self.motion_constants()
+        lam = k["lam"]
+        Lhat = k["Lambda"] / lam if lam > 0.0 else np.array([0.0, 0.0, 1.0])
+        qL = quat_from_rotvec(Lhat, lam * tau)                       # precession about L
+        qs = quat_from_rotvec([0.0, 0.0, 1.0], k["sigma"] * tau)      # body about its own axis
+        q = quat_mul(quat_mul(qL, self.q0), qs)
+        wb0 = self.R0.T @ k["omega0"]
+        ang = -k["sigma"] * tau
+        ca, sa = np.cos(ang), np.sin(ang)
+        wb = np.stack([ca * wb0[0] - sa * wb0[1], sa * wb0[0] + ca * wb0[1],
+                       np.full_like(tau, wb0[2])])
+        return np.vstack([q.T, wb])
+
+    def rhs(self):
+        """Right-hand side for y = [q (4), ω_body (3)] in the inertial frame (Euler's equations
+        for A = A, C = μA, and q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|)."""
+        a = 1.0 - self.mu
+        kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+
+        def f(t, y):
+            qw, qx, qy, qz, w1, w2, w3 = y
+            corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
+            return np.array([
+                0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw,
+                0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx,
+                0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy,
+                0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz,
+                a * w2 * w3,
+                -a * w1 * w3,
+                0.0])
+        return f
+
+    def columns_from_state(self, tau, y):
+        """Columns and diagnostics from states ``y`` (7, m) at times ``tau`` since release.
+
+        Returns
+        -------
+        columns : dict
+            The ``COLUMNS`` arrays (rad, rad/s).
+        extra : dict
+            ``axis_enu`` (m, 3) the axis relative to the Earth; ``axis_inertial`` (m, 3);
+            ``attitude_enu`` (m, 3, 3) body → ENU; ``angular_momentum`` (m, 3) inertial, kg m²/s;
+            ``kinetic_energy_j`` (m,); ``quaternion_norm`` (m,) before renormalisation.
+        """
+        n = self.model_rate()
+        q = y[:4].T
+        wb = y[4:].T
+        R = quat_to_matrix(q)
+        k_in = R[..., :, 2]
+        k_enu = rotate_about(k_in, self.e_axis, -n * tau)
+        e, nn, u = k_enu[:, 0], k_enu[:, 1], k_enu[:, 2]
+        dm, dw, de = k_enu @ self.eq_m, k_enu @ self.eq_w, k_enu @ self.e_axis
+        ib = np.array([self.A, self.A, self.C])
+        Lb = wb * ib
+        # Attitude relative to the Earth: Rot(ê, −n τ) R.
+        Re = quat_to_matrix(quat_from_rotvec(self.e_axis, -n * tau)) @ R
+        columns = {
+            "axis_altitude": np.arctan2(u, np.hypot(e, nn)),
+            "axis_azimuth": np.unwrap(np.arctan2(e, nn)),
+            "hour_angle": np.unwrap(np.arctan2(dw, dm)),
+            "declination": np.arctan2(de, np.hypot(dm, dw)),
+            "spin_rate": wb[:, 2] - n * (k_in @ self.e_axis),
+        }
+        extra = {"axis_enu": k_enu, "axis_inertial": k_in, "attitude_enu": Re,
+                 "angular_momentum": np.einsum("mij,mj->mi", R, Lb),
+                 "kinetic_energy_j": 0.5 * np.sum(Lb * wb, axis=1),
+                 "quaternion_norm": np.linalg.norm(q, axis=1)}
+        return columns, extra
+
+    def simulate(self, t, model=None, rtol=None):
+        """Release at ``t[0]`` and sample at ``t`` (s).
+
+        Parameters
+        ----------
+        t : array_like
+            Increasing sample times, s; the axis is released at ``t[0]``.
+        model : {"analytic", "numerical"}, optional
+            Overrides the ``model`` parameter.
+        rtol : float, optional
+            Overrides the ``rtol`` parameter (numerical path).
+
+        Returns
+        -------
+        Simulation
+            ``columns`` as in ``COLUMNS``; ``trajectory.y`` rows [q (4), ω_body (3)] in the
+            inertial frame (ENU frozen at release); ``extra`` as in :meth:`columns_from_state`.
+        """
+        model = model or self.model
+        t = np.asarray(t, dtype=float)
+        tau = t - t[0]
+        if model == "analytic":
+            w0, c0 = time.perf_counter(), time.process_time()
+            y = self.analytic_state(tau)
+            traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
+        else:
+            wb0 = self.R0.T @ self.motion_constants()["omega0"]
+            traj = integrate(self.rhs(), np.concatenate([self.q0, wb0]), tau,
+                             rtol=self.rtol if rtol is None else rtol, atol=1e-14)
+            traj.t = t
+            y = traj.y
+        columns, extra = self.columns_from_state(tau, y)
+        extra["motion_constants"] = self.motion_constants()
+        return Simulation(t, columns, traj, extra)

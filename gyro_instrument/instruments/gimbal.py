@@ -1,0 +1,566 @@
+"""Two-ring gimbal gyroscope: Quet 1853, sec. 4 §III–V.
+
+Geometry (Quet sec. 4 §III)
+---------------------------
+``PP'`` is the axis fixed on the Earth about which the outer ring turns; ``NN'`` the outer
+ring's diameter perpendicular to ``PP'``, about which the inner ring turns; ``oQ`` the rotor's
+figure axis, carried by the inner ring perpendicular to ``NN'``; ``oD`` the inner ring's
+figure axis (perpendicular to ``NN'`` and to ``oQ``); the outer ring's figure axis is
+perpendicular to ``PP'`` and ``NN'``.
+
+Base axes are Quet's: ``oz`` along ``PP'``, ``ox`` the projection of the north part of Earth's
+axis on the plane perpendicular to ``PP'`` (:func:`~gyro_instrument.core.site.plane_frame`),
+``oy = oz × ox``. ω is the angle between ``oz`` and the *south* part of Earth's axis, so the
+Earth rate in these axes is (p, q, r) = (n sin ω, 0, −n cos ω) (sec. 1 eq. 17) and
+k = n cos ω, k' = n sin ω (sec. 4 eq. 11).
+
+Quet's angles: θ is the angle between ``oQ`` and ``oz``; ``oN`` (one half of ``NN'``) makes
+the angle ψ with ``ox``, and the projection ``oA`` of ``oQ`` on ``xoy`` is at ψ − 90°::
+
+    oN = (cos ψ, sin ψ, 0),   oQ = (sin θ sin ψ, −sin θ cos ψ, cos θ).
+
+The chain (:class:`~gyro_instrument.instruments.chain.HingeChain`) is: outer ring, hinge
+``oz`` (angle ψ, body axes x = ``oN``, y = outer figure axis, z = ``PP'``, inertia
+diag(A2, C2, A2)); inner ring, hinge x = ``NN'`` (angle θ, body axes x = ``NN'``, y = ``oD``
+up to sign, z = ``oQ``, inertia diag(A1, C1, A1)); rotor, hinge z = ``oQ`` (angle φ,
+inertia diag(A, A, C)). ρ = φ̇ + ψ̇ cos θ is Quet's ρ, the component along ``oQ`` of the
+rotor's angular velocity relative to the Earth (sec. 4 eq. 4 and 6).
+
+Output angles (a ``sensor_msgs/JointState`` of outer ring, inner ring, rotor)
+-----------------------------------------------------------------------------
+* ``outer_angle`` = ψ − 90°: the azimuth of ``oA`` (the rotor axis' projection on the plane
+  perpendicular to ``PP'``) from ``ox``, counter-clockwise about ``oz`` (a right-handed
+  rotation of the outer ring about ``PP'``). With the rings locked the stable equilibrium
+  line is ``ox`` (sec. 4 §IV: "l'axe oQ oscillera autour de ox"), so small swings are about
+  0; it is the directing-plane gyroscope's u for the plane perpendicular to ``PP'``.
+* ``inner_angle`` = θ − θ_ref: a right-handed rotation of the inner ring about ``NN'`` from
+  a reference pose. θ_ref = 90° (rings perpendicular) for ``locked`` (where the column is
+  then 0) and ``free``; for ``outer_fixed`` θ_ref is the equilibrium line of the inner swing,
+  the projection of the north part of Earth's axis on the plane of the swing,
+  θ_ref = atan2(sin ω cos α, −cos ω) with α the fixed ``outer_angle`` (θ_ref = 180° − ω for
+  Quet's case α = 0). Quet's u of §IV (angle of ``oQ`` from the north part of Earth's axis)
+  is −``inner_angle`` there.
+* ``rotor_angle`` = φ (the rotor joint), ``outer_rate`` = ψ̇, ``inner_rate`` = θ̇ and
+  ``spin_rate`` = ρ (not the joint rate φ̇ = ρ − ψ̇ cos θ, which is in ``extra``).
+
+Configurations
+--------------
+``free`` (both rings free: sec. 4 §III eqs. 10–13 and §V), ``locked`` (inner ring held at
+θ = 90°, outer ring free: §IV, periods T, T', T'''), ``outer_fixed`` (outer ring held at
+``outer_fixed_angle_deg``, inner ring free: §IV, period T'').
+
+Periods (every "T" is one swing, HALF the period, π/√K)
+-------------------------------------------------------
+Locked rings: the swinging inertia about ``PP'`` is A (rotor) + C1 (inner ring, whose figure
+axis ``oD`` is then along ``PP'``) + A2. Quet's eq. (14) writes A + 2A1 + A2, which is exact
+for thin rings only (C1 = 2A1): eq. (11) gives u² = b sin²θ + γ = A + C1 + A2 at θ = 90°, so
+the printed (14) has silently put C1 = 2A1. Outer ring fixed: the swinging inertia about
+``NN'`` is A + A1 (exact for any ring). Hence::
+
+    T   = π √((A + C1 + A2) / (C n ρ0 sin ω))      (Quet: A + 2A1 + A2)
+    T'  = π √((A + C1 + A2) / (C n ρ0 cos γ))      PP' vertical, sin ω = cos γ
+    T'' = π √((A + A1) / (C n ρ0))                  outer ring fixed across the meridian
+    T'''= π √((A + C1 + A2) / (C n ρ0))            PP' horizontal east–west, sin ω = 1
+
+With both ``earth_rotation`` and ``centrifugal`` the chain is the exact rigid-body motion;
+the small-oscillation constant then gains O(n²) terms (derived from the Routhian, see
+:func:`locked_swing_constant` and :func:`outer_fixed_swing_constant`) whose relative size is
+~ n / (μ ρ0) ≈ 1e-7.
+
+Invariants (used by the tests)
+------------------------------
+(13) d(ρ − k cos θ + k' sin θ sin ψ) = 0 is exact: it is the constancy of the rotor's absolute
+spin ρ + Ω·oQ (axisymmetric rotor, frictionless bearing). (12, first) a θ̇² + u² ψ̇² + Cρ²
+= const is twice the relative kinetic energy; it drops the O(n²) centrifugal potential, the
+exact (Jacobi) integral being T_rel − ½ Σ Ωᵀ I Ω. With ``PP'`` along Earth's axis (§V, k' = 0)
+the second of (12) integrates to u²ψ̇ + Cρ cos θ − k(b − C) sin²θ = const (§V eq. 2), the
+absolute angular momentum about ``PP'`` (exact).
+
+Conventions of this module: ``vertical`` is ``PP'`` up (ω = 90° + γ, k = −n sin γ; Quet's
+§IV T'' derivation takes ``oz`` down, k = n sin γ — the same periods); ``north_south`` points
+north, ``east_west`` east, ``polar`` along the north part of Earth's axis (ω = 180°, k = −n;
+Quet's §V takes the south part, ω = 0, k = n).
+"""
+
+import math
+
+import numpy as np
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.params import Param
+from gyro_instrument.core.site import plane_frame
+from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.chain import HingeChain, Link
+
+CONFIGURATIONS = ("free", "locked", "outer_fixed")
+OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
+
+#: Default initial swing angle (0.1 rad, as for the directing-plane gyroscope), degrees.
+DEFAULT_SWING_DEG = math.degrees(0.1)
+
+
+def outer_axis_direction_enu(outer_axis, outer_axis_enu, site):
+    """Unit vector along ``PP'`` (Quet's ``oz``) in ENU.
+
+    Parameters
+    ----------
+    outer_axis : str
+        ``vertical`` (up), ``north_south`` (north), ``east_west`` (east), ``polar`` (north part
+        of Earth's axis) or ``custom``.
+    outer_axis_enu : array_like or None
+        The direction when ``custom``.
+    site : Site
+
+    Returns
+    -------
+    ndarray, shape (3,)
+    """
+    if outer_axis == "vertical":
+        v = np.array([0.0, 0.0, 1.0])
+    elif outer_axis == "north_south":
+        v = np.array([0.0, 1.0, 0.0])
+    elif outer_axis == "east_west":
+        v = np.array([1.0, 0.0, 0.0])
+    elif outer_axis == "polar":
+        v = site.earth_axis_north_enu()
+    else:
+        v = np.asarray(outer_axis_enu, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+def swing_duration_s(inertia_kg_m2, axial_inertia_kg_m2, earth_rate_component_rad_s, spin_rad_s):
+    """One swing (half period) of small oscillations, T = π √(J / (C n ρ0 sin ω)).
+
+    Quet 1853 sec. 4 §IV (T, T', T'', T''' differ only in J and in the Earth-rate component
+    n sin ω). Returns ``inf`` when there is no restoring torque about the reference line.
+
+    Parameters
+    ----------
+    inertia_kg_m2 : float
+        Swinging inertia J, kg m².
+    axial_inertia_kg_m2 : float
+        Rotor's axial moment C, kg m².
+    earth_rate_component_rad_s : float
+        Component of the Earth rate along the equilibrium line (n sin ω, n cos γ, n, ...), rad/s.
+    spin_rad_s : float
+        Relative spin ρ0, rad/s.
+    """
+    K = axial_inertia_kg_m2 * earth_rate_component_rad_s * spin_rad_s / inertia_kg_m2
+    return math.pi / math.sqrt(K) if K > 0.0 else math.inf
+
+
+def locked_swing_constant(A, C, C1, A2, C2, k_prime, rho_eq):
+    """Exact small-oscillation constant K (v'' = −K v) of the locked gimbal, s⁻².
+
+    Routhian of the rigid assembly turning about ``PP'`` with the rotor's absolute spin
+    s = ρ + k' cos v conserved (v = ``outer_angle``); inner ring locked at θ = 90°, so ``oQ``
+    lies along the outer ring's figure axis and ``oD`` along ``PP'``::
+
+        K = [C ρ_eq k' + (C + C2 − A − A2) k'²] / (A + C1 + A2)
+
+    The first term is Quet's eq. (14) (thick-ring inertia); the second is the O(n²) term
+    that eq. (14) drops (with massless rings it is the directing-plane (μ − 1) n² sin² ω).
+
+    Parameters
+    ----------
+    A, C : float
+        Rotor's transverse and axial moments, kg m².
+    C1 : float
+        Inner ring's moment about its figure axis ``oD``, kg m².
+    A2, C2 : float
+        Outer ring's moments about a diameter (``PP'``, ``NN'``) and about its figure axis.
+    k_prime : float
+        n sin ω, rad/s.
+    rho_eq : float
+        Relative spin at the equilibrium line, rad/s.
+    """
+    return (C * rho_eq * k_prime + (C + C2 - A - A2) * k_prime ** 2) / (A + C1 + A2)
+
+
+def outer_fixed_swing_constant(A, C, A1, C1, m_rate, rho_eq):
+    """Exact small-oscillation constant K of the inner swing with the outer ring fixed, s⁻².
+
+    The rotor and inner ring turn about ``NN'`` (a principal axis of both), ``oQ`` in the
+    plane perpendicular to ``NN'``; m_rate = n·|projection of Earth's axis on that plane|::
+
+        K = [C ρ_eq m + (C + A1 − A − C1) m²] / (A + A1)
+
+    First term: Quet's T'' (sec. 4 §IV, with m = n); second: the dropped O(n²) term.
+    """
+    return (C * rho_eq * m_rate + (C + A1 - A - C1) * m_rate ** 2) / (A + A1)
+
+
+def spin_invariant(rho, theta, psi, k, k_prime):
+    """Quet's eq. (13): ρ − k cos θ + k' sin θ sin ψ (rad/s), constant without bearing torque.
+
+    It is ρ + Ω·oQ, the rotor's absolute spin, with Ω = (k', 0, −k) and
+    oQ = (sin θ sin ψ, −sin θ cos ψ, cos θ) in Quet's axes.
+    """
+    return rho - k * np.cos(theta) + k_prime * np.sin(theta) * np.sin(psi)
+
+
+def quet_energy(theta, theta_dot, psi_dot, rho, A, C, A1, C1, A2):
+    """Quet's eq. (12, first): a θ̇² + u² ψ̇² + C ρ² (J, twice the relative kinetic energy).
+
+    a = A + A1, b = A + C1 − A1, γ = A1 + A2, u² = b sin²θ + γ (eq. 11).
+    """
+    a = A + A1
+    u2 = (A + C1 - A1) * np.sin(theta) ** 2 + A1 + A2
+    return a * theta_dot ** 2 + u2 * psi_dot ** 2 + C * rho ** 2
+
+
+def axial_momentum(theta, psi_dot, rho, k, A, C, A1, C1, A2):
+    """§V eq. (2, second): u² ψ̇ + C ρ cos θ − k (b − C) sin² θ, kg m²/s.
+
+    The absolute angular momentum about ``PP'`` less a constant; conserved when ``PP'`` is
+    parallel to Earth's axis (k' = 0). b = A + C1 − A1.
+    """
+    b = A + C1 - A1
+    u2 = b * np.sin(theta) ** 2 + A1 + A2
+    return u2 * psi_dot + C * rho * np.cos(theta) - k * (b - C) * np.sin(theta) ** 2
+
+
+class GimbalGyroscope(Instrument):
+    """Rotor in two rings, the outer turning about an axis ``PP'`` fixed on the Earth.
+
+    See the module docstring for axes, angle conventions and the four periods of
+    Quet 1853 sec. 4 §IV.
+    """
+
+    type_name = "gimbal_gyroscope"
+    summary = "rotor in two gimbal rings about an Earth-fixed axis PP' (Quet sec. 4 §III–V)"
+    PARAMS = (
+        Param("configuration", kind="str", default="locked", choices=CONFIGURATIONS,
+              doc="free (both rings free), locked (rings held perpendicular, outer free: T, T', T''') "
+                  "or outer_fixed (outer ring held, inner free: T'')"),
+        Param("outer_axis", kind="str", default="vertical", choices=OUTER_AXES,
+              doc="direction of PP': vertical (up), north_south (north), east_west (east), "
+                  "polar (north part of Earth's axis) or custom"),
+        Param("outer_axis_enu", kind="vec3", default=None, doc="PP' in ENU when outer_axis = custom"),
+        Param("outer_fixed_angle_deg", default=0.0, low=-180.0, high=180.0,
+              doc="outer_angle at which the outer ring is held (outer_fixed), degrees; 0 = NN' across "
+                  "the plane of oz and ox (across the meridian for a vertical PP': Quet's T'')"),
+        Param("inertia_ratio", default=2.0, low=0.0, high=2.0, open_low=True,
+              doc="μ = C/A of the rotor (≤ 2 for a rigid body of revolution)"),
+        Param("transverse_inertia_kg_m2", default=1.0e-3, low=0.0, open_low=True,
+              doc="A, the rotor's moment about a diameter, kg m^2"),
+        Param("inner_ring_diametral_inertia_kg_m2", default=2.5e-4, low=0.0,
+              doc="A1, inner ring's moment about its diameters NN' and oQ, kg m^2"),
+        Param("inner_ring_axial_inertia_kg_m2", default=None, low=0.0,
+              doc="C1, inner ring's moment about its figure axis oD, kg m^2 (default 2 A1: thin ring; "
+                  "must be ≤ 2 A1)"),
+        Param("outer_ring_diametral_inertia_kg_m2", default=5.0e-4, low=0.0,
+              doc="A2, outer ring's moment about PP' (and NN'), kg m^2"),
+        Param("outer_ring_axial_inertia_kg_m2", default=None, low=0.0,
+              doc="C2, outer ring's moment about its figure axis, kg m^2 (default 2 A2: thin ring; "
+                  "must be ≤ 2 A2)"),
+        Param("spin_rate_rad_s", default=2 * math.pi * 100.0, low=-1.0e6, high=1.0e6,
+              doc="initial relative spin ρ0 of the rotor about oQ, rad/s (positive: Earth's sense when "
+                  "oQ is along ox)"),
+        Param("initial_outer_angle_deg", default=None, low=-180.0, high=180.0,
+              doc="initial outer_angle (rotor-axis azimuth from ox about PP'), degrees; default 5.73 "
+                  "(0.1 rad) for locked and free; outer_fixed uses outer_fixed_angle_deg"),
+        Param("initial_inner_angle_deg", default=None, low=-180.0, high=180.0,
+              doc="initial inner_angle (θ − θ_ref), degrees; default 5.73 (0.1 rad) for outer_fixed, "
+                  "0 for free; locked holds 0"),
+        Param("initial_outer_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6,
+              doc="initial ψ̇, degrees/s (must be 0 for outer_fixed)"),
+        Param("initial_inner_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6,
+              doc="initial θ̇, degrees/s (must be 0 for locked)"),
+        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+    )
+    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "ring_inertia", "spin_decay",
+                                   "pivot_damping"})
+    COLUMNS = (
+        Column("outer_angle", "rad", "ψ − 90°: azimuth of the rotor axis' projection from ox, about PP' "
+                                     "(outer ring joint; equilibrium line 0 when locked)"),
+        Column("inner_angle", "rad", "θ − θ_ref: inner ring about NN' from the reference pose (90° locked "
+                                     "and free; the swing's equilibrium line for outer_fixed)"),
+        Column("rotor_angle", "rad", "φ: rotor joint angle about oQ"),
+        Column("outer_rate", "rad/s", "ψ̇"),
+        Column("inner_rate", "rad/s", "θ̇"),
+        Column("spin_rate", "rad/s", "ρ = φ̇ + ψ̇ cos θ: relative spin of the rotor about oQ"),
+    )
+
+    @classmethod
+    def check_params(cls, prefix, p):
+        """Refuse a missing custom axis, non-physical ring moments and initial values for a held ring."""
+        if p["outer_axis"] == "custom" and p["outer_axis_enu"] is None:
+            raise SceneError(f"{prefix}.outer_axis_enu", None, "is required when outer_axis = custom (3 numbers, ENU)")
+        A1, C1 = p["inner_ring_diametral_inertia_kg_m2"], p["inner_ring_axial_inertia_kg_m2"]
+        if C1 is not None and C1 > 2.0 * A1 * (1.0 + 1e-12):
+            raise SceneError(f"{prefix}.inner_ring_axial_inertia_kg_m2", C1,
+                             f"must be in [0, 2 A1] = [0, {2.0 * A1:g}] (triangle inequality of a rigid ring)")
+        A2, C2 = p["outer_ring_diametral_inertia_kg_m2"], p["outer_ring_axial_inertia_kg_m2"]
+        if C2 is not None and C2 > 2.0 * A2 * (1.0 + 1e-12):
+            raise SceneError(f"{prefix}.outer_ring_axial_inertia_kg_m2", C2,
+                             f"must be in [0, 2 A2] = [0, {2.0 * A2:g}] (triangle inequality of a rigid ring)")
+        conf = p["configuration"]
+        if conf == "locked":
+            if p["initial_inner_angle_deg"] not in (None, 0.0):
+                raise SceneError(f"{prefix}.initial_inner_angle_deg", p["initial_inner_angle_deg"],
+                                 "must be unset or 0 when configuration = locked (inner ring held at θ = 90°)")
+            if p["initial_inner_rate_deg_s"] != 0.0:
+                raise SceneError(f"{prefix}.initial_inner_rate_deg_s", p["initial_inner_rate_deg_s"],
+                                 "must be 0 when configuration = locked (inner ring held)")
+        if conf == "outer_fixed":
+            a0 = p["initial_outer_angle_deg"]
+            if a0 is not None and a0 != p["outer_fixed_angle_deg"]:
+                raise SceneError(f"{prefix}.initial_outer_angle_deg", a0,
+                                 "must be unset or equal to outer_fixed_angle_deg when configuration = "
+                                 "outer_fixed (the outer ring is held there)")
+            if p["initial_outer_rate_deg_s"] != 0.0:
+                raise SceneError(f"{prefix}.initial_outer_rate_deg_s", p["initial_outer_rate_deg_s"],
+                                 "must be 0 when configuration = outer_fixed (outer ring held)")
+
+    def __init__(self, name, site, params, effects):
+        full = {prm.name: prm.default for prm in self.PARAMS}
+        full.update(params)
+        super().__init__(name, site, full, effects)
+        self.check_params(name, self.params)
+        self.pp_enu = outer_axis_direction_enu(self.outer_axis, self.outer_axis_enu, site)
+        self.frame, self.sin_omega = plane_frame(self.pp_enu, site)
+        # ω: angle between oz and the south part of Earth's axis (Quet sec. 1 eq. 17).
+        self.cos_omega = -float(np.dot(site.earth_axis_north_enu(), self.pp_enu))
+        n = site.earth_rate_rad_s
+        self.k = n * self.cos_omega
+        self.k_prime = n * self.sin_omega
+        self.A = self.transverse_inertia_kg_m2
+        self.C = self.inertia_ratio * self.A
+        # Ring moments as given (for predictions of both forms) ...
+        self.A1_given = self.inner_ring_diametral_inertia_kg_m2
+        self.C1_given = 2.0 * self.A1_given if self.inner_ring_axial_inertia_kg_m2 is None \
+            else self.inner_ring_axial_inertia_kg_m2
+        self.A2_given = self.outer_ring_diametral_inertia_kg_m2
+        self.C2_given = 2.0 * self.A2_given if self.outer_ring_axial_inertia_kg_m2 is None \
+            else self.outer_ring_axial_inertia_kg_m2
+        # ... and as simulated: massless rings unless ``ring_inertia`` is listed.
+        rings = self.has("ring_inertia")
+        self.A1 = self.A1_given if rings else 0.0
+        self.C1 = self.C1_given if rings else 0.0
+        self.A2 = self.A2_given if rings else 0.0
+        self.C2 = self.C2_given if rings else 0.0
+        conf = self.configuration
+        self.alpha_fixed = math.radians(self.outer_fixed_angle_deg)
+        if conf == "outer_fixed":
+            self.theta_ref = math.atan2(self.sin_omega * math.cos(self.alpha_fixed), -self.cos_omega)
+            self.outer0 = self.alpha_fixed
+            inner0 = DEFAULT_SWING_DEG if self.initial_inner_angle_deg is None else self.initial_inner_angle_deg
+        else:
+            self.theta_ref = math.pi / 2
+            self.outer0 = math.radians(DEFAULT_SWING_DEG if self.initial_outer_angle_deg is None
+                                       else self.initial_outer_angle_deg)
+            inner0 = 0.0 if self.initial_inner_angle_deg is None else self.initial_inner_angle_deg
+        self.inner0 = math.radians(inner0)
+        self.outer_rate0 = math.radians(self.initial_outer_rate_deg_s)
+        self.inner_rate0 = math.radians(self.initial_inner_rate_deg_s)
+
+    # ---------------------------------------------------------------- geometry helpers
+    @property
+    def psi0(self):
+        """Initial ψ (Quet), rad."""
+        return self.outer0 + math.pi / 2
+
+    @property
+    def theta0(self):
+        """Initial θ (Quet), rad."""
+        return self.inner0 + self.theta_ref
+
+    def swing_plane_rate_rad_s(self):
+        """n times the projection of Earth's axis on the plane of the inner swing (outer_fixed):
+        m = n √(cos² ω + sin² ω cos² α); n for Quet's α = 0, whatever PP'."""
+        return self.site.earth_rate_rad_s * math.hypot(self.cos_omega, self.sin_omega * math.cos(self.alpha_fixed))
+
+    # ---------------------------------------------------------------- predictions
+    def predictions(self):
+        """Quet sec. 4 §IV periods in the printed thin-ring form and the thick-ring form.
+
+        All durations are one swing (HALF the period), T = π/√K, in seconds, evaluated with the
+        ring moments the simulation uses (zero when ``ring_inertia`` is absent) and the configured
+        spin ρ0. Keys:
+
+        * ``T_quet_s``, ``T_prime_quet_s``, ``T_second_quet_s``, ``T_third_quet_s``: T (this
+          PP'), T' (PP' vertical), T'' (outer ring fixed across the meridian), T''' (PP'
+          east–west), with Quet's A + 2A1 + A2 (T'': A + A1);
+        * ``T_thick_s`` ... ``T_third_thick_s``: the same with the correct A + C1 + A2;
+        * ``applies``: which of T, T', T'', T''' the configured case is (None when free; for
+          outer_fixed with α ≠ 0 the generalised T'' with m = n √(cos²ω + sin²ω cos²α));
+        * ``swing_duration_quet_s`` / ``swing_duration_small_s``: the configured case in
+          Quet's printed form / the correct first-order form; ``quet_relative_error`` their
+          ratio − 1; ``swing_duration_exact_s`` with the O(n²) terms; ``period_s`` = 2 T;
+        * ``conserved_spin_rad_s``: eq. (13) at release; ``inner_reference_rad`` θ_ref;
+        * ``nutation_half_period_s``: §V eq. (14), leading term, π √(a u0²) / (C ρ0 sin θ0),
+          the fast gimbal nutation (free configuration).
+        """
+        n = self.site.earth_rate_rad_s
+        A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
+        rho0 = self.spin_rate_rad_s
+        cos_g = math.cos(self.site.latitude_rad)
+        J_quet = A + 2.0 * A1 + A2
+        J_thick = A + C1 + A2
+        J_fixed = A + A1
+        out = {"configuration": self.configuration, "sin_omega": self.sin_omega, "cos_omega": self.cos_omega,
+               "k_rad_s": self.k, "k_prime_rad_s": self.k_prime,
+               "inertia_locked_quet_kg_m2": J_quet, "inertia_locked_kg_m2": J_thick,
+               "inertia_outer_fixed_kg_m2": J_fixed}
+        for key, rate in (("T", self.k_prime), ("T_prime", n * cos_g), ("T_third", n)):
+            out[f"{key}_quet_s"] = swing_duration_s(J_quet, C, rate, rho0)
+            out[f"{key}_thick_s"] = swing_duration_s(J_thick, C, rate, rho0)
+        out["T_second_quet_s"] = out["T_second_thick_s"] = swing_duration_s(J_fixed, C, n, rho0)
+        theta0, psi0 = self.theta0, self.psi0
+        out["conserved_spin_rad_s"] = float(spin_invariant(rho0, theta0, psi0, self.k, self.k_prime))
+        out["inner_reference_rad"] = self.theta_ref
+        out["outer_reference_rad"] = math.pi / 2
+        conf = self.configuration
+        applies, Tq, Ts, Te = None, math.nan, math.nan, math.nan
+        if conf == "locked":
+            applies = {"vertical": "T'", "east_west": "T'''"}.get(self.outer_axis, "T")
+            Tq, Ts = out["T_quet_s"], out["T_thick_s"]
+            rho_eq = rho0 + self.k_prime * (math.cos(self.outer0) - 1.0)
+            K = locked_swing_constant(A, C, C1, A2, self.C2, self.k_prime, rho_eq)
+            Te = math.pi / math.sqrt(K) if K > 0 else math.inf
+        elif conf == "outer_fixed":
+            m = self.swing_plane_rate_rad_s()
+            applies = "T''" if self.alpha_fixed == 0.0 else "T'' (generalised)"
+            Tq = Ts = swing_duration_s(J_fixed, C, m, rho0)
+            rho_eq = rho0 + m * (math.cos(self.inner0) - 1.0)
+            K = outer_fixed_swing_constant(A, C, A1, C1, m, rho_eq)
+            Te = math.pi / math.sqrt(K) if K > 0 else math.inf
+        out["applies"] = applies
+        out["swing_duration_quet_s"] = Tq
+        out["swing_duration_small_s"] = Ts
+        out["swing_duration_exact_s"] = Te
+        out["quet_relative_error"] = Tq / Ts - 1.0 if math.isfinite(Ts) and Ts > 0 else math.nan
+        out["period_s"] = 2.0 * Ts
+        s0 = math.sin(theta0)
+        u02 = (A + C1 - A1) * s0 ** 2 + A1 + A2
+        out["nutation_half_period_s"] = (math.pi * math.sqrt((A + A1) * u02) / abs(C * rho0 * s0)
+                                         if rho0 != 0.0 and s0 != 0.0 else math.inf)
+        return out
+
+    def scales(self, duration_s):
+        """Characteristic scales for ``Effect.relative_size``: swing and gyroscopic rates, ring ratio."""
+        pred = self.predictions()
+        conf = self.configuration
+        if conf == "outer_fixed":
+            J = self.A + self.A1
+            ring_ratio = self.A1_given / self.A
+            amp = abs(self.inner0)
+        else:
+            J = self.A + self.C1 + self.A2
+            ring_ratio = (self.C1_given + self.A2_given) / self.A
+            amp = abs(self.outer0)
+        T0 = pred["swing_duration_small_s"]
+        return {"earth_rate_rad_s": self.site.earth_rate_rad_s,
+                "gyro_rate_rad_s": abs(self.C * self.spin_rate_rad_s / J) or None,
+                "restoring_rate_rad_s": math.pi / T0 if math.isfinite(T0) and T0 > 0 else 0.0,
+                "ring_inertia_ratio": ring_ratio, "amplitude_rad": amp, "duration_s": duration_s}
+
+    # ---------------------------------------------------------------- model
+    def swing_inertias(self):
+        """(J_outer, J_inner): A + C1 + A2 about PP' (rings perpendicular) and A + A1 about NN', kg m²."""
+        return self.A + self.C1 + self.A2, self.A + self.A1
+
+    def build_chain(self):
+        """Hinge chain outer ring (about oz) → inner ring (about NN') → rotor (about oQ).
+
+        ``pivot_damping`` puts −(2/τ) J q̇ on the outer and inner hinges with the constant swing
+        inertias of :meth:`swing_inertias` (small swings decay as e^(−t/τ)); ``spin_decay`` puts
+        −C φ̇ / τ on the rotor bearing (φ̇ the rotor's rate relative to the inner ring; an internal
+        torque, so it enters the rotor's equation only).
+        """
+        conf = self.configuration
+        links = [
+            Link("outer_ring", np.array([0.0, 0.0, 1.0]), np.diag([self.A2, self.C2, self.A2]),
+                 locked=(conf == "outer_fixed"), locked_angle=self.alpha_fixed + math.pi / 2),
+            Link("inner_ring", np.array([1.0, 0.0, 0.0]), np.diag([self.A1, self.C1, self.A1]),
+                 locked=(conf == "locked"), locked_angle=math.pi / 2),
+            Link("rotor", np.array([0.0, 0.0, 1.0]), np.diag([self.A, self.A, self.C])),
+        ]
+        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
+        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
+        J_out, J_in = self.swing_inertias()
+        C = self.C
+        torques = None
+        if damp or tau_s:
+            def torques(q, qd, w_axis):
+                out = np.zeros(3)
+                if damp:
+                    out[0] = -damp * J_out * qd[0]
+                    out[1] = -damp * J_in * qd[1]
+                if tau_s:
+                    out[2] = -C * qd[2] / tau_s
+                return out
+        g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
+        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
+                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
+                          hinge_torques=torques)
+
+    def initial_state(self, chain):
+        """y0 = [q_free, q̇_free] at release: ψ0, θ0, φ0 = 0, ψ̇0, θ̇0, φ̇0 = ρ0 − ψ̇0 cos θ0."""
+        q = np.array([self.psi0, self.theta0, 0.0])
+        qd = np.array([self.outer_rate0, self.inner_rate0,
+                       self.spin_rate_rad_s - self.outer_rate0 * math.cos(self.theta0)])
+        return np.concatenate([q[chain.free], qd[chain.free]])
+
+    def simulate(self, t):
+        """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
+
+        Parameters
+        ----------
+        t : array_like
+            Increasing sample times, s.
+
+        Returns
+        -------
+        Simulation
+            ``columns`` as in ``COLUMNS``; ``extra`` holds ``psi``, ``theta`` (Quet's angles,
+            rad), ``rotor_joint_rate`` (φ̇, rad/s) and the ``chain``.
+        """
+        t = np.asarray(t, dtype=float)
+        chain = self.build_chain()
+        y0 = self.initial_state(chain)
+        traj = integrate(chain.rhs, y0, t, rtol=self.rtol, atol=1e-13)
+        nf = chain.nf
+        m = traj.y.shape[1]
+        q = np.array([[L.locked_angle] * m for L in chain.links], dtype=float)
+        qd = np.zeros((3, m))
+        q[chain.free] = traj.y[:nf]
+        qd[chain.free] = traj.y[nf:]
+        psi, theta, phi = q
+        psid, thetad, phid = qd
+        rho = phid + psid * np.cos(theta)
+        cols = {"outer_angle": psi - math.pi / 2, "inner_angle": theta - self.theta_ref, "rotor_angle": phi,
+                "outer_rate": psid, "inner_rate": thetad, "spin_rate": rho}
+        return Simulation(traj.t, cols, traj,
+                          extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
+
+    # ---------------------------------------------------------------- invariants
+    def invariants(self, sim):
+        """Quet's integrals along a simulation (arrays over the samples).
+
+        Returns
+        -------
+        dict
+            ``spin_13_rad_s``: eq. (13), ρ − k cos θ + k' sin θ sin ψ; ``energy_12_J``: eq. (12,
+            first), a θ̇² + u²ψ̇² + Cρ² (twice the relative kinetic energy); ``jacobi_J``: the
+            exact integral T_rel − ½ Σ Ωᵀ I Ω (J); ``axial_momentum_kg_m2_s``: §V eq. (2, second)
+            (conserved when k' = 0).
+        """
+        psi, theta = sim.extra["psi"], sim.extra["theta"]
+        c = sim.columns
+        A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
+        e12 = quet_energy(theta, c["inner_rate"], c["outer_rate"], c["spin_rate"], A, C, A1, C1, A2)
+        chain = sim.extra["chain"]
+        om = chain.omega_base
+        t0 = np.empty_like(e12)
+        for i in range(e12.size):
+            qf = np.array([psi[i], theta[i], 0.0])[chain.free]
+            Bs = chain.orientations(chain.full_coordinates(qf, np.zeros(chain.nf))[0])
+            t0[i] = 0.5 * sum((B.T @ om) @ L.inertia @ (B.T @ om) for B, L in zip(Bs, chain.links))
+        return {"spin_13_rad_s": spin_invariant(c["spin_rate"], theta, psi, self.k, self.k_prime),
+                "energy_12_J": e12,
+                "jacobi_J": 0.5 * e12 - t0,
+                "axial_momentum_kg_m2_s": axial_momentum(theta, c["outer_rate"], c["spin_rate"], self.k,
+                                                         A, C, A1, C1, A2)}
