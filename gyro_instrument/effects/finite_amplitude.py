@@ -6,7 +6,10 @@ linearised model is integrated (sin u → u, the pendulum's Binet ellipse). The 
 duration grows as (2/π) K(sin(a/2)) ≈ 1 + a²/16 (pendulum law; sec. 2 eq. 42).
 """
 
+import math
+
 import numpy as np
+from scipy.special import ellipk
 
 from gyro_instrument.core.effect import Effect
 
@@ -25,3 +28,10 @@ class FiniteAmplitude(Effect):
 def restoring_sine(u, exact):
     """sin u when ``exact`` (finite amplitude listed), else u (small-angle model)."""
     return np.sin(u) if exact else u
+
+
+def finite_amplitude_factor(amplitude_rad):
+    """(2/π) K(sin(a/2)): swing duration at amplitude a over the small-amplitude one (pendulum law,
+    Quet sec. 4 §1 item 6; ≈ 1 + a²/16)."""
+    m = math.sin(abs(amplitude_rad) / 2.0) ** 2
+    return 2.0 / math.pi * float(ellipk(m))

@@ -3,9 +3,10 @@
 ``REGISTRY`` maps the ``type`` used in scene files to the instrument class.
 """
 
+from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
-REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum)}
+REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope)}
 
-__all__ = ["REGISTRY", "CompoundPendulum", "PlaneGyroscope", "SphericalPendulum"]
+__all__ = ["REGISTRY", "CompoundPendulum", "FreeGyroscope", "PlaneGyroscope", "SphericalPendulum"]

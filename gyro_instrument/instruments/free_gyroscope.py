@@ -64,6 +64,18 @@ Predictions (Quet eqs. 16, 19, 47, 48)
   In general d²(cos θ)/dt² = n sin²θ0 [μ ρ0 + (μ − 1) n cos θ0] at release; Quet's eq. (9)
   gives only the first term.
 
+Checks of the printed text (sec. 4 §II)
+---------------------------------------
+* Sphere (μ = 1), eqs. (20)–(46): these are exact (the Jacobi correction vanishes), and
+  quadrature of eq. (21) over a half period along eq. (30) gives V = n to 1e-15 for any n/ρ0
+  (checked at n/ρ0 = 1/2 … 1/60): eq. (47) is exact, not only first order. Eq. (42) reproduces
+  this only with A2 = −n (cos θ0 − cos θ')/4 in eq. (32) (printed +); eq. (46) as printed
+  gives 1.00012 n at n/ρ0 = 1/60. The first series (36) lacks the factor 2 on tan²μ cos 4x.
+* Eqs. (12), (51) print d²θ/dt² for (dθ/dt)²; the integral of eq. (18) is garbled (it is
+  n ρ0 (t − sin(ht)/h)/(ρ0 − 2n cos θ0)); the nutation period is once printed 2π/n (2π/h);
+  "1/72000 mm" computes to 1/7200 mm (2n/ρ0 × 0.36 m/(2π) = 1.4e-4 mm).
+* Eqs. (16), (19) agree with the closed form to ≤ 5 (n/(μρ0)) β, signs included.
+
 Numerical path (``model: numerical``)
 -------------------------------------
 The unit quaternion q (body → inertial, scalar first; body z is the figure axis) and the

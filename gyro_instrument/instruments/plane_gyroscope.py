@@ -27,13 +27,12 @@ the axis about the cone axis, from the half-plane toward Earth's north axis.
 import math
 
 import numpy as np
-from scipy.special import ellipk
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.effects.finite_amplitude import restoring_sine
+from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor  # noqa: F401 (re-export)
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 
@@ -60,12 +59,6 @@ def swing_duration_small_s(mu, earth_rate, spin, sin_omega, sin_eps=1.0):
     if k <= 0.0:
         return math.inf
     return math.pi * math.sqrt(sin_eps / k)
-
-
-def finite_amplitude_factor(amplitude_rad):
-    """(2/π) K(sin(a/2)) — the pendulum's finite-amplitude factor on the period (item 6)."""
-    m = math.sin(abs(amplitude_rad) / 2.0) ** 2
-    return 2.0 / math.pi * float(ellipk(m))
 
 
 class PlaneGyroscope(Instrument):
