@@ -6,7 +6,8 @@
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
+from gyro_instrument.instruments.puiseux import PuiseuxBody
 
-REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope)}
+REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody)}
 
-__all__ = ["REGISTRY", "CompoundPendulum", "FreeGyroscope", "PlaneGyroscope", "SphericalPendulum"]
+__all__ = ["REGISTRY", "CompoundPendulum", "FreeGyroscope", "PlaneGyroscope", "PuiseuxBody", "SphericalPendulum"]
