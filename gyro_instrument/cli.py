@@ -151,6 +151,43 @@ def write_csv(path, t, columns):
     os.replace(tmp, path)
 
 
+def _fmt(v, spec):
+    return "null" if v is None else format(v, spec)
+
+
+def print_estimate(r, stream=None):
+    """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
+    w = (stream or sys.stdout).write
+    tr = r["truth"]
+    w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
+    w(f"  latitude   {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
+      f"   truth {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
+    w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
+      f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
+    if r.get("method"):
+        w(f"  method: {r['method']}\n")
+    if r.get("reason"):
+        w(f"  reason: {r['reason']}\n")
+    for name, e in r["instruments"].items():
+        if e.get("swing_duration_s") is not None:
+            c = e.get("counting", {})
+            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s (fit), "
+              f"T0 = {e['small_amplitude_swing_duration_s']:.9f} s; counting: {_fmt(c.get('swing_duration_s'), '.6f')} s"
+              f" ({c.get('swings')} swings)\n")
+        elif e.get("foucault_rate_rad_s") is not None:
+            w(f"  {name}: k = {e['foucault_rate_rad_s']:.6e} +/- {e['foucault_rate_sigma_rad_s']:.2g} rad/s "
+              f"(ellipse correction {e['ellipse_correction_rad_s']:.2g})\n")
+        else:
+            w(f"  {name}: null: {e.get('reason')}\n")
+    for mname, m in r["methods"].items():
+        lat = m.get("latitude_deg")
+        w(f"  method {mname}: latitude {_fmt(lat, '.7f')}" + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None
+                                                             and m.get("latitude_sigma_deg") is not None else "")
+          + (f", n = {m['earth_rate_rad_s']:.9e}" if m.get("earth_rate_rad_s") is not None else "")
+          + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
+          + "\n")
+
+
 # ----------------------------------------------------------------------------- main
 def build_parser():
     parser = argparse.ArgumentParser(
@@ -167,6 +204,10 @@ def build_parser():
     p.add_argument("--out", required=True, metavar="FILE.csv",
                    help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p = sub.add_parser("estimate", help="simulate the scene's instruments through their sensors and estimate "
+                                        "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors")
+    add_scene_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
     return parser
 
 
@@ -209,6 +250,17 @@ def run_command(args):
             wall = sum(s.trajectory.wall_time_s for s in sims.values())
             progress(f"wrote {args.out}: {t.size} rows x {len(columns) + 1} columns "
                      f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
+        return 0
+    if args.command == "estimate":
+        from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+        scene = scene_from_args(args)
+        truth = simulate_truth(scene)
+        result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
+        result["seed"] = scene.seed
+        if args.json:
+            print(json.dumps(result, indent=2))
+        else:
+            print_estimate(result)
         return 0
     raise AssertionError(args.command)
 

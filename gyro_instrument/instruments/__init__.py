@@ -4,10 +4,11 @@
 """
 
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
+from gyro_instrument.instruments.gimbal import GimbalGyroscope
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 from gyro_instrument.instruments.puiseux import PuiseuxBody
 
-REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody)}
+REGISTRY = {cls.type_name: cls for cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope)}
 
-__all__ = ["REGISTRY", "CompoundPendulum", "FreeGyroscope", "PlaneGyroscope", "PuiseuxBody", "SphericalPendulum"]
+__all__ = ["REGISTRY", "CompoundPendulum", "FreeGyroscope", "GimbalGyroscope", "PlaneGyroscope", "PuiseuxBody", "SphericalPendulum"]

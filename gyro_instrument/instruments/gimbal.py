@@ -356,6 +356,30 @@ class GimbalGyroscope(Instrument):
         self.outer_rate0 = math.radians(self.initial_outer_rate_deg_s)
         self.inner_rate0 = math.radians(self.initial_inner_rate_deg_s)
 
+    def directing_model(self):
+        """What an estimator may know: K = (π/T0)² = gain · n ρ · s(γ) for the configured swing, or
+        None for free rings (no single directing line).
+
+        ``locked``: the rotor axis swings about PP' with inertia A + C1 + A2 (thick-ring form; Quet's
+        A + 2A1 + A2 for thin rings), s = sin ω of PP' (T, T', T'''). ``outer_fixed``: the inner ring
+        swings in the plane normal to NN' with inertia A + A1 (T'').
+        """
+        if self.configuration == "locked":
+            normal = self.pp_enu
+            gain = self.C / (self.A + self.C1 + self.A2)
+            label = {"vertical": "horizontal", "east_west": "meridian"}.get(self.outer_axis, self.outer_axis)
+            chan = "outer_angle"
+        elif self.configuration == "outer_fixed":
+            psi = self.outer0 + math.pi / 2
+            normal = self.frame @ np.array([math.cos(psi), math.sin(psi), 0.0])
+            gain = self.C / (self.A + self.A1)
+            label = "meridian" if abs(normal[0]) > 1 - 1e-9 else "outer_fixed"
+            chan = "inner_angle"
+        else:
+            return None
+        return {"gain": gain, "normal_enu": tuple(float(v) for v in normal), "label": label, "angle_channel": chan,
+                "null_reason": "the swing plane is perpendicular to Earth's axis here: no restoring torque"}
+
     # ---------------------------------------------------------------- geometry helpers
     @property
     def psi0(self):
@@ -535,6 +559,23 @@ class GimbalGyroscope(Instrument):
                 "outer_rate": psid, "inner_rate": thetad, "spin_rate": rho}
         return Simulation(traj.t, cols, traj,
                           extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
+
+    def mass_matrix(self, chain, qf):
+        """Mass matrix M(q) of the free coordinates (Kane: M_ab = Σ_k P_kaᵀ I_k P_kb), kg m².
+
+        For the free configuration, from eq. (12, first), M = [[u² + C cos²θ, 0, C cos θ],
+        [0, a, 0], [C cos θ, 0, C]] in (ψ, θ, φ), so det M = a C u² with u² ≥ A1 + A2: the
+        rings keep M regular at gimbal lock (θ → 0), where massless rings give a C A sin²θ → 0.
+        """
+        q, qd = chain.full_coordinates(np.asarray(qf, dtype=float), np.zeros(chain.nf))
+        _, _, _, P = chain.kinematics(q, qd)
+        M = np.zeros((chain.nf, chain.nf))
+        for k, L in enumerate(chain.links):
+            for a, j in enumerate(chain.free):
+                for b, i in enumerate(chain.free):
+                    if j <= k and i <= k:
+                        M[a, b] += P[k][j] @ L.inertia @ P[k][i]
+        return M
 
     # ---------------------------------------------------------------- invariants
     def invariants(self, sim):

@@ -119,6 +119,15 @@ class PlaneGyroscope(Instrument):
                 "period_s": 2.0 * T0,
                 "conserved_spin_rad_s": self.spin_rate_rad_s + n * self.sin_omega * math.cos(self.u0)}
 
+    def directing_model(self):
+        """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with
+        gain = μ (μ / sin ε on a cone) and sin ω from the plane normal (ENU) and the latitude."""
+        gain = self.mu / (math.sin(self.eps) if self.is_cone else 1.0)
+        return {"gain": gain, "normal_enu": tuple(float(v) for v in self.normal), "label": self.plane,
+                "angle_channel": "angle",
+                "null_reason": "a directing plane perpendicular to Earth's axis (horizontal at a pole) has no "
+                               "restoring torque (Quet sec. 4 §1 item 4)"}
+
     def scales(self, duration_s):
         n = self.site.earth_rate_rad_s
         T0 = self.predictions()["swing_duration_small_s"]

@@ -1,0 +1,165 @@
+"""Latitude γ and Earth rate n from the instruments' measurements, with honest uncertainty.
+
+Each measurement is linear in the unknown rates for a fixed latitude:
+
+* a gyroscope whose axis swings about a directing line (plane gyroscope, cone, locked gimbal):
+  K = (π/T0)² = g n ρ s(γ) (Quet sec. 4 §1 eq. 9; §IV), g = C/J the known inertia gain, ρ the mean
+  measured spin, T0 the small-amplitude swing duration, s(γ) = sin ω the sine of the angle between
+  the directing plane's normal and Earth's axis: cos γ for a horizontal plane, 1 for the meridian.
+  Dividing by g ρ gives y = n s(γ);
+* a Foucault pendulum: k = n sin γ (sec. 2).
+
+For each trial γ the best n (or, when the inertia gain is not trusted, n and G = g n) follows in
+closed form, so the weighted χ² is profiled over γ alone; γ̂ is its minimum on [−90°, 90°] and
+the 1-σ interval is where χ² rises by 1. This reproduces Quet's item 9 (cos γ = (T_m/T_h)² ρ_m/ρ_h)
+and eq. (10) (n = π²/(μ ρ0 T_m²)) when only the two gyroscopes are given, and stays honest near the
+equator (cos γ flat: the gyroscopes' interval widens as 1/sin γ) and the pole (sin γ flat: the
+pendulum's widens as 1/cos γ) — the two instruments complement each other.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+
+@dataclass
+class RateMeasurement:
+    """y = n · s(γ) (``kind='gyro'``, y = K/(gρ)) or y = n sin γ (``kind='pendulum'``).
+
+    ``geometry`` is the plane normal in ENU for a gyroscope (s = √(1 − (N·a(γ))²), a(γ) the unit
+    Earth axis (0, cos γ, sin γ)); ``gain_known`` False means y = K/ρ and the gain is fitted.
+    """
+
+    name: str
+    kind: str
+    value: float
+    sigma: float
+    geometry: tuple = (0.0, 0.0, 1.0)
+    gain_known: bool = True
+    crlb_sigma: float = math.nan
+
+    def shape(self, gamma):
+        if self.kind == "pendulum":
+            return math.sin(gamma)
+        nx, ny, nz = self.geometry
+        norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+        c = (ny * math.cos(gamma) + nz * math.sin(gamma)) / norm
+        return math.sqrt(max(1.0 - c * c, 0.0))
+
+
+def _chi2(gamma, meas, use_crlb=False):
+    """Profiled χ²(γ) and the best rates (n, G) at that γ."""
+    rows, ys, ws = [], [], []
+    has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
+    for m in meas:
+        s = m.shape(gamma)
+        sig = m.crlb_sigma if use_crlb else m.sigma
+        if m.kind == "gyro" and not m.gain_known:
+            rows.append([0.0, s])
+        else:
+            rows.append([s, 0.0] if has_gain else [s])
+        ys.append(m.value)
+        ws.append(1.0 / sig)
+    X = np.array(rows) * np.array(ws)[:, None]
+    y = np.array(ys) * np.array(ws)
+    theta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ theta
+    return float(r @ r), theta
+
+
+@dataclass
+class LatitudeResult:
+    latitude_rad: float
+    latitude_lo_rad: float
+    latitude_hi_rad: float
+    earth_rate_rad_s: float
+    earth_rate_sigma_rad_s: float
+    chi2: float
+    dof: int
+    carried_by: dict
+
+    @property
+    def latitude_sigma_rad(self):
+        return 0.5 * (self.latitude_hi_rad - self.latitude_lo_rad)
+
+
+def solve_latitude(meas, use_crlb=False, prefer_north=True):
+    """Profile-likelihood latitude and Earth rate from :class:`RateMeasurement` objects.
+
+    Returns
+    -------
+    LatitudeResult
+        γ̂ with its Δχ² = 1 interval, n̂ with its standard error, and each instrument's share of the
+        Fisher information on γ at γ̂ (``carried_by``).
+    """
+    if len(meas) < 2:
+        raise ValueError("need at least two measurements to separate latitude and Earth rate")
+    half = math.pi / 2
+    f = lambda g: _chi2(g, meas, use_crlb)[0]  # noqa: E731
+    grid = np.linspace(-half, half, 3601)
+    vals = np.array([f(g) for g in grid])
+    best = float(vals.min())
+    # symmetric minima (no pendulum): prefer the northern one
+    cands = np.nonzero(vals <= best + 1e-9 * max(best, 1.0) + 1e-12)[0]
+    i = int(cands[-1] if prefer_north else cands[0]) if len(cands) > 1 else int(np.argmin(vals))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
+    res = minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
+    g_hat = float(res.x) if res.fun <= vals[i] else float(grid[i])
+    c_min = f(g_hat)
+    target = c_min + 1.0
+
+    def edge(direction):
+        step = 1e-9
+        g = g_hat
+        while True:
+            g2 = g_hat + direction * step
+            if abs(g2) >= half:
+                g2 = math.copysign(half, g2)
+                return g2 if f(g2) <= target else brentq(lambda x: f(x) - target, g, g2, xtol=1e-15)
+            if f(g2) > target:
+                return brentq(lambda x: f(x) - target, g, g2, xtol=1e-15)
+            g = g2
+            step *= 2.0
+
+    g_lo, g_hi = edge(-1.0), edge(+1.0)
+    _, theta = _chi2(g_hat, meas, use_crlb)
+    n_hat = float(theta[0])
+    # σ(n) at fixed γ̂ plus the γ uncertainty propagated (numerical derivative of n̂(γ))
+    has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
+    rows, ws = [], []
+    for m in meas:
+        s = m.shape(g_hat)
+        sig = m.crlb_sigma if use_crlb else m.sigma
+        rows.append(([0.0, s] if (m.kind == "gyro" and not m.gain_known) else ([s, 0.0] if has_gain else [s])))
+        ws.append(1.0 / sig)
+    X = np.array(rows) * np.array(ws)[:, None]
+    cov = np.linalg.pinv(X.T @ X)
+    sig_n_fixed = math.sqrt(max(cov[0, 0], 0.0))
+    dg = 1e-7
+    n_plus = _chi2(min(g_hat + dg, half), meas, use_crlb)[1][0]
+    n_minus = _chi2(max(g_hat - dg, -half), meas, use_crlb)[1][0]
+    dn_dg = (n_plus - n_minus) / (min(g_hat + dg, half) - max(g_hat - dg, -half))
+    sig_g = 0.5 * (g_hi - g_lo)
+    sig_n = math.sqrt(sig_n_fixed ** 2 + (dn_dg * sig_g) ** 2)
+    # information share on γ (n held at n̂)
+    info = {}
+    for m in meas:
+        sig = m.crlb_sigma if use_crlb else m.sigma
+        ds = (m.shape(min(g_hat + dg, half)) - m.shape(max(g_hat - dg, -half))) / (2 * dg)
+        info[m.name] = (n_hat * ds / sig) ** 2
+    total = sum(info.values()) or 1.0
+    share = {k: v / total for k, v in info.items()}
+    dof = len(meas) - (2 + (1 if has_gain else 0))
+    return LatitudeResult(g_hat, g_lo, g_hi, n_hat, sig_n, c_min, dof, share)
+
+
+def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_horizontal=1.0):
+    """Quet item 9: cos γ = (T_m / T_h)² · ρ_m / ρ_h (small-amplitude one-swing durations)."""
+    return (T_meridian_s / T_horizontal_s) ** 2 * spin_meridian / spin_horizontal
+
+
+def eq10_earth_rate(T_s, inertia_ratio, spin_rad_s, sin_omega=1.0):
+    """Eq. (10): n = π² / (μ ρ0 T² sin ω) (item 8's printed π/(μρ0T²) is a misprint)."""
+    return math.pi ** 2 / (inertia_ratio * spin_rad_s * T_s ** 2 * sin_omega)

@@ -1,0 +1,273 @@
+"""From a scene to estimates: simulate the truth, measure through the sensor model, estimate.
+
+``simulate_truth`` runs each instrument once; ``measure`` draws the sensor samples for one seed
+(so 200 seeded runs cost one simulation); ``estimate_records`` turns measured records into the
+``estimate`` JSON object: per-instrument periods (fit and Quet's counting), Quet's item 9 and
+eq. (10), the Foucault rate with its ellipse correction, and the combined latitude and Earth
+rate (profile likelihood, :mod:`.latitude`) with their Cramér–Rao bounds. Quantities that cannot
+be estimated are ``None`` with a reason — never NaN, infinity or a crash.
+"""
+
+import math
+
+import numpy as np
+
+from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
+from gyro_instrument.estimators.foucault import estimate_foucault
+from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude
+from gyro_instrument.estimators.period import EstimationError, count_oscillations, fit_oscillation
+from gyro_instrument.scenes import build_instruments
+from gyro_instrument.sensors import SensorModel, scene_rng
+
+#: Detection threshold: an oscillation counts when A² N / (4 σ²) exceeds this (the periodogram
+#: peak of pure noise is ~ln N ≈ 10 for N ~ 1e4).
+DETECTION_SNR = 100.0
+
+
+def sample_times(scene):
+    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    return np.arange(n) / scene.sample_rate_hz
+
+
+def simulate_truth(scene):
+    """(t, instruments, sims): the noiseless simulation of every instrument."""
+    t = sample_times(scene)
+    insts = build_instruments(scene)
+    return t, insts, {name: inst.simulate(t) for name, inst in insts.items()}
+
+
+def measure(scene, truth, seed=None):
+    """Measured records for one seed: name -> {'t', channel arrays}."""
+    t, insts, sims = truth
+    sensor = SensorModel.from_scene(scene)
+    seed = scene.seed if seed is None else seed
+    records = {}
+    for name, inst in insts.items():
+        rng = scene_rng(seed, name)
+        cols = sims[name].columns
+        rec = {"t": t.copy()}
+        if inst.type_name in ("spherical_pendulum", "compound_pendulum"):
+            l = getattr(inst, "l", None) or getattr(inst, "lc", 1.0)
+            rec["deflection_east"] = sensor.measure_angle(cols["x_east"] / l, rng)
+            rec["deflection_north"] = sensor.measure_angle(cols["y_north"] / l, rng)
+        elif getattr(inst, "directing_model", lambda: None)() is not None:
+            chan = inst.directing_model()["angle_channel"]
+            rec["angle"] = sensor.measure_angle(cols[chan], rng)
+            rec["spin_rate"] = sensor.measure_rate(cols["spin_rate"], rng)
+        records[name] = rec
+    return records
+
+
+def _gyro_estimate(inst, rec, sigma_sensor):
+    """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline."""
+    t, y = rec["t"], rec["angle"]
+    out = {"type": inst.type_name}
+    model = inst.directing_model()
+    out["configuration"] = model["label"]
+    spin = rec["spin_rate"]
+    spin_ok = np.isfinite(spin)
+    if not spin_ok.any():
+        return out | {"swing_duration_s": None, "reason": "no valid spin samples"}
+    rho_mean = float(np.mean(spin[spin_ok]))
+    out["mean_spin_rad_s"] = rho_mean
+    warp = env = None
+    notes = []
+    if spin_ok.sum() > 10:
+        # spin decay: use the measured spin history (time warp and adiabatic envelope)
+        coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
+        smooth = np.polyval(coef, t)
+        change = abs(smooth[-1] - smooth[0])
+        noise = np.std(spin[spin_ok] - np.polyval(coef, t[spin_ok]))
+        if change > max(10 * noise / math.sqrt(spin_ok.sum()), 1e-9 * abs(rho_mean)) and change > 1e-6 * abs(rho_mean):
+            ratio = np.clip(smooth / rho_mean, 1e-6, None)
+            warp = np.concatenate([[0.0], np.cumsum(0.5 * (np.sqrt(ratio[1:]) + np.sqrt(ratio[:-1])) * np.diff(t))])
+            env = ratio ** -0.25
+            notes.append(f"spin changed by {change / abs(rho_mean):.3g} relative: fitted in spin-warped time")
+    try:
+        fit = fit_oscillation(t, y, warp=warp, envelope=env)
+    except EstimationError as exc:
+        return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
+    snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
+    if snr < DETECTION_SNR:
+        return out | {"swing_duration_s": None,
+                      "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model['null_reason']}"}
+    # damping: refit with an envelope when it lowers the residual significantly
+    try:
+        dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, damping=True, warp=warp, envelope=env)
+        if fit.residual_rms ** 2 - dfit.residual_rms ** 2 > 10.0 * fit.residual_rms ** 2 / fit.n_samples:
+            notes.append(f"damping fitted: {dfit.damping_per_s:.3g} 1/s")
+            fit = dfit
+    except EstimationError:
+        pass
+    a = fit.amplitude
+    if fit.damping_per_s:
+        tau = (t - np.mean(t))
+        a = a * math.sqrt(float(np.mean(np.exp(-2 * fit.damping_per_s * tau))))
+    F = finite_amplitude_factor(a)
+    T = fit.swing_duration_s
+    T0 = T / F
+    sig_T0 = fit.swing_duration_sigma_s / F
+    crlb_T0 = math.pi * fit.crlb_omega_rad_s / fit.omega_rad_s ** 2 / F
+    out.update({"swing_duration_s": T, "swing_duration_sigma_s": fit.swing_duration_sigma_s,
+                "small_amplitude_swing_duration_s": T0, "small_amplitude_swing_duration_sigma_s": sig_T0,
+                "crlb_swing_duration_s": crlb_T0 * F, "amplitude_rad": a, "finite_amplitude_factor": F,
+                "period_s": 2 * T, "noise_rad": fit.residual_rms, "fit_method": fit.method,
+                "samples": fit.n_samples, "notes": notes + fit.notes})
+    try:
+        c = count_oscillations(t, y)
+        out["counting"] = {"swing_duration_s": c.swing_duration_s, "swing_duration_sigma_s": c.swing_duration_sigma_s,
+                           "swings": c.swings, "small_amplitude_swing_duration_s": c.swing_duration_s / F}
+    except EstimationError as exc:
+        out["counting"] = {"swing_duration_s": None, "reason": str(exc)}
+    K = (math.pi / T0) ** 2
+    y_val = K / (model["gain"] * rho_mean)
+    rel = 2 * sig_T0 / T0
+    out["_measurement"] = RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model["normal_enu"]),
+                                          True, y_val * 2 * crlb_T0 / T0)
+    return out
+
+
+def estimate_records(scene, insts, records):
+    """The ``estimate`` JSON object (see module docstring) from measured records."""
+    site = scene.site
+    n_true = site.earth_rate_rad_s
+    result = {"scene": scene.name, "observation_s": float(scene.duration_s),
+              "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": n_true},
+              "instruments": {}, "methods": {}}
+    sensor = SensorModel.from_scene(scene)
+    meas = []
+    gyros = {}
+    pend = None
+    for name, inst in insts.items():
+        rec = records[name]
+        if "angle" in rec and inst.directing_model() is not None:
+            est = _gyro_estimate(inst, rec, sensor.effective_sigma_rad())
+            m = est.pop("_measurement", None)
+            if m is not None:
+                meas.append(m)
+                gyros[name] = (inst, est, m)
+            result["instruments"][name] = est
+        elif "deflection_east" in rec:
+            try:
+                f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"])
+                est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
+                       "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
+                       "measured_plane_rate_rad_s": f.measured_rate_rad_s,
+                       "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
+                       "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
+                       "notes": f.notes}
+                m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=f.crlb_k_rad_s)
+                meas.append(m)
+                pend = (inst, est, m)
+            except EstimationError as exc:
+                est = {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}
+            result["instruments"][name] = est
+        else:
+            result["instruments"][name] = {"type": inst.type_name, "reason": "not used by the estimator "
+                                           "(no Earth-rate measurement from this instrument)"}
+    _classic_methods(result, gyros, pend)
+    # combined
+    if len(meas) >= 2:
+        try:
+            sol = solve_latitude(meas)
+            crlb = solve_latitude(meas, use_crlb=True)
+            result.update({"latitude_deg": math.degrees(sol.latitude_rad),
+                           "latitude_sigma_deg": math.degrees(sol.latitude_sigma_rad),
+                           "latitude_interval_deg": [math.degrees(sol.latitude_lo_rad), math.degrees(sol.latitude_hi_rad)],
+                           "earth_rate_rad_s": sol.earth_rate_rad_s,
+                           "earth_rate_sigma_rad_s": sol.earth_rate_sigma_rad_s,
+                           "crlb": {"latitude_deg": math.degrees(crlb.latitude_sigma_rad),
+                                    "earth_rate_rad_s": crlb.earth_rate_sigma_rad_s},
+                           "carried_by": sol.carried_by, "chi2": sol.chi2, "dof": sol.dof})
+            lead = max(sol.carried_by, key=sol.carried_by.get)
+            kinds = "+".join(sorted({("pendulum" if m.kind == "pendulum" else "gyroscope") for m in meas}))
+            result["method"] = (f"profile least squares over {kinds} ({len(meas)} measurements); "
+                                f"latitude carried by {lead} ({100 * sol.carried_by[lead]:.1f} % of the information)")
+        except ValueError as exc:
+            result.update(_null_combined(f"combination failed: {exc}"))
+    else:
+        result.update(_null_combined(f"need two Earth-rate measurements (two gyroscope configurations, or one "
+                                     f"and a pendulum); have {len(meas)}"))
+    return result
+
+
+def _null_combined(reason):
+    return {"latitude_deg": None, "latitude_sigma_deg": None, "earth_rate_rad_s": None,
+            "earth_rate_sigma_rad_s": None, "crlb": {"latitude_deg": None, "earth_rate_rad_s": None},
+            "method": None, "reason": reason}
+
+
+def _classic_methods(result, gyros, pend):
+    """Quet's item 9 and eq. (10), and the pendulum-only results, side by side."""
+    methods = result["methods"]
+    hor = [g for g in gyros.values() if g[0].directing_model()["label"] == "horizontal"]
+    mer = [g for g in gyros.values() if g[0].directing_model()["label"] == "meridian"]
+    if hor and mer:
+        (ih, eh, mh), (im, em, mm) = hor[0], mer[0]
+        # cos γ = y_h / y_m with y = K/(gain ρ): Quet's (T_m/T_h)² ρ_m/ρ_h, with the finite-amplitude
+        # and (gimbal) ring-inertia corrections carried by T0 and the gains.
+        c = mh.value / mm.value
+        rel = math.hypot(mh.sigma / mh.value, mm.sigma / mm.value)
+        entry = {"cos_latitude": c, "cos_latitude_sigma": c * rel}
+        if 0.0 < c <= 1.0:
+            lat = math.degrees(math.acos(c))
+            sign = 1.0
+            if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
+                sign = 1.0 if pend[1]["foucault_rate_rad_s"] >= 0 else -1.0
+            else:
+                entry["note"] = "item 9 gives |latitude| (cos is even); northern hemisphere assumed"
+            s = math.sqrt(max(1 - c * c, 0.0))
+            lo = math.degrees(math.acos(min(c + c * rel, 1.0)))
+            hi = math.degrees(math.acos(max(c - c * rel, 0.0)))
+            entry.update({"latitude_deg": sign * lat, "latitude_sigma_deg": 0.5 * (hi - lo),
+                          "linear_sigma_deg": (math.degrees(c * rel / s) if s > 0 else None)})
+        else:
+            entry.update({"latitude_deg": None, "reason": f"(T_m/T_h)^2 rho_m/rho_h = {c:.9g} is outside (0, 1]"})
+        # uncorrected (printed T at unequal amplitudes, no spin ratio) for comparison
+        entry["uncorrected_cos_latitude"] = (em["swing_duration_s"] / eh["swing_duration_s"]) ** 2
+        ch, cm = eh.get("counting", {}), em.get("counting", {})
+        if ch.get("swing_duration_s") and cm.get("swing_duration_s"):
+            gain_ratio = im.directing_model()["gain"] / ih.directing_model()["gain"]
+            cc = item9_cos_latitude(cm["small_amplitude_swing_duration_s"], ch["small_amplitude_swing_duration_s"],
+                                    em["mean_spin_rad_s"], eh["mean_spin_rad_s"]) * gain_ratio
+            methods["item9_counting"] = {"cos_latitude": cc,
+                                         "latitude_deg": math.degrees(math.acos(cc)) if 0 < cc <= 1 else None,
+                                         "swings": [ch["swings"], cm["swings"]]}
+        methods["item9"] = entry
+    elif hor or mer:
+        methods["item9"] = {"latitude_deg": None, "reason": "item 9 needs both a horizontal and a meridian "
+                            "configuration with a measured oscillation"}
+    if mer:
+        im, em, mm = mer[0]
+        model = im.directing_model()
+        n = mm.value
+        methods["item8_eq10"] = {"earth_rate_rad_s": n, "earth_rate_sigma_rad_s": mm.sigma,
+                                 "formula": "n = pi^2 / (mu rho0 T_m^2) (eq. 10; item 8's printed pi/(mu rho0 T^2) is a misprint)",
+                                 "gain": model["gain"]}
+    if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
+        k, sk = pend[1]["foucault_rate_rad_s"], pend[1]["foucault_rate_sigma_rad_s"]
+        entry = {"foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk}
+        n_ref = methods.get("item8_eq10", {}).get("earth_rate_rad_s")
+        if n_ref is None:
+            n_ref = result["truth"]["earth_rate_rad_s"]
+            entry["note"] = "latitude from k / n with the nominal sidereal n (no meridian gyroscope)"
+        x = k / n_ref
+        if abs(x) <= 1.0 + 3 * sk / n_ref:
+            xc = max(min(x, 1.0), -1.0)
+            lo = math.degrees(math.asin(max(xc - sk / n_ref, -1.0)))
+            hi = math.degrees(math.asin(min(xc + sk / n_ref, 1.0)))
+            entry.update({"latitude_deg": math.degrees(math.asin(xc)), "latitude_sigma_deg": 0.5 * (hi - lo)})
+        else:
+            entry.update({"latitude_deg": None, "reason": f"k/n = {x:.6g} exceeds 1 by more than 3 sigma"})
+        lat9 = methods.get("item9", {}).get("latitude_deg")
+        if lat9 is not None:
+            s = math.sin(math.radians(lat9))
+            if abs(s) * n_ref > 3 * sk:
+                entry["earth_rate_rad_s"] = k / s
+                entry["earth_rate_sigma_rad_s"] = sk / abs(s)
+                entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
+            else:
+                entry["earth_rate_rad_s"] = None
+                entry["reason_earth_rate"] = ("the pendulum does not precess measurably at this latitude "
+                                              "(|n sin(latitude)| < 3 sigma_k): n = k / sin(latitude) is undetermined")
+        methods["foucault"] = entry
