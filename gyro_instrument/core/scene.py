@@ -101,6 +101,12 @@ def parse_override(text):
         parsed = yaml.safe_load(value) if value.strip() else ""
     except yaml.YAMLError:
         parsed = value
+    if isinstance(parsed, str):
+        # YAML 1.1 reads 1e-10 (no dot) as a string; on the command line it is surely a number.
+        try:
+            parsed = float(parsed) if parsed.strip().lower() not in ("nan", "inf", "-inf", "infinity") else parsed
+        except ValueError:
+            pass
     return key.split("."), parsed
 
 

@@ -41,32 +41,52 @@ class RateMeasurement:
     crlb_sigma: float = math.nan
 
     def shape(self, gamma):
+        """s(γ): sin γ for a pendulum, sin ω(γ) for a gyroscope (γ scalar or array, rad)."""
+        gamma = np.asarray(gamma, dtype=float)
         if self.kind == "pendulum":
-            return math.sin(gamma)
+            return np.sin(gamma)
         nx, ny, nz = self.geometry
         norm = math.sqrt(nx * nx + ny * ny + nz * nz)
-        c = (ny * math.cos(gamma) + nz * math.sin(gamma)) / norm
-        return math.sqrt(max(1.0 - c * c, 0.0))
+        c = (ny * np.cos(gamma) + nz * np.sin(gamma)) / norm
+        return np.sqrt(np.maximum(1.0 - c * c, 0.0))
 
 
 def _chi2(gamma, meas, use_crlb=False):
-    """Profiled χ²(γ) and the best rates (n, G) at that γ."""
-    rows, ys, ws = [], [], []
-    has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
+    """Profiled χ²(γ) and the best rates at γ, by the closed-form normal equations.
+
+    Unknowns: n alone, or (n, G) when some gyroscope's gain is not trusted (its rows are
+    y = G s(γ), the pendulum's y = n sin γ). ``gamma`` may be an array (vectorised over a grid).
+    """
+    g = np.atleast_1d(np.asarray(gamma, dtype=float))
+    two = any(m.kind == "gyro" and not m.gain_known for m in meas)
+    # accumulate the 2x2 (or 1x1) normal equations Σ w a aᵀ θ = Σ w a y
+    S = np.zeros((2, 2) + g.shape)
+    b = np.zeros((2,) + g.shape)
+    yy = 0.0
     for m in meas:
-        s = m.shape(gamma)
         sig = m.crlb_sigma if use_crlb else m.sigma
-        if m.kind == "gyro" and not m.gain_known:
-            rows.append([0.0, s])
-        else:
-            rows.append([s, 0.0] if has_gain else [s])
-        ys.append(m.value)
-        ws.append(1.0 / sig)
-    X = np.array(rows) * np.array(ws)[:, None]
-    y = np.array(ys) * np.array(ws)
-    theta, *_ = np.linalg.lstsq(X, y, rcond=None)
-    r = y - X @ theta
-    return float(r @ r), theta
+        w = 1.0 / (sig * sig)
+        s = m.shape(g)
+        j = 1 if (two and m.kind == "gyro" and not m.gain_known) else 0
+        S[j, j] += w * s * s
+        b[j] += w * s * m.value
+        yy += w * m.value * m.value
+    if not two:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
+        chi2 = yy - n * b[0]
+        theta = np.array([n, np.zeros_like(n)])
+    else:
+        # the two blocks decouple (each row has one nonzero coefficient)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
+            G = np.where(S[1, 1] > 0, b[1] / S[1, 1], 0.0)
+        chi2 = yy - n * b[0] - G * b[1]
+        theta = np.array([n, G])
+    chi2 = np.maximum(chi2, 0.0)
+    if np.ndim(gamma) == 0:
+        return float(chi2[0]), theta[:, 0]
+    return chi2, theta
 
 
 @dataclass
@@ -99,7 +119,7 @@ def solve_latitude(meas, use_crlb=False, prefer_north=True):
     half = math.pi / 2
     f = lambda g: _chi2(g, meas, use_crlb)[0]  # noqa: E731
     grid = np.linspace(-half, half, 3601)
-    vals = np.array([f(g) for g in grid])
+    vals = _chi2(grid, meas, use_crlb)[0]
     best = float(vals.min())
     # symmetric minima (no pendulum): prefer the northern one
     cands = np.nonzero(vals <= best + 1e-9 * max(best, 1.0) + 1e-12)[0]
@@ -128,15 +148,9 @@ def solve_latitude(meas, use_crlb=False, prefer_north=True):
     n_hat = float(theta[0])
     # σ(n) at fixed γ̂ plus the γ uncertainty propagated (numerical derivative of n̂(γ))
     has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
-    rows, ws = [], []
-    for m in meas:
-        s = m.shape(g_hat)
-        sig = m.crlb_sigma if use_crlb else m.sigma
-        rows.append(([0.0, s] if (m.kind == "gyro" and not m.gain_known) else ([s, 0.0] if has_gain else [s])))
-        ws.append(1.0 / sig)
-    X = np.array(rows) * np.array(ws)[:, None]
-    cov = np.linalg.pinv(X.T @ X)
-    sig_n_fixed = math.sqrt(max(cov[0, 0], 0.0))
+    info_n = sum(float(m.shape(g_hat)) ** 2 / (m.crlb_sigma if use_crlb else m.sigma) ** 2
+                 for m in meas if not (m.kind == "gyro" and not m.gain_known))
+    sig_n_fixed = 1.0 / math.sqrt(info_n) if info_n > 0 else math.inf
     dg = 1e-7
     n_plus = _chi2(min(g_hat + dg, half), meas, use_crlb)[1][0]
     n_minus = _chi2(max(g_hat - dg, -half), meas, use_crlb)[1][0]
@@ -147,7 +161,7 @@ def solve_latitude(meas, use_crlb=False, prefer_north=True):
     info = {}
     for m in meas:
         sig = m.crlb_sigma if use_crlb else m.sigma
-        ds = (m.shape(min(g_hat + dg, half)) - m.shape(max(g_hat - dg, -half))) / (2 * dg)
+        ds = float(m.shape(min(g_hat + dg, half)) - m.shape(max(g_hat - dg, -half))) / (2 * dg)
         info[m.name] = (n_hat * ds / sig) ** 2
     total = sum(info.values()) or 1.0
     share = {k: v / total for k, v in info.items()}

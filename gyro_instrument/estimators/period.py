@@ -225,7 +225,12 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         sig_omega = math.inf
     base = 3 if damping else 2
     amp = float(math.hypot(p[base], p[base + 1]))
-    amp_peak = amp + sum(math.hypot(p[base + 2 * i], p[base + 2 * i + 1]) for i in range(1, len(harmonics)))
+    # Peak amplitude from the fitted waveform itself: harmonics may be in antiphase (a pendulum-law
+    # swing has A3 < 0 relative to the peak: a = A1 − |A3| + ...), so their sizes do not simply add.
+    phase = np.linspace(0.0, 2 * math.pi, 4097)
+    wave = sum(p[base + 2 * i] * np.cos(h * phase) + p[base + 2 * i + 1] * np.sin(h * phase)
+               for i, h in enumerate(harmonics))
+    amp_peak = float(0.5 * (np.max(wave) - np.min(wave)))
     dt = span / max(t.size - 1, 1)
     crlb = crlb_omega(math.sqrt(s2), amp, dt, t.size)
     method = "sine_fit" + ("+damping" if damping else "") + ("+warp" if warp is not None else "") + \

@@ -84,7 +84,7 @@ def _gyro_estimate(inst, rec, sigma_sensor):
             env = ratio ** -0.25
             notes.append(f"spin changed by {change / abs(rho_mean):.3g} relative: fitted in spin-warped time")
     try:
-        fit = fit_oscillation(t, y, warp=warp, envelope=env)
+        fit = fit_oscillation(t, y, harmonics=(1, 3), warp=warp, envelope=env)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
     snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
@@ -93,7 +93,8 @@ def _gyro_estimate(inst, rec, sigma_sensor):
                       "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model['null_reason']}"}
     # damping: refit with an envelope when it lowers the residual significantly
     try:
-        dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, damping=True, warp=warp, envelope=env)
+        dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), damping=True, warp=warp,
+                               envelope=env)
         if fit.residual_rms ** 2 - dfit.residual_rms ** 2 > 10.0 * fit.residual_rms ** 2 / fit.n_samples:
             notes.append(f"damping fitted: {dfit.damping_per_s:.3g} 1/s")
             fit = dfit
@@ -121,6 +122,11 @@ def _gyro_estimate(inst, rec, sigma_sensor):
         out["counting"] = {"swing_duration_s": None, "reason": str(exc)}
     K = (math.pi / T0) ** 2
     y_val = K / (model["gain"] * rho_mean)
+    c2 = model.get("second_order", 0.0)
+    if c2:
+        # invert y = y0 (1 + c2 y0/ρ) for y0 = n s(γ): the O(n²) centrifugal term of the exact equation
+        y_val = 2.0 * y_val / (1.0 + math.sqrt(1.0 + 4.0 * c2 * y_val / rho_mean))
+        out["second_order_correction"] = K / (model["gain"] * rho_mean) / y_val - 1.0
     rel = 2 * sig_T0 / T0
     out["_measurement"] = RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model["normal_enu"]),
                                           True, y_val * 2 * crlb_T0 / T0)

@@ -123,7 +123,11 @@ class PlaneGyroscope(Instrument):
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with
         gain = μ (μ / sin ε on a cone) and sin ω from the plane normal (ENU) and the latitude."""
         gain = self.mu / (math.sin(self.eps) if self.is_cone else 1.0)
-        return {"gain": gain, "normal_enu": tuple(float(v) for v in self.normal), "label": self.plane,
+        # The exact equation adds (μ − 1) n² sin² ω to K (module docstring): K/(μρ) = y0 (1 + c2 y0 / ρ)
+        # with y0 = n sin ω and c2 = (μ − 1)/μ. Derived for the plane only (ε = 90°).
+        c2 = 0.0 if self.is_cone else (self.mu - 1.0) / self.mu
+        return {"gain": gain, "second_order": c2, "normal_enu": tuple(float(v) for v in self.normal),
+                "label": self.plane,
                 "angle_channel": "angle",
                 "null_reason": "a directing plane perpendicular to Earth's axis (horizontal at a pole) has no "
                                "restoring torque (Quet sec. 4 §1 item 4)"}
