@@ -99,13 +99,40 @@ class LatitudeResult:
     chi2: float
     dof: int
     carried_by: dict
+    dropped: dict = None
 
     @property
     def latitude_sigma_rad(self):
         return 0.5 * (self.latitude_hi_rad - self.latitude_lo_rad)
 
 
-def solve_latitude(meas, use_crlb=False, prefer_north=True):
+def solve_latitude(meas, use_crlb=False, prefer_north=True, flat_sigma=3.0):
+    """Like :func:`_solve`, but a gyroscope measured within ``flat_sigma`` σ of the flat maximum of
+    its s(γ) (a horizontal gyroscope near the equator: cos γ ≈ 1) is left out of the latitude when
+    a pendulum can carry it — there its information on γ is non-Gaussian and a Δχ² = 1 interval
+    would under-cover. ``dropped`` on the result says which and why."""
+    res = _solve(meas, use_crlb, prefer_north)
+    has_pendulum = any(m.kind == "pendulum" for m in meas)
+    grid = np.linspace(-math.pi / 2, math.pi / 2, 3601)
+    dropped = {}
+    for m in meas:
+        if m.kind != "gyro" or not has_pendulum:
+            continue
+        sg = m.shape(grid)
+        if np.ptp(sg) < 1e-12:
+            continue
+        sig = m.crlb_sigma if use_crlb else m.sigma
+        if res.earth_rate_rad_s * float(np.max(sg)) - m.value < flat_sigma * sig:
+            dropped[m.name] = (f"within {flat_sigma:g} sigma of the flat maximum of its directing factor "
+                               f"(cos(latitude) ≈ 1 near the equator): no Gaussian latitude information")
+    kept = [m for m in meas if m.name not in dropped]
+    if dropped and len(kept) >= 2:
+        res = _solve(kept, use_crlb, prefer_north)
+    res.dropped = dropped
+    return res
+
+
+def _solve(meas, use_crlb=False, prefer_north=True):
     """Profile-likelihood latitude and Earth rate from :class:`RateMeasurement` objects.
 
     Returns
@@ -130,11 +157,12 @@ def solve_latitude(meas, use_crlb=False, prefer_north=True):
     c_min = f(g_hat)
     target = c_min + 1.0
 
-    def edge(direction):
+    def edge(direction, center=None):
         step = 1e-9
-        g = g_hat
+        g_c = g_hat if center is None else center
+        g = g_c
         while True:
-            g2 = g_hat + direction * step
+            g2 = g_c + direction * step
             if abs(g2) >= half:
                 g2 = math.copysign(half, g2)
                 return g2 if f(g2) <= target else brentq(lambda x: f(x) - target, g, g2, xtol=1e-15)
@@ -144,6 +172,23 @@ def solve_latitude(meas, use_crlb=False, prefer_north=True):
             step *= 2.0
 
     g_lo, g_hi = edge(-1.0), edge(+1.0)
+    # The gyroscopes' s(γ) are even in γ: when the mirror latitude −γ̂ is also allowed (the pendulum
+    # cannot tell them apart, as near the equator), the interval spans both.
+    if g_hat != 0.0 and f(-g_hat) <= target:
+        g_lo, g_hi = min(g_lo, edge(-1.0, -g_hat)), max(g_hi, edge(+1.0, -g_hat))
+    # A profile with several dips under the threshold (near the equator the gyroscopes' cos γ is
+    # even and flat, so ±γ are both allowed): the interval spans every grid region below it.
+    inside = np.nonzero(vals <= target)[0]
+    if inside.size:
+        a, b = int(inside[0]), int(inside[-1])
+        if a > 0:
+            g_lo = min(g_lo, brentq(lambda x: f(x) - target, grid[a - 1], grid[a], xtol=1e-15))
+        else:
+            g_lo = -half
+        if b < len(grid) - 1:
+            g_hi = max(g_hi, brentq(lambda x: f(x) - target, grid[b], grid[b + 1], xtol=1e-15))
+        else:
+            g_hi = half
     _, theta = _chi2(g_hat, meas, use_crlb)
     n_hat = float(theta[0])
     # σ(n) at fixed γ̂ plus the γ uncertainty propagated (numerical derivative of n̂(γ))

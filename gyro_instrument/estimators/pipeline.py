@@ -185,6 +185,8 @@ def estimate_records(scene, insts, records):
                            "crlb": {"latitude_deg": math.degrees(crlb.latitude_sigma_rad),
                                     "earth_rate_rad_s": crlb.earth_rate_sigma_rad_s},
                            "carried_by": sol.carried_by, "chi2": sol.chi2, "dof": sol.dof})
+            if sol.dropped:
+                result["left_out_of_latitude"] = sol.dropped
             lead = max(sol.carried_by, key=sol.carried_by.get)
             kinds = "+".join(sorted({("pendulum" if m.kind == "pendulum" else "gyroscope") for m in meas}))
             result["method"] = (f"profile least squares over {kinds} ({len(meas)} measurements); "
@@ -215,7 +217,12 @@ def _classic_methods(result, gyros, pend):
         c = mh.value / mm.value
         rel = math.hypot(mh.sigma / mh.value, mm.sigma / mm.value)
         entry = {"cos_latitude": c, "cos_latitude_sigma": c * rel}
-        if 0.0 < c <= 1.0:
+        if c + c * rel >= 1.0 and c <= 1.0 + 3 * c * rel:
+            entry.update({"latitude_deg": None,
+                          "reason": f"cos(latitude) = {c:.9f} is within 1 sigma ({c * rel:.2g}) of 1: near the "
+                                    "equator item 9 cannot resolve the latitude (cos is flat, "
+                                    "d(latitude) = d(cos)/sin(latitude) diverges); the pendulum carries"})
+        elif 0.0 < c <= 1.0:
             lat = math.degrees(math.acos(c))
             sign = 1.0
             if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
