@@ -219,3 +219,14 @@ def test_foucault_release_from_rest_removes_quet_lag():
     lag = 0.375 * math.radians(2) * math.sin(math.radians(2)) * math.cos(math.radians(1))
     assert f.measured_rate_rad_s / k - 1 == pytest.approx(-lag, rel=0.05)
     assert abs(f.k_rad_s / k - 1) < 0.05 * lag
+
+
+def test_gimbal_pair_t_prime_t_second_gives_latitude_with_ring_correction(capsys):
+    # Quet sec. 4 §IV: "the values of T', T'' can serve to determine n and γ". With the thick
+    # inner ring (C1 = 1.2 A1) the estimator's gains C/(A + C1 + A2) and C/(A + A1) recover γ and n
+    # within 3σ; Quet's thin-ring A + 2A1 + A2 would be off by 5 % in T'² (not used).
+    assert main(["estimate", "gimbal_paris", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert abs(r["latitude_deg"] - 48.8462) < 3 * r["latitude_sigma_deg"]
+    assert abs(r["earth_rate_rad_s"] - 7.2921150e-5) < 3 * r["earth_rate_sigma_rad_s"]
+    assert r["latitude_sigma_deg"] < 1.5 * r["crlb"]["latitude_deg"]
