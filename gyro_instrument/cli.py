@@ -15,6 +15,7 @@ import sys
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
+from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
 EXIT_BAD_INPUT = 2
@@ -37,12 +38,6 @@ def scene_from_args(args):
     if getattr(args, "duration_s", None) is not None:
         overrides.append(f"duration_s={args.duration_s!r}")
     return load_scene(args.scene, overrides)
-
-
-def sample_times(scene):
-    """Sample times 0, 1/f, ... up to the scene's duration (inclusive when it falls on a sample)."""
-    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
-    return np.arange(n) / scene.sample_rate_hz
 
 
 def check_writable(path, field="--out"):

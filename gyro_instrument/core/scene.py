@@ -221,3 +221,19 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
                  effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
                  sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
                  source=source, raw=MappingProxyType(data))
+
+
+#: Sim time starts here (time 0 means "no time yet" to ROS): 1e9 s, 2001-09-09T01:46:40Z.
+EPOCH_NS = 1_000_000_000 * 1_000_000_000
+
+
+def sample_times_ns(scene):
+    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N."""
+    import numpy as np
+    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
+
+
+def sample_times(scene):
+    """Sample times in seconds, ``sample_times_ns / 1e9`` (the same floats a ROS stamp gives back)."""
+    return sample_times_ns(scene) / 1e9

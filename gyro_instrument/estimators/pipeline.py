@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from gyro_instrument.core.scene import sample_times, sample_times_ns
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude
@@ -24,9 +25,16 @@ from gyro_instrument.sensors import SensorModel, scene_rng
 DETECTION_SNR = 100.0
 
 
-def sample_times(scene):
-    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
-    return np.arange(n) / scene.sample_rate_hz
+PENDULUMS = ("spherical_pendulum", "compound_pendulum")
+
+#: Angle channels a sensor measures, per instrument type (the JointState positions).
+ANGLE_CHANNELS = {"plane_gyroscope": ("angle",), "gimbal_gyroscope": ("outer_angle", "inner_angle"),
+                  "free_gyroscope": ("axis_altitude", "axis_azimuth"), "puiseux_body": ("tilt", "tilt_azimuth")}
+
+
+def pendulum_length(inst):
+    """Rod length of a simple pendulum, or the pivot–centre distance of a compound one (m)."""
+    return getattr(inst, "l", None) or getattr(inst, "lc", 1.0)
 
 
 def simulate_truth(scene):
@@ -46,14 +54,18 @@ def measure(scene, truth, seed=None):
         rng = scene_rng(seed, name)
         cols = sims[name].columns
         rec = {"t": t.copy()}
-        if inst.type_name in ("spherical_pendulum", "compound_pendulum"):
-            l = getattr(inst, "l", None) or getattr(inst, "lc", 1.0)
+        if inst.type_name in PENDULUMS:
+            l = pendulum_length(inst)
             rec["deflection_east"] = sensor.measure_angle(cols["x_east"] / l, rng)
             rec["deflection_north"] = sensor.measure_angle(cols["y_north"] / l, rng)
-        elif getattr(inst, "directing_model", lambda: None)() is not None:
-            chan = inst.directing_model()["angle_channel"]
-            rec["angle"] = sensor.measure_angle(cols[chan], rng)
-            rec["spin_rate"] = sensor.measure_rate(cols["spin_rate"], rng)
+        else:
+            for chan in ANGLE_CHANNELS.get(inst.type_name, ()):
+                rec[chan] = sensor.measure_angle(cols[chan], rng)
+            if "spin_rate" in cols:
+                rec["spin_rate"] = sensor.measure_rate(cols["spin_rate"], rng)
+            model = getattr(inst, "directing_model", lambda: None)()
+            if model is not None:
+                rec["angle"] = rec[model["angle_channel"]]
         records[name] = rec
     return records
 

@@ -1,0 +1,162 @@
+"""MCAP in rosbag2's layout, written and read without rclpy.
+
+Writer: profile ``ros2``; one schema per type (encoding ``ros2msg``, the concatenated definition of
+:mod:`.definitions`); channels with message encoding ``cdr`` and metadata
+``offered_qos_profiles`` (a YAML *list*, as rosbag2 jazzy writes it) and ``topic_type_hash``;
+zstd-compressed chunks, indexed summary on close. Log time = receive time in sim time; the
+publish time is written equal to it so files are deterministic. A metadata record
+``gyro_instrument`` holds the scene (YAML), the seed and the command, for ``replay``.
+
+Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order;
+``decode`` turns CDR into an object through ``mcap_ros2``'s dynamic decoder (no ROS install).
+A file cut short (SIGKILL) is read up to its last complete chunk.
+"""
+
+import os
+
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+
+from gyro_instrument.recording.definitions import concatenated_definition, type_hash
+
+_INF = "    sec: 9223372036\n    nsec: 854775807\n"
+
+
+def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False):
+    """rosbag2 (jazzy, metadata version 9) encoding of one offered QoS profile, as a YAML list."""
+    return ("- history: {h}\n  depth: {d}\n  reliability: {r}\n  durability: {du}\n  deadline:\n{inf}"
+            "  lifespan:\n{inf}  liveliness: 1\n  liveliness_lease_duration:\n{inf}"
+            "  avoid_ros_namespace_conventions: false\n").format(
+        h=2 if keep_all else 1, d=depth, r=1 if reliable else 2, du=1 if transient_local else 2,
+        inf=_INF.replace("    ", "    "))
+
+
+class BagWriter:
+    """Write ROS 2 CDR messages to an MCAP file in rosbag2's layout.
+
+    Parameters
+    ----------
+    path : str
+        Output ``.mcap`` path; written to ``path + '.partial'`` is *not* used: chunks are flushed
+        as they fill so a killed process leaves a readable prefix.
+    chunk_size : int
+        Bytes per chunk (smaller chunks lose less on SIGKILL).
+    """
+
+    def __init__(self, path, chunk_size=256 * 1024, compression="zstd"):
+        self.path = path
+        self._fh = open(path, "wb")
+        comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
+        self._w = Writer(self._fh, chunk_size=chunk_size, compression=comp)
+        self._w.start(profile="ros2", library="gyro_instrument")
+        self._schemas = {}
+        self._channels = {}
+        self.counts = {}
+        self.closed = False
+
+    def add_topic(self, topic, type_name, qos=None):
+        """Register a topic of type ``pkg/msg/Type`` (idempotent); returns the channel id."""
+        if topic in self._channels:
+            return self._channels[topic]
+        if type_name not in self._schemas:
+            self._schemas[type_name] = self._w.register_schema(
+                name=type_name, encoding="ros2msg", data=concatenated_definition(type_name).encode())
+        cid = self._w.register_channel(topic=topic, message_encoding="cdr", schema_id=self._schemas[type_name],
+                                       metadata={"offered_qos_profiles": qos or qos_yaml(),
+                                                 "topic_type_hash": type_hash(type_name)})
+        self._channels[topic] = cid
+        self.counts[topic] = 0
+        return cid
+
+    def write(self, topic, log_time_ns, data, publish_time_ns=None):
+        """Append one CDR message on a registered topic."""
+        cid = self._channels[topic]
+        self._w.add_message(channel_id=cid, log_time=int(log_time_ns),
+                            publish_time=int(log_time_ns if publish_time_ns is None else publish_time_ns),
+                            data=bytes(data), sequence=self.counts[topic])
+        self.counts[topic] += 1
+
+    def add_metadata(self, name, data):
+        """A metadata record (str -> str mapping)."""
+        self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+
+    def close(self):
+        """Finish the file: summary, indexes, footer."""
+        if not self.closed:
+            self._w.finish()
+            self._fh.close()
+            self.closed = True
+
+
+def read_messages(path, topics=None):
+    """Yield (topic, type_name, log_time_ns, cdr_bytes) in log-time order.
+
+    A truncated file (no summary) is read sequentially up to its last complete record.
+    """
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        try:
+            it = reader.iter_messages(topics=topics, log_time_order=True)
+            for schema, channel, message in it:
+                yield channel.topic, schema.name, message.log_time, message.data
+        except Exception:
+            # fall back to the streaming reader for damaged files
+            fh.seek(0)
+            yield from _stream_messages(fh, topics)
+
+
+def _stream_messages(fh, topics):
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+    schemas, channels = {}, {}
+    try:
+        for rec in StreamReader(fh, skip_magic=False).records:
+            if isinstance(rec, Schema):
+                schemas[rec.id] = rec
+            elif isinstance(rec, Channel):
+                channels[rec.id] = rec
+            elif isinstance(rec, Message):
+                ch = channels[rec.channel_id]
+                if topics is None or ch.topic in topics:
+                    yield ch.topic, schemas[ch.schema_id].name, rec.log_time, rec.data
+    except (McapError, EOFError, ValueError, KeyError, Exception):  # truncated tail
+        return
+
+
+def read_metadata(path, name="gyro_instrument"):
+    """The named metadata record as a dict, or None."""
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        try:
+            for rec in reader.iter_metadata():
+                if rec.name == name:
+                    return dict(rec.metadata)
+        except Exception:
+            pass
+    # streaming fallback (damaged file)
+    from mcap.records import Metadata
+    from mcap.stream_reader import StreamReader
+    with open(path, "rb") as fh:
+        try:
+            for rec in StreamReader(fh).records:
+                if isinstance(rec, Metadata) and rec.name == name:
+                    return dict(rec.metadata)
+        except Exception:
+            return None
+    return None
+
+
+def decode(type_name, schema_text, data):
+    """Decode CDR bytes with ``mcap_ros2``'s dynamic decoder (no ROS install needed)."""
+    from mcap_ros2._dynamic import generate_dynamic
+    decoders = _decoder_cache.setdefault(type_name, generate_dynamic(type_name, schema_text))
+    return decoders[type_name](data)
+
+
+_decoder_cache = {}
+
+
+def file_is_writable(path):
+    directory = os.path.dirname(os.path.abspath(path)) or "."
+    return os.path.isdir(directory) and os.access(directory, os.W_OK)
