@@ -34,7 +34,13 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "gyro-instrument = gyro_instrument.cli:main",
+            "gyro-instrument = gyro_instrument.ros.cli:main",
+            "gyrocompass_sim = gyro_instrument.ros.main:gyrocompass_sim",
+            "pendulum_sim = gyro_instrument.ros.main:pendulum_sim",
+            "top_sim = gyro_instrument.ros.main:top_sim",
+            "estimator = gyro_instrument.ros.main:estimator",
+            "recorder = gyro_instrument.ros.main:recorder",
+            "player = gyro_instrument.ros.main:player",
         ],
     },
 )

@@ -203,6 +203,10 @@ def build_parser():
                                         "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors")
     add_scene_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
+    p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
+                                      "live 'run' estimate to the last digit")
+    p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
+    p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     return parser
 
 
@@ -257,7 +261,39 @@ def run_command(args):
         else:
             print_estimate(result)
         return 0
+    if args.command == "replay":
+        result = replay_bag(args.bag)
+        if args.json:
+            print(json.dumps(result, indent=2))
+        else:
+            print_estimate(result)
+        return 0
     raise AssertionError(args.command)
+
+
+def replay_bag(path):
+    """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
+    JointState messages decoded without ROS."""
+    from gyro_instrument.estimators.pipeline import estimate_records
+    from gyro_instrument.recording.bag_samples import samples_from_bag
+    from gyro_instrument.recording.joints import records_from_joints
+    from gyro_instrument.scenes import build_instruments, scene_from_data
+    if not os.path.exists(path):
+        raise SceneError("bag", path, "file not found")
+    meta, samples, notes = samples_from_bag(path)
+    if meta is None or "scene_yaml" not in meta:
+        raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
+                                      "'gyro-instrument run --bag' or the recorder node")
+    scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
+    insts = build_instruments(scene)
+    samples = {n: v for n, v in samples.items() if n in insts and len(v[0]) >= 3}
+    if not samples:
+        raise SceneError("bag", path, "holds no usable joint samples of the scene's instruments")
+    result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
+    result = to_jsonable(result)
+    if notes:
+        result["replay_notes"] = notes
+    return result
 
 
 if __name__ == "__main__":

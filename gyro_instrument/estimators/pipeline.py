@@ -149,7 +149,7 @@ def estimate_records(scene, insts, records):
     """The ``estimate`` JSON object (see module docstring) from measured records."""
     site = scene.site
     n_true = site.earth_rate_rad_s
-    result = {"scene": scene.name, "observation_s": float(scene.duration_s),
+    result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
               "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": n_true},
               "instruments": {}, "methods": {}}
     sensor = SensorModel.from_scene(scene)

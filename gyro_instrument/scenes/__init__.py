@@ -59,6 +59,11 @@ def load_scene(name_or_path, overrides=()):
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=path)
 
 
+def scene_from_data(data, source="recorded"):
+    """Validate an already-read scene mapping (e.g. the one stored in a bag)."""
+    return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=source)
+
+
 def build_instruments(scene):
     """Instrument objects of a scene: name -> instrument, each with only its listed effects."""
     out = {}

@@ -1,0 +1,66 @@
+"""``gyro-instrument`` with the ROS subcommand ``run`` added to the core CLI (the core CLI never
+imports rclpy; this module does, lazily, only for ``run``)."""
+
+import json
+import sys
+
+from gyro_instrument import cli as core_cli
+from gyro_instrument.core.errors import SceneError
+
+
+def build_parser():
+    parser = core_cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    p = sub.add_parser("run", help="run every node of the scene in one process (simulators, estimator, "
+                                   "recorder) over DDS on loopback and print the recovered latitude and "
+                                   "Earth rate next to the truth")
+    core_cli.add_scene_arguments(p)
+    p.add_argument("--bag", metavar="OUT.mcap", help="record every topic to this MCAP file (rosbag2 layout)")
+    p.add_argument("--real-time-factor", type=float, default=0.0,
+                   help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
+    p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    return parser
+
+
+def main(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command != "run":
+        try:
+            return core_cli.run_command(args)
+        except SceneError as exc:
+            print(f"gyro-instrument: error: {exc}", file=sys.stderr)
+            return core_cli.EXIT_BAD_INPUT
+    try:
+        if args.bag:
+            core_cli.check_writable(args.bag, "--bag")
+        if args.real_time_factor < 0:
+            raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
+        from gyro_instrument.ros.suite import run_suite
+        progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+        result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
+                                  command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress)
+    except SceneError as exc:
+        print(f"gyro-instrument: error: {exc}", file=sys.stderr)
+        return core_cli.EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("gyro-instrument: interrupted", file=sys.stderr)
+        return 130
+    if result is None:
+        print("gyro-instrument: no estimate could be made from the run", file=sys.stderr)
+        return 3
+    result = core_cli.to_jsonable(result)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        core_cli.print_estimate(result)
+        if not args.quiet:
+            print(f"  suite: {stats['samples']} samples in {stats['wall_s']:.2f} s "
+                  f"({stats['real_time_factor_achieved']:.1f}x real time); recorded {sum(stats['recorded'].values())} "
+                  f"messages" + (f" to {args.bag}" if args.bag else ""), file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

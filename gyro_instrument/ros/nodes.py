@@ -1,0 +1,345 @@
+"""Thin ROS 2 nodes over the core: parameters in, one core call, messages out.
+
+* :class:`SimulatorNode` (``gyrocompass_sim``, ``pendulum_sim``, ``top_sim``): one core call
+  (:func:`~gyro_instrument.recording.joints.joint_streams`: simulate, measure, lay out) then
+  publishes the samples as ``sensor_msgs/JointState`` (and the bob position) and owns ``/clock``.
+* :class:`EstimatorNode`: collects joint samples and calls the core estimator.
+* :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL.
+* :class:`PlayerNode`: republishes a bag, driving ``/clock``.
+
+Every node takes ``scene`` (name or path), ``overrides`` (``key.path=value`` strings) and
+``duration_s``; a bad value is logged with the field, the value and the valid range, the change
+is refused, and the node stays up.
+"""
+
+import math
+import os
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterUninitializedException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.estimators.pipeline import PENDULUMS, estimate_records
+from gyro_instrument.recording.joints import JOINT_NAMES, joint_streams, records_from_joints
+from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
+from gyro_instrument.ros import messages as m
+from gyro_instrument.ros.topics import CLOCK, ESTIMATOR_TOPICS, bob_topic, joint_topic, scene_topics
+from gyro_instrument.scenes import build_instruments, load_scene
+
+RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+class SceneNode(Node):
+    """Common scene parameters and their validation."""
+
+    def __init__(self, name, **kwargs):
+        super().__init__(name, **kwargs)
+        self._declare("scene", "quet_paris")
+        self._declare("overrides", Parameter.Type.STRING_ARRAY)
+        self._declare("duration_s", 0.0)
+        self.scene = None
+        self.insts = {}
+        self.add_on_set_parameters_callback(self._check_params)
+
+    def _declare(self, name, default):
+        if not self.has_parameter(name):
+            self.declare_parameter(name, default)
+
+    def value(self, name, default=None):
+        """A parameter's value; ``default`` for a declared-but-unset one (string arrays)."""
+        try:
+            v = self.get_parameter(name).value
+        except ParameterUninitializedException:
+            return default
+        return default if v is None else v
+
+    def _scene_args(self, changes=None):
+        vals = {p: self.value(p) for p in ("scene", "overrides", "duration_s")}
+        for p in changes or ():
+            vals[p.name] = p.value
+        overrides = list(vals["overrides"] or [])
+        if vals["duration_s"]:
+            overrides.append(f"duration_s={float(vals['duration_s'])!r}")
+        return vals["scene"], overrides
+
+    def _check_params(self, params):
+        if not any(p.name in ("scene", "overrides", "duration_s") for p in params):
+            return SetParametersResult(successful=True)
+        try:
+            load_scene(*self._scene_args(params))
+        except SceneError as exc:
+            self.get_logger().error(f"parameter refused: {exc}")
+            return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
+    def load(self):
+        """Load the scene from the parameters; on bad input log it and return False (stay up)."""
+        try:
+            self.scene = load_scene(*self._scene_args())
+            self.insts = build_instruments(self.scene)
+            return True
+        except SceneError as exc:
+            self.get_logger().error(f"{exc}")
+            self.scene, self.insts = None, {}
+            return False
+
+
+class SimulatorNode(SceneNode):
+    """Publishes the scene's instruments of the given kinds; owns ``/clock``."""
+
+    def __init__(self, name, kinds, **kwargs):
+        super().__init__(name, **kwargs)
+        self.kinds = tuple(kinds)
+        self._declare("real_time_factor", 1.0)
+        self._declare("publish_clock", True)
+        self._declare("seed", -1)
+        self.index = 0
+        self.t_ns = np.zeros(0, dtype=np.int64)
+        self.streams = {}
+        self.pubs = {}
+        self.timer = None
+        if self.load():
+            self.prepare()
+
+    def prepare(self):
+        """One core call: simulate, measure and lay out; then create the publishers."""
+        seed = self.get_parameter("seed").value
+        self.t_ns, self.streams = joint_streams(self.scene, self.kinds, None if seed < 0 else seed)
+        if not self.streams:
+            self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
+        for name, s in self.streams.items():
+            self.pubs[name] = self.create_publisher(m.JointState, joint_topic(name), RELIABLE_1000)
+            if s.bob_enu_m is not None:
+                self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), RELIABLE_1000)
+        self.clock_pub = (self.create_publisher(m.Clock, CLOCK, RELIABLE_1000)
+                          if self.get_parameter("publish_clock").value else None)
+        self.index = 0
+
+    @property
+    def samples(self):
+        return int(self.t_ns.size) if self.streams else 0
+
+    def messages_per_step(self):
+        return sum(2 if s.bob_enu_m is not None else 1 for s in self.streams.values())
+
+    def publish_step(self):
+        """Publish sample ``index`` (clock first); return False when none remain."""
+        if self.index >= self.samples:
+            return False
+        i = self.index
+        t = int(self.t_ns[i])
+        if self.clock_pub is not None:
+            self.clock_pub.publish(m.clock(t))
+        for name, s in self.streams.items():
+            self.pubs[name].publish(m.joint_state(t, s.names, s.position[i], s.velocity[i], s.effort[i]))
+            if s.bob_enu_m is not None:
+                self.pubs[name + "/bob"].publish(m.point_stamped(t, s.bob_enu_m[i], f"{name}_pivot"))
+        self.index += 1
+        return True
+
+    def start(self):
+        """Standalone pacing: a wall timer at dt / real_time_factor (0: as fast as possible)."""
+        if not self.samples:
+            return
+        rtf = float(self.get_parameter("real_time_factor").value)
+        dt = 1.0 / self.scene.sample_rate_hz
+        self.timer = self.create_timer(dt / rtf if rtf > 0 else 0.0, self._tick)
+
+    def _tick(self):
+        if not self.publish_step():
+            self.timer.cancel()
+            self.get_logger().info(f"published {self.samples} samples of {', '.join(self.streams)}")
+
+
+class EstimatorNode(SceneNode):
+    """Subscribes to the instruments' joint states and publishes latitude and Earth rate."""
+
+    def __init__(self, name="estimator", **kwargs):
+        super().__init__(name, **kwargs)
+        self._declare("publish_period_s", 0.0)
+        self.buffers = {}
+        self.rejected = {}
+        self.result = None
+        self.pubs = {}
+        if self.load():
+            self.prepare()
+
+    def prepare(self):
+        for name, inst in self.insts.items():
+            if inst.type_name in PENDULUMS or getattr(inst, "directing_model", lambda: None)() is not None:
+                self.buffers[name] = ([], [], [])
+                self.create_subscription(m.JointState, joint_topic(name),
+                                         lambda msg, n=name: self._on_joint(n, msg), RELIABLE_ALL)
+        for topic, type_name in ESTIMATOR_TOPICS.items():
+            self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
+        period = float(self.get_parameter("publish_period_s").value)
+        if period > 0:
+            self.create_timer(period, self.finalize)
+
+    def received(self):
+        return sum(len(b[0]) for b in self.buffers.values())
+
+    def _on_joint(self, name, msg):
+        expected = JOINT_NAMES[self.insts[name].type_name]
+        names = tuple(n.split("/")[-1] for n in msg.name)
+        if names != expected or len(msg.position) != len(expected) or len(msg.velocity) != len(expected):
+            self.rejected[name] = self.rejected.get(name, 0) + 1
+            if self.rejected[name] == 1:
+                self.get_logger().warning(f"{joint_topic(name)}: joints {list(names)} do not match {list(expected)}; "
+                                          f"message ignored")
+            return
+        ts, pos, vel = self.buffers[name]
+        ts.append(m.stamp_to_release_ns(msg.header.stamp))
+        pos.append(list(msg.position))
+        vel.append(list(msg.velocity))
+
+    def estimate(self):
+        """Core call on everything received so far (None if nothing usable)."""
+        samples = {n: (np.array(b[0], dtype=np.int64), np.array(b[1]), np.array(b[2]))
+                   for n, b in self.buffers.items() if len(b[0]) >= 3}
+        if not samples:
+            return None
+        recs = records_from_joints(self.insts, samples)
+        return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
+
+    def finalize(self):
+        """Estimate and publish; returns the result dict."""
+        try:
+            self.result = self.estimate()
+        except Exception as exc:  # the estimator must never take the node down
+            self.get_logger().error(f"estimation failed: {exc.__class__.__name__}: {exc}")
+            return None
+        if self.result is None:
+            return None
+        r = self.result
+        t = max((b[0][-1] for b in self.buffers.values() if b[0]), default=0)
+        lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
+        sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
+        self.pubs["/estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        self.pubs["/diagnostics"].publish(m.diagnostics(
+            t, "gyro_instrument/estimator", r.get("method") is not None,
+            r.get("method") or r.get("reason", ""),
+            {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
+             "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
+             "rejected_messages": self.rejected}))
+        self.pubs["/estimator/latitude_rad"].publish(m.float64(lat))
+        self.pubs["/estimator/latitude_sigma_rad"].publish(m.float64(sig))
+        self.pubs["/estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
+        self.pubs["/estimator/earth_rate_sigma_rad_s"].publish(m.float64(r.get("earth_rate_sigma_rad_s")))
+        return r
+
+
+class RecorderNode(SceneNode):
+    """Records topics (raw CDR) to MCAP; log time = the message stamp (sim time) when it has one."""
+
+    def __init__(self, name="recorder", **kwargs):
+        super().__init__(name, **kwargs)
+        self._declare("output", "")
+        self._declare("topics", Parameter.Type.STRING_ARRAY)
+        self.writer = None
+        self.counts = {}
+        self.last_ns = 0
+        if self.load():
+            self.prepare()
+
+    def prepare(self):
+        out = self.get_parameter("output").value
+        if not out:
+            self.get_logger().error("output = '' is invalid: give an .mcap path to record to")
+            return
+        directory = os.path.dirname(os.path.abspath(out)) or "."
+        if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
+            self.get_logger().error(f"output = {out!r} is invalid: directory {directory} is missing or not writable")
+            return
+        types = scene_topics(self.insts)
+        wanted = self.value("topics", []) or list(types)
+        self.writer = BagWriter(out)
+        self.stamped = {tp for tp, ty in types.items() if ty != "std_msgs/msg/Float64"}
+        for topic in wanted:
+            if topic not in types:
+                self.get_logger().error(f"topics: {topic!r} is not a topic of this scene; valid: {', '.join(types)}")
+                continue
+            self.writer.add_topic(topic, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
+            self.counts[topic] = 0
+            self.create_subscription(m.message_class(types[topic]), topic,
+                                     lambda data, tp=topic: self._on_raw(tp, data), RELIABLE_ALL, raw=True)
+
+    def received(self):
+        return sum(self.counts.values())
+
+    def _on_raw(self, topic, data):
+        # Header-first types and Clock carry their sim time; Float64 takes the clock (never earlier
+        # than the last stamp, so the file stays deterministic and ordered in lock-step).
+        st = m.cdr_stamp_ns(data) if topic in self.stamped else None
+        if st is None:
+            st = max(self.last_ns, self.get_clock().now().nanoseconds)
+        self.last_ns = max(self.last_ns, st)
+        self.writer.write(topic, st, data)
+        self.counts[topic] += 1
+
+    def close(self, metadata=None):
+        """Write the metadata record and finish the file (indexes, footer)."""
+        if self.writer is not None and not self.writer.closed:
+            if metadata:
+                self.writer.add_metadata("gyro_instrument", metadata)
+            self.writer.close()
+
+
+class PlayerNode(Node):
+    """Republishes a bag on its topics, driving ``/clock`` from the log times."""
+
+    def __init__(self, name="player", **kwargs):
+        super().__init__(name, **kwargs)
+        self.declare_parameter("bag", "")
+        self.declare_parameter("real_time_factor", 1.0)
+        self.pubs = {}
+        self.queue = []
+        self.index = 0
+        bag = self.get_parameter("bag").value
+        if not bag or not os.path.exists(bag):
+            self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file")
+            return
+        self.queue = list(read_messages(bag))
+        self.has_clock = any(tp == CLOCK for tp, *_ in self.queue)
+        for topic, type_name, _, _ in self.queue:
+            if topic not in self.pubs:
+                self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
+        if not self.has_clock:
+            self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, RELIABLE_1000)
+
+    def publish_next(self):
+        """Publish the next message (and a clock tick when the bag has none); False when done."""
+        if self.index >= len(self.queue):
+            return False
+        topic, _, log_ns, data = self.queue[self.index]
+        if not self.has_clock:
+            from builtin_interfaces.msg import Time
+            self.pubs[CLOCK].publish(m.Clock(clock=Time(sec=log_ns // 10 ** 9, nanosec=log_ns % 10 ** 9)))
+        self.pubs[topic].publish(data)
+        self.index += 1
+        return True
+
+    def start(self):
+        rtf = float(self.get_parameter("real_time_factor").value)
+        self.t_wall0 = None
+
+        def tick():
+            if self.index >= len(self.queue):
+                self.timer.cancel()
+                return
+            if rtf > 0:
+                now = self.get_clock().now().nanoseconds
+                if self.t_wall0 is None:
+                    self.t_wall0, self.t_log0 = now, self.queue[0][2]
+                while self.index < len(self.queue) and \
+                        (self.queue[self.index][2] - self.t_log0) <= (now - self.t_wall0) * rtf:
+                    self.publish_next()
+            else:
+                self.publish_next()
+        self.timer = self.create_timer(0.001 if rtf > 0 else 0.0, tick)
