@@ -1,6 +1,33 @@
-"""Shared fixtures: effects and instruments built the way scenes build them."""
+"""Shared fixtures: effects and instruments built the way scenes build them.
 
+Network safety: every test process that may start rclpy stays on loopback. Discovery is limited
+to LOCALHOST, and when run as root the whole session re-executes inside a loopback-only network
+namespace (``unshare -n``), so Fast DDS cannot reach any other address whoever starts pytest.
+"""
+
+import os
+import shutil
+import sys
+
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
+os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 import pytest
+
+
+def pytest_configure(config):
+    """As root, re-run the whole session inside a loopback-only network namespace."""
+    if (os.geteuid() == 0 and not os.environ.get("GYRO_IN_NETNS") and shutil.which("unshare")
+            and shutil.which("ip") and not os.environ.get("GYRO_NO_NETNS")):
+        capman = config.pluginmanager.getplugin("capturemanager")
+        if capman is not None:
+            capman.stop_global_capturing()
+        os.environ["GYRO_IN_NETNS"] = "1"
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.execvp("unshare", ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh",
+                              sys.executable, "-m", "pytest", *config.invocation_params.args])
 
 from gyro_instrument.core.params import validate_params
 from gyro_instrument.effects import REGISTRY as EFFECTS
