@@ -18,10 +18,10 @@ setup: $(STAMP)
 demo: $(STAMP)
 	mkdir -p out
 	tools/loopback $(VENV)/bin/gyro-instrument describe quet_paris
-	tools/loopback $(VENV)/bin/gyro-instrument simulate quet_paris --out out/quet_paris.csv
+	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(VENV)/bin/gyro-instrument run quet_paris --bag out/quet_paris.mcap
 
 test: $(STAMP)
-	tools/loopback $(PY) -m pytest -ra
+	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra
 
 clean:
 	rm -rf $(VENV) build install log out .pytest_cache
