@@ -274,7 +274,7 @@ def run_command(args):
 def replay_bag(path):
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
     JointState messages decoded without ROS."""
-    from gyro_instrument.estimators.pipeline import estimate_records
+    from gyro_instrument.estimators.pipeline import estimable, estimate_records
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
@@ -286,9 +286,7 @@ def replay_bag(path):
                                       "'gyro-instrument run --bag' or the recorder node")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
-    samples = {n: v for n, v in samples.items() if n in insts and len(v[0]) >= 3}
-    if not samples:
-        raise SceneError("bag", path, "holds no usable joint samples of the scene's instruments")
+    samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     result = to_jsonable(result)
     if notes:

@@ -32,6 +32,12 @@ ANGLE_CHANNELS = {"plane_gyroscope": ("angle",), "gimbal_gyroscope": ("outer_ang
                   "free_gyroscope": ("axis_altitude", "axis_azimuth"), "puiseux_body": ("tilt", "tilt_azimuth")}
 
 
+def estimable(inst):
+    """True for instruments that measure an Earth rate: pendulums (k = n sin γ) and gyroscopes with a
+    directing line (K = gain n ρ s(γ)). Free gyroscopes and Puiseux's body do not."""
+    return inst.type_name in PENDULUMS or getattr(inst, "directing_model", lambda: None)() is not None
+
+
 def pendulum_length(inst):
     """Rod length of a simple pendulum, or the pivot–centre distance of a compound one (m)."""
     return getattr(inst, "l", None) or getattr(inst, "lc", 1.0)

@@ -48,7 +48,7 @@ def main(argv=None):
         print("gyro-instrument: interrupted", file=sys.stderr)
         return 130
     if result is None:
-        print("gyro-instrument: no estimate could be made from the run", file=sys.stderr)
+        print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3
     result = core_cli.to_jsonable(result)
     if args.json:

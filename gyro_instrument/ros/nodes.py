@@ -24,7 +24,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.pipeline import PENDULUMS, estimate_records
+from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joints import JOINT_NAMES, joint_streams, records_from_joints
 from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
@@ -172,7 +172,7 @@ class EstimatorNode(SceneNode):
 
     def prepare(self):
         for name, inst in self.insts.items():
-            if inst.type_name in PENDULUMS or getattr(inst, "directing_model", lambda: None)() is not None:
+            if estimable(inst):
                 self.buffers[name] = ([], [], [])
                 self.create_subscription(m.JointState, joint_topic(name),
                                          lambda msg, n=name: self._on_joint(n, msg), RELIABLE_ALL)
@@ -201,10 +201,10 @@ class EstimatorNode(SceneNode):
 
     def estimate(self):
         """Core call on everything received so far (None if nothing usable)."""
+        if self.scene is None:
+            return None
         samples = {n: (np.array(b[0], dtype=np.int64), np.array(b[1]), np.array(b[2]))
                    for n, b in self.buffers.items() if len(b[0]) >= 3}
-        if not samples:
-            return None
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
 
