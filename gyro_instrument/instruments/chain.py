@@ -206,3 +206,30 @@ class HingeChain:
         q, _ = self.full_coordinates(qf, np.zeros(self.nf))
         B = self.orientations(q)[link]
         return self.base @ (B @ np.asarray(axis_body, dtype=float))
+
+
+def hinge_friction(n_links, damping_rate=0.0, swing_inertias=None, spin_link=None, spin_inertia=0.0,
+                   spin_time_constant_s=0.0):
+    """Hinge torques for the ``pivot_damping`` and ``spin_decay`` effects, or None when neither acts.
+
+    Swinging hinge k gets −(2/τ_d) J_k q̇_k (amplitude e-folding in τ_d); the rotor's bearing gets
+    −C q̇_spin / τ_s — friction acts on the joint rate, the rotor's rate relative to its carrier.
+
+    Parameters
+    ----------
+    swing_inertias : dict
+        link index -> swinging inertia J (kg m²).
+    """
+    swing = dict(swing_inertias or {})
+    if not (damping_rate and swing) and not (spin_time_constant_s and spin_link is not None):
+        return None
+
+    def torques(q, qd, w_axis):
+        out = np.zeros(n_links)
+        if damping_rate:
+            for k, J in swing.items():
+                out[k] = -damping_rate * J * qd[k]
+        if spin_time_constant_s and spin_link is not None:
+            out[spin_link] = -spin_inertia * qd[spin_link] / spin_time_constant_s
+        return out
+    return torques

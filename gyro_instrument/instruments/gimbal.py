@@ -91,7 +91,7 @@ from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
-from gyro_instrument.instruments.chain import HingeChain, Link
+from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
@@ -505,17 +505,7 @@ class GimbalGyroscope(Instrument):
         damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
         tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
         J_out, J_in = self.swing_inertias()
-        C = self.C
-        torques = None
-        if damp or tau_s:
-            def torques(q, qd, w_axis):
-                out = np.zeros(3)
-                if damp:
-                    out[0] = -damp * J_out * qd[0]
-                    out[1] = -damp * J_in * qd[1]
-                if tau_s:
-                    out[2] = -C * qd[2] / tau_s
-                return out
+        torques = hinge_friction(3, damp, {0: J_out, 1: J_in}, 2, self.C, tau_s)
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
         return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
                           linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),

@@ -33,7 +33,7 @@ from scipy.special import ellipk
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
-from gyro_instrument.instruments.chain import HingeChain, Link
+from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
 
 PENDULUM_COLUMNS = (
     Column("deflection", "rad", "θ: angle of the bob from the downward vertical"),
@@ -315,17 +315,7 @@ class CompoundPendulum(Instrument):
                       mass_kg=self.M, com_m=np.array([0.0, 0.0, -self.lc]))]
         damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
         tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
-        A, C = self.A, self.C
-        torques = None
-        if damp or tau_s:
-            def torques(q, qd, w_axis):
-                out = np.zeros(3)
-                if damp:
-                    out[0] = -damp * A * qd[0]
-                    out[1] = -damp * A * qd[1]
-                if tau_s:
-                    out[2] = -C * w_axis[2] / tau_s
-                return out
+        torques = hinge_friction(3, damp, {0: self.A, 1: self.A}, 2, self.C, tau_s)
         return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
                           np.array([0.0, 0.0, -self.site.gravity_m_s2]),
                           linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),

@@ -34,7 +34,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor  # noqa: F401 (re-export)
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
-from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
+from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation, hinge_friction
 
 
 def plane_normal_enu(plane, normal_enu, site):
@@ -178,16 +178,7 @@ class PlaneGyroscope(Instrument):
         damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
         tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
         J = self.A * (math.sin(self.eps) ** 2 if self.is_cone else 1.0)
-        C = self.C
-        torques = None
-        if damp or tau_s:
-            def torques(q, qd, w_axis):
-                out = np.zeros(2)
-                if damp:
-                    out[0] = -damp * J * qd[0]
-                if tau_s:
-                    out[1] = -C * w_axis[1] / tau_s
-                return out
+        torques = hinge_friction(2, damp, {0: J}, 1, self.C, tau_s)
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
         return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
                           linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
