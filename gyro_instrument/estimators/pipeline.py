@@ -291,14 +291,16 @@ def _classic_methods(result, gyros, pend):
         else:
             entry.update({"latitude_deg": None, "reason": f"k/n = {x:.6g} exceeds 1 by more than 3 sigma"})
         lat9 = methods.get("item9", {}).get("latitude_deg")
-        if lat9 is not None:
+        if abs(k) < 3 * sk:
+            entry["earth_rate_rad_s"] = None
+            entry["reason_earth_rate"] = ("the pendulum does not precess measurably here (|k| < 3 sigma_k, as at "
+                                          "the equator): n = k / sin(latitude) is undetermined")
+        elif lat9 is None:
+            entry["earth_rate_rad_s"] = None
+            entry["reason_earth_rate"] = "n = k / sin(latitude) needs the latitude from item 9, which is null here"
+        else:
             s = math.sin(math.radians(lat9))
-            if abs(s) * n_ref > 3 * sk:
-                entry["earth_rate_rad_s"] = k / s
-                entry["earth_rate_sigma_rad_s"] = sk / abs(s)
-                entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
-            else:
-                entry["earth_rate_rad_s"] = None
-                entry["reason_earth_rate"] = ("the pendulum does not precess measurably at this latitude "
-                                              "(|n sin(latitude)| < 3 sigma_k): n = k / sin(latitude) is undetermined")
+            entry["earth_rate_rad_s"] = k / s
+            entry["earth_rate_sigma_rad_s"] = sk / abs(s)
+            entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
         methods["foucault"] = entry

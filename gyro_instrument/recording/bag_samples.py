@@ -5,7 +5,7 @@ import json
 import numpy as np
 from mcap.reader import make_reader
 
-from gyro_instrument.recording.mcap_io import read_metadata
+from gyro_instrument.recording.mcap_io import iter_records, read_metadata
 
 
 def samples_from_bag(path):
@@ -22,24 +22,26 @@ def samples_from_bag(path):
     factory = DecoderFactory()
     decoders = {}
     count = 0
-    with open(path, "rb") as fh:
-        reader = make_reader(fh, decoder_factories=[factory])
-        try:
-            for schema, channel, message in reader.iter_messages(log_time_order=True):
-                if not channel.topic.endswith("/joint_states") or schema.name != "sensor_msgs/msg/JointState":
-                    continue
-                dec = decoders.get(schema.id)
-                if dec is None:
-                    dec = decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
-                msg = dec(message.data)
-                name = channel.topic.strip("/").split("/")[0]
-                ts, pos, vel = data.setdefault(name, ([], [], []))
-                ts.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS)
-                pos.append(list(msg.position))
-                vel.append(list(msg.velocity))
-                count += 1
-        except Exception as exc:  # truncated or damaged: keep what was read
-            notes.append(f"bag read stopped after {count} joint messages: {exc.__class__.__name__}: {exc}")
+    try:
+        for schema, channel, message in iter_records(path):
+            if schema is None or not channel.topic.endswith("/joint_states") \
+                    or schema.name != "sensor_msgs/msg/JointState":
+                continue
+            dec = decoders.get(schema.id)
+            if dec is None:
+                dec = decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
+            msg = dec(message.data)
+            name = channel.topic.strip("/").split("/")[0]
+            ts, pos, vel = data.setdefault(name, ([], [], []))
+            ts.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS)
+            pos.append(list(msg.position))
+            vel.append(list(msg.velocity))
+            count += 1
+    except Exception as exc:  # damaged: keep what was read
+        notes.append(f"bag read stopped after {count} joint messages: {exc.__class__.__name__}: {exc}")
+    if not _has_summary(path):
+        notes.append(f"bag has no summary (recording interrupted): read {count} joint messages up to the last "
+                     f"complete record")
     out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
            for n, v in data.items()}
     return meta, out, notes
@@ -47,7 +49,15 @@ def samples_from_bag(path):
 
 def recorded_estimate(path):
     """The estimate stored in the bag's metadata by the live run, or None."""
-    meta = read_metadata(path)
+    meta = read_metadata(path, "gyro_instrument_estimate")
     if meta and meta.get("estimate_json"):
         return json.loads(meta["estimate_json"])
     return None
+
+
+def _has_summary(path):
+    try:
+        with open(path, "rb") as fh:
+            return make_reader(fh).get_summary() is not None
+    except Exception:
+        return False

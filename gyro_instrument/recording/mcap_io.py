@@ -53,6 +53,7 @@ class BagWriter:
         self._channels = {}
         self.counts = {}
         self.closed = False
+        self._since_flush = 0
 
     def add_topic(self, topic, type_name, qos=None):
         """Register a topic of type ``pkg/msg/Type`` (idempotent); returns the channel id."""
@@ -75,10 +76,15 @@ class BagWriter:
                             publish_time=int(log_time_ns if publish_time_ns is None else publish_time_ns),
                             data=bytes(data), sequence=self.counts[topic])
         self.counts[topic] += 1
+        self._since_flush += 1
+        if self._since_flush >= 256:      # completed chunks reach the disk: a SIGKILL loses little
+            self._fh.flush()
+            self._since_flush = 0
 
     def add_metadata(self, name, data):
-        """A metadata record (str -> str mapping)."""
+        """A metadata record (str -> str mapping), written (and flushed) at once."""
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+        self._fh.flush()
 
     def close(self):
         """Finish the file: summary, indexes, footer."""
@@ -88,53 +94,44 @@ class BagWriter:
             self.closed = True
 
 
-def read_messages(path, topics=None):
-    """Yield (topic, type_name, log_time_ns, cdr_bytes) in log-time order.
-
-    A truncated file (no summary) is read sequentially up to its last complete record.
-    """
-    with open(path, "rb") as fh:
-        reader = make_reader(fh)
-        try:
-            it = reader.iter_messages(topics=topics, log_time_order=True)
-            for schema, channel, message in it:
-                yield channel.topic, schema.name, message.log_time, message.data
-        except Exception:
-            # fall back to the streaming reader for damaged files
-            fh.seek(0)
-            yield from _stream_messages(fh, topics)
-
-
-def _stream_messages(fh, topics):
-    from mcap.exceptions import McapError
+def iter_records(path, topics=None):
+    """Yield (schema, channel, message) in log-time order from an indexed file, or in file order
+    from one without a summary (a recorder killed mid-run): up to its last complete record."""
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
-    schemas, channels = {}, {}
-    try:
-        for rec in StreamReader(fh, skip_magic=False).records:
-            if isinstance(rec, Schema):
-                schemas[rec.id] = rec
-            elif isinstance(rec, Channel):
-                channels[rec.id] = rec
-            elif isinstance(rec, Message):
-                ch = channels[rec.channel_id]
-                if topics is None or ch.topic in topics:
-                    yield ch.topic, schemas[ch.schema_id].name, rec.log_time, rec.data
-    except (McapError, EOFError, ValueError, KeyError, Exception):  # truncated tail
-        return
+    with open(path, "rb") as fh:
+        try:
+            reader = make_reader(fh)
+            summary = reader.get_summary()
+        except Exception:
+            summary = None
+        if summary is not None and summary.chunk_indexes:
+            yield from reader.iter_messages(topics=topics, log_time_order=True)
+            return
+        fh.seek(0)
+        schemas, channels = {}, {}
+        try:
+            for rec in StreamReader(fh, skip_magic=False).records:
+                if isinstance(rec, Schema):
+                    schemas[rec.id] = rec
+                elif isinstance(rec, Channel):
+                    channels[rec.id] = rec
+                elif isinstance(rec, Message):
+                    ch = channels.get(rec.channel_id)
+                    if ch is not None and (topics is None or ch.topic in topics):
+                        yield schemas.get(ch.schema_id), ch, rec
+        except Exception:  # truncated tail: stop at the last complete record
+            return
+
+
+def read_messages(path, topics=None):
+    """Yield (topic, type_name, log_time_ns, cdr_bytes); see :func:`iter_records`."""
+    for schema, channel, message in iter_records(path, topics):
+        yield channel.topic, schema.name if schema else "", message.log_time, message.data
 
 
 def read_metadata(path, name="gyro_instrument"):
-    """The named metadata record as a dict, or None."""
-    with open(path, "rb") as fh:
-        reader = make_reader(fh)
-        try:
-            for rec in reader.iter_metadata():
-                if rec.name == name:
-                    return dict(rec.metadata)
-        except Exception:
-            pass
-    # streaming fallback (damaged file)
+    """The named metadata record as a dict, or None (also from a file cut short)."""
     from mcap.records import Metadata
     from mcap.stream_reader import StreamReader
     with open(path, "rb") as fh:

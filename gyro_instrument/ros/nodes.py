@@ -12,6 +12,7 @@ Every node takes ``scene`` (name or path), ``overrides`` (``key.path=value`` str
 is refused, and the node stays up.
 """
 
+import json
 import math
 import os
 
@@ -242,6 +243,7 @@ class RecorderNode(SceneNode):
         super().__init__(name, **kwargs)
         self._declare("output", "")
         self._declare("topics", Parameter.Type.STRING_ARRAY)
+        self._declare("command", "recorder node")
         self.writer = None
         self.counts = {}
         self.last_ns = 0
@@ -260,6 +262,10 @@ class RecorderNode(SceneNode):
         types = scene_topics(self.insts)
         wanted = self.value("topics", []) or list(types)
         self.writer = BagWriter(out)
+        # the scene first, so that a recording cut short still says what it holds (replay needs it)
+        self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
+                                                     "scene": self.scene.name, "seed": self.scene.seed,
+                                                     "command": self.value("command", "recorder node")})
         self.stamped = {tp for tp, ty in types.items() if ty != "std_msgs/msg/Float64"}
         for topic in wanted:
             if topic not in types:
@@ -283,11 +289,11 @@ class RecorderNode(SceneNode):
         self.writer.write(topic, st, data)
         self.counts[topic] += 1
 
-    def close(self, metadata=None):
-        """Write the metadata record and finish the file (indexes, footer)."""
+    def close(self, metadata=None, name="gyro_instrument"):
+        """Write an optional metadata record and finish the file (summary, indexes, footer)."""
         if self.writer is not None and not self.writer.closed:
             if metadata:
-                self.writer.add_metadata("gyro_instrument", metadata)
+                self.writer.add_metadata(name, metadata)
             self.writer.close()
 
 

@@ -62,7 +62,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         est = EstimatorNode(context=context, parameter_overrides=_params(
             scene, overrides, duration_s, use_sim_time=True))
         rec = RecorderNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, output=bag, use_sim_time=True)) if bag else None
+            scene, overrides, duration_s, output=bag, use_sim_time=True, command=command)) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:
@@ -110,9 +110,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             t_wait = time.monotonic() + timeout_s
             while rec.received() < want and time.monotonic() < t_wait:
                 ex.spin_once(timeout_sec=0.001)
-            rec.close({"scene_yaml": json.dumps(dict(scene_obj.raw)), "scene": scene_obj.name,
-                       "seed": scene_obj.seed, "command": command,
-                       "estimate_json": json.dumps(result, default=str) if result else ""})
+            rec.close({"estimate_json": json.dumps(result, default=str) if result else ""}, name="gyro_instrument_estimate")
         stats = {"samples": n_samples, "wall_s": wall,
                  "real_time_factor_achieved": (n_samples * dt / wall) if wall > 0 else None,
                  "estimator_messages": est.received(), "recorded": dict(rec.counts) if rec else {},
