@@ -207,6 +207,10 @@ def build_parser():
                                       "live 'run' estimate to the last digit")
     p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
+    p = sub.add_parser("recover", help="rewrite a recording cut short (killed recorder) into a complete, "
+                                       "indexed MCAP that any reader opens")
+    p.add_argument("bag", help="the damaged .mcap")
+    p.add_argument("--out", required=True, metavar="FIXED.mcap", help="where to write the recovered file")
     return parser
 
 
@@ -260,6 +264,14 @@ def run_command(args):
             print(json.dumps(result, indent=2))
         else:
             print_estimate(result)
+        return 0
+    if args.command == "recover":
+        from gyro_instrument.recording.mcap_io import recover
+        if not os.path.exists(args.bag):
+            raise SceneError("bag", args.bag, "file not found")
+        check_writable(args.out)
+        n = recover(args.bag, args.out)
+        print(f"recovered {n} messages from {args.bag} into {args.out}")
         return 0
     if args.command == "replay":
         result = replay_bag(args.bag)

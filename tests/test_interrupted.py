@@ -61,6 +61,15 @@ def test_sigkill_leaves_a_readable_prefix_and_replay_says_what_it_did(tmp_path):
     assert t == sorted(t)
     result = replay_bag(str(bag))
     assert any("interrupted" in n for n in result.get("replay_notes", []))
+    # 'recover' rewrites it complete and indexed: the independent reader rosbags (which needs the
+    # footer) then reads every recovered message
+    from rosbags.highlevel import AnyReader
+    from gyro_instrument.cli import main
+    fixed = tmp_path / "fixed.mcap"
+    assert main(["recover", str(bag), "--out", str(fixed)]) == 0
+    with AnyReader([fixed]) as r:
+        assert sum(1 for _ in r.messages()) == len(msgs)
+    assert replay_bag(str(fixed))["latitude_deg"] == result["latitude_deg"]
     # a record of a few hundred seconds: the latitude is estimated, or null with a reason
     assert result["latitude_deg"] is not None or result.get("reason")
     json.dumps(result, allow_nan=False)

@@ -157,3 +157,33 @@ _decoder_cache = {}
 def file_is_writable(path):
     directory = os.path.dirname(os.path.abspath(path)) or "."
     return os.path.isdir(directory) and os.access(directory, os.W_OK)
+
+
+def recover(damaged, out):
+    """Rewrite a recording cut short (no summary/footer) into a complete, indexed MCAP holding every
+    complete record of the original (schemas, channels with their metadata, messages, metadata).
+
+    Returns the number of messages written.
+    """
+    from mcap.records import Channel, Message, Metadata, Schema
+    from mcap.stream_reader import StreamReader
+    with open(damaged, "rb") as fh, open(out, "wb") as fo:
+        w = Writer(fo, compression=CompressionType.ZSTD)
+        w.start(profile="ros2", library="gyro_instrument recover")
+        schema_ids, channel_ids, n = {}, {}, 0
+        try:
+            for rec in StreamReader(fh, skip_magic=False).records:
+                if isinstance(rec, Schema):
+                    schema_ids[rec.id] = w.register_schema(rec.name, rec.encoding, rec.data)
+                elif isinstance(rec, Channel):
+                    channel_ids[rec.id] = w.register_channel(rec.topic, rec.message_encoding,
+                                                             schema_ids.get(rec.schema_id, 0), dict(rec.metadata))
+                elif isinstance(rec, Message) and rec.channel_id in channel_ids:
+                    w.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data, rec.publish_time, rec.sequence)
+                    n += 1
+                elif isinstance(rec, Metadata):
+                    w.add_metadata(rec.name, dict(rec.metadata))
+        except Exception:
+            pass  # truncated tail
+        w.finish()
+    return n
