@@ -1,0 +1,38 @@
+"""Write msg_docs/instruments.md from the instrument and effect registries (kept true by
+tests/test_docs.py: run `python tools/gen_instrument_docs.py` after changing a Param or Column)."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from gyro_instrument.core.params import REQUIRED  # noqa: E402
+from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
+from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
+
+
+def render():
+    out = ["# Instruments and effects", "",
+           "Generated from the code by `tools/gen_instrument_docs.py`; `tests/test_docs.py` fails when it",
+           "is stale. Angles are given in degrees only in parameter names ending in `_deg`; channels are",
+           "in radians, rad/s and metres.", ""]
+    for name, cls in sorted(INSTRUMENTS.items()):
+        out += [f"## `{name}`", "", cls.summary, "",
+                f"Supported effects: {', '.join(sorted(cls.SUPPORTED_EFFECTS)) or 'none (exact model)'}.", "",
+                "| parameter | default | valid | meaning |", "|---|---|---|---|"]
+        for p in cls.PARAMS:
+            default = "required" if p.default is REQUIRED else repr(p.default)
+            out.append(f"| `{p.name}` | {default} | {p.describe_range().replace('must be ', '')} | {p.doc} |")
+        out += ["", "| channel | unit | meaning |", "|---|---|---|"]
+        out += [f"| `{c.name}` | {c.unit} | {c.doc} |" for c in cls.COLUMNS]
+        out.append("")
+    out += ["## Effects", "", "| effect | parameters | what it adds |", "|---|---|---|"]
+    for name, cls in sorted(EFFECTS.items()):
+        params = ", ".join(f"`{p.name}` (default {p.default!r}; {p.describe_range().replace('must be ', '')})"
+                           for p in cls.PARAMS) or "none"
+        out.append(f"| `{name}` | {params} | {cls.summary} |")
+    return "\n".join(out) + "\n"
+
+
+if __name__ == "__main__":
+    (Path(__file__).resolve().parents[1] / "msg_docs" / "instruments.md").write_text(render())
