@@ -188,11 +188,12 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
     # Bracket: the FFT resolution is ~2π/span; search ±1.5 bins, then polish.
     half = 1.5 * 2 * math.pi / span
     lo, hi = max(omega_guess - half, 0.1 * omega_guess), omega_guess + half
-    grid = np.linspace(lo, hi, 31)
+    grid = np.linspace(lo, hi, 9)
     best = grid[int(np.argmin([rss(w) for w in grid]))]
     step = grid[1] - grid[0]
+    # Brent to ~1e-3 of a bin; Levenberg–Marquardt with the analytic Jacobian polishes below.
     res = minimize_scalar(rss, bounds=(best - step, best + step), method="bounded",
-                          options={"xatol": 1e-13 * best})
+                          options={"xatol": 1e-3 * step})
     omega = float(res.x)
     lam = 0.0
     X = _design(tau, omega, harmonics, env)
@@ -208,8 +209,25 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
             out = out + e * (a * np.cos(h * w * tau) + b * np.sin(h * w * tau))
         return out
 
+    def jac(params):
+        """Analytic Jacobian of the model (columns: ω, [λ], C, a_h, b_h ...)."""
+        w, lm = params[0], (params[1] if damping else 0.0)
+        e = env * np.exp(-lm * tau) if damping else env
+        base = 3 if damping else 2
+        cols_w = np.zeros_like(tau)
+        osc = np.zeros_like(tau)
+        hcols = []
+        for i, h in enumerate(harmonics):
+            a, b = params[base + 2 * i], params[base + 2 * i + 1]
+            c, s_ = np.cos(h * w * tau), np.sin(h * w * tau)
+            cols_w += e * h * tau * (-a * s_ + b * c)
+            osc += e * (a * c + b * s_)
+            hcols += [e * c, e * s_]
+        cols = [cols_w] + ([-tau * osc] if damping else []) + [np.ones_like(tau)] + hcols
+        return np.column_stack(cols)
+
     p0 = [omega] + ([0.0] if damping else []) + list(coef)
-    sol = least_squares(lambda p: model(p) - y, p0, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15)
+    sol = least_squares(lambda p: model(p) - y, p0, jac=jac, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15)
     p = sol.x
     omega = float(p[0])
     if damping:
