@@ -8,7 +8,6 @@ import subprocess
 import sys
 import time
 
-import pytest
 
 from gyro_instrument.cli import replay_bag
 from gyro_instrument.recording.mcap_io import read_messages

@@ -1,9 +1,7 @@
 """MCAP in rosbag2's layout, checked with independent readers (rosbags, mcap + mcap_ros2)."""
 
-import math
 import os
 
-import numpy as np
 import pytest
 
 from gyro_instrument.recording.definitions import SEPARATOR, concatenated_definition, msg_text, type_hash

@@ -8,7 +8,6 @@ duration grows as (2/π) K(sin(a/2)) ≈ 1 + a²/16 (pendulum law; sec. 2 eq. 42
 
 import math
 
-import numpy as np
 from scipy.special import ellipk
 
 from gyro_instrument.core.effect import Effect
@@ -23,11 +22,6 @@ class FiniteAmplitude(Effect):
     def relative_size(self, scales):
         a = scales.get("amplitude_rad", 0.0)
         return a * a / 16.0, "a^2 / 16 (relative period change, sec. 2 eq. 42)"
-
-
-def restoring_sine(u, exact):
-    """sin u when ``exact`` (finite amplitude listed), else u (small-angle model)."""
-    return np.sin(u) if exact else u
 
 
 def finite_amplitude_factor(amplitude_rad):

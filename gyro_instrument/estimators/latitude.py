@@ -218,7 +218,3 @@ def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_hor
     """Quet item 9: cos γ = (T_m / T_h)² · ρ_m / ρ_h (small-amplitude one-swing durations)."""
     return (T_meridian_s / T_horizontal_s) ** 2 * spin_meridian / spin_horizontal
 
-
-def eq10_earth_rate(T_s, inertia_ratio, spin_rad_s, sin_omega=1.0):
-    """Eq. (10): n = π² / (μ ρ0 T² sin ω) (item 8's printed π/(μρ0T²) is a misprint)."""
-    return math.pi ** 2 / (inertia_ratio * spin_rad_s * T_s ** 2 * sin_omega)

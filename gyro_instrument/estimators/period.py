@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
 
-from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor  # noqa: F401
 
 
 @dataclass

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.core.scene import sample_times, sample_times_ns
+from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude

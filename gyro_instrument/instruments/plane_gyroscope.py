@@ -32,7 +32,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor  # noqa: F401 (re-export)
+from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation, hinge_friction
 

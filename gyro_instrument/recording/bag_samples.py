@@ -1,7 +1,5 @@
 """Joint samples from a recorded bag, decoded without ROS (``mcap_ros2``'s dynamic decoder)."""
 
-import json
-
 import numpy as np
 from mcap.reader import make_reader
 
@@ -46,13 +44,6 @@ def samples_from_bag(path):
            for n, v in data.items()}
     return meta, out, notes
 
-
-def recorded_estimate(path):
-    """The estimate stored in the bag's metadata by the live run, or None."""
-    meta = read_metadata(path, "gyro_instrument_estimate")
-    if meta and meta.get("estimate_json"):
-        return json.loads(meta["estimate_json"])
-    return None
 
 
 def _has_summary(path):

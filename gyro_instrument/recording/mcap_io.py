@@ -8,11 +8,8 @@ publish time is written equal to it so files are deterministic. A metadata recor
 ``gyro_instrument`` holds the scene (YAML), the seed and the command, for ``replay``.
 
 Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order;
-``decode`` turns CDR into an object through ``mcap_ros2``'s dynamic decoder (no ROS install).
 A file cut short (SIGKILL) is read up to its last complete chunk.
 """
-
-import os
 
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
@@ -142,21 +139,6 @@ def read_metadata(path, name="gyro_instrument"):
         except Exception:
             return None
     return None
-
-
-def decode(type_name, schema_text, data):
-    """Decode CDR bytes with ``mcap_ros2``'s dynamic decoder (no ROS install needed)."""
-    from mcap_ros2._dynamic import generate_dynamic
-    decoders = _decoder_cache.setdefault(type_name, generate_dynamic(type_name, schema_text))
-    return decoders[type_name](data)
-
-
-_decoder_cache = {}
-
-
-def file_is_writable(path):
-    directory = os.path.dirname(os.path.abspath(path)) or "."
-    return os.path.isdir(directory) and os.access(directory, os.W_OK)
 
 
 def recover(damaged, out):
