@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.estimators.period import EstimationError, fit_oscillation
+from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, fit_oscillation
 
 
 @dataclass
@@ -74,6 +74,10 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
         raise EstimationError(f"too few valid pendulum samples ({t.size})")
     main = e if np.var(e) >= np.var(nn) else nn
     fit = fit_oscillation(t, main)
+    snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
+    if snr < DETECTION_SNR:
+        raise EstimationError(f"no swing detected (SNR {snr:.3g} < {DETECTION_SNR:g}): a bob at rest has no "
+                              f"swing plane, so no Foucault rate")
     period = 2 * math.pi / fit.omega_rad_s
     n_win = int((t[-1] - t[0]) // period)
     if n_win < 3:

@@ -71,6 +71,11 @@ class OscillationFit:
         return math.pi * self.crlb_omega_rad_s / self.omega_rad_s ** 2
 
 
+#: Detection threshold: an oscillation counts when A² N / (4 σ²) exceeds this (the periodogram
+#: peak of pure noise is ~ln N ≈ 10 for N ~ 1e4).
+DETECTION_SNR = 100.0
+
+
 class EstimationError(ValueError):
     """The record cannot give the requested quantity (too short, no oscillation, ...)."""
 

@@ -16,13 +16,10 @@ from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude
-from gyro_instrument.estimators.period import EstimationError, count_oscillations, fit_oscillation
+from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, count_oscillations, fit_oscillation
 from gyro_instrument.scenes import build_instruments
 from gyro_instrument.sensors import SensorModel, scene_rng
 
-#: Detection threshold: an oscillation counts when A² N / (4 σ²) exceeds this (the periodogram
-#: peak of pure noise is ~ln N ≈ 10 for N ~ 1e4).
-DETECTION_SNR = 100.0
 
 
 PENDULUMS = ("spherical_pendulum", "compound_pendulum")

@@ -238,13 +238,21 @@ class SphericalPendulum(Instrument):
         t = np.asarray(t, dtype=float)
         r0, v0 = self.initial_state()
         w0sq = self.g / self.l
+        # Absolute tolerances scale with the motion, not the rod: a 1e-9 rad swing on 67 m moves
+        # the bob 7e-8 m, which an atol of 1e-12 l would resolve to only 1e-3 of itself.
+        w0 = math.sqrt(w0sq)
+        amp = max(self.l * math.sin(self.theta0), float(np.linalg.norm(v0)) / w0, 1e-12 * self.l)
+        atol_r, atol_v = self.rtol * amp, self.rtol * amp * w0
+        # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
+        # level, which no tolerance may ask to resolve (an inverted bob took 7e6 evaluations).
+        atol_z, atol_vz = max(atol_r, 1e-14 * self.l), max(atol_v, 1e-14 * self.l * w0)
         if self.has("finite_amplitude"):
             traj = integrate(self.rhs_exact(), np.concatenate([r0, v0]), t, rtol=self.rtol,
-                             atol=1e-12 * self.l)
+                             atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
             pos, vel = traj.y[:3], traj.y[3:]
         else:
             traj = integrate(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t, rtol=self.rtol,
-                             atol=1e-12 * self.l)
+                             atol=np.array([atol_r] * 2 + [atol_v] * 2))
             x, y, vx, vy = traj.y
             rh2 = x * x + y * y
             pos = np.vstack([x, y, -np.sqrt(np.maximum(self.l ** 2 - rh2, 0.0))])

@@ -165,6 +165,7 @@ class EstimatorNode(SceneNode):
         self._declare("publish_period_s", 0.0)
         self.buffers = {}
         self.rejected = {}
+        self.wrong_types = {}
         self.result = None
         self.pubs = {}
         if self.load():
@@ -184,6 +185,23 @@ class EstimatorNode(SceneNode):
 
     def received(self):
         return sum(len(b[0]) for b in self.buffers.values())
+
+    def check_topic_types(self):
+        """Topics the estimator listens to that the graph offers with another type (DDS never
+        matches them, so nothing arrives): {topic: [types]}; logged once and put in diagnostics."""
+        wrong = {}
+        for topic, types in self.get_topic_names_and_types():
+            name = topic.strip("/").split("/")[0]
+            if name in self.buffers and topic == joint_topic(name):
+                others = [t for t in types if t != "sensor_msgs/msg/JointState"]
+                if others:
+                    wrong[topic] = others
+        for topic, types in wrong.items():
+            if topic not in self.wrong_types:
+                self.get_logger().warning(f"{topic} is published as {', '.join(types)}; the estimator expects "
+                                          f"sensor_msgs/msg/JointState and receives nothing of that type")
+        self.wrong_types.update(wrong)
+        return wrong
 
     def _on_joint(self, name, msg):
         expected = JOINT_NAMES[self.insts[name].type_name]
@@ -227,7 +245,7 @@ class EstimatorNode(SceneNode):
             r.get("method") or r.get("reason", ""),
             {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
              "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
-             "rejected_messages": self.rejected}))
+             "rejected_messages": self.rejected, "wrong_topic_types": self.check_topic_types()}))
         self.pubs["/estimator/latitude_rad"].publish(m.float64(lat))
         self.pubs["/estimator/latitude_sigma_rad"].publish(m.float64(sig))
         self.pubs["/estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
