@@ -189,20 +189,6 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         r = y - X @ coef
         return float(r @ r)
 
-    # Bracket: the FFT resolution is ~2π/span; search ±1.5 bins, then polish.
-    half = 1.5 * 2 * math.pi / span
-    lo, hi = max(omega_guess - half, 0.1 * omega_guess), omega_guess + half
-    grid = np.linspace(lo, hi, 9)
-    best = grid[int(np.argmin([rss(w) for w in grid]))]
-    step = grid[1] - grid[0]
-    # Brent to ~1e-3 of a bin; Levenberg–Marquardt with the analytic Jacobian polishes below.
-    res = minimize_scalar(rss, bounds=(best - step, best + step), method="bounded",
-                          options={"xatol": 1e-3 * step})
-    omega = float(res.x)
-    lam = 0.0
-    X = _design(tau, omega, harmonics, env)
-    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-
     def model(params):
         w, lm = params[0], (params[1] if damping else 0.0)
         e = env * np.exp(-lm * tau) if damping else env
@@ -230,8 +216,30 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         cols = [cols_w] + ([-tau * osc] if damping else []) + [np.ones_like(tau)] + hcols
         return np.column_stack(cols)
 
-    p0 = [omega] + ([0.0] if damping else []) + list(coef)
-    sol = least_squares(lambda p: model(p) - y, p0, jac=jac, method="lm", x_scale="jac", xtol=1e-15, ftol=1e-15)
+    def polish(omega0):
+        """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved."""
+        X0 = _design(tau, omega0, harmonics, env)
+        c0, *_ = np.linalg.lstsq(X0, y, rcond=None)
+        q0 = [omega0] + ([0.0] if damping else []) + list(c0)
+        return least_squares(lambda q: model(q) - y, q0, jac=jac, method="lm", x_scale="jac",
+                             xtol=1e-15, ftol=1e-15)
+
+    bin_w = 2 * math.pi / span
+    lam = 0.0
+    # Fast path: the zero-padded, parabola-refined FFT peak is within a small fraction of a bin, inside
+    # the basin of the least-squares minimum; accept when the solution stays within half a bin.
+    sol = polish(omega_guess)
+    if not (sol.success and abs(sol.x[0] - omega_guess) < 0.5 * bin_w):
+        # Fallback: bracket ±1.5 bins on a 9-point grid, Brent to 1e-3 of a bin, then polish.
+        lo, hi = max(omega_guess - 1.5 * bin_w, 0.1 * omega_guess), omega_guess + 1.5 * bin_w
+        grid = np.linspace(lo, hi, 9)
+        best = grid[int(np.argmin([rss(w) for w in grid]))]
+        step = grid[1] - grid[0]
+        res = minimize_scalar(rss, bounds=(best - step, best + step), method="bounded",
+                              options={"xatol": 1e-3 * step})
+        sol2 = polish(float(res.x))
+        if not sol.success or 2 * sol2.cost <= 2 * sol.cost:
+            sol = sol2
     p = sol.x
     omega = float(p[0])
     if damping:
