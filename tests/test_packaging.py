@@ -76,3 +76,13 @@ def test_node_with_bad_parameter_logs_field_value_range_and_stays_up(colcon_inst
                         ["-p", "scene:=quet_paris", "-p", "overrides:=['site.latitude_deg=95']"], 6)
     assert "site.latitude_deg = 95" in out and "[-90, 90]" in out, out
     assert "Traceback" not in out
+
+
+def test_params_file(colcon_install, tmp_path):
+    # Issue 4: a parameters YAML works with --ros-args --params-file (scene, overrides, pacing).
+    params = tmp_path / "params.yaml"
+    params.write_text("gyrocompass_sim:\n  ros__parameters:\n    scene: quet_paris\n"
+                      "    overrides: ['duration_s=0.5', 'instruments.gyro_meridian.spin_rate_rad_s=300.0']\n"
+                      "    real_time_factor: 0.0\n")
+    rc, out = _run_node(colcon_install, "gyrocompass_sim", ["--params-file", str(params)], 8)
+    assert "published 11 samples of gyro_horizontal, gyro_meridian" in out, out
