@@ -207,6 +207,10 @@ def build_parser():
                                       "live 'run' estimate to the last digit")
     p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
+    p = sub.add_parser("bench", help="what accuracy costs: work-precision, speed targets and latitude error "
+                                     "versus observation time; CSV and summary.md in --out")
+    p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute)")
+    p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
     p = sub.add_parser("recover", help="rewrite a recording cut short (killed recorder) into a complete, "
                                        "indexed MCAP that any reader opens")
     p.add_argument("bag", help="the damaged .mcap")
@@ -264,6 +268,10 @@ def run_command(args):
             print(json.dumps(result, indent=2))
         else:
             print_estimate(result)
+        return 0
+    if args.command == "bench":
+        from gyro_instrument.bench.studies import run_bench
+        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
         return 0
     if args.command == "recover":
         from gyro_instrument.recording.mcap_io import recover
