@@ -10,7 +10,7 @@ import numpy as np
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.estimators.period import fit_oscillation
-from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+from gyro_instrument.estimators.pipeline import seed_sweep
 from gyro_instrument.instruments.pendulum import binet_ellipse
 from gyro_instrument.scenes import build_instruments, load_scene
 
@@ -79,26 +79,23 @@ def targets():
     return rows
 
 
-def _obs_worker(args):
-    minutes, seeds = args
-    scene = load_scene("quet_paris", [f"duration_s={60.0 * minutes}"])
-    truth = simulate_truth(scene)
+def _obs_rows(minutes, results):
     out = []
-    for s in seeds:
-        r = estimate_records(scene, truth[1], measure(scene, truth, s))
+    for r in results:
+        truth = r["truth"]["latitude_deg"]
         cnt = r["methods"].get("item9_counting", {}).get("latitude_deg")
-        out.append((minutes, r["latitude_deg"] - 48.8462, r["latitude_sigma_deg"], r["crlb"]["latitude_deg"],
-                    None if cnt is None else cnt - 48.8462))
+        out.append((minutes, r["latitude_deg"] - truth, r["latitude_sigma_deg"], r["crlb"]["latitude_deg"],
+                    None if cnt is None else cnt - truth))
     return out
 
 
 def observation_time(minutes_list, n_seeds, executor=None):
     """Rows (minutes, rms_fit_deg, mean_sigma_deg, crlb_deg, rms_counting_deg)."""
-    jobs = [(m, range(n_seeds)) for m in minutes_list]
+    jobs = [("quet_paris", [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
     own = executor is None
     executor = executor or process_executor()
     try:
-        results = list(executor.map(_obs_worker, jobs))
+        results = [_obs_rows(m, res) for m, res in zip(minutes_list, executor.map(seed_sweep, jobs))]
     finally:
         if own:
             executor.shutdown()

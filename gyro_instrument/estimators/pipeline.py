@@ -17,7 +17,7 @@ from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, count_oscillations, fit_oscillation
-from gyro_instrument.scenes import build_instruments
+from gyro_instrument.scenes import build_instruments, load_scene
 from gyro_instrument.sensors import SensorModel, scene_rng
 
 
@@ -73,7 +73,7 @@ def measure(scene, truth, seed=None):
     return records
 
 
-def _gyro_estimate(inst, rec, sigma_sensor):
+def _gyro_estimate(inst, rec):
     """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline."""
     t, y = rec["t"], rec["angle"]
     out = {"type": inst.type_name}
@@ -155,14 +155,13 @@ def estimate_records(scene, insts, records):
     result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
               "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": n_true},
               "instruments": {}, "methods": {}}
-    sensor = SensorModel.from_scene(scene)
     meas = []
     gyros = {}
     pend = None
     for name, inst in insts.items():
         rec = records[name]
         if "angle" in rec and inst.directing_model() is not None:
-            est = _gyro_estimate(inst, rec, sensor.effective_sigma_rad())
+            est = _gyro_estimate(inst, rec)
             m = est.pop("_measurement", None)
             if m is not None:
                 meas.append(m)
@@ -301,3 +300,15 @@ def _classic_methods(result, gyros, pend):
             entry["earth_rate_sigma_rad_s"] = sk / abs(s)
             entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
         methods["foucault"] = entry
+
+
+def seed_sweep(job):
+    """Estimates of one scene over many sensor seeds, simulating the truth once.
+
+    ``job`` = (scene name or path, overrides, seeds) — one picklable argument, so a sweep can be
+    ``executor.map``-ed over any ``concurrent.futures`` executor. Returns the estimate dicts.
+    """
+    name, overrides, seeds = job
+    scene = load_scene(name, list(overrides))
+    truth = simulate_truth(scene)
+    return [estimate_records(scene, truth[1], measure(scene, truth, s)) for s in seeds]

@@ -25,7 +25,7 @@ def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False):
             "  lifespan:\n{inf}  liveliness: 1\n  liveliness_lease_duration:\n{inf}"
             "  avoid_ros_namespace_conventions: false\n").format(
         h=2 if keep_all else 1, d=depth, r=1 if reliable else 2, du=1 if transient_local else 2,
-        inf=_INF.replace("    ", "    "))
+        inf=_INF)
 
 
 class BagWriter:

@@ -42,10 +42,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     """
     from gyro_instrument.scenes import load_scene
     overrides = list(overrides)
-    if duration_s:
-        overrides_all = overrides + [f"duration_s={float(duration_s)!r}"]
-    else:
-        overrides_all = overrides
+    overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
     context = rclpy.Context()
     rclpy.init(context=context, args=[])
