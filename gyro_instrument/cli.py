@@ -211,8 +211,8 @@ def build_parser():
                                      "versus observation time; CSV and summary.md in --out")
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
-    p = sub.add_parser("recover", help="rewrite a recording cut short (killed recorder) into a complete, "
-                                       "indexed MCAP that any reader opens")
+    p = sub.add_parser("recover", help="rewrite a recording truncated inside its data (no footer: disk "
+                                       "full, copied mid-write) into a complete, indexed MCAP")
     p.add_argument("bag", help="the damaged .mcap")
     p.add_argument("--out", required=True, metavar="FIXED.mcap", help="where to write the recovered file")
     return parser

@@ -43,32 +43,65 @@ def test_sigint_finishes_a_complete_indexed_mcap(tmp_path):
     n = summary.statistics.message_count
     with AnyReader([bag]) as r:
         assert sum(1 for _ in r.messages()) == n
+    from gyro_instrument.recording.mcap_io import recording_state
+    assert recording_state(str(bag)) == "interrupted"             # the SIGINT landed between samples
     result = replay_bag(str(bag))                                  # estimates from what is there
+    assert any("interrupted" in n for n in result.get("replay_notes", []))
     assert result["latitude_deg"] is not None and result["observation_s"] == 600.0
     json.dumps(result, allow_nan=False)
 
 
-def test_sigkill_leaves_a_readable_prefix_and_replay_says_what_it_did(tmp_path):
+def test_sigkill_leaves_an_indexed_file_every_reader_opens_and_replay_says_what_it_did(tmp_path):
+    """The recorder commits a chunk plus a provisional summary/footer in one write (mcap_io.BagWriter),
+    so a SIGKILL at any moment leaves a complete MCAP holding everything up to the last commit."""
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+    from gyro_instrument.recording.mcap_io import recording_state
     bag = tmp_path / "kill.mcap"
     p = start_run(bag)
     wait_for_messages(bag)
     p.kill()
     p.communicate(timeout=30)
+    with open(bag, "rb") as fh:                      # mcap: indexed, CRCs valid, counts consistent
+        reader = make_reader(fh, validate_crcs=True)
+        summary = reader.get_summary()
+        n = summary.statistics.message_count
+        assert summary.chunk_indexes and sum(1 for _ in reader.iter_messages()) == n
+    assert n > 1000
+    with AnyReader([bag]) as r:                      # rosbags (needs the footer) reads every message
+        assert sum(1 for _ in r.messages()) == n
     msgs = list(read_messages(str(bag)))
-    assert len(msgs) > 1000
+    assert len(msgs) == n
     t = [m[2] for m in msgs if m[0] == "/clock"]
     assert t == sorted(t)
+    assert recording_state(str(bag)) == "recording"  # the status record says it was cut short
     result = replay_bag(str(bag))
     assert any("interrupted" in n for n in result.get("replay_notes", []))
-    # 'recover' rewrites it complete and indexed: the independent reader rosbags (which needs the
-    # footer) then reads every recovered message
+    # a record of a few hundred seconds: the latitude is estimated, or null with a reason
+    assert result["latitude_deg"] is not None or result.get("reason")
+    json.dumps(result, allow_nan=False)
+
+
+def test_a_file_truncated_elsewhere_is_recovered_complete_and_indexed(tmp_path):
+    """A file cut inside its data section (disk full, a copy taken mid-write) has no footer: replay
+    reads it up to the last complete record and 'recover' rewrites it indexed for other readers."""
+    import os
     from rosbags.highlevel import AnyReader
     from gyro_instrument.cli import main
+    from gyro_instrument.recording.mcap_io import recording_state
+    src = tmp_path / "src.mcap"
+    p = start_run(src, rtf="0")
+    p.communicate(timeout=300)
+    size = os.path.getsize(src)
+    os.truncate(src, size * 2 // 3)                  # well inside the data section
+    assert recording_state(str(src)) == "no summary"
+    msgs = list(read_messages(str(src)))
+    assert len(msgs) > 1000
+    result = replay_bag(str(src))
+    assert any("interrupted" in n for n in result.get("replay_notes", []))
     fixed = tmp_path / "fixed.mcap"
-    assert main(["recover", str(bag), "--out", str(fixed)]) == 0
+    assert main(["recover", str(src), "--out", str(fixed)]) == 0
     with AnyReader([fixed]) as r:
         assert sum(1 for _ in r.messages()) == len(msgs)
     assert replay_bag(str(fixed))["latitude_deg"] == result["latitude_deg"]
-    # a record of a few hundred seconds: the latitude is estimated, or null with a reason
-    assert result["latitude_deg"] is not None or result.get("reason")
     json.dumps(result, allow_nan=False)

@@ -1,9 +1,7 @@
 """Joint samples from a recorded bag, decoded without ROS (``mcap_ros2``'s dynamic decoder)."""
 
 import numpy as np
-from mcap.reader import make_reader
-
-from gyro_instrument.recording.mcap_io import iter_records, read_metadata
+from gyro_instrument.recording.mcap_io import iter_records, read_metadata, recording_state
 
 
 def samples_from_bag(path):
@@ -37,18 +35,16 @@ def samples_from_bag(path):
             count += 1
     except Exception as exc:  # damaged: keep what was read
         notes.append(f"bag read stopped after {count} joint messages: {exc.__class__.__name__}: {exc}")
-    if not _has_summary(path):
+    state = recording_state(path)
+    if state == "no summary":
         notes.append(f"bag has no summary (recording interrupted): read {count} joint messages up to the last "
                      f"complete record")
+    elif state == "recording":
+        notes.append(f"recording interrupted (killed) after its last commit: the file is complete up to there; "
+                     f"read {count} joint messages")
+    elif state not in (None, "complete"):
+        notes.append(f"recording {state}: read {count} joint messages")
     out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
            for n, v in data.items()}
     return meta, out, notes
 
-
-
-def _has_summary(path):
-    try:
-        with open(path, "rb") as fh:
-            return make_reader(fh).get_summary() is not None
-    except Exception:
-        return False

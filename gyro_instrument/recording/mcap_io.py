@@ -3,15 +3,23 @@
 Writer: profile ``ros2``; one schema per type (encoding ``ros2msg``, the concatenated definition of
 :mod:`.definitions`); channels with message encoding ``cdr`` and metadata
 ``offered_qos_profiles`` (a YAML *list*, as rosbag2 jazzy writes it) and ``topic_type_hash``;
-zstd-compressed chunks, indexed summary on close. Log time = receive time in sim time; the
+zstd-compressed chunks, indexed summary. Log time = receive time in sim time; the
 publish time is written equal to it so files are deterministic. A metadata record
 ``gyro_instrument`` holds the scene (YAML), the seed and the command, for ``replay``.
 
-Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order;
-A file cut short (SIGKILL) is read up to its last complete chunk.
+The file on disk is a complete, indexed MCAP after every commit (see :class:`BagWriter`), so a
+recorder killed with SIGKILL leaves a file every reader opens, up to its last commit.
+
+Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order; a file
+truncated some other way (no footer) is read in file order up to its last complete record.
 """
 
+import copy
+import os
+import time
+
 from mcap.reader import make_reader
+from mcap.data_stream import RecordBuilder
 from mcap.writer import CompressionType, Writer
 
 from gyro_instrument.recording.definitions import concatenated_definition, type_hash
@@ -28,29 +36,87 @@ def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False):
         inf=_INF)
 
 
+STATUS_RECORD = "gyro_instrument_status"
+
+
+class _TailKeepingFile:
+    """The writer's output stream: data records are buffered and reach the file in one ``pwrite``
+    together with a provisional end (summary, footer, magic) placed after them. The next commit
+    writes over that provisional end from its first byte, so the file on disk is a complete MCAP
+    after every commit, and a SIGKILL loses only what was not yet committed."""
+
+    def __init__(self, path):
+        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self._pos = 0              # end of the committed data section
+        self._pending = bytearray()
+        self._end = 0              # end of what is on disk
+
+    def write(self, data):
+        self._pending += data
+        return len(data)
+
+    def tell(self):
+        return self._pos + len(self._pending)
+
+    def flush(self):
+        pass
+
+    def commit(self, tail=b""):
+        """Write the pending records and then ``tail`` (not part of the data: overwritten next time)."""
+        buf = memoryview(bytes(self._pending) + tail)
+        at = self._pos
+        while buf:                 # one syscall in practice; loop for short writes
+            k = os.pwrite(self._fd, buf, at)
+            buf, at = buf[k:], at + k
+        self._pos += len(self._pending)
+        self._pending.clear()
+        if at < self._end:         # never happens with a growing summary; keep the file exact anyway
+            os.ftruncate(self._fd, at)
+        self._end = at
+
+    def close(self):
+        os.close(self._fd)
+
+
 class BagWriter:
-    """Write ROS 2 CDR messages to an MCAP file in rosbag2's layout.
+    """Write ROS 2 CDR messages to an MCAP file in rosbag2's layout, valid on disk at every commit.
+
+    Chunks are closed by the writer itself (every ``chunk_size`` bytes of messages, or every
+    ``commit_period_s`` of wall time, whichever comes first). Each commit writes the chunk and
+    then a provisional summary, footer and end magic, with a metadata record
+    ``gyro_instrument_status`` = ``{"state": "recording"}``; :meth:`close` writes the final one
+    with ``state`` = ``complete`` (or the state given). So a killed recorder (SIGKILL, power cut of
+    the process) leaves an indexed MCAP that any reader (``mcap``, ``rosbags``, ``ros2 bag``)
+    opens, holding every message up to the last commit, and :func:`recording_state` tells that it
+    was cut short.
 
     Parameters
     ----------
     path : str
-        Output ``.mcap`` path; written to ``path + '.partial'`` is *not* used: chunks are flushed
-        as they fill so a killed process leaves a readable prefix.
+        Output ``.mcap`` path.
     chunk_size : int
-        Bytes per chunk (smaller chunks lose less on SIGKILL).
+        Bytes of messages per chunk.
+    commit_period_s : float
+        Longest wall time between commits: at most this much recording is lost on SIGKILL.
     """
 
-    def __init__(self, path, chunk_size=256 * 1024, compression="zstd"):
+    def __init__(self, path, chunk_size=256 * 1024, compression="zstd", commit_period_s=0.5):
         self.path = path
-        self._fh = open(path, "wb")
+        self._fh = _TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
-        self._w = Writer(self._fh, chunk_size=chunk_size, compression=comp)
+        # chunks are closed here (flush), never by mcap's own size test
+        self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp)
         self._w.start(profile="ros2", library="gyro_instrument")
         self._schemas = {}
         self._channels = {}
         self.counts = {}
         self.closed = False
-        self._since_flush = 0
+        self.chunk_size = int(chunk_size)
+        self.commit_period_s = float(commit_period_s)
+        self._bytes = 0
+        self._last_commit = time.monotonic()
+        self.commits = 0
+        self._commit()
 
     def add_topic(self, topic, type_name, qos=None):
         """Register a topic of type ``pkg/msg/Type`` (idempotent); returns the channel id."""
@@ -69,26 +135,93 @@ class BagWriter:
     def write(self, topic, log_time_ns, data, publish_time_ns=None):
         """Append one CDR message on a registered topic."""
         cid = self._channels[topic]
+        data = bytes(data)
         self._w.add_message(channel_id=cid, log_time=int(log_time_ns),
                             publish_time=int(log_time_ns if publish_time_ns is None else publish_time_ns),
-                            data=bytes(data), sequence=self.counts[topic])
+                            data=data, sequence=self.counts[topic])
         self.counts[topic] += 1
-        self._since_flush += 1
-        if self._since_flush >= 256:      # completed chunks reach the disk: a SIGKILL loses little
-            self._fh.flush()
-            self._since_flush = 0
+        self._bytes += len(data) + 31          # message record overhead
+        if self._bytes >= self.chunk_size or time.monotonic() - self._last_commit >= self.commit_period_s:
+            self.commit()
 
     def add_metadata(self, name, data):
-        """A metadata record (str -> str mapping), written (and flushed) at once."""
+        """A metadata record (str -> str mapping), committed to disk at once."""
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
-        self._fh.flush()
+        self.commit()
 
-    def close(self):
-        """Finish the file: summary, indexes, footer."""
+    def commit(self):
+        """Close the chunk in progress and make the file on disk a complete MCAP holding it."""
+        self._w.flush()
+        self._commit()
+
+    def _commit(self):
+        self._fh.commit(self._provisional_end())
+        self._bytes = 0
+        self._last_commit = time.monotonic()
+        self.commits += 1
+
+    def _provisional_end(self):
+        """What ``Writer.finish`` would write now (status record, data end, summary, footer, magic),
+        computed on a copy of the writer so the real one carries on; a shallow copy is enough once
+        the lists and counters that ``add_metadata``/``finish`` change are copied."""
+        w = copy.copy(self._w)
+        stats = copy.copy(self._w._Writer__statistics)
+        stats.channel_message_counts = dict(stats.channel_message_counts)
+        w._Writer__statistics = stats
+        w._Writer__summary_offsets = list(self._w._Writer__summary_offsets)
+        w._Writer__metadata_indexes = list(self._w._Writer__metadata_indexes)
+        w._Writer__record_builder = RecordBuilder()
+        sink = _Sink(self._fh.tell())
+        w._Writer__stream = sink
+        w._Writer__should_close = False
+        w.add_metadata(STATUS_RECORD, {"state": "recording", "messages": str(sum(self.counts.values()))})
+        w.finish()
+        return bytes(sink.buf)
+
+    def close(self, state="complete"):
+        """Finish the file: final status record, summary, indexes, footer."""
         if not self.closed:
+            self._w.add_metadata(STATUS_RECORD, {"state": state, "messages": str(sum(self.counts.values()))})
             self._w.finish()
+            self._fh.commit()
             self._fh.close()
             self.closed = True
+
+
+class _Sink:
+    """A byte sink that reports file offsets from ``start`` (for the provisional end)."""
+
+    def __init__(self, start):
+        self.start, self.buf = start, bytearray()
+
+    def write(self, data):
+        self.buf += data
+        return len(data)
+
+    def tell(self):
+        return self.start + len(self.buf)
+
+    def flush(self):
+        pass
+
+
+def recording_state(path):
+    """The recorder's last status: ``complete``, ``recording`` (cut short after its last commit),
+    ``no summary`` (an unindexed prefix, e.g. from an older writer), or None (no status record:
+    a file written by another tool or before status records)."""
+    try:
+        with open(path, "rb") as fh:
+            reader = make_reader(fh)
+            summary = reader.get_summary()
+            if summary is None:
+                return "no summary"
+            state = None
+            for rec in reader.iter_metadata():
+                if rec.name == STATUS_RECORD:
+                    state = rec.metadata.get("state")
+            return state
+    except Exception:
+        return "no summary"
 
 
 def iter_records(path, topics=None):
@@ -142,12 +275,13 @@ def read_metadata(path, name="gyro_instrument"):
 
 
 def recover(damaged, out):
-    """Rewrite a recording cut short (no summary/footer) into a complete, indexed MCAP holding every
+    """Rewrite a recording cut short (no summary/footer, e.g. truncated by a full disk or written
+    by a writer that does not keep its end on disk) into a complete, indexed MCAP holding every
     complete record of the original (schemas, channels with their metadata, messages, metadata).
 
     Returns the number of messages written.
     """
-    from mcap.records import Channel, Message, Metadata, Schema
+    from mcap.records import Channel, DataEnd, Message, Metadata, Schema
     from mcap.stream_reader import StreamReader
     with open(damaged, "rb") as fh, open(out, "wb") as fo:
         w = Writer(fo, compression=CompressionType.ZSTD)
@@ -155,6 +289,8 @@ def recover(damaged, out):
         schema_ids, channel_ids, n = {}, {}, 0
         try:
             for rec in StreamReader(fh, skip_magic=False).records:
+                if isinstance(rec, DataEnd):
+                    break  # the summary repeats schemas and channels: the data section is all there is
                 if isinstance(rec, Schema):
                     schema_ids[rec.id] = w.register_schema(rec.name, rec.encoding, rec.data)
                 elif isinstance(rec, Channel):

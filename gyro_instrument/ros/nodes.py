@@ -306,12 +306,13 @@ class RecorderNode(SceneNode):
         self.writer.write(topic, st, data)
         self.counts[topic] += 1
 
-    def close(self, metadata=None, name="gyro_instrument"):
-        """Write an optional metadata record and finish the file (summary, indexes, footer)."""
+    def close(self, metadata=None, name="gyro_instrument", state="complete"):
+        """Write an optional metadata record and finish the file (summary, indexes, footer) with
+        the status record ``state`` (``complete``, or ``interrupted`` when a run is cut short)."""
         if self.writer is not None and not self.writer.closed:
             if metadata:
                 self.writer.add_metadata(name, metadata)
-            self.writer.close()
+            self.writer.close(state=state)
 
 
 class PlayerNode(Node):

@@ -7,6 +7,8 @@ until the estimator and the recorder hold every message of that sample. With
 """
 
 import json
+import signal
+import threading
 import time
 
 import rclpy
@@ -45,7 +47,14 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
     context = rclpy.Context()
-    rclpy.init(context=context, args=[])
+    # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
+    # (the recorder then finishes the file with status 'interrupted')
+    stop = []
+    handlers = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            handlers[sig] = signal.signal(sig, lambda signum, frame: stop.append(signum))
+    rclpy.init(context=context, args=[], signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     nodes = []
     try:
         sims = []
@@ -74,6 +83,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
                         return False
             return True
         while not matched():
+            if stop:
+                raise KeyboardInterrupt
             ex.spin_once(timeout_sec=0.01)
             if time.monotonic() > deadline:
                 raise DeliveryError("subscribers did not match the simulators' publishers in time")
@@ -83,6 +94,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         dt = 1.0 / scene_obj.sample_rate_hz
         w0 = time.perf_counter()
         for i in range(n_samples):
+            if stop:
+                raise KeyboardInterrupt
             for s in sims:
                 s.publish_step()
             want_e, want_r = per_step_est * (i + 1), per_step_rec * (i + 1)
@@ -116,6 +129,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     finally:
         for n in nodes:
             if isinstance(n, RecorderNode):
-                n.close()
+                n.close(state="interrupted")   # only still open if the run did not finish
             n.destroy_node()
         rclpy.shutdown(context=context)
+        for sig, h in handlers.items():
+            signal.signal(sig, h)
