@@ -197,3 +197,45 @@ def test_compound_pendulum_equivalent_length_eq57(build):
     s = cp.simulate(t)
     ta, _ = local_maxima(t, -s.columns["z_up"])
     assert np.polyfit(np.arange(ta.size), ta, 1)[0] / 2 == pytest.approx(Tq, rel=1e-6)
+
+
+def test_parareal_fast_path_is_the_full_model(build):
+    # The fast path (integrator: parareal) integrates every swing at once from Newton-converged
+    # swing starts; it drops no term, so over 2 h of the Pantheon pendulum (440 swings, the full
+    # model with the centrifugal gradient) it must agree with the adaptive DOP853 at rtol 1e-12:
+    # swing azimuth at the end within 1e-9 rad (the adaptive run's own error is ~1e-11) and
+    # positions within 1e-9 l everywhere. The dense output (quintic Hermite between RK8 grid
+    # points) must keep the constraint (23) to 1e-9 l and the energy (24) to 1e-9 g l.
+    effects = FULL + ("centrifugal",)
+    t = np.arange(0.0, 7200.0 + 1e-9, 0.05)
+    fast = build(SphericalPendulum, PARIS, effects, length_m=67.0, initial_deflection_deg=2.0,
+                 integrator="parareal").simulate(t)
+    ref = build(SphericalPendulum, PARIS, effects, length_m=67.0, initial_deflection_deg=2.0,
+                rtol=1e-12).simulate(t)
+    info = fast.extra["parareal"]
+    assert fast.extra["segments"] >= 438
+    # Newton: each update is about the square of the previous (quadratic convergence)
+    ch = info["changes"]
+    assert ch[-1] <= 1e-9 and all(b < 10 * a * a + 1e-12 for a, b in zip(ch, ch[1:]))
+    dpos = np.max(np.abs(fast.extra["position_enu"] - ref.extra["position_enu"]))
+    assert dpos < 1e-9 * 67.0
+    assert abs(fast.columns["swing_azimuth"][-1] - ref.columns["swing_azimuth"][-1]) < 1e-9
+    pos, vel = fast.extra["position_enu"], fast.extra["velocity_enu"]
+    assert np.max(np.abs(np.linalg.norm(pos, axis=0) - 67.0)) < 1e-9 * 67.0
+    g = PARIS.gravity_m_s2
+    om = PARIS.earth_rate_enu()
+    dr = pos - np.array([[0.0], [0.0], [-67.0]])
+    E = 0.5 * np.sum(vel ** 2, axis=0) + g * pos[2] - 0.5 * np.sum(np.cross(om, dr.T) ** 2, axis=1)
+    assert np.ptp(E) < 1e-9 * g * 67.0
+
+
+def test_parareal_needs_the_full_conservative_model():
+    # The fast path's period and first guess come from a release from rest of the full model:
+    # other set-ups are refused at load time with the field, value and reason.
+    from gyro_instrument.core.errors import SceneError
+    from gyro_instrument.scenes import load_scene
+    with pytest.raises(SceneError, match="instruments.pendulum.integrator.*finite_amplitude"):
+        load_scene("foucault_pantheon", ["effects={earth_rotation: {}}", "instruments.pendulum.integrator=parareal"])
+    with pytest.raises(SceneError, match="release from rest"):
+        load_scene("foucault_pantheon", ["instruments.pendulum.integrator=parareal",
+                                         "instruments.pendulum.transverse_speed_m_s=0.01"])

@@ -206,6 +206,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         params = validate_params(prefix, cls.PARAMS, spec)
         if hasattr(cls, "check_params"):
             cls.check_params(prefix, params)
+        if hasattr(cls, "check_effects"):
+            cls.check_effects(prefix, params, tuple(names))
         instruments[iname] = (itype, MappingProxyType(params), tuple(names))
     for e in effects:
         if e not in used:

@@ -26,10 +26,12 @@ pendulum of length λ = A / (M l) when μ = C/A is small and ρ0 ≈ 0 (eq. 57).
 """
 
 import math
+import time
 
 import numpy as np
 from scipy.special import ellipk
 
+from gyro_instrument.core.angles import unwrap
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
@@ -108,13 +110,13 @@ def pendulum_columns(pos, vel, omega0_sq):
     vx, vy = vel[0], vel[1]
     rh = np.hypot(x, y)
     deflection = np.arctan2(rh, -z)
-    azimuth = np.unwrap(np.arctan2(x, y))
+    azimuth = unwrap(np.arctan2(x, y))
     # Fradkin tensor in (north, east) axes: its major axis is the swing plane.
     n, e, vn, ve = y, x, vy, vx
     tnn = omega0_sq * n * n + vn * vn
     tee = omega0_sq * e * e + ve * ve
     tne = omega0_sq * n * e + vn * ve
-    swing = 0.5 * np.unwrap(np.arctan2(2.0 * tne, tnn - tee))
+    swing = 0.5 * unwrap(np.arctan2(2.0 * tne, tnn - tee))
     return {"deflection": deflection, "azimuth": azimuth, "swing_azimuth": swing,
             "x_east": x, "y_north": y, "z_up": z}
 
@@ -133,10 +135,33 @@ class SphericalPendulum(Instrument):
         Param("transverse_speed_m_s", default=0.0, low=-1.0e3, high=1.0e3,
               doc="launch speed perpendicular to the release plane (u0 of sec. 2 §IV), positive clockwise "
                   "seen from above (toward increasing azimuth)"),
-        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+        Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance (adaptive)"),
+        Param("integrator", kind="str", default="adaptive", choices=("adaptive", "parareal"),
+              doc="adaptive: DOP853 swing after swing; parareal: every swing period at once (fixed-step "
+                  "RK8 batched over periods, Newton-parareal from Quet's comparison pendulum), the fast path "
+                  "for long runs of the full model (needs finite_amplitude, no air_drag)"),
+        Param("segment_steps", kind="int", default=48, low=8, high=100000,
+              doc="parareal: RK8 steps per swing period"),
+        Param("shooting_tol", default=1e-9, low=1e-14, high=1e-3,
+              doc="parareal: largest change of a swing's start state (relative to the amplitude) accepted"),
     )
     SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"})
     COLUMNS = PENDULUM_COLUMNS
+
+    @classmethod
+    def check_effects(cls, prefix, p, effects):
+        from gyro_instrument.core.errors import SceneError
+        if p["integrator"] == "parareal":
+            if "finite_amplitude" not in effects:
+                raise SceneError(f"{prefix}.integrator", "parareal", "needs the effect finite_amplitude (the "
+                                 "full model); the linear model has Binet's closed form")
+            if "air_drag" in effects:
+                raise SceneError(f"{prefix}.integrator", "parareal", "needs a conservative motion: leave out "
+                                 "air_drag or use integrator: adaptive")
+            if p["initial_deflection_deg"] >= 90.0 or p["initial_deflection_deg"] <= 0.0 \
+                    or p["radial_speed_m_s"] != 0.0 or p["transverse_speed_m_s"] != 0.0:
+                raise SceneError(f"{prefix}.integrator", "parareal", "needs a release from rest at a deflection "
+                                 "in (0, 90) degrees (its period and precession come from that release)")
 
     def __init__(self, name, site, params, effects):
         super().__init__(name, site, params, effects)
@@ -246,6 +271,8 @@ class SphericalPendulum(Instrument):
         # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
         # level, which no tolerance may ask to resolve (an inverted bob took 7e6 evaluations).
         atol_z, atol_vz = max(atol_r, 1e-14 * self.l), max(atol_v, 1e-14 * self.l * w0)
+        if self.integrator == "parareal":
+            return self._simulate_parareal(t, r0, v0, amp, options.get("progress"))
         if self.has("finite_amplitude"):
             traj = integrate(self.rhs_exact(), np.concatenate([r0, v0]), t, rtol=self.rtol,
                              atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
@@ -259,6 +286,84 @@ class SphericalPendulum(Instrument):
             vel = np.vstack([vx, vy, np.zeros_like(vx)])
         cols = pendulum_columns(pos, vel, w0sq)
         return Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
+
+
+    def _first_swing(self, r0, v0):
+        """Period and apsidal turn of the first swing, from the full equations (DOP853, rtol 1e-12).
+
+        The guess is Quet's: T = 4 × the quarter period (42) between θ0 and the minimum deflection
+        β of sec. 2 §II, and a turn of −k′ T with k′ the apsidal rate of sec. 2 §III. The swing is
+        then integrated to its second apocentre (x ẋ + y ẏ = 0, decreasing) after 0.9 T: that time and
+        the azimuth turned there are the comparison pendulum's period and turn, exact for this
+        release, which the first guess of every swing start uses (sec. 2: the non-rotating
+        motion turned by k t)."""
+        from scipy.integrate import solve_ivp
+        k = self.site.k_vertical_rad_s if self.has("earth_rotation") else 0.0
+        beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
+        guess = 4.0 * quarter_period_s(self.l, self.g, self.theta0, beta)
+        rhs = self.rhs_exact()
+
+        def apocentre(tt, y):
+            return y[0] * y[3] + y[1] * y[4] if tt > 0.9 * guess else 1.0     # d(x² + y²)/dt / 2
+        apocentre.direction = -1
+        apocentre.terminal = True
+        sol = solve_ivp(rhs, (0.0, 1.2 * guess), np.concatenate([r0, v0]), method="DOP853", rtol=1e-12,
+                        atol=1e-14 * self.l, events=apocentre, dense_output=True)
+        if sol.status != 1 or not len(sol.t_events[0]):
+            return guess, -apsidal_rate_from_rest_rad_s(k, self.theta0) * guess, sol.nfev
+        period = float(sol.t_events[0][0])
+        y1 = sol.y_events[0][0]
+        turn = math.atan2(r0[0] * y1[1] - r0[1] * y1[0], r0[0] * y1[0] + r0[1] * y1[1])
+        return period, turn, sol.nfev
+
+    def _simulate_parareal(self, t, r0, v0, amp, progress=None):
+        """The fast path: all swings at once (:mod:`gyro_instrument.core.parareal`).
+
+        Segments are one swing period T = 4 × the exact quarter period (42) of the comparison
+        pendulum released at θ0 with Quet's minimum deflection β (sec. 2 §II); the first guess of
+        each swing's start is the release turned by the apsidal rate of sec. 2 §III per period
+        (Quet's comparison pendulum: the non-rotating solution turned by k t). Newton-parareal
+        then converges the starts on the full equations (:meth:`rhs_exact`, every listed effect),
+        so the result is the full model to ``shooting_tol``, not the comparison solution.
+        """
+        from gyro_instrument.core.integrate import Trajectory
+        from gyro_instrument.core.parareal import dense_output, parareal
+        c0, w0t = time.process_time(), time.perf_counter()
+        period, phi, nfev0 = self._first_swing(r0, v0)
+        span = float(t[-1] - t[0])
+        n = max(1, int(math.ceil(span / period)))
+        y0 = np.concatenate([r0, v0])
+        ang = phi * np.arange(n + 1)
+        pred = np.empty((n + 1, 6))
+        for b in (0, 3):
+            pred[:, b] = np.cos(ang) * y0[b] - np.sin(ang) * y0[b + 1]
+            pred[:, b + 1] = np.sin(ang) * y0[b] + np.cos(ang) * y0[b + 1]
+            pred[:, b + 2] = y0[b + 2]
+        w0sq = self.g / self.l
+        scale = np.array([amp] * 3 + [amp * math.sqrt(w0sq)] * 3)
+        U, grid, info = parareal(self.rhs_exact(), y0, period, pred, self.segment_steps, scale,
+                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress)
+        y = dense_output(grid, period, t - t[0], 3)
+        pos, vel = y[:3], y[3:]
+        traj = Trajectory(t, y, info["rhs_columns"] + nfev0, time.perf_counter() - w0t, time.process_time() - c0,
+                          f"parareal RK8 ({self.segment_steps} steps/period, {info['iterations']} passes)")
+        cols = pendulum_columns(pos, vel, w0sq)
+        return Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
+                                                "period_s": period, "segments": n})
+
+
+def _swing_frames(U, w0sq):
+    """Rotations about the vertical by each state's swing-plane angle (Fradkin tensor), acting on
+    position and velocity: the frame in which a swing's one-period Jacobian varies slowly."""
+    x, y, vx, vy = U[:, 0], U[:, 1], U[:, 3], U[:, 4]
+    txx, tyy, txy = w0sq * x * x + vx * vx, w0sq * y * y + vy * vy, w0sq * x * y + vx * vy
+    a = 0.5 * np.unwrap(np.arctan2(2 * txy, txx - tyy))
+    c, s = np.cos(a), np.sin(a)
+    R = np.zeros((len(a), 6, 6))
+    for b in (0, 3):
+        R[:, b, b], R[:, b, b + 1], R[:, b + 1, b], R[:, b + 1, b + 1] = c, -s, s, c
+        R[:, b + 2, b + 2] = 1.0
+    return R
 
 
 class CompoundPendulum(Instrument):
