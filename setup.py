@@ -24,7 +24,7 @@ setup(
     install_requires=["numpy>=1.24", "scipy>=1.10", "pyyaml>=6"],
     extras_require={
         "ros": ROS,
-        "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions"],
+        "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6"],
         "plot": ["matplotlib>=3.6"],
     },
     zip_safe=True,

@@ -1,19 +1,63 @@
-"""``gyro-instrument bench --quick`` writes its CSVs and summary; the studies measure physics:
-DOP853's azimuth error falls with the tolerance and the fit beats Quet's counting by orders of
-magnitude at every observation time."""
+"""``gyro-instrument bench --quick`` writes its CSVs, plots and summary; the studies measure physics:
+DOP853's azimuth error falls with the tolerance, the parareal fast path reaches the tight
+reference, Quet's fidelity tiers are ordered as their physics says, the fit beats Quet's counting
+by orders of magnitude at every observation time, and the ROS suite records everything."""
 
 import csv
+
+import pytest
 
 from gyro_instrument.cli import main
 
 
-def test_bench_quick_writes_studies(tmp_path, capsys):
-    out = tmp_path / "bench"
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
     assert main(["bench", "--quick", "--out", str(out)]) == 0
-    for name in ("work_precision.csv", "targets.csv", "observation_time.csv", "summary.md"):
-        assert (out / name).exists(), name
-    wp = [r for r in csv.DictReader(open(out / "work_precision.csv")) if r["method"].startswith("DOP853")]
-    errs = [float(r["azimuth_error_rad"]) for r in sorted(wp, key=lambda r: -float(r["rtol"]))]
+    return out
+
+
+def rows(out, name):
+    return list(csv.DictReader(open(out / name)))
+
+
+def test_bench_quick_writes_studies_and_plots(bench):
+    for name in ("work_precision.csv", "targets.csv", "observation_time.csv", "effect_cost.csv", "summary.md",
+                 "work_precision.png", "observation_time.png", "effect_cost.png"):
+        assert (bench / name).exists(), name
+    assert "Regenerate: `gyro-instrument bench --quick" in (bench / "summary.md").read_text()
+
+
+def test_work_precision_tiers(bench):
+    wp = rows(bench, "work_precision.csv")
+    fou = [r for r in wp if r["instrument"].startswith("Foucault")]
+    dop = [r for r in fou if r["method"] == "full equations, DOP853"]
+    errs = [float(r["error_rad"]) for r in sorted(dop, key=lambda r: -float(r["setting"].split()[1]))]
     assert errs == sorted(errs, reverse=True) and errs[-1] < 1e-9
-    for r in csv.DictReader(open(out / "observation_time.csv")):
+    # the fast path integrates the full equations: as accurate as the tightest DOP853 here, cheaper
+    fast = [r for r in fou if "parareal" in r["method"] and r["setting"].startswith("48")][0]
+    assert float(fast["error_rad"]) < 1e-9
+    assert float(fast["cpu_s"]) < min(float(r["cpu_s"]) for r in dop)
+    # Quet's tiers over 1 h of the 2° Pantheon pendulum: the comparison pendulum (exact first
+    # swing, turned) is off by less than 1e-5 rad; the small-angle model and Binet's ellipse miss
+    # the Airy precession of the finite swing (~1e-4 rad) and agree with each other, Binet being
+    # the linear model's exact solution (to 1e-8 rad).
+    tier = {r["method"]: float(r["error_rad"]) for r in fou}
+    comp = tier["Quet's comparison pendulum (first swing turned by its apsidal angle)"]
+    lin, binet = tier["linear (small-angle) model, DOP853"], tier["Binet's closed form (linear model)"]
+    assert comp < 1e-5 < lin
+    assert abs(lin - binet) < 1e-8
+    gyro = {r["method"] + r["setting"]: float(r["error_rad"]) for r in wp if r["instrument"].startswith("plane")}
+    assert gyro["exact equations (hinge chain), DOP853rtol 1e-09"] < 1e-8
+    # the reduced equations drop only O(n/ρ) terms (~1e-9 rad here): at rtol 1e-9 they are as good
+    assert gyro["Quet's reduced equations, DOP853rtol 1e-09"] < 1e-8
+
+
+def test_targets_and_observation_time(bench):
+    tg = {r["target"]: r for r in rows(bench, "targets.csv")}
+    suite = [r for k, r in tg.items() if k.startswith("ROS suite")][0]
+    assert float(suite["measured"]) > 0          # measured, and the recording held every message
+    az = [r for k, r in tg.items() if k.endswith("end azimuth error")][0]
+    assert float(az["measured"]) <= 1e-6
+    for r in rows(bench, "observation_time.csv"):
         assert float(r["rms_counting_deg"]) > 100 * float(r["rms_fit_deg"])

@@ -1,16 +1,25 @@
 """``gyro-instrument bench``: what accuracy costs, in computer time and in observation time.
 
-Writes CSV files and a markdown summary (``summary.md``) to ``--out``; PNG plots are a later
-addition (matplotlib stays optional: the CSV never needs it). Studies:
+Writes CSV files, PNG plots (when matplotlib is installed: the ``plot`` extra; the CSVs never
+need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 
-* ``work_precision.csv`` — the Foucault pendulum (67 m, 2°): error of the swing-plane azimuth at
-  the end of the run against a tight-tolerance reference, versus CPU time, for DOP853 across
-  tolerances (the textbook baseline on the Cartesian rotating-frame pendulum) and for the fidelity
-  tiers: Binet's analytic ellipse (linear model, closed form) and the full equations;
-* ``targets.csv`` — the issue's speed targets measured in one run: one hour of both
-  plane-gyroscope configurations, estimator samples per second;
+* ``work_precision.csv`` (:mod:`.studies`) — error at the end of the run against a tight reference
+  versus CPU time, per fidelity tier and setting:
+
+  - the Foucault pendulum (67 m, 2°, a sidereal day at 20 Hz; 1 h with ``--quick``): Binet's
+    closed form (linear model), Quet's comparison pendulum (the first swing turned by its apsidal
+    angle), the small-angle model, and the full equations with DOP853 across tolerances (the
+    textbook baseline on the Cartesian rotating-frame pendulum) or with the parareal fast path;
+  - the directing-plane gyroscope (quet_paris, 1 h): Quet's closed form (eq. 9 with the exact
+    swing), his reduced equations and the exact hinge-chain equations across tolerances;
+* ``targets.csv`` — the speed targets measured in one run (fast path: CPU, end error and the
+  DOP853/fast-path CPU ratio at the same error; one hour of both plane-gyroscope configurations;
+  estimator samples per second; the ROS suite at 100 Hz with its recording checked complete);
 * ``observation_time.csv`` — latitude rms error versus observation time for the sine fit, Quet's
   counting and the Cramér–Rao bound, over seeds run in a process pool
   (:func:`gyro_instrument.core.parallel.process_executor`; any ``concurrent.futures``-compatible
-  executor, e.g. a Dask client's, can be passed instead).
+  executor, e.g. a Dask client's, can be passed instead);
+* ``effect_cost.csv`` (:mod:`.effect_cost`) — for each effect of a scene: CPU with and without
+  it, and the error made by leaving it out (angles, noise-free latitude and Earth rate);
+* ``*.png`` (:mod:`.plots`) — work-precision, observation-time and effect-cost diagrams.
 """

@@ -11,7 +11,8 @@ from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.estimators.period import fit_oscillation
 from gyro_instrument.estimators.pipeline import seed_sweep
-from gyro_instrument.instruments.pendulum import binet_ellipse
+from gyro_instrument.instruments.base import Simulation
+from gyro_instrument.instruments.pendulum import binet_ellipse, pendulum_columns
 from gyro_instrument.scenes import build_instruments, load_scene
 
 
@@ -21,62 +22,217 @@ def _cpu(f):
     return out, time.process_time() - c0
 
 
-def _swing_azimuth_end(pos, vel, w0sq):
-    n, e, vn, ve = pos[1, -1], pos[0, -1], vel[1, -1], vel[0, -1]
-    return 0.5 * math.atan2(2 * (w0sq * n * e + vn * ve), (w0sq * n * n + vn * vn) - (w0sq * e * e + ve * ve))
+def _wrapped(d, period=math.pi):
+    """``d`` folded into (−period/2, period/2]: a swing plane is defined modulo π."""
+    return (d + period / 2) % period - period / 2
 
 
-def work_precision(duration_s, tolerances):
-    """Rows (method, rtol, cpu_s, nfev, azimuth_error_rad) for the Foucault pendulum."""
+def _end_swing_azimuth(sim):
+    """Swing-plane azimuth (compass, rad) at the last sample, from the Fradkin tensor."""
+    return float(sim.columns["swing_azimuth"][-1])
+
+
+def _pendulum(duration_s, rate_hz, **params):
+    over = [f"duration_s={duration_s}", f"sample_rate_hz={rate_hz}"]
+    over += [f"instruments.pendulum.{k}={v}" for k, v in params.items() if k != "effects"]
+    if "effects" in params:
+        over.append("effects={" + ", ".join(f"{e}: {{}}" for e in params["effects"]) + "}")
+    scene = load_scene("foucault_pantheon", over)
+    return build_instruments(scene)["pendulum"], sample_times(scene), scene
+
+
+def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, progress=print):
+    """Rows (instrument, tier, setting, cpu_s, nfev, error_rad): the 67 m Foucault pendulum
+    released at 2°, output at ``rate_hz``; error = swing-plane azimuth at the last sample against
+    DOP853 at rtol 1e-13 on the full equations (the tight reference). Tiers: Binet's closed form
+    (linear model), Quet's comparison pendulum (the first swing of the full model repeated and
+    turned by its apsidal angle), the linear (small-angle) model, and the full model with DOP853
+    (the textbook baseline) or the parareal fast path."""
+    name = f"Foucault pendulum 67 m, {duration_s:g} s at {rate_hz:g} Hz"
+    progress(f"  reference: DOP853 rtol 1e-13 over {duration_s:g} s")
+    p, t, scene = _pendulum(duration_s, rate_hz, rtol=1e-13)
+    ref = _end_swing_azimuth(p.simulate(t))
     rows = []
-    scene = load_scene("foucault_pantheon", [f"duration_s={duration_s}", "sample_rate_hz=1"])
-    t = sample_times(scene)
 
-    def run(rtol, effects=None):
-        over = [f"duration_s={duration_s}", "sample_rate_hz=1", f"instruments.pendulum.rtol={rtol}"]
-        if effects is not None:
-            over.append("effects={" + ", ".join(f"{e}: {{}}" for e in effects) + "}")
-        p = build_instruments(load_scene("foucault_pantheon", over))["pendulum"]
+    def add(tier, setting, sim, cpu, nfev):
+        rows.append((name, tier, setting, cpu, nfev, abs(_wrapped(_end_swing_azimuth(sim) - ref))))
+
+    for rtol in rtols:
+        p, t, _ = _pendulum(duration_s, rate_hz, rtol=rtol)
         sim, cpu = _cpu(lambda: p.simulate(t))
-        return p, sim, cpu
-
-    p, ref, _ = run(1e-13)
-    w0sq = p.g / p.l
-    ref_az = _swing_azimuth_end(ref.extra["position_enu"], ref.extra["velocity_enu"], w0sq)
-    for rtol in tolerances:
-        _, sim, cpu = run(rtol)
-        az = _swing_azimuth_end(sim.extra["position_enu"], sim.extra["velocity_enu"], w0sq)
-        rows.append(("DOP853 full equations", rtol, cpu, sim.trajectory.nfev, abs(az - ref_az)))
+        add("full equations, DOP853", f"rtol {rtol:g}", sim, cpu, sim.trajectory.nfev)
+        progress(f"  DOP853 rtol {rtol:g}: {cpu:.2f} s CPU, error {rows[-1][-1]:.2e} rad")
+    for steps, tol in parareal_settings:
+        p, t, _ = _pendulum(duration_s, rate_hz, integrator="parareal", segment_steps=steps, shooting_tol=tol)
+        sim, cpu = _cpu(lambda: p.simulate(t))
+        add("full equations, parareal RK8 (fast path)", f"{steps} steps/swing, tol {tol:g}", sim, cpu,
+            sim.trajectory.nfev)
+        progress(f"  parareal {steps} steps, tol {tol:g}: {cpu:.2f} s CPU, error {rows[-1][-1]:.2e} rad")
+    p, t, _ = _pendulum(duration_s, rate_hz, rtol=1e-10, effects=("earth_rotation", "centrifugal"))
+    sim, cpu = _cpu(lambda: p.simulate(t))
+    add("linear (small-angle) model, DOP853", "rtol 1e-10", sim, cpu, sim.trajectory.nfev)
+    p, t, _ = _pendulum(duration_s, rate_hz)
+    (pos, vel, nfev), cpu = _cpu(lambda: p.comparison_solution(t))
+    sim = Simulation(t, pendulum_columns(pos, vel, p.g / p.l), None)
+    add("Quet's comparison pendulum (first swing turned by its apsidal angle)", "", sim, cpu, nfev)
     r0, v0 = p.initial_state()
 
     def binet():
-        return binet_ellipse(t, p.l, p.g, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1])
-    (x, y), cpu = _cpu(binet)
-    # velocities of the closed form by differencing the last two samples' neighbourhood
-    xe, ye = binet_ellipse(t[-1:] + np.array([-1e-3, 1e-3]), p.l, p.g, scene.site.k_vertical_rad_s,
-                           r0[0], r0[1], v0[0], v0[1])
-    pos = np.array([[x[-1]], [y[-1]]])
-    vel = np.array([[(xe[1] - xe[0]) / 2e-3], [(ye[1] - ye[0]) / 2e-3]])
-    az = _swing_azimuth_end(np.vstack([pos, [[0.0]]]), np.vstack([vel, [[0.0]]]), w0sq)
-    rows.append(("Binet closed form (linear model)", 0.0, cpu, 0, abs(az - ref_az)))
+        x, y, vx, vy = binet_ellipse(t, p.l, p.g, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1],
+                                     velocity=True)
+        z = -np.sqrt(np.maximum(p.l ** 2 - x * x - y * y, 0.0))
+        return pendulum_columns(np.vstack([x, y, z]), np.vstack([vx, vy, 0 * vx]), p.g / p.l)
+    cols, cpu = _cpu(binet)
+    add("Binet's closed form (linear model)", "", Simulation(t, cols, None), cpu, 0)
     return rows
 
 
-def targets():
-    """Rows (target, measured, unit, goal)."""
+def gyroscope_work_precision(duration_s, rtols, progress=print):
+    """Rows (instrument, tier, setting, cpu_s, nfev, error_rad) for quet_paris's horizontal
+    directing-plane gyroscope: error = axis angle u at the last sample against the hinge chain
+    (exact equations, Kane's method) at rtol 1e-13. Tiers: Quet's closed form (eq. 9 with the
+    exact pendulum-like swing, :func:`plane_gyroscope_closed_form`), Quet's reduced equations
+    (model: reduced) and the exact equations (model: chain), each across tolerances."""
     rows = []
+    name = f"plane gyroscope (quet_paris gyro_horizontal), {duration_s:g} s at 20 Hz"
+
+    def gyro(**params):
+        over = [f"duration_s={duration_s}"] + [f"instruments.gyro_horizontal.{k}={v}" for k, v in params.items()]
+        scene = load_scene("quet_paris", over)
+        return build_instruments(scene)["gyro_horizontal"], sample_times(scene)
+
+    progress(f"  reference: hinge chain rtol 1e-13 over {duration_s:g} s")
+    g, t = gyro(model="chain", rtol=1e-13)
+    ref = float(g.simulate(t).columns["angle"][-1])
+    for model, tier in (("chain", "exact equations (hinge chain), DOP853"), ("reduced", "Quet's reduced equations, DOP853")):
+        for rtol in rtols:
+            g, t = gyro(model=model, rtol=rtol)
+            sim, cpu = _cpu(lambda: g.simulate(t))
+            rows.append((name, tier, f"rtol {rtol:g}", cpu, sim.trajectory.nfev,
+                         abs(float(sim.columns["angle"][-1]) - ref)))
+    g, t = gyro()
+    u, cpu = _cpu(lambda: plane_gyroscope_closed_form(g, t))
+    rows.append((name, "Quet's closed form (eq. 9, exact swing)", "", cpu, 0, abs(float(u[-1]) - ref)))
+    return rows
+
+
+def plane_gyroscope_closed_form(g, t):
+    """Axis angle u(t) of Quet's reduced equation in closed form: with the small-swing duration T0
+    of eq. (9), u obeys the plane pendulum's law ü = −(π/T0)² sin u, whose release from rest at u0
+    is u = 2 arcsin(k sn(K(m) − π t/T0 | m)), k = sin(u0/2), m = k² (Jacobi's sn)."""
+    from scipy.special import ellipj, ellipk
+    pred = g.predictions()
+    w = math.pi / pred["swing_duration_small_s"]
+    k = math.sin(g.u0 / 2.0)
+    m = k * k
+    sn, _, _, _ = ellipj(float(ellipk(m)) - w * np.asarray(t, dtype=float), m)
+    return 2.0 * np.arcsin(k * sn)
+
+
+def work_precision(quick=False, progress=print):
+    """All work-precision rows (see :func:`foucault_work_precision`, :func:`gyroscope_work_precision`)."""
+    day = 86164.0989                           # a sidereal day (2π / n)
+    if quick:
+        fr = foucault_work_precision(3600.0, (1e-6, 1e-8, 1e-10, 1e-12), ((24, 1e-7), (48, 1e-9)),
+                                     progress=progress)
+        gr = gyroscope_work_precision(600.0, (1e-6, 1e-9), progress=progress)
+    else:
+        fr = foucault_work_precision(day, (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12),
+                                     ((16, 1e-6), (24, 1e-7), (32, 1e-9), (48, 1e-9), (64, 1e-12)),
+                                     progress=progress)
+        gr = gyroscope_work_precision(3600.0, (1e-5, 1e-7, 1e-9, 1e-11), progress=progress)
+    return fr + gr
+
+
+def matched_error_ratio(rows, fast_row):
+    """CPU of DOP853 on the full equations at the fast path's error (log-log interpolation of
+    its work-precision line; at its most accurate point if the fast path is more accurate
+    still, which understates the ratio) divided by the fast path's CPU."""
+    pts = sorted((r[5], r[3]) for r in rows if r[0] == fast_row[0] and r[1].endswith("DOP853")
+                 and r[1].startswith("full") and r[5] > 0)
+    err = max(fast_row[5], 1e-300)
+    if not pts:
+        return None
+    if err <= pts[0][0]:
+        cpu = pts[0][1]
+    elif err >= pts[-1][0]:
+        cpu = pts[-1][1]
+    else:
+        le, lc = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+        cpu = float(np.exp(np.interp(math.log(err), le, lc)))
+    return cpu / fast_row[3]
+
+
+def targets(wp_rows, quick=False, progress=print):
+    """Rows (target, measured, unit, goal, met) of issue 5's speed targets, measured in this run."""
+    rows = []
+    fast = [r for r in wp_rows if r[1].startswith("full equations, parareal") and r[2].startswith("48 steps")]
+    if fast:
+        f = fast[0]
+        what = f"{f[0]}: parareal fast path"
+        if not quick:
+            rows.append((f"{what}, CPU", f[3], "s", "<= 2", f[3] <= 2.0))
+        rows.append((f"{what}, end azimuth error", f[5], "rad", "<= 1e-6", f[5] <= 1e-6))
+        ratio = matched_error_ratio(wp_rows, f)
+        rows.append((f"{what}, DOP853 CPU at the same error / fast path CPU", ratio, "x", ">= 10",
+                     ratio is not None and ratio >= 10))
     scene = load_scene("quet_paris", ["duration_s=3600"])
     insts = build_instruments(scene)
     t = sample_times(scene)
     _, cpu = _cpu(lambda: [insts[n].simulate(t) for n in ("gyro_horizontal", "gyro_meridian")])
-    rows.append(("1 h of both plane-gyroscope configurations at 20 Hz", cpu, "s CPU", "<= 0.5"))
+    rows.append(("1 h of both plane-gyroscope configurations at 20 Hz", cpu, "s CPU", "<= 0.5", cpu <= 0.5))
     rng = np.random.default_rng(0)
     tt = np.arange(0, 600, 0.05)
     y = 0.1 * np.cos(0.245 * tt) + rng.normal(0, 1e-4, tt.size)
     k = 20
     _, cpu = _cpu(lambda: [fit_oscillation(tt, y, harmonics=(1, 3)) for _ in range(k)])
-    rows.append(("estimator throughput (sine fit, 3rd harmonic)", k * tt.size / cpu, "samples/s", ">= 1e6"))
+    rows.append(("estimator throughput (sine fit, 3rd harmonic)", k * tt.size / cpu, "samples/s", ">= 1e6",
+                 k * tt.size / cpu >= 1e6))
+    progress("  ROS suite, quet_paris at 100 Hz (subprocess on loopback)")
+    rtf, note = suite_real_time_factor(duration_s=120.0 if quick else None)
+    rows.append(("ROS suite, quet_paris at 100 Hz, nothing lost" + (" (120 s)" if quick else ""),
+                 rtf if rtf is not None else float("nan"), "x real time" + (f" ({note})" if note else ""),
+                 ">= 50", rtf is not None and rtf >= 50))
     return rows
+
+
+def suite_real_time_factor(duration_s=None, rate_hz=100.0):
+    """Real-time factor of ``gyro-instrument run quet_paris`` at ``rate_hz`` with a recording,
+    in a subprocess kept on loopback (discovery range LOCALHOST and, as root, a loopback-only
+    network namespace), after checking that the recording holds every published message.
+    Returns (factor or None, note)."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+    from gyro_instrument.recording.mcap_io import read_messages
+    import importlib.util
+    if importlib.util.find_spec("rclpy") is None:
+        return None, "rclpy not installed"
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = os.path.join(tmp, "suite.mcap")
+        cmd = [sys.executable, "-m", "gyro_instrument.ros.cli", "run", "quet_paris", "--set",
+               f"sample_rate_hz={rate_hz:g}", "--bag", bag, "--json", "--stats"]
+        if duration_s:
+            cmd += ["--duration-s", f"{duration_s:g}"]
+        env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        if os.geteuid() == 0 and shutil.which("unshare") and shutil.which("ip") and not env.get("GYRO_IN_NETNS"):
+            env["GYRO_IN_NETNS"] = "1"
+            cmd = ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh"] + cmd
+        p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+        if p.returncode != 0:
+            return None, f"run failed: {p.stderr.strip().splitlines()[-1] if p.stderr.strip() else p.returncode}"
+        stats = json.loads(p.stderr.strip().splitlines()[-1])
+        recorded = {}
+        for topic, _, _, _ in read_messages(bag):
+            recorded[topic] = recorded.get(topic, 0) + 1
+        # every joint stream holds one message per sample, and the file holds what the recorder counted
+        lost = sorted(tp for tp, n in stats["recorded"].items()
+                      if recorded.get(tp, 0) != n or (tp.endswith("/joint_states") and n != stats["samples"]))
+        if lost:
+            return None, f"recording incomplete on {lost}"
+        return stats["real_time_factor_achieved"], ""
 
 
 def _obs_rows(minutes, results):
@@ -108,34 +264,60 @@ def observation_time(minutes_list, n_seeds, executor=None):
 
 
 def run_bench(out_dir, quick=False, progress=print):
-    """Run every study, write CSVs and summary.md; return the summary text."""
+    """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text."""
+    from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
+    from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
+    from gyro_instrument.bench.plots import write_plots
     os.makedirs(out_dir, exist_ok=True)
-    dur = 600.0 if quick else 3600.0
-    tols = (1e-6, 1e-8, 1e-10) if quick else (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
-    progress("work-precision (Foucault pendulum)")
-    wp = work_precision(dur, tols)
-    _write(os.path.join(out_dir, "work_precision.csv"), ("method", "rtol", "cpu_s", "nfev", "azimuth_error_rad"), wp)
+    progress("work-precision (Foucault pendulum, plane gyroscope)")
+    wp = work_precision(quick, progress)
+    _write(os.path.join(out_dir, "work_precision.csv"),
+           ("instrument", "method", "setting", "cpu_s", "nfev", "error_rad"), wp)
     progress("speed targets")
-    tg = targets()
-    _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal"), tg)
+    tg = targets(wp, quick, progress)
+    _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
     progress("observation time")
     ot = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
     _write(os.path.join(out_dir, "observation_time.csv"),
            ("minutes", "rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg"), ot)
+    progress("effect cost")
+    ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
+                          duration_s=120.0 if quick else None)
+    write_effect_cost_csv(os.path.join(out_dir, "effect_cost.csv"), ec)
+    pngs = write_plots(out_dir)
+    if not pngs:
+        progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     lines = ["# gyro-instrument bench" + (" (quick)" if quick else ""), "",
-             f"## Work-precision: Foucault pendulum, 67 m, 2°, {dur:g} s (azimuth error at the end vs rtol 1e-13)", "",
-             "| method | rtol | CPU s | RHS evaluations | azimuth error (rad) |", "|---|---|---|---|---|"]
-    lines += [f"| {m} | {r:g} | {c:.3f} | {n} | {e:.2e} |" for m, r, c, n, e in wp]
-    lines += ["", "## Speed targets", "", "| target | measured | unit | goal |", "|---|---|---|---|"]
-    lines += [f"| {a} | {b:.4g} | {c} | {d} |" for a, b, c, d in tg]
+             "Regenerate: `gyro-instrument bench" + (" --quick" if quick else "") + f" --out {out_dir}`.", "",
+             "## Speed targets (measured in this run)", "",
+             "| target | measured | unit | goal | met |", "|---|---|---|---|---|"]
+    lines += [f"| {a} | {b:.4g} | {c} | {d} | {'yes' if e else 'no'} |" for a, b, c, d, e in tg]
+    lines += ["", "## Work-precision (error at the end against a tight reference)", "",
+              "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
+    lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
     lines += ["", "## Latitude error versus observation time (quet_paris)", "",
               "| minutes | rms error, fit (deg) | reported σ (deg) | Cramér–Rao (deg) | rms error, counting (deg) |",
               "|---|---|---|---|---|"]
     lines += [f"| {m:g} | {a:.2e} | {b:.2e} | {c:.2e} | {d:.2e} |" for m, a, b, c, d in ot]
+    lines += ["", "## Effect cost (leave one effect out; noise-free)", "",
+              "| scene | effect | instrument | CPU with (s) | CPU without (s) | largest angle change (rad) | "
+              "latitude change (deg) | Earth-rate change (rad/s) |", "|---|---|---|---|---|---|---|---|"]
+    for r in ec:
+        d = dict(zip(EC_HEADER, r))
+        lines.append("| {scene} | {effect} | {instrument} | {a} | {b} | {c} | {dl} | {dn} |".format(
+            scene=d["scene"], effect=d["effect"], instrument=d["instrument"], a=_fmt(d["cpu_with_s"], ".3g"),
+            b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
+            dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
+    if pngs:
+        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
     text = "\n".join(lines) + "\n"
     with open(os.path.join(out_dir, "summary.md"), "w") as fh:
         fh.write(text)
     return text
+
+
+def _fmt(x, spec):
+    return "—" if x is None else format(x, spec)
 
 
 def _write(path, header, rows):

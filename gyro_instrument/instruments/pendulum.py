@@ -85,12 +85,13 @@ def min_deflection_from_rest_rad(length_m, gravity_m_s2, k_rad_s, theta0_rad):
     return math.sqrt(length_m / gravity_m_s2) * k_rad_s * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0)
 
 
-def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0):
+def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity=False):
     """Exact solution of the linear model with the vertical Earth-rate component only.
 
     ẍ = −ω0² x + 2k ẏ, ÿ = −ω0² y − 2k ẋ (ENU, k = n sin γ) has, with z = x + i y,
     z = e^(−ikt) (P e^(iΩt) + Q e^(−iΩt)), Ω = √(ω0² + k²): Binet's ellipse of frequency Ω
-    turning at −k (clockwise from above for k > 0).
+    turning at −k (clockwise from above for k > 0). Returns (x, y), or (x, y, ẋ, ẏ) with
+    ``velocity``.
     """
     w0sq = gravity_m_s2 / length_m
     W = math.sqrt(w0sq + k_rad_s ** 2)
@@ -100,8 +101,13 @@ def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0):
     P = (zd0 + 1j * (W + k_rad_s) * z0) / (2j * W)
     Q = z0 - P
     t = np.asarray(t, dtype=float)
-    z = np.exp(-1j * k_rad_s * t) * (P * np.exp(1j * W * t) + Q * np.exp(-1j * W * t))
-    return z.real, z.imag
+    rot = np.exp(-1j * k_rad_s * t)
+    ep, em = np.exp(1j * W * t), np.exp(-1j * W * t)
+    z = rot * (P * ep + Q * em)
+    if not velocity:
+        return z.real, z.imag
+    zd = rot * (1j * (W - k_rad_s) * P * ep - 1j * (W + k_rad_s) * Q * em)
+    return z.real, z.imag, zd.real, zd.imag
 
 
 def pendulum_columns(pos, vel, omega0_sq):
@@ -241,22 +247,26 @@ class SphericalPendulum(Instrument):
         """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x + Coriolis
         (vertical and horizontal Earth-rate parts on the horizontal velocity) + listed effects."""
         w0sq = self.g / self.l
-        om = self.site.earth_rate_enu()
+        ox, oy, oz = (float(c) for c in self.site.earth_rate_enu())
         cor = self.has("earth_rotation")
         cen = self.has("centrifugal")
         drag = self.effect("air_drag")
 
         def rhs(t, y):
             x, yy, vx, vy = y
-            a = np.array([-w0sq * x, -w0sq * yy, 0.0])
-            v = np.array([vx, vy, 0.0])
-            if cor:
-                a += -2.0 * np.cross(om, v)
-            if cen:
-                a += -np.cross(om, np.cross(om, np.array([x, yy, 0.0])))
+            ax, ay = -w0sq * x, -w0sq * yy
+            if cor:                       # −2 Ω × v with v = (vx, vy, 0)
+                ax += 2.0 * oz * vy
+                ay -= 2.0 * oz * vx
+            if cen:                       # −Ω × (Ω × r) = Ω² r − (Ω·r) Ω with r = (x, y, 0)
+                o2, od = ox * ox + oy * oy + oz * oz, ox * x + oy * yy
+                ax += o2 * x - od * ox
+                ay += o2 * yy - od * oy
             if drag is not None:
-                a += drag.acceleration(v)
-            return np.array([vx, vy, a[0], a[1]])
+                a = drag.acceleration(np.array([vx, vy, 0.0]))
+                ax += a[0]
+                ay += a[1]
+            return np.array([vx, vy, ax, ay])
         return rhs
 
     def simulate(self, t, **options):
@@ -310,11 +320,29 @@ class SphericalPendulum(Instrument):
         sol = solve_ivp(rhs, (0.0, 1.2 * guess), np.concatenate([r0, v0]), method="DOP853", rtol=1e-12,
                         atol=1e-14 * self.l, events=apocentre, dense_output=True)
         if sol.status != 1 or not len(sol.t_events[0]):
-            return guess, -apsidal_rate_from_rest_rad_s(k, self.theta0) * guess, sol.nfev
+            return guess, -apsidal_rate_from_rest_rad_s(k, self.theta0) * guess, sol.nfev, sol
         period = float(sol.t_events[0][0])
         y1 = sol.y_events[0][0]
         turn = math.atan2(r0[0] * y1[1] - r0[1] * y1[0], r0[0] * y1[0] + r0[1] * y1[1])
-        return period, turn, sol.nfev
+        return period, turn, sol.nfev, sol
+
+    def comparison_solution(self, t):
+        """Quet's comparison pendulum (sec. 2): the first swing of the full model (DOP853, rtol
+        1e-12), repeated every period and turned about the vertical by its apsidal angle each time
+        — the non-rotating motion turned by k t, with the swing's exact period and turn. Exact
+        for the first swing; it misses what the horizontal Earth rate and the slow change of the
+        ellipse do later (the parareal fast path adds them). Returns (position, velocity, nfev)."""
+        r0, v0 = self.initial_state()
+        period, turn, nfev, sol = self._first_swing(r0, v0)
+        t = np.asarray(t, dtype=float) - float(t[0])
+        n = np.floor(t / period)
+        y = sol.sol(t - n * period)
+        c, s = np.cos(n * turn), np.sin(n * turn)
+        out = y.copy()
+        for b in (0, 3):
+            out[b] = c * y[b] - s * y[b + 1]
+            out[b + 1] = s * y[b] + c * y[b + 1]
+        return out[:3], out[3:], nfev
 
     def _simulate_parareal(self, t, r0, v0, amp, progress=None):
         """The fast path: all swings at once (:mod:`gyro_instrument.core.parareal`).
@@ -329,7 +357,7 @@ class SphericalPendulum(Instrument):
         from gyro_instrument.core.integrate import Trajectory
         from gyro_instrument.core.parareal import dense_output, parareal
         c0, w0t = time.process_time(), time.perf_counter()
-        period, phi, nfev0 = self._first_swing(r0, v0)
+        period, phi, nfev0, _ = self._first_swing(r0, v0)
         span = float(t[-1] - t[0])
         n = max(1, int(math.ceil(span / period)))
         y0 = np.concatenate([r0, v0])

@@ -20,6 +20,9 @@ def build_parser():
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--stats", action="store_true",
+                   help="print the suite's statistics (samples, wall time, real-time factor, messages recorded "
+                        "per topic) as one JSON line on stderr (implies --quiet)")
     return parser
 
 
@@ -38,7 +41,7 @@ def main(argv=None):
         if args.real_time_factor < 0:
             raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
         from gyro_instrument.ros.suite import run_suite
-        progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+        progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
         result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
                                   command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress)
     except SceneError as exc:
@@ -51,11 +54,14 @@ def main(argv=None):
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3
     result = core_cli.to_jsonable(result)
+    if args.stats:
+        print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded")}),
+              file=sys.stderr)
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         core_cli.print_estimate(result)
-        if not args.quiet:
+        if not (args.quiet or args.stats):
             print(f"  suite: {stats['samples']} samples in {stats['wall_s']:.2f} s "
                   f"({stats['real_time_factor_achieved']:.1f}x real time); recorded {sum(stats['recorded'].values())} "
                   f"messages" + (f" to {args.bag}" if args.bag else ""), file=sys.stderr)

@@ -1,0 +1,179 @@
+"""PNG plots of the bench CSVs. matplotlib is optional (``pip install matplotlib``, or the ``plot``
+extra); the CSVs never need it.
+
+:func:`write_plots` reads whichever of these are in the directory and writes one PNG beside each:
+
+* ``work_precision.csv`` (instrument, method, setting, cpu_s, nfev, error_rad) →
+  ``work_precision.png``: one panel per instrument, error at the end versus CPU time, log-log, one
+  series per method (fidelity tier), points labelled with their setting (a work-precision diagram
+  in the manner of Hairer, Nørsett & Wanner);
+* ``observation_time.csv`` (minutes, rms_fit_deg, mean_sigma_deg, crlb_deg, rms_counting_deg) →
+  ``observation_time.png``: rms latitude error versus observation time, log-log, for the sine fit,
+  Quet's counting and the Cramér–Rao bound, with the mean reported σ;
+* ``effect_cost.csv`` (see :mod:`gyro_instrument.bench.effect_cost`) → ``effect_cost.png``: the
+  largest angle difference caused by leaving each effect out, per scene and instrument, as
+  horizontal bars on a log scale (an exact zero or a missing value is written beside its bar).
+
+CSVs are read with :mod:`csv`; empty cells (None) become ``None``.
+"""
+
+import csv
+import math
+import os
+
+#: Values below this are drawn at this value on log axes (an exact 0 cannot be placed on them).
+LOG_FLOOR = 1e-16
+
+
+def write_plots(out_dir):
+    """Write the PNGs for the CSVs found in ``out_dir``.
+
+    Returns
+    -------
+    list of str
+        Paths written, in the order work-precision, observation time, effect cost (those whose CSV
+        exists). ``[]`` when matplotlib is not installed (tell the user ``pip install matplotlib``).
+    """
+    plt = _pyplot()
+    if plt is None:
+        return []
+    written = []
+    for stem, plot in (("work_precision", _plot_work_precision), ("observation_time", _plot_observation_time),
+                       ("effect_cost", _plot_effect_cost)):
+        src = os.path.join(out_dir, stem + ".csv")
+        if not os.path.exists(src):
+            continue
+        rows = read_csv(src)
+        if not rows:
+            continue
+        dst = os.path.join(out_dir, stem + ".png")
+        fig = plot(plt, rows)
+        try:
+            fig.savefig(dst, dpi=110)
+        finally:
+            plt.close(fig)
+        written.append(dst)
+    return written
+
+
+def matplotlib_available():
+    """True when matplotlib can be imported."""
+    return _pyplot() is not None
+
+
+def _pyplot():
+    try:
+        import matplotlib
+    except ImportError:
+        return None
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def read_csv(path):
+    """Rows of a CSV as dicts; numeric cells become float, empty cells None, other text stays text."""
+    with open(path, newline="") as fh:
+        return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+
+
+def _value(text):
+    if text is None or text == "" or text == "None":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _pos(x):
+    """A value that can go on a log axis (None stays None)."""
+    if x is None or not isinstance(x, float) or not math.isfinite(x):
+        return None
+    return max(abs(x), LOG_FLOOR)
+
+
+# ----------------------------------------------------------------------------- work-precision
+def _plot_work_precision(plt, rows):
+    instruments = list(dict.fromkeys(r["instrument"] for r in rows))
+    fig, axes = plt.subplots(1, len(instruments), figsize=(6.5 * len(instruments), 5.0), squeeze=False)
+    for ax, inst in zip(axes[0], instruments):
+        sub = [r for r in rows if r["instrument"] == inst]
+        for method in dict.fromkeys(r["method"] for r in sub):
+            pts = sorted((r for r in sub if r["method"] == method and _pos(r["error_rad"]) is not None),
+                         key=lambda r: _pos(r["cpu_s"]) or LOG_FLOOR)
+            if not pts:
+                continue
+            cpu = [_pos(r["cpu_s"]) or LOG_FLOOR for r in pts]
+            err = [_pos(r["error_rad"]) for r in pts]
+            ax.loglog(cpu, err, "o-" if len(pts) > 1 else "s", label=str(method))
+            for r, x, y in zip(pts, cpu, err):
+                if r.get("setting"):
+                    ax.annotate(str(r["setting"]), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=6)
+        ax.set_xlabel("CPU time (s)")
+        ax.set_ylabel("error at the end (rad)")
+        ax.set_title(str(inst), fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Work-precision by fidelity tier (error against a tight reference vs CPU time)")
+    fig.tight_layout()
+    return fig
+
+
+# ----------------------------------------------------------------------------- observation time
+def _plot_observation_time(plt, rows):
+    fig, ax = plt.subplots(figsize=(7, 4.8))
+    rows = sorted(rows, key=lambda r: r["minutes"] or 0.0)
+    series = (("rms_fit_deg", "sine fit, rms error", "o-"), ("mean_sigma_deg", "sine fit, reported σ", "--"),
+              ("crlb_deg", "Cramér–Rao bound", "k:"), ("rms_counting_deg", "Quet's counting, rms error", "s-"))
+    for key, label, style in series:
+        pts = [(r["minutes"], _pos(r.get(key))) for r in rows if r.get("minutes") and _pos(r.get(key)) is not None]
+        if pts:
+            ax.loglog([a for a, _ in pts], [b for _, b in pts], style, label=label)
+    minutes = sorted({r["minutes"] for r in rows if r.get("minutes")})
+    if minutes:
+        from matplotlib.ticker import NullFormatter
+        ax.set_xticks(minutes)
+        ax.set_xticklabels([f"{m:g}" for m in minutes])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("observation time per configuration (min)")
+    ax.set_ylabel("latitude error (deg)")
+    ax.set_title("Latitude error versus observation time")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+# ----------------------------------------------------------------------------- effect cost
+def _plot_effect_cost(plt, rows):
+    rows = [r for r in rows if r.get("effect") and r.get("instrument") and r.get("column")
+            and r.get("instrument") != "(combined)"]
+    labels, values, texts = [], [], []
+    for r in rows:
+        labels.append(f"{r['scene']}: {r['effect']} / {r['instrument']}")
+        v = r.get("max_abs_diff_rad")
+        if isinstance(v, float) and math.isfinite(v) and v > 0:
+            values.append(v)
+            texts.append(f"{v:.2g}")
+        else:
+            values.append(LOG_FLOOR)
+            texts.append("0" if v == 0.0 else "n/a")
+    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.28 * max(len(rows), 1)))
+    if rows:
+        y = list(range(len(rows)))[::-1]
+        scenes = list(dict.fromkeys(r["scene"] for r in rows))
+        cmap = plt.get_cmap("tab10")
+        colors = [cmap(scenes.index(r["scene"]) % 10) for r in rows]
+        ax.barh(y, values, color=colors, log=True)
+        ax.set_yticks(y)
+        ax.set_yticklabels(labels, fontsize=7)
+        for yi, v, t in zip(y, values, texts):
+            ax.text(v, yi, " " + t, va="center", fontsize=7)
+        ax.set_xlim(left=max(min(values) / 10, LOG_FLOOR / 10), right=max(values) * 30)
+    ax.set_xscale("log")
+    ax.set_xlabel("largest change of the instrument's angle when the effect is left out (rad)")
+    ax.set_title("Effect cost: error made by leaving each effect out")
+    ax.grid(True, axis="x", which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig
