@@ -11,6 +11,7 @@ import json
 import math
 import os
 import sys
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -126,11 +127,33 @@ def simulate_scene(scene, progress=None):
     for name, inst in build_instruments(scene).items():
         if progress:
             progress(f"simulating {name} ({inst.type_name}) for {scene.duration_s:g} s")
-        sim = inst.simulate(t)
+        with terminal_progress(f"  {name}", enabled=progress is not None):
+            sim = inst.simulate(t)
         sims[name] = sim
         for c in inst.COLUMNS:
             columns[f"{name}.{c.name}"] = sim.columns[c.name]
     return t, columns, sims
+
+
+@contextmanager
+def terminal_progress(label, enabled=True, stream=None, force=False):
+    """Draw ``label: NN.N %`` on one terminal line while long integrations inside the block
+    report (:func:`gyro_instrument.core.integrate.reporting`); only on a terminal (or
+    ``force``), so logs and pipes stay clean."""
+    from gyro_instrument.core.integrate import reporting
+    stream = stream or sys.stderr
+    if not enabled or not (force or stream.isatty()):
+        yield
+        return
+    drawn = []
+
+    def draw(fraction):
+        drawn.append(fraction)
+        print(f"\r{label}: {100.0 * fraction:5.1f} %", end="", file=stream, flush=True)
+    with reporting(draw):
+        yield
+    if drawn:
+        print(f"\r{label}: done   ", file=stream, flush=True)
 
 
 def write_csv(path, t, columns):
@@ -263,7 +286,8 @@ def run_command(args):
     if args.command == "estimate":
         from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
         scene = scene_from_args(args)
-        truth = simulate_truth(scene)
+        with terminal_progress("simulating"):
+            truth = simulate_truth(scene)
         result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
         result["seed"] = scene.seed
         if args.json:

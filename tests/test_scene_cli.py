@@ -97,3 +97,28 @@ def test_cli_bad_input_exit_2_one_line_no_traceback(args):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in r.stderr
     assert "is invalid" in lines[0] or "error" in lines[0]
+
+
+def test_long_runs_report_progress():
+    # A long integration reports how far it has got (rate-limited) to the active reporter:
+    # fractions rise to 1 — for the adaptive driver (from the RHS's time) and for the parareal
+    # fast path (from its Newton passes). The CLI draws them on a terminal line.
+    import io
+    from gyro_instrument.cli import terminal_progress
+    from gyro_instrument.core.integrate import reporting
+    from gyro_instrument.scenes import build_instruments, load_scene
+    from gyro_instrument.core.scene import sample_times
+    for extra in ([], ["instruments.pendulum.integrator=parareal"]):
+        scene = load_scene("foucault_pantheon", ["duration_s=600"] + extra)
+        p = build_instruments(scene)["pendulum"]
+        seen = []
+        with reporting(seen.append, every_s=0.0):
+            p.simulate(sample_times(scene))
+        assert seen and seen == sorted(seen) and 0.0 <= seen[0] and seen[-1] <= 1.0, seen
+        assert seen[-1] > 0.9 if not extra else len(seen) >= 2
+    out = io.StringIO()
+    with terminal_progress("  pendulum", stream=out, force=True):
+        from gyro_instrument.core.integrate import report
+        report(0.5)
+        report(1.0)
+    assert "  pendulum: 100.0 %" in out.getvalue() and out.getvalue().endswith("done   \n")

@@ -5,7 +5,9 @@ evaluated at the requested sample times), counts right-hand-side evaluations its
 measures wall and CPU time, and returns a :class:`Trajectory`.
 """
 
+import contextvars
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,15 +45,44 @@ class Trajectory:
     meta: dict = field(default_factory=dict)
 
 
-class _Counted:
-    __slots__ = ("f", "n")
+_REPORTER = contextvars.ContextVar("gyro_instrument_progress", default=None)
 
-    def __init__(self, f):
+
+@contextmanager
+def reporting(callback, every_s=0.5):
+    """Within the block, long integrations call ``callback(fraction_done)`` (0 to 1) at most
+    every ``every_s`` seconds of wall time (the CLI draws a progress line from it)."""
+    token = _REPORTER.set((callback, float(every_s), [time.perf_counter()]))
+    try:
+        yield
+    finally:
+        _REPORTER.reset(token)
+
+
+def report(fraction):
+    """Tell the active :func:`reporting` block (if any) how far a run has got; rate-limited."""
+    rep = _REPORTER.get()
+    if rep is not None:
+        callback, every, last = rep
+        now = time.perf_counter()
+        if now - last[0] >= every or fraction >= 1.0:
+            last[0] = now
+            callback(min(max(float(fraction), 0.0), 1.0))
+
+
+class _Counted:
+    __slots__ = ("f", "n", "t0", "span", "reporting")
+
+    def __init__(self, f, t0=0.0, t1=1.0):
         self.f = f
         self.n = 0
+        self.t0, self.span = t0, (t1 - t0) or 1.0
+        self.reporting = _REPORTER.get() is not None
 
     def __call__(self, t, y):
         self.n += 1
+        if self.reporting and not self.n & 1023:
+            report((t - self.t0) / self.span)
         return self.f(t, y)
 
 
@@ -88,7 +119,7 @@ def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step
         raise IntegrationError("t_eval must be a non-empty 1-D array of times")
     if not np.all(np.isfinite(y0)):
         raise IntegrationError(f"initial state is not finite: {y0}")
-    counted = _Counted(rhs)
+    counted = _Counted(rhs, float(t_eval[0]), float(t_eval[-1]))
     w0, c0 = time.perf_counter(), time.process_time()
     if t_eval.size == 1 or t_eval[-1] == t_eval[0]:
         y = y0[:, None].repeat(t_eval.size, axis=1)

@@ -21,10 +21,13 @@ at any sample times comes from quintic Hermite interpolation of positions betwee
 points (position, velocity and acceleration known at both ends).
 """
 
+import math
+
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.integrate import report
 
 _S = _dop.N_STAGES                 # 12 stages of the 8th-order formula
 _A = _dop.A[:_S, :_S]
@@ -144,6 +147,9 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
             new[j + 1] = F[j] + J[j] @ (new[j] - U[j])
         change = float(np.max(np.abs(new - U) / scale))
         changes.append(change)
+        # quadratic convergence: passes still needed ~ log2(log(change)/log(tol))
+        left = max(math.log2(max(math.log(tol) / math.log(min(change, 0.5)), 1.0)), 0.0) if change > tol else 0.0
+        report(it / (it + 1.0 + left))
         if progress:
             progress(f"parareal pass {it}: the next update moves segment starts by {change:.2e} "
                      f"(tolerance {tol:.1e})")
