@@ -62,7 +62,7 @@ def _chi2(gamma, meas, use_crlb=False):
     # accumulate the 2x2 (or 1x1) normal equations Σ w a aᵀ θ = Σ w a y
     S = np.zeros((2, 2) + g.shape)
     b = np.zeros((2,) + g.shape)
-    yy = 0.0
+    rows = []
     for m in meas:
         sig = m.crlb_sigma if use_crlb else m.sigma
         w = 1.0 / (sig * sig)
@@ -70,19 +70,18 @@ def _chi2(gamma, meas, use_crlb=False):
         j = 1 if (two and m.kind == "gyro" and not m.gain_known) else 0
         S[j, j] += w * s * s
         b[j] += w * s * m.value
-        yy += w * m.value * m.value
-    if not two:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
-        chi2 = yy - n * b[0]
-        theta = np.array([n, np.zeros_like(n)])
-    else:
-        # the two blocks decouple (each row has one nonzero coefficient)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
-            G = np.where(S[1, 1] > 0, b[1] / S[1, 1], 0.0)
-        chi2 = yy - n * b[0] - G * b[1]
-        theta = np.array([n, G])
+        rows.append((w, s, j, m.value))
+    # the two blocks decouple (each row has one nonzero coefficient)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
+        G = np.where(S[1, 1] > 0, b[1] / S[1, 1], 0.0) if two else np.zeros_like(n)
+    theta = np.array([n, G])
+    # χ² from the residuals, not as Σ w y² − θ·b: those two terms are ~(y/σ)² ~ 1e12 here and
+    # their difference kept only ~1e-3 of χ², enough to move the latitude by 0.03 σ
+    chi2 = np.zeros_like(n)
+    for w, s, j, y in rows:
+        r = y - theta[j] * s
+        chi2 += w * r * r
     chi2 = np.maximum(chi2, 0.0)
     if np.ndim(gamma) == 0:
         return float(chi2[0]), theta[:, 0]
