@@ -2,8 +2,11 @@
 
 * :class:`SimulatorNode` (``gyrocompass_sim``, ``pendulum_sim``, ``top_sim``): one core call
   (:func:`~gyro_instrument.recording.joints.joint_streams`: simulate, measure, lay out) then
-  publishes the samples as ``sensor_msgs/JointState`` (and the bob position) and owns ``/clock``.
-* :class:`EstimatorNode`: collects joint samples and calls the core estimator.
+  publishes the samples as ``sensor_msgs/JointState`` (and the bob position) and owns ``/clock``;
+  messages are serialized with numpy (:class:`~gyro_instrument.ros.messages.CdrLayout`), many
+  samples at a time, and published as CDR bytes.
+* :class:`EstimatorNode`: collects joint samples (raw CDR, decoded in bulk) and calls the core
+  estimator.
 * :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL.
 * :class:`PlayerNode`: republishes a bag, driving ``/clock``.
 
@@ -22,6 +25,7 @@ from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
@@ -103,6 +107,8 @@ class SimulatorNode(SceneNode):
         self.t_ns = np.zeros(0, dtype=np.int64)
         self.streams = {}
         self.pubs = {}
+        self.layouts = {}
+        self.clock_pub = None
         self.timer = None
         if self.load():
             self.prepare()
@@ -115,8 +121,10 @@ class SimulatorNode(SceneNode):
             self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
         for name, s in self.streams.items():
             self.pubs[name] = self.create_publisher(m.JointState, joint_topic(name), RELIABLE_1000)
+            self.layouts[name] = m.joint_state_layout(s.names)
             if s.bob_enu_m is not None:
                 self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), RELIABLE_1000)
+                self.layouts[name + "/bob"] = m.point_stamped_layout(f"{name}_pivot")
         self.clock_pub = (self.create_publisher(m.Clock, CLOCK, RELIABLE_1000)
                           if self.get_parameter("publish_clock").value else None)
         self.index = 0
@@ -128,20 +136,42 @@ class SimulatorNode(SceneNode):
     def messages_per_step(self):
         return sum(2 if s.bob_enu_m is not None else 1 for s in self.streams.values())
 
+    def topics(self):
+        """Topics this node publishes, each once per sample."""
+        out = [CLOCK] if self.clock_pub is not None else []
+        for name, s in self.streams.items():
+            out.append(joint_topic(name))
+            if s.bob_enu_m is not None:
+                out.append(bob_topic(name))
+        return out
+
+    def publish_steps(self, k):
+        """Publish samples ``index`` .. ``index + k - 1`` (fewer at the end): topic by topic, the
+        clock first, each topic's messages in sample order (each topic is its own ordered stream);
+        return how many samples were published (0 when none remain)."""
+        i0, i1 = self.index, min(self.index + max(int(k), 0), self.samples)
+        if i1 <= i0:
+            return 0
+        t = self.t_ns[i0:i1]
+        batches = []
+        if self.clock_pub is not None:
+            batches.append((self.clock_pub, m.CLOCK_LAYOUT.encode(t)))
+        for name, s in self.streams.items():
+            batches.append((self.pubs[name], self.layouts[name].encode(
+                t, s.position[i0:i1], s.velocity[i0:i1], s.effort[i0:i1])))
+            if s.bob_enu_m is not None:
+                batches.append((self.pubs[name + "/bob"], self.layouts[name + "/bob"].encode(t, s.bob_enu_m[i0:i1])))
+        for pub, datas in batches:
+            with pub.handle:
+                publish = pub.handle.publish_raw
+                for data in datas:
+                    publish(data)
+        self.index = i1
+        return i1 - i0
+
     def publish_step(self):
         """Publish sample ``index`` (clock first); return False when none remain."""
-        if self.index >= self.samples:
-            return False
-        i = self.index
-        t = int(self.t_ns[i])
-        if self.clock_pub is not None:
-            self.clock_pub.publish(m.clock(t))
-        for name, s in self.streams.items():
-            self.pubs[name].publish(m.joint_state(t, s.names, s.position[i], s.velocity[i], s.effort[i]))
-            if s.bob_enu_m is not None:
-                self.pubs[name + "/bob"].publish(m.point_stamped(t, s.bob_enu_m[i], f"{name}_pivot"))
-        self.index += 1
-        return True
+        return self.publish_steps(1) > 0
 
     def start(self):
         """Standalone pacing: a wall timer at dt / real_time_factor (0: as fast as possible)."""
@@ -157,6 +187,59 @@ class SimulatorNode(SceneNode):
             self.get_logger().info(f"published {self.samples} samples of {', '.join(self.streams)}")
 
 
+class JointBuffer:
+    """The joint samples one instrument's topic delivered, in arrival order: serialized messages
+    of the expected layout are kept as bytes and decoded together when the arrays are needed; any
+    other accepted message (decoded by rclpy) is appended after them. Both give the same float64
+    values bit for bit, so the estimate does not depend on which path a message took."""
+
+    def __init__(self, layout):
+        self.layout = layout
+        self._raw = []
+        self._chunks = []          # [(t_ns int64 (m,), position (m, k), velocity (m, k))]
+        self.count = 0
+
+    def __len__(self):
+        return self.count
+
+    #: serialized messages kept before they are decoded into arrays (a quarter of the memory)
+    DECODE_EVERY = 4096
+
+    def add_raw(self, data):
+        """A serialized message that ``layout.matches``."""
+        self._raw.append(data)
+        self.count += 1
+        if len(self._raw) >= self.DECODE_EVERY:
+            self._flush()
+
+    def add(self, t_ns, position, velocity):
+        self._flush()
+        self._chunks.append((np.array([t_ns], dtype=np.int64), np.array([position], dtype=np.float64),
+                             np.array([velocity], dtype=np.float64)))
+        self.count += 1
+
+    def _flush(self):
+        if self._raw:
+            t, (pos, vel, _) = self.layout.decode(self._raw)
+            self._chunks.append((t, pos, vel))
+            self._raw = []
+
+    def arrays(self):
+        """(t_ns, position, velocity) of everything received."""
+        self._flush()
+        if len(self._chunks) > 1:
+            self._chunks = [tuple(np.concatenate(parts) for parts in zip(*self._chunks))]
+        if not self._chunks:
+            k = self.layout.fields[0][1]
+            return np.zeros(0, dtype=np.int64), np.zeros((0, k)), np.zeros((0, k))
+        return self._chunks[0]
+
+    def last_stamp(self):
+        if self._raw:
+            return m.cdr_stamp_ns(self._raw[-1]) - m.EPOCH_NS
+        return int(self._chunks[-1][0][-1]) if self._chunks else None
+
+
 class EstimatorNode(SceneNode):
     """Subscribes to the instruments' joint states and publishes latitude and Earth rate."""
 
@@ -164,6 +247,7 @@ class EstimatorNode(SceneNode):
         super().__init__(name, **kwargs)
         self._declare("publish_period_s", 0.0)
         self.buffers = {}
+        self.subs = {}
         self.rejected = {}
         self.wrong_types = {}
         self.result = None
@@ -174,9 +258,11 @@ class EstimatorNode(SceneNode):
     def prepare(self):
         for name, inst in self.insts.items():
             if estimable(inst):
-                self.buffers[name] = ([], [], [])
-                self.create_subscription(m.JointState, joint_topic(name),
-                                         lambda msg, n=name: self._on_joint(n, msg), RELIABLE_ALL)
+                self.buffers[name] = JointBuffer(m.joint_state_layout(
+                    tuple(f"{name}/{j}" for j in JOINT_NAMES[inst.type_name])))
+                self.subs[joint_topic(name)] = self.create_subscription(
+                    m.JointState, joint_topic(name), lambda data, n=name: self._on_joint_raw(n, data),
+                    RELIABLE_ALL, raw=True)
         for topic, type_name in ESTIMATOR_TOPICS.items():
             self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
         period = float(self.get_parameter("publish_period_s").value)
@@ -184,7 +270,7 @@ class EstimatorNode(SceneNode):
             self.create_timer(period, self.finalize)
 
     def received(self):
-        return sum(len(b[0]) for b in self.buffers.values())
+        return sum(len(b) for b in self.buffers.values())
 
     def check_topic_types(self):
         """Topics the estimator listens to that the graph offers with another type (DDS never
@@ -203,26 +289,38 @@ class EstimatorNode(SceneNode):
         self.wrong_types.update(wrong)
         return wrong
 
+    def _reject(self, name, why):
+        self.rejected[name] = self.rejected.get(name, 0) + 1
+        if self.rejected[name] == 1:
+            self.get_logger().warning(f"{joint_topic(name)}: {why}; message ignored")
+
+    def _on_joint_raw(self, name, data):
+        """A serialized JointState: kept as bytes when it has the layout the simulators publish
+        (the common case, no Python message object), otherwise decoded and checked as any other."""
+        buf = self.buffers[name]
+        if buf.layout.matches(data):
+            buf.add_raw(data)
+            return
+        try:
+            msg = deserialize_message(data, m.JointState)
+        except Exception as exc:
+            self._reject(name, f"undecodable message ({exc.__class__.__name__})")
+            return
+        self._on_joint(name, msg)
+
     def _on_joint(self, name, msg):
         expected = JOINT_NAMES[self.insts[name].type_name]
         names = tuple(n.split("/")[-1] for n in msg.name)
         if names != expected or len(msg.position) != len(expected) or len(msg.velocity) != len(expected):
-            self.rejected[name] = self.rejected.get(name, 0) + 1
-            if self.rejected[name] == 1:
-                self.get_logger().warning(f"{joint_topic(name)}: joints {list(names)} do not match {list(expected)}; "
-                                          f"message ignored")
+            self._reject(name, f"joints {list(names)} do not match {list(expected)}")
             return
-        ts, pos, vel = self.buffers[name]
-        ts.append(m.stamp_to_release_ns(msg.header.stamp))
-        pos.append(list(msg.position))
-        vel.append(list(msg.velocity))
+        self.buffers[name].add(m.stamp_to_release_ns(msg.header.stamp), list(msg.position), list(msg.velocity))
 
     def estimate(self):
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
-        samples = {n: (np.array(b[0], dtype=np.int64), np.array(b[1]), np.array(b[2]))
-                   for n, b in self.buffers.items() if len(b[0]) >= 3}
+        samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
 
@@ -236,7 +334,7 @@ class EstimatorNode(SceneNode):
         if self.result is None:
             return None
         r = self.result
-        t = max((b[0][-1] for b in self.buffers.values() if b[0]), default=0)
+        t = max((b.last_stamp() for b in self.buffers.values() if len(b)), default=0)
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
         self.pubs["/estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
@@ -263,6 +361,7 @@ class RecorderNode(SceneNode):
         self._declare("command", "recorder node")
         self.writer = None
         self.counts = {}
+        self.subs = {}
         self.last_ns = 0
         if self.load():
             self.prepare()
@@ -290,8 +389,9 @@ class RecorderNode(SceneNode):
                 continue
             self.writer.add_topic(topic, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
             self.counts[topic] = 0
-            self.create_subscription(m.message_class(types[topic]), topic,
-                                     lambda data, tp=topic: self._on_raw(tp, data), RELIABLE_ALL, raw=True)
+            self.subs[topic] = self.create_subscription(m.message_class(types[topic]), topic,
+                                                        lambda data, tp=topic: self._on_raw(tp, data),
+                                                        RELIABLE_ALL, raw=True)
 
     def received(self):
         return sum(self.counts.values())

@@ -1,26 +1,137 @@
 """The whole suite in one process (there is no ``ros2 launch`` on PyPI): simulators, estimator
-and recorder on one ``SingleThreadedExecutor``, stepped in lock-step so nothing is dropped.
+and recorder as nodes of one context over DDS, stepped in lock-step so nothing is dropped.
 
-The simulators own ``/clock`` and step in the suite's loop: after each sample the executor spins
-until the estimator and the recorder hold every message of that sample. With
-``real_time_factor`` > 0 the loop is paced to the wall clock; 0 runs as fast as possible.
+The simulators own ``/clock`` and step in the suite's loop, a batch of samples at a time: each
+simulator publishes the batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue
+it), then :class:`LockStep` takes every message of the batch from the estimator's and the
+recorder's subscriptions, waiting on a wait set for any not yet delivered, and runs their
+callbacks sample by sample (sample i of every topic before sample i + 1), so the recorder writes
+the same ordered stream as one sample at a time. Then the nodes' other subscriptions (their
+sim-time ``/clock``) are drained: a node's clock reaches a sample's time only once that sample's
+data is delivered. With ``real_time_factor`` > 0 the batches are at most 20 ms of wall time
+and paced to the wall clock; 0 runs as fast as possible.
 """
 
 import json
 import signal
 import threading
 import time
+from contextlib import ExitStack
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.parameter import Parameter
+from rclpy.subscription import Subscription
 
 from gyro_instrument.ros.nodes import EstimatorNode, RecorderNode, SimulatorNode
 from gyro_instrument.ros.topics import SIMULATOR_KINDS
 
 
+#: samples per batch at full speed; at most the publishers' KEEP_LAST depth (1000), so a writer
+#: never overwrites a sample before the subscriptions (KEEP_ALL) have it
+BATCH = 100
+MAX_BATCH = 1000
+
+
 class DeliveryError(RuntimeError):
     """A message was not delivered in time (the suite never drops silently)."""
+
+
+def _call(sub, taken):
+    if sub._callback_type is Subscription.CallbackType.MessageOnly:
+        sub.callback(taken[0])
+    else:
+        sub.callback(*taken)
+
+
+class LockStep:
+    """Delivery of published batches to subscriptions, without the executor's per-callback cost.
+
+    Parameters
+    ----------
+    context : rclpy.Context
+    counted : list of (topic, Subscription)
+        Subscriptions that receive exactly one message per published sample of their topic.
+    others : list of Subscription
+        Subscriptions drained after each batch (whatever arrived), e.g. the nodes' ``/clock``.
+    """
+
+    def __init__(self, context, counted, others=()):
+        self.context = context
+        self.counted = list(counted)
+        self.others = list(others)
+
+    def deliver(self, published, timeout_s, describe=lambda: ""):
+        """Take ``published[topic]`` messages from every counted subscription of that topic, run
+        the callbacks sample-major (message i of each subscription in order, then i + 1), then
+        drain the other subscriptions. Raises :class:`DeliveryError` after ``timeout_s`` without
+        a complete batch."""
+        want = [published.get(topic, 0) for topic, _ in self.counted]
+        got = [[] for _ in self.counted]
+        deadline = None
+        while True:
+            missing = []
+            for (_, sub), q, n in zip(self.counted, got, want):
+                if len(q) < n:
+                    with sub.handle:
+                        take, msg_type, raw = sub.handle.take_message, sub.msg_type, sub.raw
+                        while len(q) < n:
+                            taken = take(msg_type, raw)
+                            if taken is None:
+                                break
+                            q.append(taken)
+                    if len(q) < n:
+                        missing.append(sub)
+            if not missing:
+                break
+            now = time.monotonic()
+            if deadline is None:
+                deadline = now + timeout_s
+            elif now > deadline:
+                short = ", ".join(f"{topic} {len(q)}/{n}" for (topic, _), q, n in zip(self.counted, got, want)
+                                  if len(q) < n)
+                raise DeliveryError(f"{describe()}: not delivered in {timeout_s} s: {short}")
+            self._wait(missing, 0.01)
+        # (callback, arguments) per message; MessageOnly callbacks get the message alone
+        calls = []
+        for (_, sub), q in zip(self.counted, got):
+            if sub._callback_type is Subscription.CallbackType.MessageOnly:
+                calls.append([(sub.callback, (taken[0],)) for taken in q])
+            else:
+                calls.append([(sub.callback, taken) for taken in q])
+        if len(set(want)) == 1:                      # every topic published the same samples
+            for row in zip(*calls):
+                for cb, args in row:
+                    cb(*args)
+        else:
+            for i in range(max(want, default=0)):
+                for c in calls:
+                    if i < len(c):
+                        cb, args = c[i]
+                        cb(*args)
+        self.drain()
+
+    def drain(self):
+        """Run the callbacks of whatever the other subscriptions hold."""
+        for sub in self.others:
+            with sub.handle:
+                while True:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+                    if taken is None:
+                        break
+                    _call(sub, taken)
+
+    def _wait(self, subs, timeout_s):
+        with ExitStack() as stack:
+            stack.enter_context(self.context.handle)
+            for sub in subs:
+                stack.enter_context(sub.handle)
+            ws = _rclpy.WaitSet(len(subs), 0, 0, 0, 0, 0, self.context.handle)
+            ws.clear_entities()
+            for sub in subs:
+                ws.add_subscription(sub.handle)
+            ws.wait(int(timeout_s * 1e9))
 
 
 def _params(scene, overrides, duration_s, **extra):
@@ -32,8 +143,11 @@ def _params(scene, overrides, duration_s, **extra):
 
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
-              timeout_s=10.0, progress=None):
+              timeout_s=10.0, progress=None, batch=None):
     """Run the scene's nodes; return (estimate dict, stats dict).
+
+    ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
+    of wall time when paced; capped at :data:`MAX_BATCH`).
 
     Raises
     ------
@@ -73,15 +187,23 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:
             ex.add_node(n)
+        # the subscriptions that get one message per sample of a simulator topic, and the rest
+        sim_pubs = {}
+        for s in sims:
+            pubs = ([s.clock_pub] if s.clock_pub is not None else []) + list(s.pubs.values())
+            sim_pubs.update(zip(s.topics(), pubs))
+        counted = [(topic, sub) for n in (est, rec) if n is not None for topic, sub in n.subs.items()
+                   if topic in sim_pubs]
+        counted_ids = {id(sub) for _, sub in counted}
+        others = [sub for n in (est, rec) if n is not None for sub in n.subscriptions if id(sub) not in counted_ids]
+        lockstep = LockStep(context, counted, others)
+        need = {}
+        for topic, _ in counted:
+            need[topic] = need.get(topic, 0) + 1
         # wait for discovery: every publisher matched by its subscribers
         deadline = time.monotonic() + timeout_s
         def matched():
-            for s in sims:
-                for name, pub in s.pubs.items():
-                    need = (1 if name in est.buffers else 0) + (1 if rec else 0)
-                    if pub.get_subscription_count() < need:
-                        return False
-            return True
+            return all(sim_pubs[topic].get_subscription_count() >= k for topic, k in need.items())
         while not matched():
             if stop:
                 raise KeyboardInterrupt
@@ -89,28 +211,37 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             if time.monotonic() > deadline:
                 raise DeliveryError("subscribers did not match the simulators' publishers in time")
         n_samples = max((s.samples for s in sims), default=0)
-        per_step_est = sum(1 for s in sims for name in s.streams if name in est.buffers)
-        per_step_rec = sum(s.messages_per_step() + (1 if s.clock_pub else 0) for s in sims) if rec else 0
         dt = 1.0 / scene_obj.sample_rate_hz
+        if batch is None:
+            batch = BATCH if real_time_factor <= 0 else int(0.02 * real_time_factor / dt)
+        batch = max(1, min(int(batch), MAX_BATCH))
+        published = {topic: 0 for topic in sim_pubs}
+        every = max(n_samples // 20, 1)
         w0 = time.perf_counter()
-        for i in range(n_samples):
+        t_spin = w0
+        i = 0
+        while i < n_samples:
             if stop:
                 raise KeyboardInterrupt
+            step = {}
             for s in sims:
-                s.publish_step()
-            want_e, want_r = per_step_est * (i + 1), per_step_rec * (i + 1)
-            t_wait = time.monotonic() + timeout_s
-            while est.received() < want_e or (rec and rec.received() < want_r):
-                ex.spin_once(timeout_sec=0.001)
-                if time.monotonic() > t_wait:
-                    raise DeliveryError(f"sample {i}: estimator has {est.received()}/{want_e}, recorder "
-                                        f"{rec.received() if rec else 0}/{want_r} messages")
+                k = s.publish_steps(batch)
+                for topic in s.topics():
+                    step[topic] = k
+                    published[topic] += k
+            lockstep.deliver(step, timeout_s, lambda: f"samples {i}..{i + batch - 1}")
+            i_next = i + batch
+            now = time.perf_counter()
+            if now - t_spin > 0.1:    # parameter services, timers: the executor's other work
+                ex.spin_once(timeout_sec=0)
+                t_spin = now
             if real_time_factor > 0:
-                lag = (i + 1) * dt / real_time_factor - (time.perf_counter() - w0)
+                lag = min(i_next, n_samples) * dt / real_time_factor - (time.perf_counter() - w0)
                 if lag > 0:
                     time.sleep(lag)
-            if progress and i % max(n_samples // 20, 1) == 0:
-                progress(f"sample {i}/{n_samples}")
+            if progress and (i_next - 1) // every > (i - 1) // every:
+                progress(f"sample {min(i_next, n_samples)}/{n_samples}")
+            i = i_next
         wall = time.perf_counter() - w0
         base = rec.received() if rec else 0
         result = est.finalize()
@@ -124,7 +255,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         stats = {"samples": n_samples, "wall_s": wall,
                  "real_time_factor_achieved": (n_samples * dt / wall) if wall > 0 else None,
                  "estimator_messages": est.received(), "recorded": dict(rec.counts) if rec else {},
-                 "published": {name: s.samples for s in sims for name in s.streams}}
+                 "published": {name: s.samples for s in sims for name in s.streams},
+                 "published_topics": published, "batch": batch}
         return result, stats
     finally:
         for n in nodes:
