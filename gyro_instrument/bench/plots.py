@@ -7,9 +7,10 @@ extra); the CSVs never need it.
   ``work_precision.png``: one panel per instrument, error at the end versus CPU time, log-log, one
   series per method (fidelity tier), points labelled with their setting (a work-precision diagram
   in the manner of Hairer, Nørsett & Wanner);
-* ``observation_time.csv`` (minutes, rms_fit_deg, mean_sigma_deg, crlb_deg, rms_counting_deg) →
-  ``observation_time.png``: rms latitude error versus observation time, log-log, for the sine fit,
-  Quet's counting and the Cramér–Rao bound, with the mean reported σ;
+* ``observation_time.csv`` (see ``studies.OBS_HEADER``) and ``systematic_floors.csv`` →
+  ``observation_time.png``: rms latitude and Earth-rate errors versus observation time, log-log,
+  for the sine fit, Quet's counting and the Cramér–Rao bound, with the mean reported σ, the
+  noise-free error and the bias each corrected effect would leave if unmodelled;
 * ``effect_cost.csv`` (see :mod:`gyro_instrument.bench.effect_cost`) → ``effect_cost.png``: the
   largest angle difference caused by leaving each effect out, per scene and instrument, as
   horizontal bars on a log scale (an exact zero or a missing value is written beside its bar).
@@ -47,7 +48,7 @@ def write_plots(out_dir):
         if not rows:
             continue
         dst = os.path.join(out_dir, stem + ".png")
-        fig = plot(plt, rows)
+        fig = plot(plt, rows, out_dir)
         try:
             fig.savefig(dst, dpi=110)
         finally:
@@ -94,7 +95,7 @@ def _pos(x):
 
 
 # ----------------------------------------------------------------------------- work-precision
-def _plot_work_precision(plt, rows):
+def _plot_work_precision(plt, rows, out_dir=None):
     instruments = list(dict.fromkeys(r["instrument"] for r in rows))
     fig, axes = plt.subplots(1, len(instruments), figsize=(6.5 * len(instruments), 5.0), squeeze=False)
     for ax, inst in zip(axes[0], instruments):
@@ -121,32 +122,48 @@ def _plot_work_precision(plt, rows):
 
 
 # ----------------------------------------------------------------------------- observation time
-def _plot_observation_time(plt, rows):
-    fig, ax = plt.subplots(figsize=(7, 4.8))
+def _plot_observation_time(plt, rows, out_dir=None):
+    floors_csv = os.path.join(out_dir, "systematic_floors.csv") if out_dir else None
+    floors = read_csv(floors_csv) if floors_csv and os.path.exists(floors_csv) else []
     rows = sorted(rows, key=lambda r: r["minutes"] or 0.0)
-    series = (("rms_fit_deg", "sine fit, rms error", "o-"), ("mean_sigma_deg", "sine fit, reported σ", "--"),
-              ("crlb_deg", "Cramér–Rao bound", "k:"), ("rms_counting_deg", "Quet's counting, rms error", "s-"))
-    for key, label, style in series:
-        pts = [(r["minutes"], _pos(r.get(key))) for r in rows if r.get("minutes") and _pos(r.get(key)) is not None]
-        if pts:
-            ax.loglog([a for a, _ in pts], [b for _, b in pts], style, label=label)
-    minutes = sorted({r["minutes"] for r in rows if r.get("minutes")})
-    if minutes:
-        from matplotlib.ticker import NullFormatter
-        ax.set_xticks(minutes)
-        ax.set_xticklabels([f"{m:g}" for m in minutes])
-        ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("observation time per configuration (min)")
-    ax.set_ylabel("latitude error (deg)")
-    ax.set_title("Latitude error versus observation time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    panels = [("deg", "latitude error (deg)", "", "bias_if_unmodelled_deg"),
+              ("rad/s", "Earth-rate error, eq. (10) (rad/s)", "_earth_rate_rad_s", "bias_if_unmodelled_earth_rate_rad_s")]
+    have_n = any(r.get("rms_fit_earth_rate_rad_s") is not None for r in rows)
+    fig, axes = plt.subplots(1, 2 if have_n else 1, figsize=(12 if have_n else 7, 4.8), squeeze=False)
+    for ax, (unit, ylabel, suffix, floor_key) in zip(axes[0], panels):
+        def key(base):
+            return (base + suffix) if suffix else (base + "_deg")
+        series = ((key("rms_fit"), "sine fit, rms error", "o-"), (key("mean_sigma"), "sine fit, reported σ", "--"),
+                  (key("crlb"), "Cramér–Rao bound", "k:"), (key("rms_counting"), "Quet's counting, rms error", "s-"),
+                  ("noise_free_error" + (suffix.replace("_rad_s", "_error_rad_s") if suffix else "_deg"),
+                   "noise-free error (the estimator's own floor)", "x-"))
+        for k, label, style in series:
+            pts = [(r["minutes"], _pos(r.get(k))) for r in rows if r.get("minutes") and _pos(r.get(k)) is not None]
+            if pts:
+                ax.loglog([a for a, _ in pts], [b for _, b in pts], style, label=label)
+        for effect in dict.fromkeys(f"{f['effect']} ({f['scope']})" for f in floors):
+            pts = [(f["minutes"], _pos(f.get(floor_key))) for f in floors
+                   if f"{f['effect']} ({f['scope']})" == effect and _pos(f.get(floor_key)) is not None]
+            if pts:
+                ax.loglog([a for a, _ in pts], [b for _, b in pts], "-.", alpha=0.7,
+                          label=f"if unmodelled: {effect}")
+        minutes = sorted({r["minutes"] for r in rows if r.get("minutes")})
+        if minutes:
+            from matplotlib.ticker import NullFormatter
+            ax.set_xticks(minutes)
+            ax.set_xticklabels([f"{m:g}" for m in minutes])
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("observation time per configuration (min)")
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.suptitle("Error versus observation time (quet_paris), with the systematic floors")
     fig.tight_layout()
     return fig
 
 
 # ----------------------------------------------------------------------------- effect cost
-def _plot_effect_cost(plt, rows):
+def _plot_effect_cost(plt, rows, out_dir=None):
     rows = [r for r in rows if r.get("effect") and r.get("instrument") and r.get("column")
             and r.get("instrument") != "(combined)"]
     labels, values, texts = [], [], []

@@ -238,29 +238,76 @@ def suite_real_time_factor(duration_s=None, rate_hz=100.0):
 def _obs_rows(minutes, results):
     out = []
     for r in results:
-        truth = r["truth"]["latitude_deg"]
+        truth = r["truth"]
         cnt = r["methods"].get("item9_counting", {}).get("latitude_deg")
-        out.append((minutes, r["latitude_deg"] - truth, r["latitude_sigma_deg"], r["crlb"]["latitude_deg"],
-                    None if cnt is None else cnt - truth))
+        out.append((minutes, r["latitude_deg"] - truth["latitude_deg"], r["latitude_sigma_deg"],
+                    r["crlb"]["latitude_deg"], None if cnt is None else cnt - truth["latitude_deg"],
+                    r["earth_rate_rad_s"] - truth["earth_rate_rad_s"], r["earth_rate_sigma_rad_s"],
+                    r["crlb"]["earth_rate_rad_s"], _counting_earth_rate(r) - truth["earth_rate_rad_s"]))
     return out
 
 
+def _counting_earth_rate(r):
+    """Eq. (10) with Quet's counted meridian swing instead of the fitted one: n ∝ 1/T²."""
+    g = r["instruments"].get("gyro_meridian", {})
+    cnt = g.get("counting", {}).get("small_amplitude_swing_duration_s")
+    if not cnt or r.get("earth_rate_rad_s") is None:
+        return math.nan
+    return r["earth_rate_rad_s"] * (g["small_amplitude_swing_duration_s"] / cnt) ** 2
+
+
+OBS_HEADER = ("minutes", "rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg",
+              "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
+              "rms_counting_earth_rate_rad_s", "noise_free_error_deg", "noise_free_earth_rate_error_rad_s")
+
+FLOOR_HEADER = ("minutes", "effect", "scope", "bias_if_unmodelled_deg", "bias_if_unmodelled_earth_rate_rad_s")
+
+#: The systematic effects whose corrections the estimator makes, studied on quet_paris with a spin
+#: decay added (τ = 1 h) so that all three are present.
+FLOOR_SCENE_EFFECTS = "effects={earth_rotation: {}, centrifugal: {}, finite_amplitude: {}, spin_decay: {time_constant_s: 3600}}"
+
+
 def observation_time(minutes_list, n_seeds, executor=None):
-    """Rows (minutes, rms_fit_deg, mean_sigma_deg, crlb_deg, rms_counting_deg)."""
+    """Rows :data:`OBS_HEADER` (rms over seeds of the fit, its reported σ, the Cramér–Rao bound
+    and Quet's counting, for the latitude and eq. (10)'s Earth rate; the noise-free error is the
+    estimator's own systematic floor) and :data:`FLOOR_HEADER` rows: what each corrected
+    systematic effect (finite amplitude, spin decay, the Foucault ellipse precession) would
+    cost if it were not modelled, from noise-free runs with and without it (:mod:`.effect_cost`)."""
+    from gyro_instrument.bench.effect_cost import COMBINED, NOISE_FREE, scene_effect_cost
     jobs = [("quet_paris", [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
+    free = [("quet_paris", [f"duration_s={60.0 * m}"] + list(NOISE_FREE), [0]) for m in minutes_list]
+    floors = [("quet_paris", (f"duration_s={60.0 * m}", FLOOR_SCENE_EFFECTS)) for m in minutes_list]
     own = executor is None
     executor = executor or process_executor()
     try:
         results = [_obs_rows(m, res) for m, res in zip(minutes_list, executor.map(seed_sweep, jobs))]
+        noise_free = list(executor.map(seed_sweep, free))
+        floor_rows = list(executor.map(scene_effect_cost, floors))
     finally:
         if own:
             executor.shutdown()
     rows = []
-    for res in results:
+    for res, nf in zip(results, noise_free):
         a = np.array([[x if x is not None else np.nan for x in r] for r in res], dtype=float)
-        rows.append((a[0, 0], float(np.sqrt(np.mean(a[:, 1] ** 2))), float(np.mean(a[:, 2])),
-                     float(np.mean(a[:, 3])), float(np.sqrt(np.nanmean(a[:, 4] ** 2)))))
-    return rows
+        rms = lambda j: float(np.sqrt(np.nanmean(a[:, j] ** 2)))  # noqa: E731
+        mean = lambda j: float(np.mean(a[:, j]))  # noqa: E731
+        e = nf[0]
+        rows.append((a[0, 0], rms(1), mean(2), mean(3), rms(4), rms(5), mean(6), mean(7), rms(8),
+                     e["latitude_deg"] - e["truth"]["latitude_deg"],
+                     e["earth_rate_rad_s"] - e["truth"]["earth_rate_rad_s"]))
+    fl = []
+    for m, rws in zip(minutes_list, floor_rows):
+        for r in rws:
+            effect, instrument, dlat, dn = r[1], r[4], r[7], r[8]
+            if effect in ("finite_amplitude", "spin_decay") and instrument == COMBINED:
+                fl.append((m, effect, "latitude and n (combined)", _abs(dlat), _abs(dn)))
+            if effect == "finite_amplitude" and instrument == "pendulum":
+                fl.append((m, "ellipse precession (finite amplitude)", "Foucault pendulum alone", _abs(dlat), _abs(dn)))
+    return rows, fl
+
+
+def _abs(x):
+    return None if x is None else abs(x)
 
 
 def run_bench(out_dir, quick=False, progress=print):
@@ -277,9 +324,9 @@ def run_bench(out_dir, quick=False, progress=print):
     tg = targets(wp, quick, progress)
     _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
     progress("observation time")
-    ot = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
-    _write(os.path.join(out_dir, "observation_time.csv"),
-           ("minutes", "rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg"), ot)
+    ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
+    _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
+    _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
     progress("effect cost")
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
                           duration_s=120.0 if quick else None)
@@ -295,10 +342,16 @@ def run_bench(out_dir, quick=False, progress=print):
     lines += ["", "## Work-precision (error at the end against a tight reference)", "",
               "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
     lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
-    lines += ["", "## Latitude error versus observation time (quet_paris)", "",
-              "| minutes | rms error, fit (deg) | reported σ (deg) | Cramér–Rao (deg) | rms error, counting (deg) |",
-              "|---|---|---|---|---|"]
-    lines += [f"| {m:g} | {a:.2e} | {b:.2e} | {c:.2e} | {d:.2e} |" for m, a, b, c, d in ot]
+    lines += ["", "## Error versus observation time (quet_paris, per configuration)", "",
+              "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free | "
+              "n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += ["| {:g} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} |".format(
+        *r) for r in ot]
+    lines += ["", "Systematic floors: the bias each corrected effect would leave if the estimator did not model it "
+              "(noise-free runs with and without the effect, quet_paris with a 1 h spin decay added):", "",
+              "| minutes | effect | scope | latitude (deg) | Earth rate (rad/s) |", "|---|---|---|---|---|"]
+    lines += [f"| {m:g} | {e} | {sc} | {_fmt(a, '.2e')} | {_fmt(b, '.2e')} |" for m, e, sc, a, b in floors]
     lines += ["", "## Effect cost (leave one effect out; noise-free)", "",
               "| scene | effect | instrument | CPU with (s) | CPU without (s) | largest angle change (rad) | "
               "latitude change (deg) | Earth-rate change (rad/s) |", "|---|---|---|---|---|---|---|---|"]
