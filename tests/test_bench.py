@@ -52,6 +52,15 @@ def test_work_precision_tiers(bench):
     assert gyro["exact equations (hinge chain), DOP853rtol 1e-09"] < 1e-8
     # the reduced equations drop only O(n/ρ) terms (~1e-9 rad here): at rtol 1e-9 they are as good
     assert gyro["Quet's reduced equations, DOP853rtol 1e-09"] < 1e-8
+    # the free gyroscope's closed form (sec. 4 §II) is exact for the rigid body: it agrees with the
+    # numerical solution at rtol 1e-13 to round-off (1e-12 rad), at no integration cost
+    free = [r for r in wp if r["instrument"].startswith("free_gyro") and r["method"].startswith("Quet")][0]
+    assert float(free["error_rad"]) < 1e-12 and free["nfev"] == "0"
+    # every instrument's DOP853 error falls as the tolerance tightens
+    for inst, method in {(r["instrument"], r["method"]) for r in wp if r["method"].endswith("DOP853")}:
+        d = sorted(((float(r["setting"].split()[1]), float(r["error_rad"])) for r in wp
+                    if (r["instrument"], r["method"]) == (inst, method)), reverse=True)
+        assert [e for _, e in d] == sorted((e for _, e in d), reverse=True), (inst, method)
 
 
 def test_targets_and_observation_time(bench):

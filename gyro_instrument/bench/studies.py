@@ -116,6 +116,47 @@ def gyroscope_work_precision(duration_s, rtols, progress=print):
     return rows
 
 
+#: (scene, instrument, angle columns, fidelity tiers as (label, parameter overrides)) for the other
+#: instruments' work-precision: the gimbal (exact chain only: Quet's T, T', T'' are period
+#: formulas, checked in tests/test_gimbal.py), the free gyroscope (Quet's closed form, sec. 4 §II,
+#: against the numerical solution) and Puiseux's body (numerical only).
+OTHER_INSTRUMENTS = (
+    ("gimbal_paris", "gimbal_locked", ("outer_angle", "inner_angle"), (("exact equations (hinge chain), DOP853", {}),)),
+    ("free_gyroscope", "free_gyro", ("axis_altitude", "axis_azimuth"),
+     (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}), ("exact equations, DOP853", {"model": "numerical"}))),
+    ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"), (("exact equations, DOP853", {}),)),
+)
+
+
+def other_work_precision(duration_s, rtols, progress=print):
+    """Rows (instrument, tier, setting, cpu_s, nfev, error_rad) for :data:`OTHER_INSTRUMENTS`:
+    largest end-of-run difference of the angle columns against the exact equations at rtol 1e-13
+    (``model: numerical`` for the free gyroscope)."""
+    rows = []
+    for scene_name, iname, columns, tiers in OTHER_INSTRUMENTS:
+        dur = duration_s if scene_name != "puiseux_spheroid" else min(duration_s, 60.0)
+
+        def inst(**params):
+            over = [f"duration_s={dur}"] + [f"instruments.{iname}.{k}={v}" for k, v in params.items()]
+            scene = load_scene(scene_name, over)
+            return build_instruments(scene)[iname], sample_times(scene)
+        progress(f"  {scene_name}/{iname}: reference rtol 1e-13 over {dur:g} s")
+        ref_params = {"rtol": 1e-13}
+        if scene_name == "free_gyroscope":
+            ref_params["model"] = "numerical"
+        g, t = inst(**ref_params)
+        ref = g.simulate(t)
+        name = f"{iname} ({scene_name}), {dur:g} s"
+        for label, params in tiers:
+            settings = [None] if params.get("model") == "analytic" else rtols
+            for rtol in settings:
+                g, t = inst(**params, **({"rtol": rtol} if rtol else {}))
+                sim, cpu = _cpu(lambda: g.simulate(t))
+                err = max(abs(float(sim.columns[c][-1]) - float(ref.columns[c][-1])) for c in columns)
+                rows.append((name, label, f"rtol {rtol:g}" if rtol else "", cpu, sim.trajectory.nfev, err))
+    return rows
+
+
 def plane_gyroscope_closed_form(g, t):
     """Axis angle u(t) of Quet's reduced equation in closed form: with the small-swing duration T0
     of eq. (9), u obeys the plane pendulum's law ü = −(π/T0)² sin u, whose release from rest at u0
@@ -136,11 +177,13 @@ def work_precision(quick=False, progress=print):
         fr = foucault_work_precision(3600.0, (1e-6, 1e-8, 1e-10, 1e-12), ((24, 1e-7), (48, 1e-9)),
                                      progress=progress)
         gr = gyroscope_work_precision(600.0, (1e-6, 1e-9), progress=progress)
+        gr += other_work_precision(60.0, (1e-6, 1e-9), progress=progress)
     else:
         fr = foucault_work_precision(day, (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12),
                                      ((16, 1e-6), (24, 1e-7), (32, 1e-9), (48, 1e-9), (64, 1e-12)),
                                      progress=progress)
         gr = gyroscope_work_precision(3600.0, (1e-5, 1e-7, 1e-9, 1e-11), progress=progress)
+        gr += other_work_precision(600.0, (1e-6, 1e-8, 1e-10, 1e-12), progress=progress)
     return fr + gr
 
 
