@@ -349,6 +349,35 @@ def observation_time(minutes_list, n_seeds, executor=None):
     return rows, fl
 
 
+SITE_HEADER = ("latitude_deg", "rms_error_deg", "mean_sigma_deg", "crlb_deg", "rms_earth_rate_error_rad_s",
+               "crlb_earth_rate_rad_s")
+
+
+def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
+    """Rows :data:`SITE_HEADER`: quet_paris moved to each latitude (10 min per configuration),
+    rms errors over seeds against the reported σ and the Cramér–Rao bound — one
+    ``seed_sweep`` job per site through the executor (any ``concurrent.futures`` executor)."""
+    jobs = [("quet_paris", [f"site.latitude_deg={lat}", f"duration_s={60.0 * minutes}"], range(n_seeds))
+            for lat in latitudes_deg]
+    own = executor is None
+    executor = executor or process_executor()
+    try:
+        results = list(executor.map(seed_sweep, jobs))
+    finally:
+        if own:
+            executor.shutdown()
+    rows = []
+    for lat, res in zip(latitudes_deg, results):
+        dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r["latitude_deg"] is not None]
+        dn = [r["earth_rate_rad_s"] - r["truth"]["earth_rate_rad_s"] for r in res if r["earth_rate_rad_s"] is not None]
+        rms = lambda v: float(np.sqrt(np.mean(np.square(v)))) if v else math.nan  # noqa: E731
+        mean = lambda v: float(np.mean(v)) if v else math.nan  # noqa: E731
+        rows.append((float(lat), rms(dl), mean([r["latitude_sigma_deg"] for r in res if r["latitude_sigma_deg"]]),
+                     mean([r["crlb"]["latitude_deg"] for r in res if r["crlb"].get("latitude_deg")]), rms(dn),
+                     mean([r["crlb"]["earth_rate_rad_s"] for r in res if r["crlb"].get("earth_rate_rad_s")])))
+    return rows
+
+
 def _abs(x):
     return None if x is None else abs(x)
 
@@ -370,6 +399,10 @@ def run_bench(out_dir, quick=False, progress=print):
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
     _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
     _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
+    progress("site sweep")
+    ss = site_sweep((-85, -60, -33.9, 5, 30, 48.8462, 70, 85) if not quick else (-33.9, 48.8462),
+                    40 if not quick else 4, minutes=10.0 if not quick else 2.0)
+    _write(os.path.join(out_dir, "site_sweep.csv"), SITE_HEADER, ss)
     progress("effect cost")
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
                           duration_s=120.0 if quick else None)
@@ -395,6 +428,10 @@ def run_bench(out_dir, quick=False, progress=print):
               "(noise-free runs with and without the effect, quet_paris with a 1 h spin decay added):", "",
               "| minutes | effect | scope | latitude (deg) | Earth rate (rad/s) |", "|---|---|---|---|---|"]
     lines += [f"| {m:g} | {e} | {sc} | {_fmt(a, '.2e')} | {_fmt(b, '.2e')} |" for m, e, sc, a, b in floors]
+    lines += ["", "## Error versus site latitude (quet_paris moved, rms over seeds)", "",
+              "| latitude (deg) | rms error (deg) | reported σ (deg) | Cramér–Rao (deg) | n rms error (rad/s) | "
+              "n Cramér–Rao (rad/s) |", "|---|---|---|---|---|---|"]
+    lines += ["| {:g} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} |".format(*r) for r in ss]
     lines += ["", "## Effect cost (leave one effect out; noise-free)", "",
               "| scene | effect | instrument | CPU with (s) | CPU without (s) | largest angle change (rad) | "
               "latitude change (deg) | Earth-rate change (rad/s) |", "|---|---|---|---|---|---|---|---|"]
