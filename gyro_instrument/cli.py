@@ -231,8 +231,9 @@ def build_parser():
     p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
-                                     "latitude error versus observation time, effect cost; CSV, PNG (with "
-                                     "matplotlib) and summary.md in --out")
+                                     "latitude and Earth-rate error versus observation time with the systematic "
+                                     "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
+                                     "summary.md in --out")
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")

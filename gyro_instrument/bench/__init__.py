@@ -15,10 +15,14 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 * ``targets.csv`` — the speed targets measured in one run (fast path: CPU, end error and the
   DOP853/fast-path CPU ratio at the same error; one hour of both plane-gyroscope configurations;
   estimator samples per second; the ROS suite at 100 Hz with its recording checked complete);
-* ``observation_time.csv`` — latitude rms error versus observation time for the sine fit, Quet's
-  counting and the Cramér–Rao bound, over seeds run in a process pool
+* ``observation_time.csv`` — latitude and Earth-rate rms error versus observation time (1–60 min)
+  for the sine fit, Quet's counting and the Cramér–Rao bound, with the mean reported σ and the
+  noise-free error, over seeds run in a process pool
   (:func:`gyro_instrument.core.parallel.process_executor`; any ``concurrent.futures``-compatible
   executor, e.g. a Dask client's, can be passed instead);
+* ``systematic_floors.csv`` — the bias finite amplitude, spin decay and the Foucault ellipse
+  precession would leave if the estimator did not model them (noise-free runs with and without);
+* ``site_sweep.csv`` — the same errors for the default scene moved over latitudes −85°…85°;
 * ``effect_cost.csv`` (:mod:`.effect_cost`) — for each effect of a scene: CPU with and without
   it, and the error made by leaving it out (angles, noise-free latitude and Earth rate);
 * ``*.png`` (:mod:`.plots`) — work-precision, observation-time and effect-cost diagrams.

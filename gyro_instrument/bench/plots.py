@@ -97,8 +97,12 @@ def _pos(x):
 # ----------------------------------------------------------------------------- work-precision
 def _plot_work_precision(plt, rows, out_dir=None):
     instruments = list(dict.fromkeys(r["instrument"] for r in rows))
-    fig, axes = plt.subplots(1, len(instruments), figsize=(6.5 * len(instruments), 5.0), squeeze=False)
-    for ax, inst in zip(axes[0], instruments):
+    ncols = min(3, max(len(instruments), 1))
+    nrows = max(1, -(-len(instruments) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(6.0 * ncols, 4.6 * nrows), squeeze=False)
+    for ax in axes.flat[len(instruments):]:
+        ax.set_visible(False)
+    for ax, inst in zip(axes.flat, instruments):
         sub = [r for r in rows if r["instrument"] == inst]
         for method in dict.fromkeys(r["method"] for r in sub):
             pts = sorted((r for r in sub if r["method"] == method and _pos(r["error_rad"]) is not None),
@@ -126,8 +130,8 @@ def _plot_observation_time(plt, rows, out_dir=None):
     floors_csv = os.path.join(out_dir, "systematic_floors.csv") if out_dir else None
     floors = read_csv(floors_csv) if floors_csv and os.path.exists(floors_csv) else []
     rows = sorted(rows, key=lambda r: r["minutes"] or 0.0)
-    panels = [("deg", "latitude error (deg)", "", "bias_if_unmodelled_deg"),
-              ("rad/s", "Earth-rate error, eq. (10) (rad/s)", "_earth_rate_rad_s", "bias_if_unmodelled_earth_rate_rad_s")]
+    panels = [("deg", "latitude error (deg)", "", "latitude_bias_deg"),
+              ("rad/s", "Earth-rate error, eq. (10) (rad/s)", "_earth_rate_rad_s", "earth_rate_bias_rad_s")]
     have_n = any(r.get("rms_fit_earth_rate_rad_s") is not None for r in rows)
     fig, axes = plt.subplots(1, 2 if have_n else 1, figsize=(12 if have_n else 7, 4.8), squeeze=False)
     for ax, (unit, ylabel, suffix, floor_key) in zip(axes[0], panels):
@@ -135,18 +139,21 @@ def _plot_observation_time(plt, rows, out_dir=None):
             return (base + suffix) if suffix else (base + "_deg")
         series = ((key("rms_fit"), "sine fit, rms error", "o-"), (key("mean_sigma"), "sine fit, reported σ", "--"),
                   (key("crlb"), "Cramér–Rao bound", "k:"), (key("rms_counting"), "Quet's counting, rms error", "s-"),
-                  ("noise_free_error" + (suffix.replace("_rad_s", "_error_rad_s") if suffix else "_deg"),
+                  ("noise_free" + (suffix.replace("_rad_s", "_error_rad_s") if suffix else "_error_deg"),
                    "noise-free error (the estimator's own floor)", "x-"))
         for k, label, style in series:
             pts = [(r["minutes"], _pos(r.get(k))) for r in rows if r.get("minutes") and _pos(r.get(k)) is not None]
             if pts:
                 ax.loglog([a for a, _ in pts], [b for _, b in pts], style, label=label)
-        for effect in dict.fromkeys(f"{f['effect']} ({f['scope']})" for f in floors):
+        for case in dict.fromkeys((f["left_out"], f["scope"]) for f in floors):
             pts = [(f["minutes"], _pos(f.get(floor_key))) for f in floors
-                   if f"{f['effect']} ({f['scope']})" == effect and _pos(f.get(floor_key)) is not None]
+                   if (f["left_out"], f["scope"]) == case and _pos(f.get(floor_key)) is not None]
             if pts:
-                ax.loglog([a for a, _ in pts], [b for _, b in pts], "-.", alpha=0.7,
-                          label=f"if unmodelled: {effect}")
+                left_out, scope = case
+                label = (f"floor, every correction: {scope}" if left_out == "none"
+                         else f"floor without the {left_out.replace('_', ' ')} correction: {scope}")
+                ax.loglog([a for a, _ in pts], [b for _, b in pts], ":" if left_out == "none" else "-.",
+                          alpha=0.8, label=label)
         minutes = sorted({r["minutes"] for r in rows if r.get("minutes")})
         if minutes:
             from matplotlib.ticker import NullFormatter

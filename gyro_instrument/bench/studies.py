@@ -303,29 +303,61 @@ OBS_HEADER = ("minutes", "rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_count
               "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
               "rms_counting_earth_rate_rad_s", "noise_free_error_deg", "noise_free_earth_rate_error_rad_s")
 
-FLOOR_HEADER = ("minutes", "effect", "scope", "bias_if_unmodelled_deg", "bias_if_unmodelled_earth_rate_rad_s")
+FLOOR_HEADER = ("minutes", "left_out", "scope", "latitude_bias_deg", "earth_rate_bias_rad_s")
 
-#: The systematic effects whose corrections the estimator makes, studied on quet_paris with a spin
-#: decay added (τ = 1 h) so that all three are present.
+#: The floor scene: quet_paris with a spin decay added (τ = 1 h) so that all three corrections of
+#: :data:`~gyro_instrument.estimators.pipeline.CORRECTIONS` have something to correct.
 FLOOR_SCENE_EFFECTS = "effects={earth_rotation: {}, centrifugal: {}, finite_amplitude: {}, spin_decay: {time_constant_s: 3600}}"
+
+#: What each scope of the floors measures, weight-free: the gyroscope pair is exactly determined
+#: (item 9's cos γ from the ratio, eq. (10)'s n from the meridian configuration); the pendulum's
+#: latitude is asin(k/n) with the true n, so only its own error enters.
+GYRO_PAIR, PENDULUM_ALONE = "gyroscope pair (item 9, eq. 10)", "Foucault pendulum alone (asin k/n)"
+
+
+def systematic_floor_rows(minutes):
+    """:data:`FLOOR_HEADER` rows for one observation time: the noise-free bias of the estimates on
+    the floor scene with every correction applied (``left_out`` = ``none``: the estimator's own
+    floor with all three effects present) and with each correction of
+    :data:`~gyro_instrument.estimators.pipeline.CORRECTIONS` left out (the floor a user would hit
+    without it). One picklable argument, so it runs through any executor."""
+    from gyro_instrument.bench.effect_cost import NOISE_FREE
+    from gyro_instrument.estimators.pipeline import CORRECTIONS, estimate_records, measure, simulate_truth
+    from gyro_instrument.scenes import load_scene
+    scene = load_scene("quet_paris", [f"duration_s={60.0 * minutes}", FLOOR_SCENE_EFFECTS] + list(NOISE_FREE))
+    truth = simulate_truth(scene)
+    records = measure(scene, truth)
+    lat0, n0 = scene.site.latitude_deg, scene.site.earth_rate_rad_s
+    rows = []
+    for left_out in ("none", "finite_amplitude", "spin_decay", "ellipse_precession"):
+        r = estimate_records(scene, truth[1], records, corrections=CORRECTIONS - {left_out})
+        if left_out != "ellipse_precession":
+            lat = r["methods"].get("item9", {}).get("latitude_deg")
+            n = r["methods"].get("item8_eq10", {}).get("earth_rate_rad_s")
+            rows.append((minutes, left_out, GYRO_PAIR, None if lat is None else lat - lat0,
+                         None if n is None else n - n0))
+        if left_out in ("none", "ellipse_precession"):
+            k = r["instruments"].get("pendulum", {}).get("foucault_rate_rad_s")
+            lat = None if k is None or abs(k) > n0 else math.degrees(math.asin(k / n0))
+            rows.append((minutes, left_out, PENDULUM_ALONE, None if lat is None else lat - lat0, None))
+    return rows
 
 
 def observation_time(minutes_list, n_seeds, executor=None):
     """Rows :data:`OBS_HEADER` (rms over seeds of the fit, its reported σ, the Cramér–Rao bound
     and Quet's counting, for the latitude and eq. (10)'s Earth rate; the noise-free error is the
-    estimator's own systematic floor) and :data:`FLOOR_HEADER` rows: what each corrected
-    systematic effect (finite amplitude, spin decay, the Foucault ellipse precession) would
-    cost if it were not modelled, from noise-free runs with and without it (:mod:`.effect_cost`)."""
-    from gyro_instrument.bench.effect_cost import COMBINED, NOISE_FREE, scene_effect_cost
+    estimator's own systematic floor) and :data:`FLOOR_HEADER` rows from
+    :func:`systematic_floor_rows`: the bias left with every correction and without each of
+    finite amplitude, spin decay and the Foucault ellipse precession."""
+    from gyro_instrument.bench.effect_cost import NOISE_FREE
     jobs = [("quet_paris", [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
     free = [("quet_paris", [f"duration_s={60.0 * m}"] + list(NOISE_FREE), [0]) for m in minutes_list]
-    floors = [("quet_paris", (f"duration_s={60.0 * m}", FLOOR_SCENE_EFFECTS)) for m in minutes_list]
     own = executor is None
     executor = executor or process_executor()
     try:
         results = [_obs_rows(m, res) for m, res in zip(minutes_list, executor.map(seed_sweep, jobs))]
         noise_free = list(executor.map(seed_sweep, free))
-        floor_rows = list(executor.map(scene_effect_cost, floors))
+        floor_rows = list(executor.map(systematic_floor_rows, minutes_list))
     finally:
         if own:
             executor.shutdown()
@@ -338,14 +370,7 @@ def observation_time(minutes_list, n_seeds, executor=None):
         rows.append((a[0, 0], rms(1), mean(2), mean(3), rms(4), rms(5), mean(6), mean(7), rms(8),
                      e["latitude_deg"] - e["truth"]["latitude_deg"],
                      e["earth_rate_rad_s"] - e["truth"]["earth_rate_rad_s"]))
-    fl = []
-    for m, rws in zip(minutes_list, floor_rows):
-        for r in rws:
-            effect, instrument, dlat, dn = r[1], r[4], r[7], r[8]
-            if effect in ("finite_amplitude", "spin_decay") and instrument == COMBINED:
-                fl.append((m, effect, "latitude and n (combined)", _abs(dlat), _abs(dn)))
-            if effect == "finite_amplitude" and instrument == "pendulum":
-                fl.append((m, "ellipse precession (finite amplitude)", "Foucault pendulum alone", _abs(dlat), _abs(dn)))
+    fl = [row for rws in floor_rows for row in rws]
     return rows, fl
 
 
@@ -376,10 +401,6 @@ def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
                      mean([r["crlb"]["latitude_deg"] for r in res if r["crlb"].get("latitude_deg")]), rms(dn),
                      mean([r["crlb"]["earth_rate_rad_s"] for r in res if r["crlb"].get("earth_rate_rad_s")])))
     return rows
-
-
-def _abs(x):
-    return None if x is None else abs(x)
 
 
 def run_bench(out_dir, quick=False, progress=print):
@@ -419,14 +440,20 @@ def run_bench(out_dir, quick=False, progress=print):
               "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
     lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
     lines += ["", "## Error versus observation time (quet_paris, per configuration)", "",
-              "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free | "
-              "n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free |",
+              "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free error | "
+              "Earth rate n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free error |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
-    lines += ["| {:g} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {:.1e} |".format(
-        *r) for r in ot]
-    lines += ["", "Systematic floors: the bias each corrected effect would leave if the estimator did not model it "
-              "(noise-free runs with and without the effect, quet_paris with a 1 h spin decay added):", "",
-              "| minutes | effect | scope | latitude (deg) | Earth rate (rad/s) |", "|---|---|---|---|---|"]
+    obs_cols = ("rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg", "noise_free_error_deg",
+                "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
+                "rms_counting_earth_rate_rad_s", "noise_free_earth_rate_error_rad_s")
+    for r in ot:
+        d = dict(zip(OBS_HEADER, r))
+        lines.append("| {:g} | ".format(d["minutes"]) + " | ".join(
+            _fmt(d[k], ".1e" if k.startswith("noise_free") else ".2e") for k in obs_cols) + " |")
+    lines += ["", "Systematic floors: the noise-free bias on quet_paris with a 1 h spin decay added, with every "
+              "correction of the estimator applied (left out: none) and with one left out:", "",
+              "| minutes | correction left out | scope | latitude bias (deg) | Earth-rate bias (rad/s) |",
+              "|---|---|---|---|---|"]
     lines += [f"| {m:g} | {e} | {sc} | {_fmt(a, '.2e')} | {_fmt(b, '.2e')} |" for m, e, sc, a, b in floors]
     lines += ["", "## Error versus site latitude (quet_paris moved, rms over seeds)", "",
               "| latitude (deg) | rms error (deg) | reported σ (deg) | Cramér–Rao (deg) | n rms error (rad/s) | "
@@ -438,7 +465,8 @@ def run_bench(out_dir, quick=False, progress=print):
     for r in ec:
         d = dict(zip(EC_HEADER, r))
         lines.append("| {scene} | {effect} | {instrument} | {a} | {b} | {c} | {dl} | {dn} |".format(
-            scene=d["scene"], effect=d["effect"], instrument=d["instrument"], a=_fmt(d["cpu_with_s"], ".3g"),
+            scene=d["scene"], effect=d["effect"] or "— (" + (d.get("note") or "no effect to leave out") + ")",
+            instrument=d["instrument"] or "—", a=_fmt(d["cpu_with_s"], ".3g"),
             b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
             dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
     if pngs:

@@ -24,6 +24,14 @@ from gyro_instrument.sensors import SensorModel, scene_rng
 
 PENDULUMS = ("spherical_pendulum", "compound_pendulum")
 
+#: The systematic corrections the estimator makes; ``estimate_records(..., corrections=...)`` can
+#: leave any of them out, which is how ``gyro-instrument bench`` measures what each one is worth:
+#: ``finite_amplitude`` — a gyroscope's swing reduced to small amplitude through (2/π)K(sin(a/2))
+#: (Quet's T is the small-swing limit); ``spin_decay`` — a gyroscope's fit in the spin-warped time
+#: of its measured spin history (eq. (9): T ∝ ρ^-1/2); ``ellipse_precession`` — the Foucault rate
+#: less the finite-amplitude precession of the swing ellipse (sec. 2 §III, from its areal velocity).
+CORRECTIONS = frozenset(("finite_amplitude", "spin_decay", "ellipse_precession"))
+
 #: Angle channels a sensor measures, per instrument type (the JointState positions).
 ANGLE_CHANNELS = {"plane_gyroscope": ("angle",), "gimbal_gyroscope": ("outer_angle", "inner_angle"),
                   "free_gyroscope": ("axis_altitude", "axis_azimuth"), "puiseux_body": ("tilt", "tilt_azimuth")}
@@ -73,7 +81,7 @@ def measure(scene, truth, seed=None):
     return records
 
 
-def _gyro_estimate(inst, rec):
+def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline."""
     t, y = rec["t"], rec["angle"]
     out = {"type": inst.type_name}
@@ -87,7 +95,7 @@ def _gyro_estimate(inst, rec):
     out["mean_spin_rad_s"] = rho_mean
     warp = env = None
     notes = []
-    if spin_ok.sum() > 10:
+    if spin_ok.sum() > 10 and "spin_decay" in corrections:
         # spin decay: use the measured spin history (time warp and adiabatic envelope)
         coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
         smooth = np.polyval(coef, t)
@@ -119,7 +127,7 @@ def _gyro_estimate(inst, rec):
     if fit.damping_per_s:
         tau = (t - np.mean(t))
         a = a * math.sqrt(float(np.mean(np.exp(-2 * fit.damping_per_s * tau))))
-    F = finite_amplitude_factor(a)
+    F = finite_amplitude_factor(a) if "finite_amplitude" in corrections else 1.0
     T = fit.swing_duration_s
     T0 = T / F
     sig_T0 = fit.swing_duration_sigma_s / F
@@ -148,8 +156,14 @@ def _gyro_estimate(inst, rec):
     return out
 
 
-def estimate_records(scene, insts, records):
-    """The ``estimate`` JSON object (see module docstring) from measured records."""
+def estimate_records(scene, insts, records, corrections=CORRECTIONS):
+    """The ``estimate`` JSON object (see module docstring) from measured records.
+
+    ``corrections`` — the subset of :data:`CORRECTIONS` to apply (all by default); a study of
+    what a correction is worth passes fewer."""
+    unknown = set(corrections) - CORRECTIONS
+    if unknown:
+        raise ValueError(f"unknown corrections {sorted(unknown)}; known: {sorted(CORRECTIONS)}")
     site = scene.site
     n_true = site.earth_rate_rad_s
     result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
@@ -161,7 +175,7 @@ def estimate_records(scene, insts, records):
     for name, inst in insts.items():
         rec = records[name]
         if "angle" in rec and inst.directing_model() is not None:
-            est = _gyro_estimate(inst, rec)
+            est = _gyro_estimate(inst, rec, corrections)
             m = est.pop("_measurement", None)
             if m is not None:
                 meas.append(m)
@@ -169,7 +183,8 @@ def estimate_records(scene, insts, records):
             result["instruments"][name] = est
         elif "deflection_east" in rec:
             try:
-                f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"])
+                f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"],
+                                      correct_ellipse="ellipse_precession" in corrections)
                 est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
                        "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
                        "measured_plane_rate_rad_s": f.measured_rate_rad_s,
