@@ -8,6 +8,8 @@ duration grows as (2/π) K(sin(a/2)) ≈ 1 + a²/16 (pendulum law; sec. 2 eq. 42
 
 import math
 
+import numpy as np
+
 from scipy.special import ellipk
 
 from gyro_instrument.core.effect import Effect
@@ -26,6 +28,8 @@ class FiniteAmplitude(Effect):
 
 def finite_amplitude_factor(amplitude_rad):
     """(2/π) K(sin(a/2)): swing duration at amplitude a over the small-amplitude one (pendulum law,
-    Quet sec. 4 §1 item 6; ≈ 1 + a²/16)."""
+    Quet sec. 4 §1 item 6; ≈ 1 + a²/16). Elementwise for an array."""
+    if np.ndim(amplitude_rad):
+        return 2.0 / math.pi * ellipk(np.sin(np.abs(np.asarray(amplitude_rad, dtype=float)) / 2.0) ** 2)
     m = math.sin(abs(amplitude_rad) / 2.0) ** 2
     return 2.0 / math.pi * float(ellipk(m))

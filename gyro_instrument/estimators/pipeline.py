@@ -96,11 +96,19 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     warp = env = None
     notes = []
     if spin_ok.sum() > 10 and "spin_decay" in corrections:
-        # spin decay: use the measured spin history (time warp and adiabatic envelope)
-        coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
-        smooth = np.polyval(coef, t)
+        # spin decay: use the measured spin history (time warp and adiabatic envelope), smoothed
+        # by a quadratic in log|ρ| (exact for the viscous bearing's e^(-t/τ), and for any slow law
+        # over a run shorter than its time scale: a quadratic in ρ itself is 0.5 % off over one τ)
+        sgn = 1.0 if rho_mean >= 0 else -1.0
+        same_sign = spin[spin_ok] * sgn > 0
+        if same_sign.all():
+            coef = np.polyfit(t[spin_ok], np.log(spin[spin_ok] * sgn), 2)
+            smooth = sgn * np.exp(np.polyval(coef, t))
+        else:
+            coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
+            smooth = np.polyval(coef, t)
         change = abs(smooth[-1] - smooth[0])
-        noise = np.std(spin[spin_ok] - np.polyval(coef, t[spin_ok]))
+        noise = np.std(spin[spin_ok] - smooth[spin_ok])
         if change > max(10 * noise / math.sqrt(spin_ok.sum()), 1e-9 * abs(rho_mean)) and change > 1e-6 * abs(rho_mean):
             ratio = np.clip(smooth / rho_mean, 1e-6, None)
             warp = np.concatenate([[0.0], np.cumsum(0.5 * (np.sqrt(ratio[1:]) + np.sqrt(ratio[:-1])) * np.diff(t))])
@@ -110,6 +118,16 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
         fit = fit_oscillation(t, y, harmonics=(1, 3), warp=warp, envelope=env)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
+    if warp is not None and "finite_amplitude" in corrections and env is not None:
+        # the swing lengthens as its amplitude grows (a ∝ ρ^-1/4): the instantaneous rate is
+        # ω_small(ρ(t)) / F(a(t)), so warp by F(a_ref)/F(a(t)) too and refit once
+        a_t = abs(fit.amplitude) * env
+        rate = np.sqrt(ratio) * finite_amplitude_factor(abs(fit.amplitude)) / finite_amplitude_factor(a_t)
+        warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+        try:
+            fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
+        except EstimationError as exc:
+            return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
     snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
     if snr < DETECTION_SNR:
         return out | {"swing_duration_s": None,
