@@ -10,7 +10,7 @@ extra); the CSVs never need it.
 * ``observation_time.csv`` (see ``studies.OBS_HEADER``) and ``systematic_floors.csv`` →
   ``observation_time.png``: rms latitude and Earth-rate errors versus observation time, log-log,
   for the sine fit, Quet's counting and the Cramér–Rao bound, with the mean reported σ, the
-  noise-free error and the bias each corrected effect would leave if unmodelled;
+  noise-free error and the systematic floors (every correction applied, and each left out);
 * ``effect_cost.csv`` (see :mod:`gyro_instrument.bench.effect_cost`) → ``effect_cost.png``: the
   largest angle difference caused by leaving each effect out, per scene and instrument, as
   horizontal bars on a log scale (an exact zero or a missing value is written beside its bar).
@@ -50,7 +50,7 @@ def write_plots(out_dir):
         dst = os.path.join(out_dir, stem + ".png")
         fig = plot(plt, rows, out_dir)
         try:
-            fig.savefig(dst, dpi=110)
+            fig.savefig(dst, dpi=110, bbox_inches="tight")
         finally:
             plt.close(fig)
         written.append(dst)
@@ -99,7 +99,7 @@ def _plot_work_precision(plt, rows, out_dir=None):
     instruments = list(dict.fromkeys(r["instrument"] for r in rows))
     ncols = min(3, max(len(instruments), 1))
     nrows = max(1, -(-len(instruments) // ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(6.0 * ncols, 4.6 * nrows), squeeze=False)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(6.0 * ncols, 5.8 * nrows), squeeze=False)
     for ax in axes.flat[len(instruments):]:
         ax.set_visible(False)
     for ax, inst in zip(axes.flat, instruments):
@@ -112,14 +112,15 @@ def _plot_work_precision(plt, rows, out_dir=None):
             cpu = [_pos(r["cpu_s"]) or LOG_FLOOR for r in pts]
             err = [_pos(r["error_rad"]) for r in pts]
             ax.loglog(cpu, err, "o-" if len(pts) > 1 else "s", label=str(method))
-            for r, x, y in zip(pts, cpu, err):
+            for i, (r, x, y) in enumerate(zip(pts, cpu, err)):
                 if r.get("setting"):
-                    ax.annotate(str(r["setting"]), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=6)
+                    ax.annotate(str(r["setting"]), (x, y), textcoords="offset points",
+                                xytext=(4, 4 if i % 2 == 0 else -9), fontsize=6)
         ax.set_xlabel("CPU time (s)")
         ax.set_ylabel("error at the end (rad)")
         ax.set_title(str(inst), fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     fig.suptitle("Work-precision by fidelity tier (error against a tight reference vs CPU time)")
     fig.tight_layout()
     return fig
@@ -133,14 +134,14 @@ def _plot_observation_time(plt, rows, out_dir=None):
     panels = [("deg", "latitude error (deg)", "", "latitude_bias_deg"),
               ("rad/s", "Earth-rate error, eq. (10) (rad/s)", "_earth_rate_rad_s", "earth_rate_bias_rad_s")]
     have_n = any(r.get("rms_fit_earth_rate_rad_s") is not None for r in rows)
-    fig, axes = plt.subplots(1, 2 if have_n else 1, figsize=(12 if have_n else 7, 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, 2 if have_n else 1, figsize=(12 if have_n else 7, 7.0), squeeze=False)
     for ax, (unit, ylabel, suffix, floor_key) in zip(axes[0], panels):
         def key(base):
             return (base + suffix) if suffix else (base + "_deg")
         series = ((key("rms_fit"), "sine fit, rms error", "o-"), (key("mean_sigma"), "sine fit, reported σ", "--"),
                   (key("crlb"), "Cramér–Rao bound", "k:"), (key("rms_counting"), "Quet's counting, rms error", "s-"),
                   ("noise_free" + (suffix.replace("_rad_s", "_error_rad_s") if suffix else "_error_deg"),
-                   "noise-free error (the estimator's own floor)", "x-"))
+                   "noise-free error, quet_paris as shipped (the estimator's own floor)", "x-"))
         for k, label, style in series:
             pts = [(r["minutes"], _pos(r.get(k))) for r in rows if r.get("minutes") and _pos(r.get(k)) is not None]
             if pts:
@@ -163,7 +164,7 @@ def _plot_observation_time(plt, rows, out_dir=None):
         ax.set_xlabel("observation time per configuration (min)")
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12))
     fig.suptitle("Error versus observation time (quet_paris), with the systematic floors")
     fig.tight_layout()
     return fig
