@@ -20,8 +20,9 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
   noise-free error, over seeds run in a process pool
   (:func:`gyro_instrument.core.parallel.process_executor`; any ``concurrent.futures``-compatible
   executor, e.g. a Dask client's, can be passed instead);
-* ``systematic_floors.csv`` — the bias finite amplitude, spin decay and the Foucault ellipse
-  precession would leave if the estimator did not model them (noise-free runs with and without);
+* ``systematic_floors.csv`` — the noise-free bias of the gyroscope pair (item 9, eq. 10) and of
+  the pendulum alone on quet_paris with a 1 h spin decay, with every estimator correction applied
+  and with each of finite amplitude, spin decay and the ellipse precession left out;
 * ``site_sweep.csv`` — the same errors for the default scene moved over latitudes −85°…85°;
 * ``effect_cost.csv`` (:mod:`.effect_cost`) — for each effect of a scene: CPU with and without
   it, and the error made by leaving it out (angles, noise-free latitude and Earth rate);

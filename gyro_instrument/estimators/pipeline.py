@@ -116,18 +116,15 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
             notes.append(f"spin changed by {change / abs(rho_mean):.3g} relative: fitted in spin-warped time")
     try:
         fit = fit_oscillation(t, y, harmonics=(1, 3), warp=warp, envelope=env)
+        if warp is not None and "finite_amplitude" in corrections:
+            # the swing lengthens as its amplitude grows (a ∝ ρ^-1/4): the instantaneous rate is
+            # ω_small(ρ(t)) / F(a(t)), so warp by F(a_ref)/F(a(t)) too and refit once
+            a_t = abs(fit.amplitude) * env
+            rate = np.sqrt(ratio) * finite_amplitude_factor(abs(fit.amplitude)) / finite_amplitude_factor(a_t)
+            warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+            fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
-    if warp is not None and "finite_amplitude" in corrections and env is not None:
-        # the swing lengthens as its amplitude grows (a ∝ ρ^-1/4): the instantaneous rate is
-        # ω_small(ρ(t)) / F(a(t)), so warp by F(a_ref)/F(a(t)) too and refit once
-        a_t = abs(fit.amplitude) * env
-        rate = np.sqrt(ratio) * finite_amplitude_factor(abs(fit.amplitude)) / finite_amplitude_factor(a_t)
-        warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
-        try:
-            fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
-        except EstimationError as exc:
-            return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
     snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
     if snr < DETECTION_SNR:
         return out | {"swing_duration_s": None,
