@@ -8,9 +8,9 @@ For the directing-plane gyroscope this is the term (μ − 1) n² sin² ω cos u
 eqs. (1)–(3) of sec. 4 §1 drop; its relative size is n / (μ ρ0).
 """
 
-import numpy as np
 
 from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.vector import cross3
 
 
 class Centrifugal(Effect):
@@ -29,9 +29,9 @@ class Centrifugal(Effect):
 
 def centrifugal_gradient_acceleration(omega, dr):
     """−Ω × (Ω × δr): change of the centrifugal acceleration over the displacement δr."""
-    return -np.cross(omega, np.cross(omega, dr))
+    return -cross3(omega, cross3(omega, dr))
 
 
 def rigid_body_inertia_torque_quadratic(inertia, omega_b):
     """Part of the inertia torque quadratic in Ω: Ω × I Ω (body axes)."""
-    return np.cross(omega_b, inertia @ omega_b)
+    return cross3(omega_b, inertia @ omega_b)

@@ -8,9 +8,9 @@ acceleration is ẇ + Ω × w, so the inertia torque I α + ω × I ω splits in
 the part linear in Ω given here, and the O(Ω²) part of :mod:`.centrifugal`.
 """
 
-import numpy as np
 
 from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.vector import cross3
 
 
 class EarthRotation(Effect):
@@ -28,10 +28,10 @@ class EarthRotation(Effect):
 
 def coriolis_acceleration(omega, v):
     """Coriolis acceleration −2 Ω × v (Quet sec. 1 eq. 16), all vectors in one frame."""
-    return -2.0 * np.cross(omega, v)
+    return -2.0 * cross3(omega, v)
 
 
 def rigid_body_inertia_torque_linear(inertia, w_rel, omega_b):
     """Part of the inertia torque linear in Ω: I(Ω×w) + w×IΩ + Ω×Iw (body axes)."""
-    return inertia @ np.cross(omega_b, w_rel) + np.cross(w_rel, inertia @ omega_b) \
-        + np.cross(omega_b, inertia @ w_rel)
+    return inertia @ cross3(omega_b, w_rel) + cross3(w_rel, inertia @ omega_b) \
+        + cross3(omega_b, inertia @ w_rel)

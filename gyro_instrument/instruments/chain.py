@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gyro_instrument.effects.centrifugal import rigid_body_inertia_torque_quadratic
+from gyro_instrument.core.vector import cross3
 from gyro_instrument.effects.earth_rotation import rigid_body_inertia_torque_linear
 
 
@@ -136,7 +137,7 @@ class HingeChain:
             wp = Rt @ w_prev
             e = self.axes[k]
             wk = wp + qd[k] * e
-            ak = Rt @ a_prev + qd[k] * np.cross(wp, e)
+            ak = Rt @ a_prev + qd[k] * cross3(wp, e)
             for j in range(k):
                 P[k][j] = Rt @ P[k - 1][j]
             P[k][k] = e
@@ -161,7 +162,7 @@ class HingeChain:
             rhs += Q[self.free]
         for k, L in enumerate(self.links):
             I = L.inertia
-            tau = I @ a0[k] + np.cross(w[k], I @ w[k])
+            tau = I @ a0[k] + cross3(w[k], I @ w[k])
             if self.linear or self.quadratic:
                 om = B[k].T @ self.omega_base
                 if self.linear:
@@ -170,7 +171,7 @@ class HingeChain:
                     tau = tau + rigid_body_inertia_torque_quadratic(I, om)
             if L.mass_kg and self.gravity_on:
                 g_b = B[k].T @ self.gravity_base
-                tau = tau - np.cross(L.com_m, L.mass_kg * g_b)
+                tau = tau - cross3(L.com_m, L.mass_kg * g_b)
             for a, j in enumerate(self.free):
                 if j > k:
                     break
