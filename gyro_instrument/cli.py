@@ -178,8 +178,18 @@ def print_estimate(r, stream=None):
     w = (stream or sys.stdout).write
     tr = r["truth"]
     w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
-    w(f"  latitude   {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
+    label = "|latitude|" if r.get("latitude_is_absolute") else "latitude  "
+    w(f"  {label} {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
       f"   truth {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
+    if r.get("latitude_sigma_reason"):
+        lo, hi = r["latitude_interval_deg"]
+        lo3, hi3 = r["latitude_interval_3sigma_deg"]
+        w(f"             1-sigma interval [{lo:.7f}, {hi:.7f}], 3-sigma [{lo3:.7f}, {hi3:.7f}] deg: "
+          f"{r['latitude_sigma_reason']}\n")
+    if r.get("hemisphere") and r.get("latitude_deg") is not None:
+        w(f"  hemisphere {r['hemisphere']} ({r.get('hemisphere_basis')})\n")
+    for o in r.get("other_latitudes_deg") or ():
+        w(f"  also consistent: latitude {o['latitude_deg']:.7f} deg (delta chi2 = {o['delta_chi2']:.3g})\n")
     w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
       f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
     if r.get("method"):
@@ -199,8 +209,9 @@ def print_estimate(r, stream=None):
             w(f"  {name}: null: {e.get('reason')}\n")
     for mname, m in r["methods"].items():
         lat = m.get("latitude_deg")
-        w(f"  method {mname}: latitude {_fmt(lat, '.7f')}" + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None
-                                                             and m.get("latitude_sigma_deg") is not None else "")
+        w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
+          + (" (|latitude|: hemisphere not determined)" if m.get("latitude_is_absolute") else "")
+          + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None and m.get("latitude_sigma_deg") is not None else "")
           + (f", n = {m['earth_rate_rad_s']:.9e}" if m.get("earth_rate_rad_s") is not None else "")
           + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
           + "\n")

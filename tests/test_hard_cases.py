@@ -42,8 +42,16 @@ def test_singular_latitudes_simulate_and_estimate(capsys, lat):
     json.dumps(r, allow_nan=False, default=float)
     if r["latitude_deg"] is None:
         assert r.get("reason")
+    elif r["latitude_sigma_deg"] is None:
+        # at a pole the 1-sigma region reaches the boundary: no local sigma, the intervals instead
+        assert "not locally Gaussian" in r["latitude_sigma_reason"]
+        lo3, hi3 = r["latitude_interval_3sigma_deg"]
+        assert lo3 - 1e-12 <= lat <= hi3 + 1e-12
     else:
         assert abs(r["latitude_deg"] - lat) <= 3 * r["latitude_sigma_deg"] + 1e-12
+    # the pendulum's precession sense decides the hemisphere wherever it precesses measurably
+    if abs(lat) >= 1.0:
+        assert r["hemisphere"] == ("north" if lat > 0 else "south")
     if abs(lat) == 90.0:
         assert r["instruments"]["gyro_horizontal"]["swing_duration_s"] is None
         assert "restoring torque" in r["instruments"]["gyro_horizontal"]["reason"]

@@ -15,7 +15,8 @@ import numpy as np
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import estimate_foucault
-from gyro_instrument.estimators.latitude import RateMeasurement, item9_cos_latitude, solve_latitude
+from gyro_instrument.estimators.latitude import (HEMISPHERE_UNDETERMINED, RateMeasurement, item9_cos_latitude,
+                                                 solve_latitude)
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, count_oscillations, fit_oscillation
 from gyro_instrument.scenes import build_instruments, load_scene
 from gyro_instrument.sensors import SensorModel, scene_rng
@@ -215,38 +216,56 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS):
         else:
             result["instruments"][name] = {"type": inst.type_name, "reason": "not used by the estimator "
                                            "(no Earth-rate measurement from this instrument)"}
-    _classic_methods(result, gyros, pend)
     # combined
     if len(meas) >= 2:
         try:
-            sol = solve_latitude(meas)
-            crlb = solve_latitude(meas, use_crlb=True)
-            result.update({"latitude_deg": math.degrees(sol.latitude_rad),
-                           "latitude_sigma_deg": math.degrees(sol.latitude_sigma_rad),
-                           "latitude_interval_deg": [math.degrees(sol.latitude_lo_rad), math.degrees(sol.latitude_hi_rad)],
-                           "earth_rate_rad_s": sol.earth_rate_rad_s,
-                           "earth_rate_sigma_rad_s": sol.earth_rate_sigma_rad_s,
-                           "crlb": {"latitude_deg": math.degrees(crlb.latitude_sigma_rad),
-                                    "earth_rate_rad_s": crlb.earth_rate_sigma_rad_s},
-                           "carried_by": sol.carried_by, "chi2": sol.chi2, "dof": sol.dof})
-            if sol.dropped:
-                result["left_out_of_latitude"] = sol.dropped
-            lead = max(sol.carried_by, key=sol.carried_by.get)
-            kinds = "+".join(sorted({("pendulum" if m.kind == "pendulum" else "gyroscope") for m in meas}))
-            result["method"] = (f"profile least squares over {kinds} ({len(meas)} measurements); "
-                                f"latitude carried by {lead} ({100 * sol.carried_by[lead]:.1f} % of the information)")
+            result.update(_combined(meas, scene.estimator.get("hemisphere")))
         except ValueError as exc:
             result.update(_null_combined(f"combination failed: {exc}"))
     else:
         result.update(_null_combined(f"need two Earth-rate measurements (two gyroscope configurations, or one "
                                      f"and a pendulum); have {len(meas)}"))
+    _classic_methods(result, gyros, pend)
     return result
+
+
+def _combined(meas, hemisphere=None):
+    """The combined latitude and Earth rate (profile likelihood) with their Cramér–Rao bounds from
+    the same mode, and what the instruments cannot determine (hemisphere, separability)."""
+    sol = solve_latitude(meas, hemisphere=hemisphere)
+    deg = lambda x: None if x is None else math.degrees(x)  # noqa: E731
+    out = {"earth_rate_rad_s": sol.earth_rate_rad_s, "earth_rate_sigma_rad_s": sol.earth_rate_sigma_rad_s,
+           "hemisphere": sol.hemisphere, "hemisphere_basis": sol.hemisphere_basis}
+    if sol.latitude_rad is None:
+        out.update({"latitude_deg": None, "latitude_sigma_deg": None, "reason": sol.reason,
+                    "crlb": {"latitude_deg": None, "earth_rate_rad_s": sol.earth_rate_sigma_rad_s},
+                    "method": (f"weighted mean over {len(meas)} measurements independent of the latitude"
+                               if sol.earth_rate_rad_s is not None else None)})
+        return out
+    crlb = solve_latitude(meas, use_crlb=True, domain=sol.domain)
+    out.update({"latitude_deg": math.degrees(sol.latitude_rad), "latitude_sigma_deg": deg(sol.latitude_sigma_rad),
+                "latitude_interval_deg": [math.degrees(sol.latitude_lo_rad), math.degrees(sol.latitude_hi_rad)],
+                "latitude_interval_3sigma_deg": [math.degrees(v) for v in sol.interval_3sigma_rad],
+                "latitude_is_absolute": sol.latitude_is_absolute,
+                "crlb": {"latitude_deg": deg(crlb.latitude_sigma_rad), "earth_rate_rad_s": crlb.earth_rate_sigma_rad_s},
+                "carried_by": sol.carried_by, "chi2": sol.chi2, "dof": sol.dof})
+    if sol.sigma_reason:
+        out["latitude_sigma_reason"] = sol.sigma_reason
+    if sol.other_modes:
+        out["other_latitudes_deg"] = [{"latitude_deg": math.degrees(g), "delta_chi2": d} for g, d in sol.other_modes]
+    if sol.dropped:
+        out["left_out_of_latitude"] = sol.dropped
+    lead = max(sol.carried_by, key=sol.carried_by.get)
+    kinds = "+".join(sorted({("pendulum" if m.kind == "pendulum" else "gyroscope") for m in meas}))
+    out["method"] = (f"profile least squares over {kinds} ({len(meas)} measurements); "
+                     f"latitude carried by {lead} ({100 * sol.carried_by[lead]:.1f} % of the information)")
+    return out
 
 
 def _null_combined(reason):
     return {"latitude_deg": None, "latitude_sigma_deg": None, "earth_rate_rad_s": None,
             "earth_rate_sigma_rad_s": None, "crlb": {"latitude_deg": None, "earth_rate_rad_s": None},
-            "method": None, "reason": reason}
+            "hemisphere": HEMISPHERE_UNDETERMINED, "method": None, "reason": reason}
 
 
 def _classic_methods(result, gyros, pend):
@@ -265,14 +284,16 @@ def _classic_methods(result, gyros, pend):
             entry.update({"latitude_deg": None,
                           "reason": f"cos(latitude) = {c:.9f} is within 1 sigma ({c * rel:.2g}) of 1: near the "
                                     "equator item 9 cannot resolve the latitude (cos is flat, "
-                                    "d(latitude) = d(cos)/sin(latitude) diverges); the pendulum carries"})
+                                    "d(latitude) = d(cos)/sin(latitude) diverges)"
+                                    + ("; the pendulum carries the latitude" if pend is not None else "")})
         elif 0.0 < c <= 1.0:
             lat = math.degrees(math.acos(c))
-            sign = 1.0
-            if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
-                sign = 1.0 if pend[1]["foucault_rate_rad_s"] >= 0 else -1.0
-            else:
-                entry["note"] = "item 9 gives |latitude| (cos is even); northern hemisphere assumed"
+            # cos is even: the sign comes from the combination's hemisphere (measured by a pendulum, or
+            # the user's estimator.hemisphere); otherwise item 9 reports |latitude|
+            hemi = result.get("hemisphere")
+            sign = {"north": 1.0, "south": -1.0}.get(hemi, 1.0)
+            entry["hemisphere"] = hemi if hemi in ("north", "south") else HEMISPHERE_UNDETERMINED
+            entry["latitude_is_absolute"] = hemi not in ("north", "south")
             s = math.sqrt(max(1 - c * c, 0.0))
             lo = math.degrees(math.acos(min(c + c * rel, 1.0)))
             hi = math.degrees(math.acos(max(c - c * rel, 0.0)))

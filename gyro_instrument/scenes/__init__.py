@@ -30,6 +30,10 @@ SENSOR_PARAMS = (
 ESTIMATOR_PARAMS = (
     Param("method", kind="str", default="sine_fit", choices=("sine_fit", "counting"),
           doc="period estimator: least-squares sine fit (reaches the Cramér–Rao bound) or Quet's counting"),
+    Param("hemisphere", kind="str", default=None, choices=("north", "south"),
+          doc="the hemisphere to assume when no instrument can tell +latitude from -latitude (item 9 and "
+              "the gimbal's T'/T'' fix cos(latitude) only); a measured sign (a pendulum) always wins. "
+              "Unset: such an estimate reports |latitude| with hemisphere 'not determined by these instruments'"),
 )
 
 
