@@ -27,7 +27,13 @@ def add_scene_arguments(parser):
     parser.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a scene value, e.g. --set site.latitude_deg=-33.87 "
-                             "--set instruments.pendulum.length_m=20 (repeatable)")
+                             "--set instruments.pendulum.length_m=20 (repeatable; values are YAML). "
+                             "null removes: effects.NAME=null drops that effect (also from every "
+                             "instrument's effects list), instruments.NAME=null drops that instrument "
+                             "(not the last one); on any other key null restores its default (refused "
+                             "if it has none). A new instrument needs its type: --set "
+                             "instruments.p2.type=spherical_pendulum --set instruments.p2.length_m=10. "
+                             "Unknown names get the closest match. Scene format: msg_docs/scene.md")
     parser.add_argument("--duration-s", type=float, default=None,
                         help="simulated time per instrument, s (default: the scene's duration_s)")
 
@@ -39,6 +45,13 @@ def scene_from_args(args):
     if getattr(args, "duration_s", None) is not None:
         overrides.append(f"duration_s={args.duration_s!r}")
     return load_scene(args.scene, overrides)
+
+
+def print_scene_notes(scene, stream=None):
+    """The scene's notes (:func:`gyro_instrument.scenes.scene_notes`) on stderr, one line each."""
+    from gyro_instrument.scenes import scene_notes
+    for note in scene_notes(scene):
+        print(f"gyro-instrument: note: {note}", file=stream or sys.stderr)
 
 
 def check_writable(path, field="--out"):
@@ -68,9 +81,10 @@ def to_jsonable(x):
 # ----------------------------------------------------------------------------- describe
 def describe(scene):
     """Dict describing a scene: site, instruments, active effects, effect sizes, predictions."""
-    from gyro_instrument.scenes import build_instruments
+    from gyro_instrument.scenes import build_instruments, scene_notes
     insts = build_instruments(scene)
     out = {"scene": scene.name, "description": scene.description, "source": scene.source,
+           "scene_notes": scene_notes(scene),
            "site": {"latitude_deg": scene.site.latitude_deg, "earth_rate_rad_s": scene.site.earth_rate_rad_s,
                     "gravity_m_s2": scene.site.gravity_m_s2},
            "duration_s": scene.duration_s, "sample_rate_hz": scene.sample_rate_hz, "seed": scene.seed,
@@ -96,6 +110,8 @@ def print_description(d, stream=None):
     w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s, "
       f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
     w(f"  effects listed: {', '.join(d['scene_effects']) or 'none'}\n")
+    for note in d.get("scene_notes", []):
+        w(f"  note: {note}\n")
     for name, inst in d["instruments"].items():
         w(f"\n  {name} ({inst['type']}): {inst['summary']}\n")
         w(f"    {'effect':<18}{'active':<8}{'relative size':>14}  estimate\n")
@@ -103,9 +119,11 @@ def print_description(d, stream=None):
             size = e["relative_size"]
             size_txt = f"{size:.3g}" if size is not None else "n/a"
             w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
-        preds = ", ".join(f"{k} = {v:.10g}" if isinstance(v, float) else f"{k} = {v}"
-                          for k, v in inst["predictions"].items())
+        preds = ", ".join(f"{k} = {v:.10g}" if isinstance(v, float) else f"{k} = {_fmt(v, '')}"
+                          for k, v in inst["predictions"].items() if k != "notes")
         w(f"    predictions: {preds}\n")
+        for note in inst["predictions"].get("notes", []):
+            w(f"    prediction note: {note}\n")
         w(f"    columns: {', '.join(inst['columns'])}\n")
 
 
@@ -173,11 +191,24 @@ def _fmt(v, spec):
     return "null" if v is None else format(v, spec)
 
 
+def without_rotation_reason(result, scene):
+    """When no pendulum of the scene simulates ``earth_rotation``, its k = 0 says nothing about the
+    site (it is not "as at the equator"): the Foucault method's Earth-rate reason says so."""
+    foucault = result.get("methods", {}).get("foucault")
+    pendulums = [n for n, e in result.get("instruments", {}).items() if isinstance(e, dict) and "foucault_rate_rad_s" in e]
+    if foucault and "reason_earth_rate" in foucault and pendulums and \
+            all("earth_rotation" not in scene.instruments[n][2] for n in pendulums if n in scene.instruments):
+        foucault["reason_earth_rate"] = ("earth_rotation is not simulated for the pendulum: it cannot precess, "
+                                         "so n = k / sin(latitude) is undetermined")
+
+
 def print_estimate(r, stream=None):
     """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
     w = (stream or sys.stdout).write
     tr = r["truth"]
     w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
+    for note in r.get("scene_notes", []):
+        w(f"  note: {note}\n")
     label = "|latitude|" if r.get("latitude_is_absolute") else "latitude  "
     w(f"  {label} {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
       f"   truth {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
@@ -286,6 +317,7 @@ def run_command(args):
     if args.command == "simulate":
         check_writable(args.out)
         scene = scene_from_args(args)
+        print_scene_notes(scene)
         progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
         t, columns, sims = simulate_scene(scene, progress)
         write_csv(args.out, t, columns)
@@ -297,11 +329,14 @@ def run_command(args):
         return 0
     if args.command == "estimate":
         from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+        from gyro_instrument.scenes import scene_notes
         scene = scene_from_args(args)
         with terminal_progress("simulating"):
             truth = simulate_truth(scene)
         result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
         result["seed"] = scene.seed
+        result["scene_notes"] = scene_notes(scene)
+        without_rotation_reason(result, scene)
         if args.json:
             print(json.dumps(result, indent=2))
         else:

@@ -1,4 +1,4 @@
-"""Docs stay true to the code: generated instrument docs are current, every topic the suite
+"""Docs stay true to the code: generated instrument and scene docs are current, every topic the suite
 publishes is documented, every CLI subcommand is in the README."""
 
 import importlib.util
@@ -16,6 +16,28 @@ def test_instrument_docs_are_current():
     spec.loader.exec_module(gen)
     assert (ROOT / "msg_docs" / "instruments.md").read_text() == gen.render(), \
         "msg_docs/instruments.md is stale: run python tools/gen_instrument_docs.py"
+
+
+def test_scene_docs_are_current():
+    spec = importlib.util.spec_from_file_location("gen_scene", ROOT / "tools" / "gen_scene_docs.py")
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+    assert (ROOT / "msg_docs" / "scene.md").read_text() == gen.render(), \
+        "msg_docs/scene.md is stale: run python tools/gen_scene_docs.py"
+
+
+def test_scene_docs_cover_every_specified_key():
+    # Whatever Param a section gains (e.g. estimator.hemisphere) appears in the generated format.
+    from gyro_instrument.core.scene import SECTIONS, SITE_PARAMS, TOP_PARAMS
+    from gyro_instrument.effects import REGISTRY as EFFECTS
+    from gyro_instrument.scenes import ESTIMATOR_PARAMS, SENSOR_PARAMS
+    doc = (ROOT / "msg_docs" / "scene.md").read_text()
+    keys = [p.name for p in TOP_PARAMS] + list(SECTIONS) + [f"site.{p.name}" for p in SITE_PARAMS] \
+        + [f"sensor.{p.name}" for p in SENSOR_PARAMS] + [f"estimator.{p.name}" for p in ESTIMATOR_PARAMS] \
+        + [f"effects.{e}.{p.name}" for e, c in EFFECTS.items() for p in c.PARAMS] + list(EFFECTS)
+    for key in keys:
+        assert f"`{key}`" in doc, key
+    assert "instruments.md" in doc and "=null" in doc and "earth_rotation is not simulated" in doc
 
 
 def test_topics_are_documented():

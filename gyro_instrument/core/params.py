@@ -93,7 +93,9 @@ def validate_params(prefix, params, raw):
     """Validate ``raw`` (a mapping) against ``params`` (a sequence of :class:`Param`).
 
     Unknown keys are refused with a close-match suggestion; missing required keys are
-    refused; defaults fill the rest.
+    refused; defaults fill the rest. A key given as ``None`` (YAML ``null``, ``--set key=null``)
+    means "use the default": it takes the default when there is one and is refused, naming the
+    field and the valid range, when the key is required.
 
     Returns
     -------
@@ -112,17 +114,22 @@ def validate_params(prefix, params, raw):
     out = {}
     for p in params:
         field = f"{prefix}.{p.name}" if prefix else p.name
-        if p.name in raw:
+        if raw.get(p.name) is not None:
             out[p.name] = p.check(field, raw[p.name])
         elif p.default is REQUIRED:
-            raise SceneError(field, None, f"is required; {p.describe_range()}")
+            raise SceneError(field, None, f"is required (it has no default); {p.describe_range()}")
         else:
             out[p.name] = p.default
     return out
 
 
-def unknown_key_hint(key, known):
-    """Message for an unknown key, with the closest known key when one is near."""
-    close = difflib.get_close_matches(str(key), list(known), n=1)
-    hint = f"unknown key (did you mean '{close[0]}'?)" if close else "unknown key"
-    return f"{hint}; valid keys: {', '.join(sorted(known))}"
+def unknown_key_hint(key, known, what="key"):
+    """Message for an unknown name, with the closest known one when one is near.
+
+    ``what`` names the kind of name (``key``, ``instrument``, ``effect``, ``instrument type``):
+    ``unknown instrument (did you mean 'pendulum'?); valid keys: gyro_horizontal, pendulum``.
+    """
+    names = [str(k) for k in known]
+    close = difflib.get_close_matches(str(key), names, n=1)
+    hint = f"unknown {what} (did you mean '{close[0]}'?)" if close else f"unknown {what}"
+    return f"{hint}; valid keys: {', '.join(sorted(names)) or 'none'}"

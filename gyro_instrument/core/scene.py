@@ -17,7 +17,8 @@ Layout::
     instruments:
       gyro_h: {type: plane_gyroscope, plane: horizontal, ...}
 
-An instrument may carry its own ``effects:`` list of names, a subset of the scene's.
+An instrument may carry its own ``effects:`` list of names, a subset of the scene's. The full
+format, generated from the parameter specifications, is msg_docs/scene.md.
 """
 
 import math
@@ -110,23 +111,116 @@ def parse_override(text):
     return key.split("."), parsed
 
 
-def apply_overrides(data, overrides):
-    """Return a copy of ``data`` with each ``key.path=value`` override applied."""
+def apply_overrides(data, overrides, effect_names=()):
+    """Return a copy of ``data`` with each ``key.path=value`` override applied, in order.
+
+    A value sets the key, creating the mappings on its way. ``null`` removes:
+
+    * ``effects.<name>=null`` removes that effect from the scene and from every instrument's
+      ``effects:`` list (``effects=null``: every effect);
+    * ``instruments.<name>=null`` removes that instrument (removing the last one is refused);
+    * on any other key, ``null`` means "use its default" (:func:`validate_params`); a key with no
+      default is then refused with its field and valid range.
+
+    A path into an instrument the scene does not have is taken for a misspelling and refused
+    with the closest name, unless the overrides also give that instrument's ``type`` (which adds
+    a new instrument, e.g. ``instruments.p2.type=spherical_pendulum``). ``effect_names`` (the
+    effect registry's names) lets ``effects.<name>=null`` refuse an unknown effect.
+    """
     import copy
     data = copy.deepcopy(data)
-    for text in overrides or ():
-        path, value = parse_override(text) if isinstance(text, str) else text
-        node = data
-        for i, part in enumerate(path[:-1]):
-            nxt = node.get(part) if isinstance(node, dict) else None
-            if nxt is None:
-                nxt = {}
-                node[part] = nxt
-            if not isinstance(nxt, dict):
-                raise SceneError(".".join(path[:i + 1]), nxt, "is not a mapping; cannot set a key inside it")
-            node = nxt
-        node[path[-1]] = value
+    parsed = [parse_override(t) if isinstance(t, str) else (list(t[0]), t[1]) for t in overrides or ()]
+    typed = set()
+    for path, value in parsed:
+        if len(path) == 3 and path[0] == "instruments" and path[2] == "type" and value is not None:
+            typed.add(path[1])
+        if len(path) == 2 and path[0] == "instruments" and isinstance(value, dict) and "type" in value:
+            typed.add(path[1])
+    for path, value in parsed:
+        _check_instrument_name(data, path, value, typed)
+        if value is None:
+            _remove(data, path, effect_names)
+        else:
+            _set(data, path, value)
     return data
+
+
+def _check_instrument_name(data, path, value, typed):
+    """Refuse ``instruments.<name>...`` for an instrument neither in the scene nor typed by an override."""
+    if path[0] != "instruments" or len(path) < 2:
+        return
+    insts = data.get("instruments")
+    if insts is not None and not isinstance(insts, dict):
+        return                                   # build_scene names the bad section
+    name = path[1]
+    if name in (insts or {}) or (name in typed and value is not None):
+        return
+    hint = unknown_key_hint(name, insts or {}, "instrument")
+    if value is not None:
+        hint += f"; to add an instrument, also set instruments.{name}.type"
+    raise SceneError(".".join(path), value, hint)
+
+
+def _set(data, path, value):
+    node = data
+    for i, part in enumerate(path[:-1]):
+        nxt = node.get(part)
+        if nxt is None:
+            nxt = {}
+            node[part] = nxt
+        if not isinstance(nxt, dict):
+            raise SceneError(".".join(path[:i + 1]), nxt, "is not a mapping; cannot set a key inside it")
+        node = nxt
+    node[path[-1]] = value
+
+
+def _remove_effect(data, name):
+    """Drop effect ``name`` from the scene's effects and from every instrument's ``effects:`` list."""
+    effects = data.get("effects")
+    if isinstance(effects, dict):
+        effects.pop(name, None)
+    elif isinstance(effects, list):
+        data["effects"] = [e for e in effects if e != name]
+    insts = data.get("instruments")
+    for spec in (insts.values() if isinstance(insts, dict) else ()):
+        if isinstance(spec, dict) and isinstance(spec.get("effects"), list):
+            spec["effects"] = [e for e in spec["effects"] if e != name]
+
+
+def _remove(data, path, effect_names):
+    """``key.path=null``: remove an effect or an instrument, or reset a key to its default."""
+    field_ = ".".join(path)
+    known_top = {p.name for p in TOP_PARAMS} | set(SECTIONS)
+    if path[0] not in known_top:
+        raise SceneError(field_, None, unknown_key_hint(path[0], known_top))
+    if path[0] == "effects":
+        effects = data.get("effects")
+        if len(path) == 1:
+            for name in list(effects) if isinstance(effects, (dict, list)) else ():
+                if isinstance(name, str):
+                    _remove_effect(data, name)
+            data.pop("effects", None)
+            return
+        name = path[1]
+        if effect_names and name not in effect_names:
+            raise SceneError(field_, None, unknown_key_hint(name, effect_names, "effect"))
+        listed = name in effects if isinstance(effects, (dict, list)) else False
+        if len(path) == 2:
+            _remove_effect(data, name)
+            return
+        if not listed:
+            return                               # not simulated: nothing to reset (never switch it on)
+    if path == ["instruments"]:
+        raise SceneError(field_, None, "removing every instrument leaves nothing to simulate; a scene needs "
+                                       "at least one instrument")
+    if path[0] == "instruments" and len(path) == 2:
+        insts = data["instruments"]
+        del insts[path[1]]
+        if not insts:
+            raise SceneError(field_, None, "removing it leaves the scene with no instrument; a scene needs "
+                                           "at least one instrument")
+        return
+    _set(data, path, None)                       # None: the key's default (validate_params)
 
 
 def build_scene(data, instrument_registry, effect_registry, sensor_params=(), estimator_params=(),
@@ -166,7 +260,7 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
     effects = {}
     for name, params in effects_raw.items():
         if name not in effect_registry:
-            raise SceneError(f"effects.{name}", params, unknown_key_hint(name, effect_registry))
+            raise SceneError(f"effects.{name}", params, unknown_key_hint(name, effect_registry, "effect"))
         if params is None:
             params = {}
         if not isinstance(params, dict):
@@ -175,7 +269,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
 
     inst_raw = data.get("instruments")
     if not isinstance(inst_raw, dict) or not inst_raw:
-        raise SceneError("instruments", inst_raw, "must be a non-empty mapping of name: {type: ..., ...}")
+        raise SceneError("instruments", inst_raw, "must be a non-empty mapping of name: {type: ..., ...}; a scene "
+                                                  "needs at least one instrument")
     instruments = {}
     used = set()
     for iname, spec in inst_raw.items():
@@ -186,8 +281,10 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
             raise SceneError(prefix, spec, "must be a mapping with at least 'type'")
         spec = dict(spec)
         itype = spec.pop("type", None)
-        if itype not in instrument_registry:
-            raise SceneError(f"{prefix}.type", itype, f"must be one of {', '.join(sorted(instrument_registry))}")
+        if itype is None:
+            raise SceneError(f"{prefix}.type", itype, f"is required; must be one of {', '.join(sorted(instrument_registry))}")
+        if not isinstance(itype, str) or itype not in instrument_registry:
+            raise SceneError(f"{prefix}.type", itype, unknown_key_hint(itype, instrument_registry, "instrument type"))
         cls = instrument_registry[itype]
         names = spec.pop("effects", None)
         if names is None:
@@ -196,6 +293,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
             if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
                 raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
             for e in names:
+                if e not in effect_registry:
+                    raise SceneError(f"{prefix}.effects", e, unknown_key_hint(e, effect_registry, "effect"))
                 if e not in effects:
                     raise SceneError(f"{prefix}.effects", e,
                                      f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
@@ -214,7 +313,7 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
             supporters = sorted(t for t, c in instrument_registry.items() if e in c.SUPPORTED_EFFECTS)
             raise SceneError(f"effects.{e}", effects_raw[e] or {},
                              f"is not supported by any instrument in this scene; instruments that support it: "
-                             f"{', '.join(supporters) or 'none'}")
+                             f"{', '.join(supporters) or 'none'} (remove it with --set effects.{e}=null)")
     sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
     estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
                  if estimator_params or data.get("estimator") else {})

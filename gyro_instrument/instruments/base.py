@@ -76,5 +76,29 @@ class Instrument:
         raise NotImplementedError
 
     def predictions(self):
-        """The papers' analytic predictions for this instrument's configuration (dict)."""
+        """The papers' analytic predictions for this instrument's configuration (dict).
+
+        Predictions describe the model as simulated: an effect the instrument does not list is
+        absent from them too (without ``earth_rotation``, n = 0). A ``notes`` entry (list of
+        str), present only when needed, says which supported effects are left out and what the
+        prediction would be with them.
+        """
         return {}
+
+    def model_earth_rate(self):
+        """n as simulated: the site's Earth rate when ``earth_rotation`` is listed, else 0 (rad/s)."""
+        return self.site.earth_rate_rad_s if self.has("earth_rotation") else 0.0
+
+    def missing_effect_note(self, effect_name, consequence):
+        """``"<effect> not simulated: <consequence>"`` when a supported effect is not listed, else None."""
+        if effect_name in self.SUPPORTED_EFFECTS and not self.has(effect_name):
+            return f"{effect_name} not simulated: {consequence}"
+        return None
+
+
+def with_notes(predictions, *notes):
+    """``predictions`` with a ``notes`` list of the non-None notes (no key when there are none)."""
+    notes = [n for n in notes if n]
+    if notes:
+        predictions["notes"] = notes
+    return predictions

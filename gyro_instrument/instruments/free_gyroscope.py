@@ -92,7 +92,7 @@ import numpy as np
 
 from gyro_instrument.core.integrate import Trajectory, integrate
 from gyro_instrument.core.params import Param
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
 
 # ----------------------------------------------------------------------------- quaternions
 
@@ -321,7 +321,7 @@ class FreeGyroscope(Instrument):
         h_quet = math.sqrt(max(rho0 * (rho0 - 2 * n * cq) + n * n, 0.0)) if mu == 1.0 else \
             mu * math.sqrt(max(rho0 * (rho0 - 2 * n * cq), 0.0))
         gyro = mu * abs(rho0)
-        return {
+        out = {
             "theta0_rad": th,
             "theta0_quet_rad": math.pi - th,
             "mean_axis_rate_rad_s": n,
@@ -335,6 +335,10 @@ class FreeGyroscope(Instrument):
             "initial_cos_theta_acceleration_rad_s2": n * s * s * (mu * rho0 + (mu - 1.0) * n * c),
             "relative_equilibrium_exact": bool(n == 0.0 or mu == 1.0 or s < 1e-15 or abs(c) < 1e-15),
         }
+        return with_notes(out, self.missing_effect_note(
+            "earth_rotation", f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
+                              f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
+                              f"rad/s)"))
 
     def scales(self, duration_s):
         """Scales for effect-size estimates. There is no restoring torque; the free-precession

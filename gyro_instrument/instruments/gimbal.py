@@ -90,7 +90,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
@@ -416,8 +416,23 @@ class GimbalGyroscope(Instrument):
         * ``conserved_spin_rad_s``: eq. (13) at release; ``inner_reference_rad`` θ_ref;
         * ``nutation_half_period_s``: §V eq. (14), leading term, π √(a u0²) / (C ρ0 sin θ0),
           the fast gimbal nutation (free configuration).
+
+        Without ``earth_rotation`` n = 0 in the model: no directing torque, every T is infinite
+        (``null`` in JSON) and a ``notes`` entry says so.
         """
-        n = self.site.earth_rate_rad_s
+        rotating = self.has("earth_rotation")
+        out = self._predictions(rotating)
+        T_site = None if rotating else self._predictions(True)["swing_duration_small_s"]
+        with_it = f" (with it, the configured swing lasts {T_site:.6g} s)" \
+            if T_site is not None and math.isfinite(T_site) else ""
+        return with_notes(out, self.missing_effect_note(
+            "earth_rotation", "no directing torque C n ρ0 sin ω (sec. 4 §IV): T, T', T'', T''' are null" + with_it))
+
+    def _predictions(self, rotating):
+        """The predictions with the site's Earth rate (``rotating``) or with n = 0."""
+        f = 1.0 if rotating else 0.0
+        n = self.site.earth_rate_rad_s * f
+        k, k_prime = self.k * f, self.k_prime * f
         A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
         rho0 = self.spin_rate_rad_s
         cos_g = math.cos(self.site.latitude_rad)
@@ -425,15 +440,15 @@ class GimbalGyroscope(Instrument):
         J_thick = A + C1 + A2
         J_fixed = A + A1
         out = {"configuration": self.configuration, "sin_omega": self.sin_omega, "cos_omega": self.cos_omega,
-               "k_rad_s": self.k, "k_prime_rad_s": self.k_prime,
+               "k_rad_s": k, "k_prime_rad_s": k_prime,
                "inertia_locked_quet_kg_m2": J_quet, "inertia_locked_kg_m2": J_thick,
                "inertia_outer_fixed_kg_m2": J_fixed}
-        for key, rate in (("T", self.k_prime), ("T_prime", n * cos_g), ("T_third", n)):
+        for key, rate in (("T", k_prime), ("T_prime", n * cos_g), ("T_third", n)):
             out[f"{key}_quet_s"] = swing_duration_s(J_quet, C, rate, rho0)
             out[f"{key}_thick_s"] = swing_duration_s(J_thick, C, rate, rho0)
         out["T_second_quet_s"] = out["T_second_thick_s"] = swing_duration_s(J_fixed, C, n, rho0)
         theta0, psi0 = self.theta0, self.psi0
-        out["conserved_spin_rad_s"] = float(spin_invariant(rho0, theta0, psi0, self.k, self.k_prime))
+        out["conserved_spin_rad_s"] = float(spin_invariant(rho0, theta0, psi0, k, k_prime))
         out["inner_reference_rad"] = self.theta_ref
         out["outer_reference_rad"] = math.pi / 2
         conf = self.configuration
@@ -441,11 +456,11 @@ class GimbalGyroscope(Instrument):
         if conf == "locked":
             applies = {"vertical": "T'", "east_west": "T'''"}.get(self.outer_axis, "T")
             Tq, Ts = out["T_quet_s"], out["T_thick_s"]
-            rho_eq = rho0 + self.k_prime * (math.cos(self.outer0) - 1.0)
-            K = locked_swing_constant(A, C, C1, A2, self.C2, self.k_prime, rho_eq)
+            rho_eq = rho0 + k_prime * (math.cos(self.outer0) - 1.0)
+            K = locked_swing_constant(A, C, C1, A2, self.C2, k_prime, rho_eq)
             Te = math.pi / math.sqrt(K) if K > 0 else math.inf
         elif conf == "outer_fixed":
-            m = self.swing_plane_rate_rad_s()
+            m = self.swing_plane_rate_rad_s() * f
             applies = "T''" if self.alpha_fixed == 0.0 else "T'' (generalised)"
             Tq = Ts = swing_duration_s(J_fixed, C, m, rho0)
             rho_eq = rho0 + m * (math.cos(self.inner0) - 1.0)
@@ -464,8 +479,9 @@ class GimbalGyroscope(Instrument):
         return out
 
     def scales(self, duration_s):
-        """Characteristic scales for ``Effect.relative_size``: swing and gyroscopic rates, ring ratio."""
-        pred = self.predictions()
+        """Characteristic scales for ``Effect.relative_size``: swing and gyroscopic rates, ring ratio
+        (those of the rotating Earth, whether or not ``earth_rotation`` is listed)."""
+        pred = self._predictions(True)
         conf = self.configuration
         if conf == "outer_fixed":
             J = self.A + self.A1

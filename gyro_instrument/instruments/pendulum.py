@@ -34,7 +34,7 @@ from scipy.special import ellipk
 from gyro_instrument.core.angles import unwrap
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
 
 PENDULUM_COLUMNS = (
@@ -189,15 +189,35 @@ class SphericalPendulum(Instrument):
         return r, v
 
     def predictions(self):
-        k = self.site.k_vertical_rad_s
-        beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
-        return {"foucault_rate_rad_s": k,
-                "foucault_rate_deg_h": math.degrees(k) * 3600.0,
-                "full_turn_h": (2 * math.pi / abs(k) / 3600.0) if k else math.inf,
-                "quarter_period_s": quarter_period_s(self.l, self.g, self.theta0, beta),
-                "quarter_period_series_s": quarter_period_series_s(self.l, self.g, self.theta0, beta),
-                "min_deflection_from_rest_rad": beta,
-                "apsidal_rate_from_rest_rad_s": apsidal_rate_from_rest_rad_s(k, self.theta0)}
+        """Sec. 2 for the model as simulated: k = n sin γ (0 without ``earth_rotation``); with
+        ``finite_amplitude`` the exact quarter period (42), β and the apsidal rate of §II–III;
+        without it the linear model's Binet ellipse (quarter period π/(2Ω), Ω = √(g/l + k²),
+        β = asin(sin θ0 · k/Ω), apsides turning at k). ``quarter_period_series_s`` is Quet's
+        series (42) in every case."""
+        k_site = self.site.k_vertical_rad_s
+        k = k_site if self.has("earth_rotation") else 0.0
+        if self.has("finite_amplitude"):
+            beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
+            quarter = quarter_period_s(self.l, self.g, self.theta0, beta)
+            apsidal = apsidal_rate_from_rest_rad_s(k, self.theta0)
+        else:
+            W = math.sqrt(self.g / self.l + k * k)
+            beta = math.asin(min(1.0, math.sin(self.theta0) * abs(k) / W)) * (1.0 if k >= 0 else -1.0)
+            quarter = 0.5 * math.pi / W
+            apsidal = k
+        out = {"foucault_rate_rad_s": k,
+               "foucault_rate_deg_h": math.degrees(k) * 3600.0,
+               "full_turn_h": (2 * math.pi / abs(k) / 3600.0) if k else math.inf,
+               "quarter_period_s": quarter,
+               "quarter_period_series_s": quarter_period_series_s(self.l, self.g, self.theta0, beta),
+               "min_deflection_from_rest_rad": beta,
+               "apsidal_rate_from_rest_rad_s": apsidal}
+        return with_notes(out, self.missing_effect_note(
+            "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s "
+                              f"= {math.degrees(k_site) * 3600.0:.4g} deg/h)"),
+            self.missing_effect_note(
+            "finite_amplitude", "small-angle (linear) model: Binet's ellipse, quarter period π/(2√(g/l + k²)), "
+                                "apsides turning at k"))
 
     def scales(self, duration_s):
         return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
@@ -438,11 +458,16 @@ class CompoundPendulum(Instrument):
         self.psi0 = math.radians(self.initial_azimuth_deg)
 
     def predictions(self):
-        k = self.site.k_vertical_rad_s
+        """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
+        ``earth_rotation``), the quarter period of the simple pendulum of length λ."""
+        k_site = self.site.k_vertical_rad_s
+        k = k_site if self.has("earth_rotation") else 0.0
         lam = self.equivalent_length_m
         g = self.site.gravity_m_s2
-        return {"equivalent_length_m": lam, "foucault_rate_rad_s": k,
-                "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0)}
+        out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k,
+               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0)}
+        return with_notes(out, self.missing_effect_note(
+            "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
     def scales(self, duration_s):
         return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,

@@ -35,7 +35,7 @@ from gyro_instrument.core.integrate import Trajectory, integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation, hinge_friction
 
 
@@ -261,16 +261,31 @@ class PlaneGyroscope(Instrument):
         self.ud0 = math.radians(self.initial_rate_deg_s)
 
     # ---------------------------------------------------------------- predictions
+    def _swing_duration_small_s(self, n):
+        """Eq. (9) (or the cone form) at Earth rate ``n``."""
+        return swing_duration_small_s(self.mu, n, self.spin_rate_rad_s, self.sin_omega,
+                                      math.sin(self.eps) if self.is_cone else 1.0)
+
     def predictions(self):
-        """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients."""
-        n = self.site.earth_rate_rad_s
-        T0 = swing_duration_small_s(self.mu, n, self.spin_rate_rad_s, self.sin_omega,
-                                    math.sin(self.eps) if self.is_cone else 1.0)
-        return {"sin_omega": self.sin_omega,
-                "swing_duration_small_s": T0,
-                "swing_duration_s": T0 * finite_amplitude_factor(self.u0) if math.isfinite(T0) else math.inf,
-                "period_s": 2.0 * T0,
-                "conserved_spin_rad_s": self.spin_rate_rad_s + n * self.sin_omega * math.cos(self.u0)}
+        """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients, for
+        the model as simulated: without ``earth_rotation`` n = 0, there is no directing torque
+        μ n ρ0 sin ω and the durations are infinite (``null`` in JSON); without
+        ``finite_amplitude`` the small-angle model swings in T0 at any amplitude."""
+        n = self.model_earth_rate()
+        T0 = self._swing_duration_small_s(n)
+        factor = finite_amplitude_factor(self.u0) if self.has("finite_amplitude") else 1.0
+        out = {"sin_omega": self.sin_omega,
+               "swing_duration_small_s": T0,
+               "swing_duration_s": T0 * factor if math.isfinite(T0) else math.inf,
+               "period_s": 2.0 * T0,
+               "conserved_spin_rad_s": self.spin_rate_rad_s + n * self.sin_omega * math.cos(self.u0)}
+        T_site = self._swing_duration_small_s(self.site.earth_rate_rad_s)
+        rest = " (only the O(n²) centrifugal term acts)" if self.has("centrifugal") else ""
+        return with_notes(out, self.missing_effect_note(
+            "earth_rotation", f"no directing torque μ n ρ0 sin ω (eq. 9): the axis stays where it is released{rest}, "
+                              f"swing durations null (with it T0 = {T_site:.6g} s)"),
+            self.missing_effect_note(
+            "finite_amplitude", "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
 
     def directing_model(self):
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with
@@ -287,7 +302,7 @@ class PlaneGyroscope(Instrument):
 
     def scales(self, duration_s):
         n = self.site.earth_rate_rad_s
-        T0 = self.predictions()["swing_duration_small_s"]
+        T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
         return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.spin_rate_rad_s) or None,
                 "restoring_rate_rad_s": math.pi / T0 if math.isfinite(T0) else 0.0,
                 "amplitude_rad": abs(self.u0), "duration_s": duration_s}

@@ -59,7 +59,7 @@ def scene_path(name_or_path):
 def load_scene(name_or_path, overrides=()):
     """Load, override and validate a scene (see module docstring). Raises SceneError."""
     path = scene_path(name_or_path)
-    data = apply_overrides(read_yaml(path), overrides)
+    data = apply_overrides(read_yaml(path), overrides, effect_names=tuple(EFFECTS))
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=path)
 
 
@@ -75,3 +75,43 @@ def build_instruments(scene):
         cls = INSTRUMENTS[itype]
         out[name] = cls(name, scene.site, params, {e: scene.effects[e] for e in effect_names})
     return out
+
+
+#: Start of the note for a scene (or instrument) that does not simulate the Earth's rotation.
+NO_EARTH_ROTATION = "earth_rotation is not simulated"
+
+
+def scene_notes(scene):
+    """What the scene leaves out that a reader would assume is there, one sentence each.
+
+    ``describe`` (text and ``scene_notes`` in JSON), ``simulate`` (stderr) and ``estimate`` (text
+    and ``scene_notes`` in JSON) all print these. Today one case: the Earth's rotation. A scene in
+    which no instrument lists ``earth_rotation`` (a hand-written file without an ``effects:``
+    block, or ``--set effects.earth_rotation=null``) is simulated on a non-rotating Earth; one
+    whose instrument leaves it out of its own ``effects:`` list is so for that instrument.
+
+    Returns
+    -------
+    list of str
+    """
+    with_rotation, without, unsupported = [], [], []
+    for name, (itype, _params, effect_names) in scene.instruments.items():
+        if "earth_rotation" in effect_names:
+            with_rotation.append(name)
+        elif "earth_rotation" in INSTRUMENTS[itype].SUPPORTED_EFFECTS:
+            without.append(name)
+        else:
+            unsupported.append(f"{name} ({itype})")
+    notes = []
+    if not with_rotation:
+        text = (f"{NO_EARTH_ROTATION}: the instruments move as on a non-rotating Earth (n = 0 in the model: "
+                f"no Foucault precession, no gyroscopic directing torque) and the predictions say the same")
+        if without:
+            text += "; add it with an effects: block in the scene file or --set effects.earth_rotation={}"
+        if unsupported:
+            text += f"; {', '.join(unsupported)} ignores the Earth's rotation by design"
+        notes.append(text)
+    elif without:
+        notes.append(f"{NO_EARTH_ROTATION} for {', '.join(without)}: left out of its effects: list, it moves as "
+                     f"on a non-rotating Earth and its predictions assume n = 0")
+    return notes
