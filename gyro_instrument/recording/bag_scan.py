@@ -293,17 +293,17 @@ class _Scanner:
             data_end = self.summary_start - 13
             return data_end if data_end > after and self.buf[data_end] == Opcode.DATA_END else None
         buf = self.buf
-        p = after + 1
-        while p < limit:
-            hits = [h for h in (buf.find(bytes([op]), p, limit) for op in
-                                (Opcode.CHUNK, Opcode.METADATA, Opcode.DATA_END)) if h >= 0]
+        nxt = {op: buf.find(bytes([op]), after + 1, limit) for op in (Opcode.CHUNK, Opcode.METADATA,
+                                                                        Opcode.DATA_END)}
+        while True:
+            hits = [h for h in nxt.values() if h >= 0]
             if not hits:
                 return None
             p = min(hits)
             if self._valid_record_at(p, limit):
                 return p
-            p += 1
-        return None
+            op = buf[p]
+            nxt[op] = buf.find(bytes([op]), p + 1, limit)
 
     def _record_ok_at_end(self, pos, length, limit):
         """Continue after a damaged record at ``pos`` only when its length is corroborated."""
@@ -413,6 +413,8 @@ class _Scanner:
                 d.lost_to_ns = max(ci.message_end_time for ci in idx)
                 d.span_from = "chunk index"
                 d.chunk_offsets = tuple(sorted(ci.chunk_start_offset for ci in idx))
+            elif self.scan.summary_ok and not d.reason.startswith("chunk"):
+                d.reason += "; the summary's index puts no chunk in it"    # message indexes only
             else:
                 before = [t for p, t in by_pos if p < offset]
                 after = [t for p, t in by_pos if p >= hi]

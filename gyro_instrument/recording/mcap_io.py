@@ -106,7 +106,7 @@ class BagWriter:
         self._fh = _TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
         # chunks are closed here (flush), never by mcap's own size test
-        self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp)
+        self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp, enable_data_crcs=True)
         self._w.start(profile="ros2", library="gyro_instrument")
         self._schemas = {}
         self._channels = {}
@@ -306,7 +306,7 @@ def recover(damaged, out, scan=None, epoch_ns=None):
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{os.path.basename(out)}.", suffix=".partial")
     try:
         with os.fdopen(fd, "wb") as fo:
-            w = Writer(fo, compression=CompressionType.ZSTD)
+            w = Writer(fo, compression=CompressionType.ZSTD, enable_data_crcs=True)
             w.start(profile=scan.header.profile if scan.header else "ros2", library="gyro_instrument recover")
             schema_ids, channel_ids = {}, {}
             for sid in sorted(scan.schemas):
