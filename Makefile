@@ -18,7 +18,7 @@ setup: $(STAMP)
 demo: $(STAMP)
 	mkdir -p out
 	tools/loopback $(VENV)/bin/gyro-instrument describe quet_paris
-	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(VENV)/bin/gyro-instrument run quet_paris --bag out/quet_paris.mcap
+	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(VENV)/bin/gyro-instrument run quet_paris --bag out/quet_paris.mcap --overwrite
 
 test: $(STAMP)
 	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra

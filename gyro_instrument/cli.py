@@ -55,7 +55,13 @@ def print_scene_notes(scene, stream=None):
 
 
 def check_writable(path, field="--out"):
-    """Refuse an output path that cannot be written, before any simulation starts."""
+    """Refuse an output path that cannot be written, before any simulation starts.
+
+    Raises
+    ------
+    SceneError
+        ``path`` is a directory, its directory is missing, or it is not writable.
+    """
     directory = os.path.dirname(os.path.abspath(path)) or "."
     if os.path.isdir(path):
         raise SceneError(field, path, "is a directory; give a file path")
@@ -63,6 +69,43 @@ def check_writable(path, field="--out"):
         raise SceneError(field, path, f"directory {directory} does not exist")
     if not os.access(directory, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
         raise SceneError(field, path, "is not writable")
+
+
+def same_file(a, b):
+    """True when paths ``a`` and ``b`` name the same file (inode when both exist, else realpath)."""
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_output(path, field="--out", inputs=(), overwrite=False, also=()):
+    """Refuse an output path before anything is simulated, read or written: it must be writable,
+    never one of the command's ``inputs`` (compared by inode/realpath, whatever ``overwrite`` says),
+    and not an existing file unless ``overwrite``. ``also``: other paths the command writes on the
+    way (e.g. ``<out>.partial``), which must not be inputs either.
+
+    Raises
+    ------
+    SceneError
+        One line naming ``field``, the path and why.
+    """
+    check_writable(path, field)
+    for inp in inputs:
+        for p in (path, *also):
+            if inp and same_file(p, inp):
+                what = "is" if p == path else f"writes {p}, which is"
+                raise SceneError(field, path, f"{what} the input {inp}; write elsewhere (--overwrite never "
+                                              f"replaces an input)")
+    if os.path.lexists(path) and not overwrite:
+        raise SceneError(field, path, "exists; pass --overwrite to replace it, or give a new path")
+
+
+def scene_inputs(scene_arg):
+    """The files a scene argument reads (a YAML path; none for a shipped scene name)."""
+    return (scene_arg,) if os.path.isfile(scene_arg) else ()
 
 
 def to_jsonable(x):
@@ -227,6 +270,7 @@ def print_estimate(r, stream=None):
         w(f"  method: {r['method']}\n")
     if r.get("reason"):
         w(f"  reason: {r['reason']}\n")
+    print_damage(r, w)
     for name, e in r["instruments"].items():
         if e.get("swing_duration_s") is not None:
             c = e.get("counting", {})
@@ -248,6 +292,37 @@ def print_estimate(r, stream=None):
           + "\n")
 
 
+def _span_s(v, end):
+    if v is None:
+        return end
+    txt = f"{v:.3f}".rstrip("0")
+    return f"{txt}0 s" if txt.endswith(".") else f"{txt} s"
+
+
+def damage_line(d):
+    """One line for a lost stretch of a bag (a ``damaged`` entry of the replay JSON)."""
+    reason = d.get("reason") or "damaged"
+    where = f" at byte {d['offset']}" if d.get("offset") is not None else ""
+    what = (f"chunk{where} failed its CRC" if reason.startswith("chunk CRC mismatch")
+            else f"{reason}{where}")
+    if d.get("before_recovery"):
+        what = f"before recovery: {what}"
+    if d.get("lost_from_s") is None and d.get("lost_to_s") is None and d.get("span_from") is None:
+        return f"{what}: no message in it"
+    span = f"lost {_span_s(d.get('lost_from_s'), 'the start')} to {_span_s(d.get('lost_to_s'), 'the end')}"
+    if d.get("span_from") == "neighbouring messages":
+        span += " (between the intact messages around it)"
+    return f"{what}: {span}"
+
+
+def print_damage(r, w):
+    """The bag's lost stretches and the reader's notes (replay); nothing for a live estimate."""
+    for d in r.get("damaged") or ():
+        w(f"  damaged: {damage_line(d)}\n")
+    for n in r.get("replay_notes") or ():
+        w(f"  note: {n}\n")
+
+
 # ----------------------------------------------------------------------------- main
 def build_parser():
     parser = argparse.ArgumentParser(
@@ -262,16 +337,20 @@ def build_parser():
     p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV")
     add_scene_arguments(p)
     p.add_argument("--out", required=True, metavar="FILE.csv",
-                   help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md)")
+                   help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+                        "an existing file is refused unless --overwrite; never the scene file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p = sub.add_parser("estimate", help="simulate the scene's instruments through their sensors and estimate "
                                         "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors")
     add_scene_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
     p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
-                                      "live 'run' estimate to the last digit")
+                                      "live 'run' estimate to the last digit. Every chunk's CRC is checked: a "
+                                      "damaged chunk is left out and the log-time span it held is reported")
     p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
-    p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
+    p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate', with "
+                                                       "'damaged' and 'replay_notes' when the bag lost data")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -280,9 +359,15 @@ def build_parser():
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
     p = sub.add_parser("recover", help="rewrite a recording truncated inside its data (no footer: disk "
-                                       "full, copied mid-write) into a complete, indexed MCAP")
+                                       "full, copied mid-write) or damaged (chunks failing their CRC, a broken "
+                                       "summary) into a complete, indexed MCAP of its intact records; the lost "
+                                       "spans are printed and kept in the new file (metadata "
+                                       "'gyro_instrument_damage'). Exit 2 when nothing intact is found")
     p.add_argument("bag", help="the damaged .mcap")
-    p.add_argument("--out", required=True, metavar="FIXED.mcap", help="where to write the recovered file")
+    p.add_argument("--out", required=True, metavar="FIXED.mcap",
+                   help="where to write the recovered file: never the input; an existing file is refused "
+                        "unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file (never the input)")
     return parser
 
 
@@ -315,7 +400,7 @@ def run_command(args):
             print_description(d)
         return 0
     if args.command == "simulate":
-        check_writable(args.out)
+        check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
         scene = scene_from_args(args)
         print_scene_notes(scene)
         progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
@@ -347,12 +432,20 @@ def run_command(args):
         print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
         return 0
     if args.command == "recover":
+        from gyro_instrument.core.scene import EPOCH_NS
+        from gyro_instrument.recording.bag_scan import check_mcap, scan_bag
         from gyro_instrument.recording.mcap_io import recover
-        if not os.path.exists(args.bag):
-            raise SceneError("bag", args.bag, "file not found")
-        check_writable(args.out)
-        n = recover(args.bag, args.out)
+        check_mcap(args.bag, "bag")
+        check_output(args.out, "--out", (args.bag,), args.overwrite)
+        scan = scan_bag(args.bag)
+        n, scan = recover(args.bag, args.out, scan)
         print(f"recovered {n} messages from {args.bag} into {args.out}")
+        for d in scan.damage_dicts(EPOCH_NS):
+            print(f"  damaged: {damage_line(d)}")
+        for note in scan.notes:
+            print(f"  note: {note}")
+        if scan.truncated:
+            print("  note: the input was cut short (no summary): read up to its last complete record")
         return 0
     if args.command == "replay":
         result = replay_bag(args.bag)
@@ -366,22 +459,30 @@ def run_command(args):
 
 def replay_bag(path):
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
-    JointState messages decoded without ROS."""
+    JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
+    out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
+
+    Raises
+    ------
+    SceneError
+        ``path`` is missing or not an MCAP file, or holds no scene metadata record.
+    """
     from gyro_instrument.estimators.pipeline import estimable, estimate_records
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
-    if not os.path.exists(path):
-        raise SceneError("bag", path, "file not found")
-    meta, samples, notes = samples_from_bag(path)
+    meta, samples, notes, damaged = samples_from_bag(path)
     if meta is None or "scene_yaml" not in meta:
+        lost = " (damaged stretches: it may have been lost)" if damaged else ""
         raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
-                                      "'gyro-instrument run --bag' or the recorder node")
+                                      f"'gyro-instrument run --bag' or the recorder node{lost}")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
     samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     result = to_jsonable(result)
+    if damaged:
+        result["damaged"] = to_jsonable(damaged)
     if notes:
         result["replay_notes"] = notes
     return result

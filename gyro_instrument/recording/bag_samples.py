@@ -1,41 +1,66 @@
 """Joint samples from a recorded bag, decoded without ROS (``mcap_ros2``'s dynamic decoder)."""
 
 import numpy as np
-from gyro_instrument.recording.mcap_io import iter_records, read_metadata, recording_state
+from gyro_instrument.recording.bag_scan import scan_bag
 
 
-def samples_from_bag(path):
-    """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes).
+def samples_from_bag(path, scan=None):
+    """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes, damaged).
 
-    Reads every ``/<instrument>/joint_states`` message; a damaged file is read up to its last
-    complete record. Out-of-order or duplicated stamps are left for the estimator to sort out
+    Reads every ``/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
+    damaged chunk is skipped and the chunks after it are read; a file cut short is read up to its
+    last complete record. Out-of-order or duplicated stamps are left for the estimator to sort out
     (it reports what it dropped).
+
+    Returns
+    -------
+    meta : dict or None
+        The ``gyro_instrument`` metadata record (the scene).
+    samples : dict
+    notes : list of str
+        What the reader noticed (interrupted recording, damaged summary, ...).
+    damaged : list of dict
+        Each lost stretch: ``offset``, ``length`` (bytes), ``lost_from_s``, ``lost_to_s`` (seconds from
+        the scene's start; None when unknown), ``span_from``, ``reason``; also the losses a previous
+        ``recover`` recorded (``before_recovery``: true).
+
+    Raises
+    ------
+    SceneError
+        ``path`` is not an MCAP file.
     """
     from mcap_ros2.decoder import DecoderFactory
     from gyro_instrument.core.scene import EPOCH_NS
-    meta = read_metadata(path)
-    data, notes = {}, []
+    scan = scan or scan_bag(path)
+    meta = scan.metadata_record("gyro_instrument")
+    data, notes = {}, list(scan.notes)
+    notes += [f"before recovery: {n}" for n in scan.recorded_notes]
     factory = DecoderFactory()
     decoders = {}
-    count = 0
-    try:
-        for schema, channel, message in iter_records(path):
-            if schema is None or not channel.topic.endswith("/joint_states") \
-                    or schema.name != "sensor_msgs/msg/JointState":
-                continue
+    count = undecodable = 0
+    for schema, channel, message in scan.records():
+        if schema is None or not channel.topic.endswith("/joint_states") \
+                or schema.name != "sensor_msgs/msg/JointState":
+            continue
+        try:
             dec = decoders.get(schema.id)
             if dec is None:
                 dec = decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
             msg = dec(message.data)
-            name = channel.topic.strip("/").split("/")[0]
-            ts, pos, vel = data.setdefault(name, ([], [], []))
-            ts.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS)
-            pos.append(list(msg.position))
-            vel.append(list(msg.velocity))
-            count += 1
-    except Exception as exc:  # damaged: keep what was read
-        notes.append(f"bag read stopped after {count} joint messages: {exc.__class__.__name__}: {exc}")
-    state = recording_state(path)
+            stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS
+            pos, vel = list(msg.position), list(msg.velocity)
+        except Exception:  # an intact record holding a message that does not decode
+            undecodable += 1
+            continue
+        name = channel.topic.strip("/").split("/")[0]
+        ts, ps, vs = data.setdefault(name, ([], [], []))
+        ts.append(stamp)
+        ps.append(pos)
+        vs.append(vel)
+        count += 1
+    if undecodable:
+        notes.append(f"{undecodable} joint messages did not decode and were left out")
+    state = scan.state
     if state == "no summary":
         notes.append(f"bag has no summary (recording interrupted): read {count} joint messages up to the last "
                      f"complete record")
@@ -44,7 +69,8 @@ def samples_from_bag(path):
                      f"read {count} joint messages")
     elif state not in (None, "complete"):
         notes.append(f"recording {state}: read {count} joint messages")
+    if scan.recorded_status not in (None, "complete", state):
+        notes.append(f"before recovery the recording's status was '{scan.recorded_status}'")
     out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
            for n, v in data.items()}
-    return meta, out, notes
-
+    return meta, out, notes, scan.damage_dicts(EPOCH_NS)

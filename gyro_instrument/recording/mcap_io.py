@@ -10,18 +10,21 @@ publish time is written equal to it so files are deterministic. A metadata recor
 The file on disk is a complete, indexed MCAP after every commit (see :class:`BagWriter`), so a
 recorder killed with SIGKILL leaves a file every reader opens, up to its last commit.
 
-Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order; a file
-truncated some other way (no footer) is read in file order up to its last complete record.
+Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order, every
+chunk's CRC checked (:mod:`.bag_scan`): a damaged chunk is skipped, never read, and the intact
+chunks after it are; a file truncated some other way (no footer) is read up to its last complete
+record. ``recover`` rewrites only intact records and records what was lost in the new file.
 """
 
 import copy
+import json
 import os
 import time
 
-from mcap.reader import make_reader
 from mcap.data_stream import RecordBuilder
 from mcap.writer import CompressionType, Writer
 
+from gyro_instrument.recording.bag_scan import DAMAGE_RECORD, STATUS_RECORD, scan_bag
 from gyro_instrument.recording.definitions import concatenated_definition, type_hash
 
 _INF = "    sec: 9223372036\n    nsec: 854775807\n"
@@ -35,8 +38,6 @@ def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False):
         h=2 if keep_all else 1, d=depth, r=1 if reliable else 2, du=1 if transient_local else 2,
         inf=_INF)
 
-
-STATUS_RECORD = "gyro_instrument_status"
 
 
 class _TailKeepingFile:
@@ -105,7 +106,7 @@ class BagWriter:
         self._fh = _TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
         # chunks are closed here (flush), never by mcap's own size test
-        self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp)
+        self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp, enable_data_crcs=True)
         self._w.start(profile="ros2", library="gyro_instrument")
         self._schemas = {}
         self._channels = {}
@@ -205,103 +206,128 @@ class _Sink:
         pass
 
 
-def recording_state(path):
+def recording_state(path, scan=None):
     """The recorder's last status: ``complete``, ``recording`` (cut short after its last commit),
     ``no summary`` (an unindexed prefix, e.g. from an older writer), or None (no status record:
-    a file written by another tool or before status records)."""
-    try:
-        with open(path, "rb") as fh:
-            reader = make_reader(fh)
-            summary = reader.get_summary()
-            if summary is None:
-                return "no summary"
-            state = None
-            for rec in reader.iter_metadata():
-                if rec.name == STATUS_RECORD:
-                    state = rec.metadata.get("state")
-            return state
-    except Exception:
-        return "no summary"
+    a file written by another tool or before status records).
+
+    Raises
+    ------
+    SceneError
+        ``path`` is not an MCAP file (see :func:`~gyro_instrument.recording.bag_scan.check_mcap`).
+    """
+    return (scan or scan_bag(path)).state
 
 
-def iter_records(path, topics=None):
-    """Yield (schema, channel, message) in log-time order from an indexed file, or in file order
-    from one without a summary (a recorder killed mid-run): up to its last complete record."""
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-    with open(path, "rb") as fh:
-        try:
-            reader = make_reader(fh)
-            summary = reader.get_summary()
-        except Exception:
-            summary = None
-        if summary is not None and summary.chunk_indexes:
-            yield from reader.iter_messages(topics=topics, log_time_order=True)
-            return
-        fh.seek(0)
-        schemas, channels = {}, {}
-        try:
-            for rec in StreamReader(fh, skip_magic=False).records:
-                if isinstance(rec, Schema):
-                    schemas[rec.id] = rec
-                elif isinstance(rec, Channel):
-                    channels[rec.id] = rec
-                elif isinstance(rec, Message):
-                    ch = channels.get(rec.channel_id)
-                    if ch is not None and (topics is None or ch.topic in topics):
-                        yield schemas.get(ch.schema_id), ch, rec
-        except Exception:  # truncated tail: stop at the last complete record
-            return
+def iter_records(path, topics=None, scan=None):
+    """Yield (schema, channel, message) of every intact message in log-time order (ties in file
+    order), every chunk's CRC checked: a damaged chunk is skipped and the intact chunks after it are
+    read (:func:`~gyro_instrument.recording.bag_scan.scan_bag` says what was lost); a file cut
+    short is read up to its last complete record.
+
+    Raises
+    ------
+    SceneError
+        ``path`` is not an MCAP file.
+    """
+    yield from (scan or scan_bag(path)).records(topics)
 
 
-def read_messages(path, topics=None):
+def read_messages(path, topics=None, scan=None):
     """Yield (topic, type_name, log_time_ns, cdr_bytes); see :func:`iter_records`."""
-    for schema, channel, message in iter_records(path, topics):
+    for schema, channel, message in iter_records(path, topics, scan):
         yield channel.topic, schema.name if schema else "", message.log_time, message.data
 
 
-def read_metadata(path, name="gyro_instrument"):
-    """The named metadata record as a dict, or None (also from a file cut short)."""
-    from mcap.records import Metadata
-    from mcap.stream_reader import StreamReader
-    with open(path, "rb") as fh:
-        try:
-            for rec in StreamReader(fh).records:
-                if isinstance(rec, Metadata) and rec.name == name:
-                    return dict(rec.metadata)
-        except Exception:
-            return None
-    return None
+def read_metadata(path, name="gyro_instrument", scan=None):
+    """The first intact metadata record of that name as a dict, or None (also from a file cut short).
 
-
-def recover(damaged, out):
-    """Rewrite a recording cut short (no summary/footer, e.g. truncated by a full disk or written
-    by a writer that does not keep its end on disk) into a complete, indexed MCAP holding every
-    complete record of the original (schemas, channels with their metadata, messages, metadata).
-
-    Returns the number of messages written.
+    Raises
+    ------
+    SceneError
+        ``path`` is not an MCAP file.
     """
-    from mcap.records import Channel, DataEnd, Message, Metadata, Schema
-    from mcap.stream_reader import StreamReader
-    with open(damaged, "rb") as fh, open(out, "wb") as fo:
-        w = Writer(fo, compression=CompressionType.ZSTD)
-        w.start(profile="ros2", library="gyro_instrument recover")
-        schema_ids, channel_ids, n = {}, {}, 0
-        try:
-            for rec in StreamReader(fh, skip_magic=False).records:
-                if isinstance(rec, DataEnd):
-                    break  # the summary repeats schemas and channels: the data section is all there is
-                if isinstance(rec, Schema):
-                    schema_ids[rec.id] = w.register_schema(rec.name, rec.encoding, rec.data)
-                elif isinstance(rec, Channel):
-                    channel_ids[rec.id] = w.register_channel(rec.topic, rec.message_encoding,
-                                                             schema_ids.get(rec.schema_id, 0), dict(rec.metadata))
-                elif isinstance(rec, Message) and rec.channel_id in channel_ids:
-                    w.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data, rec.publish_time, rec.sequence)
-                    n += 1
-                elif isinstance(rec, Metadata):
+    return (scan or scan_bag(path)).metadata_record(name)
+
+
+def damage_record(scan, epoch_ns):
+    """The ``gyro_instrument_damage`` metadata a recovered file carries: every lost span (this
+    file's and any a previous recovery recorded) as JSON, the notes, and the status the original had."""
+    notes = list(scan.recorded_notes) + list(scan.notes)
+    if scan.truncated:
+        notes.append("the original was cut short (no summary): whatever followed its last complete record is lost")
+    return {"damaged": json.dumps(scan.damage_dicts(epoch_ns)), "notes": json.dumps(notes),
+            "status": str(scan.recorded_status or scan.state), "source": os.path.basename(scan.path)}
+
+
+def recover(damaged, out, scan=None, epoch_ns=None):
+    """Rewrite a recording that is cut short (no summary/footer) or damaged (chunks failing their
+    CRC, a broken summary) into a complete, indexed MCAP holding only what is intact: the schemas
+    and channels, every message of every chunk whose CRC checks, and the metadata. Damaged bytes
+    are never copied, so no fresh CRC vouches for them.
+
+    When anything was lost (a damaged stretch, a cut-short tail, or damage an earlier recovery
+    recorded) the new file carries a metadata record ``gyro_instrument_damage`` with the lost
+    log-time spans, the notes and the status the original had, so a replay of the recovered file
+    still reports the loss.
+
+    The file is written to a temporary name beside ``out`` and renamed over it at the end.
+
+    Parameters
+    ----------
+    damaged, out : str
+        Input and output paths (the caller checks that they are different files).
+    scan : BagScan, optional
+        The input already scanned.
+    epoch_ns : int, optional
+        Time origin for the recorded spans (default: the scene epoch ``EPOCH_NS``).
+
+    Returns
+    -------
+    (int, BagScan)
+        The number of messages written and what the scan found.
+
+    Raises
+    ------
+    SceneError
+        The input is not an MCAP, or holds no intact message (nothing is written then).
+    """
+    import tempfile
+    from gyro_instrument.core.errors import SceneError
+    from gyro_instrument.core.scene import EPOCH_NS
+    epoch_ns = EPOCH_NS if epoch_ns is None else epoch_ns
+    scan = scan or scan_bag(damaged)
+    records = list(scan.records())
+    if not records:
+        lost = f"; {len(scan.damaged)} damaged stretches" if scan.damaged else ""
+        raise SceneError("bag", damaged, f"holds no intact message{lost}: nothing recovered, nothing written")
+    lossy = bool(scan.damaged or scan.truncated or scan.notes or any(r.name == DAMAGE_RECORD for r in scan.metadata))
+    directory = os.path.dirname(os.path.abspath(out))
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{os.path.basename(out)}.", suffix=".partial")
+    try:
+        with os.fdopen(fd, "wb") as fo:
+            w = Writer(fo, compression=CompressionType.ZSTD, enable_data_crcs=True)
+            w.start(profile=scan.header.profile if scan.header else "ros2", library="gyro_instrument recover")
+            schema_ids, channel_ids = {}, {}
+            for sid in sorted(scan.schemas):
+                s = scan.schemas[sid]
+                schema_ids[sid] = w.register_schema(s.name, s.encoding, s.data)
+            for cid in sorted(scan.channels):
+                c = scan.channels[cid]
+                channel_ids[cid] = w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
+                                                      dict(c.metadata))
+            for rec in scan.metadata:
+                if rec.name != DAMAGE_RECORD:       # merged into the new one below
                     w.add_metadata(rec.name, dict(rec.metadata))
-        except Exception:
-            pass  # truncated tail
-        w.finish()
-    return n
+            for _, channel, m in records:
+                w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
+            if lossy:
+                w.add_metadata(DAMAGE_RECORD, damage_record(scan, epoch_ns))
+            w.finish()
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, out)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return len(records), scan

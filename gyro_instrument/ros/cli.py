@@ -15,7 +15,9 @@ def build_parser():
                                    "recorder) over DDS on loopback and print the recovered latitude and "
                                    "Earth rate next to the truth")
     core_cli.add_scene_arguments(p)
-    p.add_argument("--bag", metavar="OUT.mcap", help="record every topic to this MCAP file (rosbag2 layout)")
+    p.add_argument("--bag", metavar="OUT.mcap", help="record every topic to this MCAP file (rosbag2 layout); an "
+                                                     "existing file is refused unless --overwrite; never the scene file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --bag file")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
@@ -37,13 +39,14 @@ def main(argv=None):
             return core_cli.EXIT_BAD_INPUT
     try:
         if args.bag:
-            core_cli.check_writable(args.bag, "--bag")
+            core_cli.check_output(args.bag, "--bag", core_cli.scene_inputs(args.scene), args.overwrite)
         if args.real_time_factor < 0:
             raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
         from gyro_instrument.ros.suite import run_suite
         progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
         result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                                  command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress)
+                                  command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
+                                  overwrite=args.overwrite)
     except SceneError as exc:
         print(f"gyro-instrument: error: {exc}", file=sys.stderr)
         return core_cli.EXIT_BAD_INPUT

@@ -7,8 +7,10 @@
   samples at a time, and published as CDR bytes.
 * :class:`EstimatorNode`: collects joint samples (raw CDR, decoded in bulk) and calls the core
   estimator.
-* :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL.
-* :class:`PlayerNode`: republishes a bag, driving ``/clock``.
+* :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL; an existing
+  ``output`` file is refused unless the parameter ``overwrite`` is true (never the scene file).
+* :class:`PlayerNode`: republishes a bag's intact messages (every chunk's CRC checked; what was
+  lost is logged with its log-time span), driving ``/clock``.
 
 Every node takes ``scene`` (name or path), ``overrides`` (``key.path=value`` strings) and
 ``duration_s``; a bad value is logged with the field, the value and the valid range, the change
@@ -27,9 +29,11 @@ from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
+from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joints import JOINT_NAMES, joint_streams, records_from_joints
+from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros.topics import CLOCK, ESTIMATOR_TOPICS, bob_topic, joint_topic, scene_topics
@@ -357,6 +361,7 @@ class RecorderNode(SceneNode):
     def __init__(self, name="recorder", **kwargs):
         super().__init__(name, **kwargs)
         self._declare("output", "")
+        self._declare("overwrite", False)
         self._declare("topics", Parameter.Type.STRING_ARRAY)
         self._declare("command", "recorder node")
         self.writer = None
@@ -374,6 +379,18 @@ class RecorderNode(SceneNode):
         directory = os.path.dirname(os.path.abspath(out)) or "."
         if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
             self.get_logger().error(f"output = {out!r} is invalid: directory {directory} is missing or not writable")
+            return
+        if os.path.isdir(out):
+            self.get_logger().error(f"output = {out!r} is invalid: is a directory; give an .mcap file path")
+            return
+        scene_file = self.value("scene", "")
+        if os.path.isfile(scene_file) and os.path.exists(out) and os.path.samefile(out, scene_file):
+            self.get_logger().error(f"output = {out!r} is invalid: is the scene file this node reads; record "
+                                    f"elsewhere (overwrite never replaces an input)")
+            return
+        if os.path.lexists(out) and not self.value("overwrite", False):
+            self.get_logger().error(f"output = {out!r} is invalid: the file exists and parameter overwrite is "
+                                    f"false; set overwrite:=true to replace it, or give a new path")
             return
         types = scene_topics(self.insts)
         wanted = self.value("topics", []) or list(types)
@@ -425,11 +442,22 @@ class PlayerNode(Node):
         self.pubs = {}
         self.queue = []
         self.index = 0
+        self.damaged = []
         bag = self.get_parameter("bag").value
         if not bag or not os.path.exists(bag):
             self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file")
             return
-        self.queue = list(read_messages(bag))
+        try:
+            scan = scan_bag(bag)
+        except SceneError as exc:
+            self.get_logger().error(str(exc))
+            return
+        self.damaged = scan.damage_dicts(m.EPOCH_NS)
+        for d in self.damaged:
+            self.get_logger().warning(f"bag {bag}: damaged: {damage_line(d)}; those messages are not published")
+        for note in scan.notes:
+            self.get_logger().warning(f"bag {bag}: {note}")
+        self.queue = list(read_messages(bag, scan=scan))
         self.has_clock = any(tp == CLOCK for tp, *_ in self.queue)
         for topic, type_name, _, _ in self.queue:
             if topic not in self.pubs:

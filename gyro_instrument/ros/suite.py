@@ -143,16 +143,18 @@ def _params(scene, overrides, duration_s, **extra):
 
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
-              timeout_s=10.0, progress=None, batch=None):
+              timeout_s=10.0, progress=None, batch=None, overwrite=False):
     """Run the scene's nodes; return (estimate dict, stats dict).
 
     ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
-    of wall time when paced; capped at :data:`MAX_BATCH`).
+    of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
+    existing file there is replaced only with ``overwrite`` (never when it is the scene file).
 
     Raises
     ------
     SceneError
-        Bad scene values (checked before any node starts).
+        Bad scene values, or a ``bag`` path that exists without ``overwrite`` or is the scene file
+        (checked before any node starts).
     DeliveryError
         A sample was not delivered within ``timeout_s``.
     """
@@ -160,6 +162,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     overrides = list(overrides)
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
+    if bag:
+        from gyro_instrument.cli import check_output, scene_inputs
+        check_output(bag, "bag", scene_inputs(scene), overwrite)
     context = rclpy.Context()
     # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
     # (the recorder then finishes the file with status 'interrupted')
@@ -182,7 +187,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         est = EstimatorNode(context=context, parameter_overrides=_params(
             scene, overrides, duration_s, use_sim_time=True))
         rec = RecorderNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, output=bag, use_sim_time=True, command=command)) if bag else None
+            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), use_sim_time=True,
+            command=command)) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:

@@ -1,0 +1,491 @@
+"""Reading an MCAP file that may be damaged, without ever hiding the damage.
+
+:func:`scan_bag` reads a file record by record (the ``mcap`` library's record classes and its
+``breakup_chunk``, which checks a chunk's ``uncompressed_crc``), and:
+
+* refuses a file that is not an MCAP (empty, a directory, wrong magic) with a
+  :class:`~gyro_instrument.core.errors.SceneError`;
+* checks every chunk's CRC (and the data-section and summary CRCs when the writer set them);
+* SKIPS a damaged chunk and keeps reading the intact chunks after it: it continues after the
+  damaged record when its length is consistent (with the summary's chunk index when the summary is
+  intact, else with the framing of the next record), otherwise it resynchronizes at the next
+  record the summary indexes, or, when the summary is gone or damaged, by scanning forward for the
+  next chunk whose CRC checks (or a metadata / data-end record that frames correctly);
+* reports which log-time span each damaged stretch held: the chunk index's
+  ``message_start_time``/``message_end_time`` when the summary is intact, otherwise the open
+  interval between the last intact message before it and the first intact message after it;
+* reads the damage a previous ``recover`` wrote into the file (metadata record
+  ``gyro_instrument_damage``), so a recovered file still says what it lost.
+
+A file cut short (no footer: a recorder killed without its provisional end, a copy taken
+mid-write) is read up to its last complete record and flagged ``truncated``; that is the
+"interrupted" case, reported as a note rather than as damage.
+"""
+
+import json
+import mmap
+import os
+import struct
+import zlib
+from dataclasses import dataclass, field
+from io import BytesIO
+
+from mcap.data_stream import ReadDataStream
+from mcap.opcode import Opcode
+from mcap.records import (Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, Message, Metadata,
+                          MetadataIndex, Schema, Statistics)
+from mcap.stream_reader import CRCValidationError, breakup_chunk
+
+from gyro_instrument.core.errors import SceneError
+
+MAGIC = b"\x89MCAP0\r\n"
+#: metadata record in which ``recover`` keeps the damage it found (spans as JSON) and the status
+#: the original file had, so that a replay of the recovered file still reports the loss
+DAMAGE_RECORD = "gyro_instrument_damage"
+STATUS_RECORD = "gyro_instrument_status"
+
+_KNOWN = {int(op) for op in Opcode}
+_FOOTER_LEN = 1 + 8 + 20          # opcode, length, summary_start, summary_offset_start, summary_crc
+
+
+@dataclass
+class Damage:
+    """One damaged stretch of a file.
+
+    ``offset``/``length`` in bytes (None for damage known only from a recorded damage record);
+    ``lost_from_ns``/``lost_to_ns`` the log-time span it held (None: unknown at that end);
+    ``span_from`` says where the span comes from: ``chunk index``, ``neighbouring messages`` or
+    ``recorded by recover``.
+    """
+
+    offset: int
+    length: int
+    reason: str
+    lost_from_ns: int = None
+    lost_to_ns: int = None
+    span_from: str = None
+    chunk_offsets: tuple = ()
+
+    def as_dict(self, epoch_ns):
+        """JSON form: times in seconds from ``epoch_ns`` (the scene's start)."""
+        def s(ns):
+            return None if ns is None else (ns - epoch_ns) / 1e9
+        return {"offset": self.offset, "length": self.length, "lost_from_s": s(self.lost_from_ns),
+                "lost_to_s": s(self.lost_to_ns), "span_from": self.span_from, "reason": self.reason}
+
+
+@dataclass
+class BagScan:
+    """What :func:`scan_bag` found. ``messages`` holds (log_time, container offset, index, Message)
+    of every intact message, in log-time order (ties: file order, as ``mcap``'s reader)."""
+
+    path: str
+    size: int
+    header: Header = None
+    schemas: dict = field(default_factory=dict)
+    channels: dict = field(default_factory=dict)
+    messages: list = field(default_factory=list)
+    metadata: list = field(default_factory=list)
+    damaged: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    summary_ok: bool = False
+    data_end: bool = False
+    truncated: bool = False
+    recorded_damage: list = field(default_factory=list)
+    recorded_notes: list = field(default_factory=list)
+    recorded_status: str = None
+
+    @property
+    def state(self):
+        """The recorder's last status (see :func:`~gyro_instrument.recording.mcap_io.recording_state`)."""
+        if not self.data_end:
+            return "no summary"
+        state = None
+        for rec in self.metadata:
+            if rec.name == STATUS_RECORD:
+                state = rec.metadata.get("state")
+        return state
+
+    def metadata_record(self, name):
+        """The first metadata record of that name as a dict, or None."""
+        for rec in self.metadata:
+            if rec.name == name:
+                return dict(rec.metadata)
+        return None
+
+    def damage_dicts(self, epoch_ns):
+        """Every loss, this file's own and what a previous ``recover`` recorded, as JSON dicts."""
+        return [d.as_dict(epoch_ns) for d in self.damaged] + [dict(d) for d in self.recorded_damage]
+
+    def records(self, topics=None):
+        """Yield (schema, channel, message) of every intact message with a known channel."""
+        for _, _, _, msg in self.messages:
+            ch = self.channels.get(msg.channel_id)
+            if ch is None or (topics is not None and ch.topic not in topics):
+                continue
+            yield (self.schemas.get(ch.schema_id) if ch.schema_id else None), ch, msg
+
+
+def check_mcap(path, field="bag"):
+    """Refuse what is not an MCAP file before anything is read or written.
+
+    Raises
+    ------
+    SceneError
+        ``path`` is missing, a directory, empty, unreadable or does not start with the MCAP magic.
+    """
+    if not os.path.exists(path):
+        raise SceneError(field, path, "file not found; expected an MCAP file")
+    if os.path.isdir(path):
+        raise SceneError(field, path, "is a directory; expected an MCAP file")
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(MAGIC))
+    except OSError as exc:
+        raise SceneError(field, path, f"cannot be read ({exc.strerror}); expected an MCAP file") from None
+    if not head:
+        raise SceneError(field, path, "is empty; expected an MCAP file")
+    if head != MAGIC:
+        raise SceneError(field, path, f"is not an MCAP file: expected the magic {MAGIC.hex(' ')} at byte 0, "
+                                      f"found {head.hex(' ')}")
+
+
+def _stream(data):
+    return ReadDataStream(BytesIO(data))
+
+
+def _framed(buf, pos, limit):
+    """A plausible record header at ``pos``: a known opcode and a length inside ``limit``."""
+    if pos == limit:
+        return True
+    if pos + 9 > limit or buf[pos] not in _KNOWN:
+        return False
+    (length,) = struct.unpack_from("<Q", buf, pos + 1)
+    return pos + 9 + length <= limit
+
+
+class _Scanner:
+    def __init__(self, buf, scan):
+        self.buf = buf
+        self.scan = scan
+        self.size = len(buf)
+        self.footer = None
+        self.summary_start = None
+        self.chunk_index = {}        # chunk_start_offset -> ChunkIndex (intact summary only)
+        self.index_offsets = []      # record offsets the intact summary points at
+        self.summary_schemas = {}
+        self.summary_channels = {}
+        self.raw_damage = []         # (offset, end or None, reason, "span" | "record")
+        self.no_crc = 0
+
+    # ------------------------------------------------------------------ summary
+    def read_summary(self):
+        buf, size = self.buf, self.size
+        fpos = size - len(MAGIC) - _FOOTER_LEN
+        if fpos < len(MAGIC) or buf[size - len(MAGIC):] != MAGIC or buf[fpos] != Opcode.FOOTER:
+            return
+        try:
+            footer = Footer.read(_stream(buf[fpos + 9:fpos + _FOOTER_LEN]))
+        except Exception:
+            return
+        self.footer = footer
+        start = footer.summary_start
+        if start == 0:
+            return
+        if not len(MAGIC) < start <= fpos:
+            self.scan.notes.append(f"footer points at a summary outside the file (byte {start}): summary ignored, "
+                                   f"the data section was read record by record")
+            return
+        if footer.summary_crc != 0:
+            crc = zlib.crc32(buf[start:fpos + 25])
+            if crc != footer.summary_crc:
+                self.scan.notes.append(f"summary section (bytes {start}-{fpos + _FOOTER_LEN}) failed its CRC: "
+                                       f"ignored; the data section was read record by record")
+                return
+        chunk_index, offsets, schemas, channels = {}, [], {}, {}
+        pos = start
+        try:
+            while pos < fpos:
+                op = buf[pos]
+                (length,) = struct.unpack_from("<Q", buf, pos + 1)
+                end = pos + 9 + length
+                if end > fpos:
+                    raise ValueError("summary record runs past the footer")
+                body = buf[pos + 9:end]
+                if op == Opcode.CHUNK_INDEX:
+                    ci = ChunkIndex.read(_stream(body))
+                    chunk_index[ci.chunk_start_offset] = ci
+                    offsets.append(ci.chunk_start_offset)
+                elif op == Opcode.METADATA_INDEX:
+                    offsets.append(MetadataIndex.read(_stream(body)).offset)
+                elif op == Opcode.SCHEMA:
+                    s = Schema.read(_stream(body))
+                    schemas[s.id] = s
+                elif op == Opcode.CHANNEL:
+                    c = Channel.read(_stream(body))
+                    channels[c.id] = c
+                elif op == Opcode.STATISTICS:
+                    Statistics.read(_stream(body))
+                pos = end
+        except Exception as exc:
+            self.scan.notes.append(f"summary section unreadable ({exc.__class__.__name__}): ignored; the data "
+                                   f"section was read record by record")
+            return
+        self.summary_start = start
+        self.chunk_index = chunk_index
+        self.index_offsets = sorted(o for o in offsets if len(MAGIC) <= o < start)
+        self.summary_schemas, self.summary_channels = schemas, channels
+        self.scan.summary_ok = True
+
+    # ------------------------------------------------------------------ data section
+    def _chunk(self, pos, length):
+        """(records, consumed) of an intact chunk; raises on damage."""
+        st = _stream(self.buf[pos + 9:pos + 9 + length])
+        chunk = Chunk.read(st)
+        if chunk.uncompressed_crc == 0:
+            self.no_crc += 1
+        return breakup_chunk(chunk, validate_crc=True), st.count
+
+    def _valid_chunk_at(self, p, limit):
+        if p + 9 > limit:
+            return False
+        (length,) = struct.unpack_from("<Q", self.buf, p + 1)
+        if p + 9 + length > limit or length < 40:
+            return False
+        try:
+            st = _stream(self.buf[p + 9:p + 9 + length])
+            chunk = Chunk.read(st)
+            if chunk.uncompressed_crc == 0 or st.count != length:
+                return False
+            breakup_chunk(chunk, validate_crc=True)
+            return True
+        except Exception:
+            return False
+
+    def _valid_record_at(self, p, limit):
+        op = self.buf[p]
+        if op == Opcode.CHUNK:
+            return self._valid_chunk_at(p, limit)
+        if not _framed(self.buf, p, limit):
+            return False
+        (length,) = struct.unpack_from("<Q", self.buf, p + 1)
+        end = p + 9 + length
+        try:
+            if op == Opcode.METADATA:
+                st = _stream(self.buf[p + 9:end])
+                Metadata.read(st)
+                return st.count == length and _framed(self.buf, end, limit)
+            if op == Opcode.DATA_END:
+                return length == 4 and (end == limit or (end < limit and self.buf[end] in
+                                                         (Opcode.FOOTER, Opcode.SCHEMA, Opcode.CHANNEL,
+                                                          Opcode.STATISTICS, Opcode.CHUNK_INDEX,
+                                                          Opcode.METADATA_INDEX, Opcode.SUMMARY_OFFSET)))
+        except Exception:
+            return False
+        return False
+
+    def resync(self, after, limit):
+        """The offset of the next trustworthy record after byte ``after`` (None: none before ``limit``)."""
+        if self.scan.summary_ok:
+            nxt = [o for o in self.index_offsets if o > after]
+            if nxt:
+                return nxt[0]
+            data_end = self.summary_start - 13
+            return data_end if data_end > after and self.buf[data_end] == Opcode.DATA_END else None
+        buf = self.buf
+        nxt = {op: buf.find(bytes([op]), after + 1, limit) for op in (Opcode.CHUNK, Opcode.METADATA,
+                                                                        Opcode.DATA_END)}
+        while True:
+            hits = [h for h in nxt.values() if h >= 0]
+            if not hits:
+                return None
+            p = min(hits)
+            if self._valid_record_at(p, limit):
+                return p
+            op = buf[p]
+            nxt[op] = buf.find(bytes([op]), p + 1, limit)
+
+    def _record_ok_at_end(self, pos, length, limit):
+        """Continue after a damaged record at ``pos`` only when its length is corroborated."""
+        ci = self.chunk_index.get(pos)
+        if ci is not None:
+            return ci.chunk_length == 9 + length
+        return _framed(self.buf, pos + 9 + length, limit) and pos + 9 + length < limit
+
+    def read_data(self):
+        buf, scan = self.buf, self.scan
+        limit = self.size
+        if self.scan.summary_ok:
+            limit = self.summary_start
+        elif self.footer is not None:
+            limit = self.size - len(MAGIC) - _FOOTER_LEN
+        pos = len(MAGIC)
+        while pos < limit:
+            if pos + 9 > limit or buf[pos] not in _KNOWN or \
+                    pos + 9 + struct.unpack_from("<Q", buf, pos + 1)[0] > limit:
+                nxt = self.resync(pos, limit)
+                if nxt is None:
+                    if self.footer is None:
+                        scan.truncated = True          # a file cut short: read up to here
+                    else:
+                        self.raw_damage.append((pos, None, "unreadable records (framing lost) up to the end "
+                                                           "of the data section", "span"))
+                    return
+                self.raw_damage.append((pos, nxt, "unreadable records (framing lost)", "span"))
+                pos = nxt
+                continue
+            op = buf[pos]
+            (length,) = struct.unpack_from("<Q", buf, pos + 1)
+            end = pos + 9 + length
+            body = buf[pos + 9:end]
+            if op == Opcode.CHUNK:
+                try:
+                    records, consumed = self._chunk(pos, length)
+                except Exception as exc:
+                    reason = ("chunk CRC mismatch" if isinstance(exc, CRCValidationError)
+                              else f"chunk undecodable ({exc.__class__.__name__})")
+                    if self._record_ok_at_end(pos, length, limit):
+                        self.raw_damage.append((pos, end, reason, "span"))
+                        pos = end
+                    else:
+                        nxt = self.resync(pos, limit)
+                        self.raw_damage.append((pos, nxt, reason + "; record length untrustworthy", "span"))
+                        if nxt is None:
+                            return
+                        pos = nxt
+                    continue
+                for i, rec in enumerate(records):
+                    if isinstance(rec, Schema):
+                        scan.schemas[rec.id] = rec
+                    elif isinstance(rec, Channel):
+                        scan.channels[rec.id] = rec
+                    elif isinstance(rec, Message):
+                        scan.messages.append((rec.log_time, pos, i, rec))
+                if consumed != length and not _framed(buf, end, limit):
+                    end = pos + 9 + consumed       # a flipped length on an intact chunk
+            elif op == Opcode.DATA_END:
+                try:
+                    de = DataEnd.read(_stream(body))
+                    if de.data_section_crc and zlib.crc32(buf[:pos]) != de.data_section_crc:
+                        scan.notes.append("data section failed its CRC (data-end record)"
+                                          + ("" if self.raw_damage else ": the damage is outside every chunk's "
+                                             "contents (record headers, metadata or indexes); every chunk checked"))
+                except Exception:
+                    pass
+                scan.data_end = True
+                return
+            elif op == Opcode.FOOTER:
+                return
+            else:
+                try:
+                    st = _stream(body)
+                    if op == Opcode.HEADER:
+                        scan.header = Header.read(st)
+                    elif op == Opcode.SCHEMA:
+                        s = Schema.read(st)
+                        scan.schemas[s.id] = s
+                    elif op == Opcode.CHANNEL:
+                        c = Channel.read(st)
+                        scan.channels[c.id] = c
+                    elif op == Opcode.MESSAGE:
+                        scan.messages.append((None, pos, 0, Message.read(st, length)))
+                    elif op == Opcode.METADATA:
+                        scan.metadata.append(Metadata.read(st))
+                except Exception as exc:
+                    self.raw_damage.append((pos, end, f"{Opcode(op).name.lower()} record unreadable "
+                                                      f"({exc.__class__.__name__})", "record"))
+            pos = end
+        scan.truncated = scan.truncated or (self.footer is None and not scan.data_end)
+
+    # ------------------------------------------------------------------ spans
+    def spans(self):
+        scan = self.scan
+        by_pos = sorted((p, t) for t, p, _, _ in scan.messages)
+        for offset, end, reason, kind in self.raw_damage:
+            d = Damage(offset=offset, length=None if end is None else end - offset, reason=reason)
+            scan.damaged.append(d)
+            if kind != "span":         # a metadata or schema record: no messages in it
+                continue
+            hi = self.size if end is None else end
+            idx = [ci for o, ci in self.chunk_index.items() if offset <= o < hi]
+            if self.scan.summary_ok and idx:
+                d.lost_from_ns = min(ci.message_start_time for ci in idx)
+                d.lost_to_ns = max(ci.message_end_time for ci in idx)
+                d.span_from = "chunk index"
+                d.chunk_offsets = tuple(sorted(ci.chunk_start_offset for ci in idx))
+            elif self.scan.summary_ok and not d.reason.startswith("chunk"):
+                d.reason += "; the summary's index puts no chunk in it"    # message indexes only
+            else:
+                before = [t for p, t in by_pos if p < offset]
+                after = [t for p, t in by_pos if p >= hi]
+                d.lost_from_ns = max(before) if before else None
+                d.lost_to_ns = min(after) if after else None
+                d.span_from = "neighbouring messages"
+
+    def finish(self):
+        scan = self.scan
+        for sid, s in self.summary_schemas.items():
+            scan.schemas.setdefault(sid, s)
+        for cid, c in self.summary_channels.items():
+            scan.channels.setdefault(cid, c)
+        # messages outside chunks carry their own log time
+        scan.messages = [(m.log_time if t is None else t, p, i, m) for t, p, i, m in scan.messages]
+        self.spans()
+        orphans = [m for _, _, _, m in scan.messages if m.channel_id not in scan.channels]
+        if orphans:
+            times = [m.log_time for m in orphans]
+            scan.damaged.append(Damage(offset=None, length=None, lost_from_ns=min(times), lost_to_ns=max(times),
+                                       span_from="neighbouring messages",
+                                       reason=f"{len(orphans)} intact messages on channels defined only in a "
+                                              f"damaged record"))
+        scan.messages.sort(key=lambda x: x[:3])
+        if self.no_crc:
+            scan.notes.append(f"{self.no_crc} chunks carry no CRC (written without one): their contents could "
+                              f"not be checked")
+        for rec in scan.metadata:
+            if rec.name == DAMAGE_RECORD:
+                try:
+                    scan.recorded_damage += [dict(d, span_from=d.get("span_from") or "recorded by recover",
+                                                  before_recovery=True)
+                                             for d in json.loads(rec.metadata.get("damaged", "[]"))]
+                    scan.recorded_notes += list(json.loads(rec.metadata.get("notes", "[]")))
+                except (ValueError, TypeError, AttributeError):
+                    scan.notes.append(f"a {DAMAGE_RECORD} record is unreadable: data was lost before a recovery, "
+                                      f"span unknown")
+                scan.recorded_status = rec.metadata.get("status", scan.recorded_status)
+
+
+def scan_bag(path, field="bag"):
+    """Read every intact record of an MCAP file, checking every CRC; see the module docstring.
+
+    Parameters
+    ----------
+    path : str
+        The ``.mcap`` file.
+    field : str
+        Name used in the error for a file that is not an MCAP (``bag``, ``--out`` ...).
+
+    Returns
+    -------
+    BagScan
+
+    Raises
+    ------
+    SceneError
+        The file is missing, a directory, empty or not an MCAP (no magic at byte 0).
+    """
+    check_mcap(path, field)
+    with open(path, "rb") as fh:
+        size = os.fstat(fh.fileno()).st_size
+        buf = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    try:
+        scan = BagScan(path=path, size=size)
+        sc = _Scanner(buf, scan)
+        sc.read_summary()
+        sc.read_data()
+        sc.finish()
+    finally:
+        # drop every view of the map before closing it (records hold bytes copies, never views)
+        sc = None
+        buf.close()
+    return scan
