@@ -140,3 +140,15 @@ def test_inseparable_scene_through_the_cli(capsys):
     assert r["latitude_deg"] is None and r["latitude_sigma_deg"] is None
     assert "cannot be separated" in r["reason"]
     json.dumps(r, allow_nan=False)
+
+
+def test_single_measurement_states_what_it_determines():
+    # Quet eq. (10): a meridian gyroscope alone gives n (sin ω = 1), not γ; a pendulum alone gives
+    # k = n sin γ, a product (sec. 2); neither gets a latitude σ.
+    k = 7.2921150e-5 * math.sin(math.radians(48.85))
+    r = solve_latitude([RateMeasurement("pendulum", "pendulum", k, 1e-9)])
+    assert r.latitude_rad is None and r.earth_rate_rad_s is None
+    assert "cannot be separated" in r.reason and "meridian" in r.reason
+    r = solve_latitude([RateMeasurement("gyro_meridian", "gyro", 7.2921150e-5, 1e-11, (1, 0, 0))])
+    assert r.latitude_rad is None and "not determined" in r.reason
+    assert r.earth_rate_rad_s == 7.2921150e-5 and r.earth_rate_sigma_rad_s == pytest.approx(1e-11, rel=1e-12)

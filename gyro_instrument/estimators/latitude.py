@@ -179,7 +179,7 @@ def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain
     Parameters
     ----------
     meas : list of RateMeasurement
-        At least two.
+        At least one (one alone separates n and γ only when it is independent of γ).
     use_crlb : bool
         Use each measurement's Cramér–Rao σ instead of its estimated σ (the bound of the same data).
     hemisphere : {None, 'north', 'south'}
@@ -200,10 +200,10 @@ def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain
     Raises
     ------
     ValueError
-        Fewer than two measurements.
+        No measurement.
     """
-    if len(meas) < 2:
-        raise ValueError("need at least two measurements to separate latitude and Earth rate")
+    if not meas:
+        raise ValueError("need at least one measurement")
     reason = _inseparable(meas)
     if reason:
         return _inseparable_result(meas, use_crlb, reason)
@@ -237,6 +237,15 @@ def _inseparable(meas):
         if sv[1] > 1e-6 * sv[0]:
             return None
     names = ", ".join(m.name for m in meas)
+    if len(meas) == 1:
+        m = meas[0]
+        if np.ptp(m.shape(GRID)) < 1e-12:
+            return (f"the latitude is not determined: one measurement ({names}), in a directing plane containing "
+                    "Earth's axis (sin ω = 1), gives n alone; n is")
+        more = ("a gyroscope in the meridian plane (eq. 10 gives n)" if m.kind == "pendulum"
+                else "a second configuration (item 9: horizontal and meridian) or a pendulum")
+        return (f"n and the latitude cannot be separated: one measurement ({names}) gives only their product "
+                f"n·s(latitude); add {more}")
     if all(np.ptp(m.shape(GRID)) < 1e-12 for m in meas):
         return (f"the latitude is not determined: every measurement ({names}) is independent of it "
                 "(directing planes containing Earth's axis, sin ω = 1); n is")
@@ -253,7 +262,7 @@ def _inseparable_result(meas, use_crlb, reason):
         y = np.array([m.value / float(m.shape(0.0)) for m in meas])
         n = float(np.sum(w * y) / np.sum(w))
         sig_n = float(1.0 / math.sqrt(np.sum(w)))
-        reason = reason[:-len("; n is")] + "; n is their weighted mean"
+        reason = reason[:-len("; n is")] + ("; n is their weighted mean" if len(meas) > 1 else "; n is its value")
     return LatitudeResult(None, None, None, None, n, sig_n, math.nan, len(meas) - 1, {m.name: 0.0 for m in meas},
                           dropped={}, latitude_is_absolute=False, reason=reason,
                           hemisphere=HEMISPHERE_UNDETERMINED, hemisphere_basis=reason)

@@ -217,14 +217,11 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS):
             result["instruments"][name] = {"type": inst.type_name, "reason": "not used by the estimator "
                                            "(no Earth-rate measurement from this instrument)"}
     # combined
-    if len(meas) >= 2:
-        try:
-            result.update(_combined(meas, scene.estimator.get("hemisphere")))
-        except ValueError as exc:
-            result.update(_null_combined(f"combination failed: {exc}"))
+    if meas:
+        result.update(_combined(meas, scene.estimator.get("hemisphere")))
     else:
-        result.update(_null_combined(f"need two Earth-rate measurements (two gyroscope configurations, or one "
-                                     f"and a pendulum); have {len(meas)}"))
+        result.update(_null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
+                                     "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
     _classic_methods(result, gyros, pend)
     return result
 
@@ -239,7 +236,7 @@ def _combined(meas, hemisphere=None):
     if sol.latitude_rad is None:
         out.update({"latitude_deg": None, "latitude_sigma_deg": None, "reason": sol.reason,
                     "crlb": {"latitude_deg": None, "earth_rate_rad_s": sol.earth_rate_sigma_rad_s},
-                    "method": (f"weighted mean over {len(meas)} measurements independent of the latitude"
+                    "method": (f"weighted mean over {len(meas)} measurement(s) independent of the latitude"
                                if sol.earth_rate_rad_s is not None else None)})
         return out
     crlb = solve_latitude(meas, use_crlb=True, domain=sol.domain)
