@@ -2,24 +2,42 @@
 
 Subcommands: ``describe`` (instruments, active effects and every supported effect's
 estimated size), ``simulate`` (CSV of every instrument channel), and the later stages.
-Bad input exits with status 2 and one line naming the field, the value and the valid range.
+Bad input exits with status 2 and one line naming the field, the value and the valid range;
+Ctrl-C exits with status 130 and the one line ``gyro-instrument: interrupted``, leaving no
+half-written output (see :func:`guarded`).
 """
+
+if __name__ == "__main__":
+    # ``python -m gyro_instrument.cli``: import this module (numpy, scipy: about a second) under
+    # its own name inside the interrupt guard, so a Ctrl-C during the imports is one line too.
+    import sys
+    try:
+        from gyro_instrument.cli import main as _main
+    except KeyboardInterrupt:
+        print("gyro-instrument: interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(_main())
 
 import argparse
 import csv
 import json
 import math
 import os
+import signal
 import sys
+import threading
 from contextlib import contextmanager
 
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
+from gyro_instrument.core.files import replaced_atomically
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
 EXIT_BAD_INPUT = 2
+EXIT_INTEGRATION_FAILED = 3
+EXIT_INTERRUPTED = 130
 
 
 def add_scene_arguments(parser):
@@ -150,23 +168,29 @@ def terminal_progress(label, enabled=True, stream=None, force=False):
     def draw(fraction):
         drawn.append(fraction)
         print(f"\r{label}: {100.0 * fraction:5.1f} %", end="", file=stream, flush=True)
-    with reporting(draw):
-        yield
+    try:
+        with reporting(draw):
+            yield
+    except BaseException:
+        if drawn:  # erase the progress line so the error (or "interrupted") starts a clean line
+            print(f"\r{' ' * (len(label) + 9)}\r", end="", file=stream, flush=True)
+        raise
     if drawn:
         print(f"\r{label}: done   ", file=stream, flush=True)
 
 
 def write_csv(path, t, columns):
-    """CSV: first column ``time_s``, then one column per channel, full float precision."""
+    """CSV: first column ``time_s``, then one column per channel, full float precision.
+
+    Written to ``<path>.partial`` and renamed when complete: an interrupted write leaves no
+    ``path`` (or the previous one) and no ``.partial``."""
     keys = list(columns)
-    tmp = f"{path}.partial"
-    with open(tmp, "w", newline="") as fh:
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         wr = csv.writer(fh)
         wr.writerow(["time_s"] + keys)
         data = np.column_stack([t] + [columns[k] for k in keys])
         for row in data:
             wr.writerow([repr(float(v)) for v in row])
-    os.replace(tmp, path)
 
 
 def _fmt(v, spec):
@@ -207,8 +231,15 @@ def print_estimate(r, stream=None):
 
 
 # ----------------------------------------------------------------------------- main
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with its errors on one line (no usage block), like every other error here; exit 2."""
+
+    def error(self, message):
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="gyro-instrument",
         description="Gyrocompass and Foucault pendulum on the rotating Earth (Quet 1853, Puiseux 1852).")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -245,19 +276,61 @@ def build_parser():
 
 
 def main(argv=None):
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one command line (``argv``, default ``sys.argv[1:]``) and return the exit status.
+
+    0 success, 2 bad input (SceneError or an argparse error: one line on stderr), 3 integration
+    failed, 130 interrupted (Ctrl-C: one line, no output file left half-written). argparse's
+    ``--help`` and its errors raise SystemExit (0 and 2).
+    """
+    return guarded(lambda: run_command(build_parser().parse_args(argv)), process=argv is None)
+
+
+def guarded(body, process=False):
+    """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
+
+    SceneError -> 2, IntegrationError -> 3, KeyboardInterrupt (wherever it lands: imports,
+    integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
+    exception is a bug and keeps its traceback. ``process``: this is the process's entry point
+    (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
+    Python exits cannot print a traceback after the one line.
+    """
     try:
-        return run_command(args)
-    except SceneError as exc:
-        print(f"gyro-instrument: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except IntegrationError as exc:
-        print(f"gyro-instrument: integration failed: {exc}", file=sys.stderr)
-        return 3
+        try:
+            return body()
+        except SceneError as exc:
+            print(f"gyro-instrument: error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        except IntegrationError as exc:
+            print(f"gyro-instrument: integration failed: {exc}", file=sys.stderr)
+            return EXIT_INTEGRATION_FAILED
     except KeyboardInterrupt:
-        print("gyro-instrument: interrupted", file=sys.stderr)
-        return 130
+        return interrupted(process)
+    finally:
+        if process:
+            _ignore_sigint()
+
+
+def interrupted(process=False):
+    """Print ``gyro-instrument: interrupted`` and return 130, with further SIGINTs ignored while
+    printing (a second Ctrl-C must not interrupt the message); in-process callers get their
+    handler back."""
+    for _ in range(3):   # a second SIGINT before the handler is swapped lands here: try again
+        try:
+            previous = _ignore_sigint()
+            print("gyro-instrument: interrupted", file=sys.stderr)
+            if not process and previous is not None:
+                signal.signal(signal.SIGINT, previous)
+            return EXIT_INTERRUPTED
+        except KeyboardInterrupt:
+            continue
+    return EXIT_INTERRUPTED
+
+
+def _ignore_sigint():
+    """Ignore SIGINT (main thread only); return the previous handler or None."""
+    if threading.current_thread() is threading.main_thread():
+        return signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return None
 
 
 def run_command(args):
@@ -305,7 +378,8 @@ def run_command(args):
         if not os.path.exists(args.bag):
             raise SceneError("bag", args.bag, "file not found")
         check_writable(args.out)
-        n = recover(args.bag, args.out)
+        with replaced_atomically(args.out) as tmp:   # interrupted: no half-written --out
+            n = recover(args.bag, tmp)
         print(f"recovered {n} messages from {args.bag} into {args.out}")
         return 0
     if args.command == "replay":
@@ -340,6 +414,3 @@ def replay_bag(path):
         result["replay_notes"] = notes
     return result
 
-
-if __name__ == "__main__":
-    sys.exit(main())
