@@ -186,7 +186,7 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
             raise SceneError(prefix, spec, "must be a mapping with at least 'type'")
         spec = dict(spec)
         itype = spec.pop("type", None)
-        if itype not in instrument_registry:
+        if not isinstance(itype, str) or itype not in instrument_registry:
             raise SceneError(f"{prefix}.type", itype, f"must be one of {', '.join(sorted(instrument_registry))}")
         cls = instrument_registry[itype]
         names = spec.pop("effects", None)
@@ -230,9 +230,14 @@ EPOCH_NS = 1_000_000_000 * 1_000_000_000
 
 
 def sample_times_ns(scene):
-    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N."""
+    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N.
+
+    Raises SceneError (on ``duration_s``) when the run would not fit in the memory available
+    (:func:`gyro_instrument.core.memory.check_memory`)."""
     import numpy as np
+    from gyro_instrument.core.memory import check_memory
     n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    check_memory(scene, n)    # SceneError on duration_s before allocating a run that cannot fit
     return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
 
 

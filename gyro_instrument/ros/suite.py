@@ -152,14 +152,17 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     Raises
     ------
     SceneError
-        Bad scene values (checked before any node starts).
+        Bad scene values, or a run too large for the memory available (checked before any node
+        starts).
     DeliveryError
         A sample was not delivered within ``timeout_s``.
     """
+    from gyro_instrument.core.memory import check_memory
     from gyro_instrument.scenes import load_scene
     overrides = list(overrides)
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
+    check_memory(scene_obj)                               # and a run that cannot fit in memory
     context = rclpy.Context()
     # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
     # (the recorder then finishes the file with status 'interrupted')
