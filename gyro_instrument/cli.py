@@ -70,6 +70,40 @@ def check_writable(path, field="--out"):
         raise SceneError(field, path, "is not writable")
 
 
+def check_input_file(path, field="bag"):
+    """Refuse an input path that is missing, not a regular file or unreadable.
+
+    Raises
+    ------
+    SceneError
+        On ``field``, naming what is wrong with ``path``.
+    """
+    if not os.path.exists(path):
+        raise SceneError(field, path, "file not found")
+    if not os.path.isfile(path):
+        raise SceneError(field, path, "is not a regular file (a directory?); give an .mcap file")
+    if not os.access(path, os.R_OK):
+        raise SceneError(field, path, "is not readable")
+
+
+def check_output_dir(path, field="--out"):
+    """Create the output directory ``path`` (and its parents) or refuse it before any work.
+
+    Raises
+    ------
+    SceneError
+        When ``path`` is a file, cannot be created, or is not writable.
+    """
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise SceneError(field, path, "exists and is not a directory")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise SceneError(field, path, f"cannot be created as a directory ({exc.strerror})") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise SceneError(field, path, "is not writable")
+
+
 def to_jsonable(x):
     """Floats for JSON: non-finite values become None (never NaN or Infinity)."""
     if isinstance(x, dict):
@@ -201,7 +235,11 @@ def print_estimate(r, stream=None):
     """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
     w = (stream or sys.stdout).write
     tr = r["truth"]
-    w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
+    if r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
+          f"read per instrument (recording cut: {r['recording_cut']})\n")
+    else:
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
     w(f"  latitude   {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
       f"   truth {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
     w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
@@ -298,16 +336,22 @@ def guarded(body, process=False):
         try:
             return body()
         except SceneError as exc:
-            print(f"gyro-instrument: error: {exc}", file=sys.stderr)
+            print(f"gyro-instrument: error: {one_line(exc)}", file=sys.stderr)
             return EXIT_BAD_INPUT
         except IntegrationError as exc:
-            print(f"gyro-instrument: integration failed: {exc}", file=sys.stderr)
+            print(f"gyro-instrument: integration failed: {one_line(exc)}", file=sys.stderr)
             return EXIT_INTEGRATION_FAILED
     except KeyboardInterrupt:
         return interrupted(process)
     finally:
         if process:
             _ignore_sigint()
+
+
+def one_line(exc):
+    """The message of ``exc`` on one line: newlines and other control characters in quoted
+    values (a key or value given on the command line) shown escaped."""
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(exc))
 
 
 def interrupted(process=False):
@@ -371,12 +415,12 @@ def run_command(args):
         return 0
     if args.command == "bench":
         from gyro_instrument.bench.studies import run_bench
+        check_output_dir(args.out)
         print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
         return 0
     if args.command == "recover":
         from gyro_instrument.recording.mcap_io import recover
-        if not os.path.exists(args.bag):
-            raise SceneError("bag", args.bag, "file not found")
+        check_input_file(args.bag)
         check_writable(args.out)
         with replaced_atomically(args.out) as tmp:   # interrupted: no half-written --out
             n = recover(args.bag, tmp)
@@ -394,14 +438,19 @@ def run_command(args):
 
 def replay_bag(path):
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
-    JointState messages decoded without ROS."""
+    JointState messages decoded without ROS.
+
+    Besides the ``estimate`` keys: ``observation_read_s`` (the span of joint stamps decoded, the
+    shortest over the instruments), ``recording_cut`` (why, when that falls short of the scene's
+    ``duration_s``) and ``replay_notes``. Raises SceneError for a missing file or one without
+    the scene metadata."""
     from gyro_instrument.estimators.pipeline import estimable, estimate_records
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
-    if not os.path.exists(path):
-        raise SceneError("bag", path, "file not found")
+    check_input_file(path)
     meta, samples, notes = samples_from_bag(path)
+    read_s = read_span_s(samples)
     if meta is None or "scene_yaml" not in meta:
         raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
                                       "'gyro-instrument run --bag' or the recorder node")
@@ -410,7 +459,17 @@ def replay_bag(path):
     samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     result = to_jsonable(result)
+    result["observation_read_s"] = read_s
+    if read_s < scene.duration_s - 0.5 / scene.sample_rate_hz:
+        result["recording_cut"] = "; ".join(notes) or "the joint samples stop before the scene's duration_s"
     if notes:
         result["replay_notes"] = notes
     return result
+
+
+def read_span_s(samples):
+    """Shortest span of joint stamps actually decoded from a bag, over its instruments, s (0 when
+    none): the observation a replay really had (``samples`` as from ``samples_from_bag``)."""
+    spans = [(int(t[-1]) - int(t[0])) / 1e9 for t, _, _ in samples.values() if len(t)]
+    return min(spans) if spans else 0.0
 
