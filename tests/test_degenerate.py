@@ -122,3 +122,31 @@ def test_replay_of_a_cut_bag_says_how_much_was_read(tmp_path, capsys):
                             f"instrument (recording cut: bag has no summary")
     whole = replay_bag(src)
     assert whole["observation_read_s"] == 600.0 and "recording_cut" not in whole
+
+
+# ------------------------------------------------------------------ what the fuzzer found (test_cli_fuzz)
+@pytest.mark.parametrize("argv, field", [
+    (["estimate", "foucault_pantheon", "--duration-s", "0.05", "--set", "instruments.pendulum.length_m=1e-300"],
+     "instruments.pendulum.length_m"),                                     # was AttributeError in integrate
+    (["estimate", "gimbal_paris", "--duration-s", "2", "--set", "instruments.gimbal_locked.inertia_ratio=1e-300"],
+     "instruments.gimbal_locked.inertia_ratio"),                           # was an overflow, then a hang
+    (["describe", "quet_paris", "--set", "instruments.pendulum.type=[1]"], "instruments.pendulum.type"),  # TypeError
+    (["replay", "/tmp"], "bag"),                                           # was IsADirectoryError
+    (["recover", "/tmp", "--out", "/tmp/never.mcap"], "bag"),
+    (["bench", "--quick", "--out", "/proc/nope"], "--out"),                # was FileNotFoundError
+    (["describe", "quet_paris", "--set", "effects={\"\\r\": null}"], "effects.\\r"),  # was two lines
+])
+def test_fuzzer_findings_are_one_line_exit_2(capsys, argv, field):
+    rc = main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert err[0].startswith(f"gyro-instrument: error: {field} = "), err
+
+
+def test_unstable_puiseux_roots_are_json(capsys):
+    """Below the critical spin eq. (15)'s roots are complex: JSON {"real", "imag"} (was TypeError)."""
+    import json
+    assert main(["describe", "puiseux_spheroid", "--json", "--set", "instruments.spheroid.spin_rate_turn_s=0.5"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    roots = d["instruments"]["spheroid"]["predictions"]["omega_sq_rad2_s2"]
+    assert all(set(r) == {"real", "imag"} for r in roots)

@@ -109,6 +109,12 @@ DEFAULT_SWING_DEG = math.degrees(0.1)
 #: lock has cond ≈ 4(μ + 1)/sin²θ (8e6 at θ = 1e-3 rad, which runs; 1e12 at θ ≈ 2.8e-6 rad).
 MAX_MASS_MATRIX_CONDITION = 1.0e12
 
+#: Smallest rotor μ = C/A accepted. The rotor's axial equation divides its torque by C; that
+#: torque is zero analytically but carries round-off ~ eps · A · rate², so as C → 0 the axial
+#: acceleration is round-off over C (μ = 1e-300 overflowed). Measured: 1e-15 still integrates
+#: normally (locked and outer_fixed, 2 s); 1e-12 keeps three decades of margin.
+MIN_INERTIA_RATIO = 1.0e-12
+
 
 def outer_axis_direction_enu(outer_axis, outer_axis_enu, site):
     """Unit vector along ``PP'`` (Quet's ``oz``) in ENU.
@@ -321,7 +327,13 @@ class GimbalGyroscope(Instrument):
 
     @classmethod
     def check_params(cls, prefix, p):
-        """Refuse a missing custom axis, non-physical ring moments and initial values for a held ring."""
+        """Refuse a missing custom axis, non-physical ring moments, a numerically massless rotor axis
+        (inertia_ratio below :data:`MIN_INERTIA_RATIO`) and initial values for a held ring; raises
+        SceneError."""
+        if p["inertia_ratio"] < MIN_INERTIA_RATIO:
+            raise SceneError(f"{prefix}.inertia_ratio", p["inertia_ratio"],
+                             f"must be in [{MIN_INERTIA_RATIO:g}, 2]: a smaller axial moment C = μA is numerically "
+                             f"zero (the rotor's axial acceleration, round-off of its torque divided by C, overflows)")
         if p["outer_axis"] == "custom" and p["outer_axis_enu"] is None:
             raise SceneError(f"{prefix}.outer_axis_enu", None, "is required when outer_axis = custom (3 numbers, ENU)")
         A1, C1 = p["inner_ring_diametral_inertia_kg_m2"], p["inner_ring_axial_inertia_kg_m2"]
