@@ -2,24 +2,42 @@
 
 Subcommands: ``describe`` (instruments, active effects and every supported effect's
 estimated size), ``simulate`` (CSV of every instrument channel), and the later stages.
-Bad input exits with status 2 and one line naming the field, the value and the valid range.
+Bad input exits with status 2 and one line naming the field, the value and the valid range;
+Ctrl-C exits with status 130 and the one line ``gyro-instrument: interrupted``, leaving no
+half-written output (see :func:`guarded`).
 """
+
+if __name__ == "__main__":
+    # ``python -m gyro_instrument.cli``: import this module (numpy, scipy: about a second) under
+    # its own name inside the interrupt guard, so a Ctrl-C during the imports is one line too.
+    import sys
+    try:
+        from gyro_instrument.cli import main as _main
+    except KeyboardInterrupt:
+        print("gyro-instrument: interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(_main())
 
 import argparse
 import csv
 import json
 import math
 import os
+import signal
 import sys
+import threading
 from contextlib import contextmanager
 
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
+from gyro_instrument.core.files import replaced_atomically
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
 EXIT_BAD_INPUT = 2
+EXIT_INTEGRATION_FAILED = 3
+EXIT_INTERRUPTED = 130
 
 
 def add_scene_arguments(parser):
@@ -108,8 +126,27 @@ def scene_inputs(scene_arg):
     return (scene_arg,) if os.path.isfile(scene_arg) else ()
 
 
+def check_output_dir(path, field="--out"):
+    """Create the output directory ``path`` (and its parents) or refuse it before any work.
+
+    Raises
+    ------
+    SceneError
+        When ``path`` is a file, cannot be created, or is not writable.
+    """
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise SceneError(field, path, "exists and is not a directory")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise SceneError(field, path, f"cannot be created as a directory ({exc.strerror})") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise SceneError(field, path, "is not writable")
+
+
 def to_jsonable(x):
-    """Floats for JSON: non-finite values become None (never NaN or Infinity)."""
+    """Floats for JSON: non-finite values become None (never NaN or Infinity); a complex number
+    becomes ``{"real": ..., "imag": ...}`` (a real one its real part)."""
     if isinstance(x, dict):
         return {k: to_jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
@@ -118,6 +155,8 @@ def to_jsonable(x):
         return float(x) if math.isfinite(x) else None
     if isinstance(x, np.integer):
         return int(x)
+    if isinstance(x, (complex, np.complexfloating)):   # e.g. the roots of an unstable motion's eq.
+        return x.real if x.imag == 0 else {"real": to_jsonable(x.real), "imag": to_jsonable(x.imag)}
     return x
 
 
@@ -211,23 +250,29 @@ def terminal_progress(label, enabled=True, stream=None, force=False):
     def draw(fraction):
         drawn.append(fraction)
         print(f"\r{label}: {100.0 * fraction:5.1f} %", end="", file=stream, flush=True)
-    with reporting(draw):
-        yield
+    try:
+        with reporting(draw):
+            yield
+    except BaseException:
+        if drawn:  # erase the progress line so the error (or "interrupted") starts a clean line
+            print(f"\r{' ' * (len(label) + 9)}\r", end="", file=stream, flush=True)
+        raise
     if drawn:
         print(f"\r{label}: done   ", file=stream, flush=True)
 
 
 def write_csv(path, t, columns):
-    """CSV: first column ``time_s``, then one column per channel, full float precision."""
+    """CSV: first column ``time_s``, then one column per channel, full float precision.
+
+    Written to ``<path>.partial`` and renamed when complete: an interrupted write leaves no
+    ``path`` (or the previous one) and no ``.partial``."""
     keys = list(columns)
-    tmp = f"{path}.partial"
-    with open(tmp, "w", newline="") as fh:
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         wr = csv.writer(fh)
         wr.writerow(["time_s"] + keys)
         data = np.column_stack([t] + [columns[k] for k in keys])
         for row in data:
             wr.writerow([repr(float(v)) for v in row])
-    os.replace(tmp, path)
 
 
 def _fmt(v, spec):
@@ -249,7 +294,11 @@ def print_estimate(r, stream=None):
     """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
     w = (stream or sys.stdout).write
     tr = r["truth"]
-    w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
+    if r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
+          f"read per instrument (recording cut: {r['recording_cut']})\n")
+    else:
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
     for note in r.get("scene_notes", []):
         w(f"  note: {note}\n")
     label = "|latitude|" if r.get("latitude_is_absolute") else "latitude  "
@@ -324,8 +373,15 @@ def print_damage(r, w):
 
 
 # ----------------------------------------------------------------------------- main
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with its errors on one line (no usage block), like every other error here; exit 2."""
+
+    def error(self, message):
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="gyro-instrument",
         description="Gyrocompass and Foucault pendulum on the rotating Earth (Quet 1853, Puiseux 1852).")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -372,19 +428,67 @@ def build_parser():
 
 
 def main(argv=None):
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one command line (``argv``, default ``sys.argv[1:]``) and return the exit status.
+
+    0 success, 2 bad input (SceneError or an argparse error: one line on stderr), 3 integration
+    failed, 130 interrupted (Ctrl-C: one line, no output file left half-written). argparse's
+    ``--help`` and its errors raise SystemExit (0 and 2).
+    """
+    return guarded(lambda: run_command(build_parser().parse_args(argv)), process=argv is None)
+
+
+def guarded(body, process=False):
+    """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
+
+    SceneError -> 2, IntegrationError -> 3, KeyboardInterrupt (wherever it lands: imports,
+    integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
+    exception is a bug and keeps its traceback. ``process``: this is the process's entry point
+    (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
+    Python exits cannot print a traceback after the one line.
+    """
     try:
-        return run_command(args)
-    except SceneError as exc:
-        print(f"gyro-instrument: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except IntegrationError as exc:
-        print(f"gyro-instrument: integration failed: {exc}", file=sys.stderr)
-        return 3
+        try:
+            return body()
+        except SceneError as exc:
+            print(f"gyro-instrument: error: {one_line(exc)}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        except IntegrationError as exc:
+            print(f"gyro-instrument: integration failed: {one_line(exc)}", file=sys.stderr)
+            return EXIT_INTEGRATION_FAILED
     except KeyboardInterrupt:
-        print("gyro-instrument: interrupted", file=sys.stderr)
-        return 130
+        return interrupted(process)
+    finally:
+        if process:
+            _ignore_sigint()
+
+
+def one_line(exc):
+    """The message of ``exc`` on one line: newlines and other control characters in quoted
+    values (a key or value given on the command line) shown escaped."""
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(exc))
+
+
+def interrupted(process=False):
+    """Print ``gyro-instrument: interrupted`` and return 130, with further SIGINTs ignored while
+    printing (a second Ctrl-C must not interrupt the message); in-process callers get their
+    handler back."""
+    for _ in range(3):   # a second SIGINT before the handler is swapped lands here: try again
+        try:
+            previous = _ignore_sigint()
+            print("gyro-instrument: interrupted", file=sys.stderr)
+            if not process and previous is not None:
+                signal.signal(signal.SIGINT, previous)
+            return EXIT_INTERRUPTED
+        except KeyboardInterrupt:
+            continue
+    return EXIT_INTERRUPTED
+
+
+def _ignore_sigint():
+    """Ignore SIGINT (main thread only); return the previous handler or None."""
+    if threading.current_thread() is threading.main_thread():
+        return signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return None
 
 
 def run_command(args):
@@ -429,6 +533,7 @@ def run_command(args):
         return 0
     if args.command == "bench":
         from gyro_instrument.bench.studies import run_bench
+        check_output_dir(args.out)
         print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
         return 0
     if args.command == "recover":
@@ -462,6 +567,10 @@ def replay_bag(path):
     JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
     out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
 
+    For a cut recording it adds ``observation_read_s`` (the span of joint stamps decoded, the shortest
+    over the instruments), ``recording_cut`` (why it falls short of the scene's ``duration_s``);
+    ``replay_notes`` says what the reader noticed.
+
     Raises
     ------
     SceneError
@@ -472,6 +581,7 @@ def replay_bag(path):
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
     meta, samples, notes, damaged = samples_from_bag(path)
+    read_s = read_span_s(samples)
     if meta is None or "scene_yaml" not in meta:
         lost = " (damaged stretches: it may have been lost)" if damaged else ""
         raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
@@ -483,10 +593,17 @@ def replay_bag(path):
     result = to_jsonable(result)
     if damaged:
         result["damaged"] = to_jsonable(damaged)
+    if read_s < scene.duration_s - 0.5 / scene.sample_rate_hz:
+        result["observation_read_s"] = read_s
+        result["recording_cut"] = "; ".join(notes) or "the joint samples stop before the scene's duration_s"
     if notes:
         result["replay_notes"] = notes
     return result
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def read_span_s(samples):
+    """Shortest span of joint stamps actually decoded from a bag, over its instruments, s (0 when
+    none): the observation a replay really had (``samples`` as from ``samples_from_bag``)."""
+    spans = [(int(t[-1]) - int(t[0])) / 1e9 for t, _, _ in samples.values() if len(t)]
+    return min(spans) if spans else 0.0
+

@@ -102,7 +102,8 @@ def effect_cost_rows(scenes=None, duration_s=None, executor=None, overrides=()):
 
 def write_effect_cost_csv(path, rows):
     """Write rows to ``path`` (``effect_cost.csv``) with :data:`HEADER`; None is written empty."""
-    with open(path, "w", newline="") as fh:
+    from gyro_instrument.core.files import replaced_atomically
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(HEADER)
         w.writerows(rows)

@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from gyro_instrument.core.files import replaced_atomically
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.estimators.period import fit_oscillation
@@ -472,7 +473,7 @@ def run_bench(out_dir, quick=False, progress=print):
     if pngs:
         lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
     text = "\n".join(lines) + "\n"
-    with open(os.path.join(out_dir, "summary.md"), "w") as fh:
+    with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
         fh.write(text)
     return text
 
@@ -482,7 +483,7 @@ def _fmt(x, spec):
 
 
 def _write(path, header, rows):
-    with open(path, "w", newline="") as fh:
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         w.writerows(rows)

@@ -128,7 +128,7 @@ def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step
                     rtol=rtol, atol=atol, max_step=max_step)
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     if sol.status < 0:
-        raise IntegrationError(f"{method} failed at t = {sol.t[-1] if sol.t.size else t_eval[0]:.6g} s: "
+        raise IntegrationError(f"{method} failed at t = {sol.t[-1] if len(sol.t) else t_eval[0]:.6g} s: "
                                f"{sol.message}")
     if not np.all(np.isfinite(sol.y)):
         raise IntegrationError(f"{method} produced a non-finite state")

@@ -329,9 +329,14 @@ EPOCH_NS = 1_000_000_000 * 1_000_000_000
 
 
 def sample_times_ns(scene):
-    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N."""
+    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N.
+
+    Raises SceneError (on ``duration_s``) when the run would not fit in the memory available
+    (:func:`gyro_instrument.core.memory.check_memory`)."""
     import numpy as np
+    from gyro_instrument.core.memory import check_memory
     n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    check_memory(scene, n)    # SceneError on duration_s before allocating a run that cannot fit
     return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
 
 

@@ -1,11 +1,34 @@
 """Instrument interface shared by every instrument module."""
 
+import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
 
+from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import Trajectory
+
+#: Most periods (swings, turns) one run may hold. An adaptive 8th-order step covers a few percent
+#: of a period at the default rtol (~50 right-hand-side evaluations per period), so 1e9 periods
+#: is ~5e10 evaluations — weeks of CPU — and far before that a period shorter than
+#: ~1e5 · eps · duration cannot be resolved in double-precision time at all (the solver fails).
+MAX_PERIODS = 1.0e9
+
+
+def check_period_count(field, value, period_s, duration_s):
+    """Refuse a parameter whose period makes a run impossible, before integrating.
+
+    Raises
+    ------
+    SceneError
+        On ``field`` when ``duration_s / period_s`` exceeds :data:`MAX_PERIODS` (or the period is
+        not a positive finite number).
+    """
+    if not (period_s > 0.0 and math.isfinite(period_s)) or duration_s / period_s > MAX_PERIODS:
+        raise SceneError(field, value, f"gives a period of {period_s:.3g} s: {duration_s:g} s of it would be "
+                                       f"more than {MAX_PERIODS:g} periods, beyond what can be integrated; "
+                                       f"shorten duration_s or choose a slower instrument")
 
 
 @dataclass(frozen=True)

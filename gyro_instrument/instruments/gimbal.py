@@ -99,6 +99,22 @@ OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
 #: Default initial swing angle (0.1 rad, as for the directing-plane gyroscope), degrees.
 DEFAULT_SWING_DEG = math.degrees(0.1)
 
+#: Largest condition number of the (Jacobi-scaled) mass matrix accepted at release. Every step
+#: solves M q̈ = f with LU (numpy.linalg.solve), whose relative error is up to cond · eps
+#: (eps = 2.2e-16): at 1e12 that is 2e-4, fewer than 4 correct digits in the accelerations —
+#: 7 orders above the default rtol (1e-11) and at the loosest the scene accepts (1e-3). At the
+#: exact singularity (cond = inf) numpy raises LinAlgError. The scaling D^-1/2 M D^-1/2
+#: (D = diag M) removes the units of the coordinates, which LU with pivoting does not mind
+#: (a rotor far lighter than its rings is not degenerate); the massless-ring gimbal near the
+#: lock has cond ≈ 4(μ + 1)/sin²θ (8e6 at θ = 1e-3 rad, which runs; 1e12 at θ ≈ 2.8e-6 rad).
+MAX_MASS_MATRIX_CONDITION = 1.0e12
+
+#: Smallest rotor μ = C/A accepted. The rotor's axial equation divides its torque by C; that
+#: torque is zero analytically but carries round-off ~ eps · A · rate², so as C → 0 the axial
+#: acceleration is round-off over C (μ = 1e-300 overflowed). Measured: 1e-15 still integrates
+#: normally (locked and outer_fixed, 2 s); 1e-12 keeps three decades of margin.
+MIN_INERTIA_RATIO = 1.0e-12
+
 
 def outer_axis_direction_enu(outer_axis, outer_axis_enu, site):
     """Unit vector along ``PP'`` (Quet's ``oz``) in ENU.
@@ -189,6 +205,32 @@ def outer_fixed_swing_constant(A, C, A1, C1, m_rate, rho_eq):
     First term: Quet's T'' (sec. 4 §IV, with m = n); second: the dropped O(n²) term.
     """
     return (C * rho_eq * m_rate + (C + A1 - A - C1) * m_rate ** 2) / (A + A1)
+
+
+def free_mass_matrix(A, C, A1, C1, A2, theta):
+    """Mass matrix of the free gimbal in (ψ, θ, φ), kg m² (from eq. 12, first; equal to
+    :meth:`GimbalGyroscope.mass_matrix` to rounding)::
+
+        [[u² + C cos²θ, 0, C cos θ], [0, a, 0], [C cos θ, 0, C]],  a = A + A1,
+        u² = (A + C1 − A1) sin²θ + A1 + A2 = (A + C1) sin²θ + A1 cos²θ + A2.
+
+    det M = a C u², so with A, C > 0 it is singular exactly when A2 = 0, A1 = 0 and sin θ = 0:
+    massless rings (``ring_inertia`` absent, or both diametral moments 0) with the rotor axis
+    along ``PP'`` (gimbal lock, inner_angle = ±90°). It does not depend on ψ, φ or C2.
+    """
+    c, s2 = math.cos(theta), math.sin(theta) ** 2
+    u2 = (A + C1) * s2 + A1 * c * c + A2
+    return np.array([[u2 + C * c * c, 0.0, C * c], [0.0, A + A1, 0.0], [C * c, 0.0, C]])
+
+
+def scaled_condition(M):
+    """Condition number (2-norm) of D^-1/2 M D^-1/2, D = diag M; inf when singular."""
+    d = np.sqrt(np.diag(M))
+    if not np.all(d > 0.0):
+        return math.inf
+    with np.errstate(all="ignore"):
+        cond = float(np.linalg.cond(M / np.outer(d, d)))
+    return cond if math.isfinite(cond) else math.inf
 
 
 def spin_invariant(rho, theta, psi, k, k_prime):
@@ -285,7 +327,13 @@ class GimbalGyroscope(Instrument):
 
     @classmethod
     def check_params(cls, prefix, p):
-        """Refuse a missing custom axis, non-physical ring moments and initial values for a held ring."""
+        """Refuse a missing custom axis, non-physical ring moments, a numerically massless rotor axis
+        (inertia_ratio below :data:`MIN_INERTIA_RATIO`) and initial values for a held ring; raises
+        SceneError."""
+        if p["inertia_ratio"] < MIN_INERTIA_RATIO:
+            raise SceneError(f"{prefix}.inertia_ratio", p["inertia_ratio"],
+                             f"must be in [{MIN_INERTIA_RATIO:g}, 2]: a smaller axial moment C = μA is numerically "
+                             f"zero (the rotor's axial acceleration, round-off of its torque divided by C, overflows)")
         if p["outer_axis"] == "custom" and p["outer_axis_enu"] is None:
             raise SceneError(f"{prefix}.outer_axis_enu", None, "is required when outer_axis = custom (3 numbers, ENU)")
         A1, C1 = p["inner_ring_diametral_inertia_kg_m2"], p["inner_ring_axial_inertia_kg_m2"]
@@ -314,11 +362,56 @@ class GimbalGyroscope(Instrument):
                 raise SceneError(f"{prefix}.initial_outer_rate_deg_s", p["initial_outer_rate_deg_s"],
                                  "must be 0 when configuration = outer_fixed (outer ring held)")
 
+    @classmethod
+    def check_effects(cls, prefix, p, effects):
+        """Refuse a free gimbal released at (or too near) gimbal lock with massless rings.
+
+        Raises
+        ------
+        SceneError
+            On ``initial_inner_angle_deg`` when the mass matrix at release (:func:`free_mass_matrix`
+            with the ring moments as simulated: zero unless ``ring_inertia`` is listed) has a
+            scaled condition number above :data:`MAX_MASS_MATRIX_CONDITION` (det M = a C u² is 0
+            exactly when A1 = A2 = 0 and inner_angle = ±90°); the message names the ring
+            parameters and the nearest accepted inner angle.
+        """
+        if p["configuration"] != "free":
+            return                     # locked: diag(A + C1 + A2, C); outer_fixed: diag(A + A1, C)
+        rings = "ring_inertia" in effects
+        A = p["transverse_inertia_kg_m2"]
+        C = p["inertia_ratio"] * A
+        A1 = p["inner_ring_diametral_inertia_kg_m2"] if rings else 0.0
+        C1 = (2.0 * A1 if p["inner_ring_axial_inertia_kg_m2"] is None else p["inner_ring_axial_inertia_kg_m2"]) \
+            if rings else 0.0
+        A2 = p["outer_ring_diametral_inertia_kg_m2"] if rings else 0.0
+        inner = p["initial_inner_angle_deg"] or 0.0
+        theta = math.radians(inner) + math.pi / 2
+        cond = scaled_condition(free_mass_matrix(A, C, A1, C1, A2, theta))
+        if cond <= MAX_MASS_MATRIX_CONDITION:
+            return
+        # the nearest accepted distance from the lock (cond falls monotonically with it)
+        lo, hi = 0.0, math.pi / 2
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            if scaled_condition(free_mass_matrix(A, C, A1, C1, A2, mid)) > MAX_MASS_MATRIX_CONDITION:
+                lo = mid
+            else:
+                hi = mid
+        why = ("ring_inertia is not listed for this instrument, so the rings are massless" if not rings else
+               f"inner_ring_diametral_inertia_kg_m2 = {A1:g} and outer_ring_diametral_inertia_kg_m2 = {A2:g}")
+        raise SceneError(f"{prefix}.initial_inner_angle_deg", inner,
+                         f"puts the rotor axis along PP' (gimbal lock) in the free configuration while {why}: "
+                         f"the mass matrix is singular there (scaled condition number {cond:.3g} > "
+                         f"{MAX_MASS_MATRIX_CONDITION:g}); keep inner_angle at least {math.degrees(hi):.3g} deg "
+                         f"away from +-90, or give the rings inertia (list ring_inertia with "
+                         f"inner_ring_diametral_inertia_kg_m2 or outer_ring_diametral_inertia_kg_m2 > 0)")
+
     def __init__(self, name, site, params, effects):
         full = {prm.name: prm.default for prm in self.PARAMS}
         full.update(params)
         super().__init__(name, site, full, effects)
         self.check_params(name, self.params)
+        self.check_effects(name, self.params, tuple(effects))
         self.pp_enu = outer_axis_direction_enu(self.outer_axis, self.outer_axis_enu, site)
         self.frame, self.sin_omega = plane_frame(self.pp_enu, site)
         # ω: angle between oz and the south part of Earth's axis (Quet sec. 1 eq. 17).

@@ -34,7 +34,7 @@ from scipy.special import ellipk
 from gyro_instrument.core.angles import unwrap
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, check_period_count, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
 
 PENDULUM_COLUMNS = (
@@ -296,6 +296,7 @@ class SphericalPendulum(Instrument):
         # Absolute tolerances scale with the motion, not the rod: a 1e-9 rad swing on 67 m moves
         # the bob 7e-8 m, which an atol of 1e-12 l would resolve to only 1e-3 of itself.
         w0 = math.sqrt(w0sq)
+        check_period_count(f"instruments.{self.name}.length_m", self.l, 2.0 * math.pi / w0, float(t[-1] - t[0]))
         amp = max(self.l * math.sin(self.theta0), float(np.linalg.norm(v0)) / w0, 1e-12 * self.l)
         atol_r, atol_v = self.rtol * amp, self.rtol * amp * w0
         # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
@@ -442,6 +443,11 @@ class CompoundPendulum(Instrument):
     @classmethod
     def check_params(cls, prefix, p):
         from gyro_instrument.core.errors import SceneError
+        ml = p["mass_kg"] * p["com_distance_m"]
+        if not (ml > 0.0 and math.isfinite(p["transverse_inertia_kg_m2"] / ml)):
+            raise SceneError(f"{prefix}.com_distance_m", p["com_distance_m"],
+                             f"with mass_kg = {p['mass_kg']:g} gives M l = {ml:g}: the equivalent length A/(M l) is "
+                             f"not a finite number")
         ml2 = p["mass_kg"] * p["com_distance_m"] ** 2
         if p["transverse_inertia_kg_m2"] < ml2 * (1 - 1e-12):
             raise SceneError(f"{prefix}.transverse_inertia_kg_m2", p["transverse_inertia_kg_m2"],
@@ -489,6 +495,9 @@ class CompoundPendulum(Instrument):
 
     def simulate(self, t, **options):
         t = np.asarray(t, dtype=float)
+        check_period_count(f"instruments.{self.name}.transverse_inertia_kg_m2", self.A,
+                           2.0 * math.pi * math.sqrt(self.equivalent_length_m / self.site.gravity_m_s2),
+                           float(t[-1] - t[0]))
         chain = self.build_chain()
         d = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
                       -math.cos(self.theta0)])

@@ -1,14 +1,17 @@
 """``gyro-instrument`` with the ROS subcommand ``run`` added to the core CLI (the core CLI never
-imports rclpy; this module does, lazily, only for ``run``)."""
+imports rclpy; this module does, lazily, only for ``run``).
+
+This is the console script's module: it imports nothing heavy at the top, so a Ctrl-C at any
+moment after Python starts (even while numpy and scipy are being imported) ends in the one line
+``gyro-instrument: interrupted`` and exit status 130 (:func:`gyro_instrument.cli.guarded`).
+"""
 
 import json
 import sys
 
-from gyro_instrument import cli as core_cli
-from gyro_instrument.core.errors import SceneError
-
 
 def build_parser():
+    from gyro_instrument import cli as core_cli
     parser = core_cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
     p = sub.add_parser("run", help="run every node of the scene in one process (simulators, estimator, "
@@ -29,30 +32,29 @@ def build_parser():
 
 
 def main(argv=None):
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.command != "run":
-        try:
-            return core_cli.run_command(args)
-        except SceneError as exc:
-            print(f"gyro-instrument: error: {exc}", file=sys.stderr)
-            return core_cli.EXIT_BAD_INPUT
+    """Run one command line; exit status as :func:`gyro_instrument.cli.main` (0, 2, 3, 130)."""
     try:
-        if args.bag:
-            core_cli.check_output(args.bag, "--bag", core_cli.scene_inputs(args.scene), args.overwrite)
-        if args.real_time_factor < 0:
-            raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
-        from gyro_instrument.ros.suite import run_suite
-        progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
-        result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                                  command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
-                                  overwrite=args.overwrite)
-    except SceneError as exc:
-        print(f"gyro-instrument: error: {exc}", file=sys.stderr)
-        return core_cli.EXIT_BAD_INPUT
+        from gyro_instrument import cli as core_cli
     except KeyboardInterrupt:
         print("gyro-instrument: interrupted", file=sys.stderr)
         return 130
+    return core_cli.guarded(lambda: _command(core_cli, argv), process=argv is None)
+
+
+def _command(core_cli, argv):
+    from gyro_instrument.core.errors import SceneError
+    args = build_parser().parse_args(argv)
+    if args.command != "run":
+        return core_cli.run_command(args)
+    if args.bag:
+        core_cli.check_output(args.bag, "--bag", core_cli.scene_inputs(args.scene), args.overwrite)
+    if args.real_time_factor < 0 or args.real_time_factor != args.real_time_factor:
+        raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
+    from gyro_instrument.ros.suite import run_suite
+    progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
+    result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
+                              command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
+                              overwrite=args.overwrite)
     if result is None:
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3

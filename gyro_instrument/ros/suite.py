@@ -153,11 +153,12 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     Raises
     ------
     SceneError
-        Bad scene values, or a ``bag`` path that exists without ``overwrite`` or is the scene file
-        (checked before any node starts).
+        Bad scene values, a ``bag`` path that exists without ``overwrite`` or is the scene file, or a
+        run too large for the memory available (checked before any node starts).
     DeliveryError
         A sample was not delivered within ``timeout_s``.
     """
+    from gyro_instrument.core.memory import check_memory
     from gyro_instrument.scenes import load_scene
     overrides = list(overrides)
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
@@ -165,6 +166,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     if bag:
         from gyro_instrument.cli import check_output, scene_inputs
         check_output(bag, "bag", scene_inputs(scene), overwrite)
+    check_memory(scene_obj)                               # and a run that cannot fit in memory
     context = rclpy.Context()
     # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
     # (the recorder then finishes the file with status 'interrupted')
