@@ -53,27 +53,44 @@ def _node_env(install):
     return env
 
 
-def _run_node(install, exe_name, ros_args, seconds):
+def _run_node(install, exe_name, ros_args, until, timeout_s=180.0):
+    """Start a node as `ros2 run` would, wait until its output contains ``until`` (or ``timeout_s``
+    passes: a loaded CI machine may take tens of seconds to import numpy, scipy and rclpy), then
+    send SIGINT as a user's Ctrl-C would; returns (exit status, whole output)."""
+    import threading
     env = _node_env(install)
     exe = ros2_run(env["AMENT_PREFIX_PATH"].split(os.pathsep), "gyro_instrument", exe_name)
     p = subprocess.Popen([str(exe), "--ros-args", *ros_args], env=env, stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, text=True)
-    time.sleep(seconds)
+    lines, seen = [], threading.Event()
+
+    def read():
+        for line in p.stdout:
+            lines.append(line)
+            if until in line:
+                seen.set()
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    seen.wait(timeout_s)
+    time.sleep(0.5)                    # the node keeps running after its message: it must stay up
     p.send_signal(2)
-    out, _ = p.communicate(timeout=30)
-    return p.returncode, out
+    p.wait(timeout=60)
+    reader.join(timeout=10)
+    return p.returncode, "".join(lines)
 
 
 def test_ros2_run_gyrocompass_sim_from_colcon_install(colcon_install):
     rc, out = _run_node(colcon_install, "gyrocompass_sim",
-                        ["-p", "scene:=quet_paris", "-p", "duration_s:=1.0", "-p", "real_time_factor:=0.0"], 8)
+                        ["-p", "scene:=quet_paris", "-p", "duration_s:=1.0", "-p", "real_time_factor:=0.0"],
+                        "published 21 samples")
     assert "published 21 samples of gyro_horizontal, gyro_meridian" in out, out
     assert "Traceback" not in out
 
 
 def test_node_with_bad_parameter_logs_field_value_range_and_stays_up(colcon_install):
     rc, out = _run_node(colcon_install, "pendulum_sim",
-                        ["-p", "scene:=quet_paris", "-p", "overrides:=['site.latitude_deg=95']"], 6)
+                        ["-p", "scene:=quet_paris", "-p", "overrides:=['site.latitude_deg=95']"],
+                        "site.latitude_deg = 95")
     assert "site.latitude_deg = 95" in out and "[-90, 90]" in out, out
     assert "Traceback" not in out
 
@@ -84,5 +101,5 @@ def test_params_file(colcon_install, tmp_path):
     params.write_text("gyrocompass_sim:\n  ros__parameters:\n    scene: quet_paris\n"
                       "    overrides: ['duration_s=0.5', 'instruments.gyro_meridian.spin_rate_rad_s=300.0']\n"
                       "    real_time_factor: 0.0\n")
-    rc, out = _run_node(colcon_install, "gyrocompass_sim", ["--params-file", str(params)], 8)
+    rc, out = _run_node(colcon_install, "gyrocompass_sim", ["--params-file", str(params)], "published 11 samples")
     assert "published 11 samples of gyro_horizontal, gyro_meridian" in out, out
