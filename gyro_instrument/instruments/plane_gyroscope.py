@@ -361,9 +361,16 @@ class PlaneGyroscope(Instrument):
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
         return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
 
+    #: The effects :meth:`reduced_rhs_scalar` is derived for by hand. With any other active effect
+    #: (one registered later for a kind this instrument sums) the hinge chain, which sums every
+    #: active effect's terms, is integrated instead, as for a cone.
+    REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"})
+
     def simulate(self, t, model=None):
-        """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0."""
-        model = "chain" if self.is_cone else (model or self.model)
+        """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model
+        (scalar DOP853) or the hinge chain — always the chain on a cone or with an active effect
+        outside :data:`REDUCED_EFFECTS` (``extra["model"]`` says which ran)."""
+        model = "chain" if self.is_cone or not set(self.effects) <= self.REDUCED_EFFECTS else (model or self.model)
         t = np.asarray(t, dtype=float)
         if model == "reduced":
             if not self.has("finite_amplitude") and abs(self.u0) > 0.5:
@@ -374,7 +381,7 @@ class PlaneGyroscope(Instrument):
             else:   # unusual sample times: the generic driver (same method) validates or handles them
                 traj = integrate(self.reduced_rhs(), y0, t, rtol=self.rtol, atol=1e-13)
             u, ud, rho = traj.y
-            return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj)
+            return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj, extra={"model": model})
         chain = self.build_chain()
         # ρ = φ̇ + u̇ cos ε (the frame's rate has a component cos ε along a cone axis).
         cos_eps = math.cos(self.eps) if self.is_cone else 0.0
@@ -383,4 +390,4 @@ class PlaneGyroscope(Instrument):
         u, phi, ud, phid = traj.y
         rho = phid + ud * cos_eps
         return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj,
-                          extra={"rotor_angle": phi, "chain": chain})
+                          extra={"rotor_angle": phi, "chain": chain, "model": model})
