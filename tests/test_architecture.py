@@ -63,3 +63,87 @@ def test_core_never_imports_rclpy_at_runtime():
             "print(bad); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+# ----------------------------------------------------------------------------- issue 12: the protocol
+#: What an instrument type can do is declared on its class (gyro_instrument/instruments/base.py);
+#: outside instruments/ nothing may switch on a type's name or look for a hook by name.
+PROTOCOL_HOOKS = ("check_params", "check_effects", "directing_model", "measured_angles", "pendulum_length_m",
+                  "JOINTS", "MEASURED_CHANNELS", "IS_PENDULUM", "SIMULATOR_NODE", "MECHANICS")
+
+
+def _type_names():
+    from gyro_instrument.instruments import REGISTRY
+    return set(REGISTRY)
+
+
+def type_name_switches(tree, names):
+    """(line, what) for every place a module switches on an instrument type's name: a comparison
+    (==, !=, in, not in) with a type-name literal or a literal collection holding one, a dict keyed
+    by type names, a literal collection of type names (a table), a comparison involving
+    ``.type_name`` with a literal, and ``hasattr``/``getattr`` on a protocol member."""
+    def literal_names(node):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names:
+            return [node.value]
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            return [e.value for e in node.elts if isinstance(e, ast.Constant) and e.value in names]
+        return []
+
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            for side in [node.left] + node.comparators:
+                if literal_names(side):
+                    out.append((node.lineno, f"compares with {literal_names(side)}"))
+        elif isinstance(node, ast.Dict):
+            keys = [k.value for k in node.keys if isinstance(k, ast.Constant) and k.value in names]
+            if keys:
+                out.append((node.lineno, f"dict keyed by {keys}"))
+        elif isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            hits = literal_names(node)
+            if hits and len(hits) == len(node.elts):
+                out.append((node.lineno, f"table of type names {hits}"))
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("hasattr", "getattr"):
+            if len(node.args) >= 2 and isinstance(node.args[1], ast.Constant) and node.args[1].value in PROTOCOL_HOOKS:
+                out.append((node.lineno, f"{node.func.id}(..., {node.args[1].value!r}): declared on Instrument"))
+    return out
+
+
+OUTSIDE_INSTRUMENTS = [p for p in FILES if package_of(p) != "instruments"]
+
+
+@pytest.mark.parametrize("path", OUTSIDE_INSTRUMENTS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_outside_instruments_switches_on_an_instrument_type(path):
+    found = type_name_switches(ast.parse(path.read_text(encoding="utf-8")), _type_names())
+    assert not found, (f"{path.relative_to(ROOT)} switches on instrument type names: {found}; ask the class "
+                       f"instead (the protocol in gyro_instrument/instruments/base.py)")
+
+
+def test_the_type_name_check_catches_the_tables_it_replaced():
+    """The detector finds each pattern issue 12 removed (so the test above can fail)."""
+    names = {"spherical_pendulum", "compound_pendulum", "plane_gyroscope"}
+    cases = ['PENDULUMS = ("spherical_pendulum", "compound_pendulum")',
+             'ANGLE_CHANNELS = {"plane_gyroscope": ("angle",)}',
+             'ok = inst.type_name == "plane_gyroscope"',
+             'ok = inst.type_name in ("spherical_pendulum", "x")',
+             'm = getattr(inst, "directing_model", None)',
+             'ok = hasattr(cls, "check_params")']
+    for src in cases:
+        assert type_name_switches(ast.parse(src), names), src
+    assert not type_name_switches(ast.parse('help = "e.g. --set instruments.p2.type=spherical_pendulum"'), names)
+
+
+def test_every_registered_instrument_declares_the_protocol():
+    from gyro_instrument.core.effect import MECHANICS
+    from gyro_instrument.instruments import REGISTRY
+    from gyro_instrument.instruments.base import Instrument
+    for name, cls in REGISTRY.items():
+        assert cls.type_name == name and cls.summary and cls.SIMULATOR_NODE, name
+        assert cls.MECHANICS <= MECHANICS, name
+        assert cls.JOINTS[:len(cls.MEASURED_CHANNELS)] or cls.IS_PENDULUM, name
+        assert len(cls.JOINTS) == len(cls.MEASURED_CHANNELS) + (2 if cls.IS_PENDULUM else 1), name
+        if cls.IS_PENDULUM:
+            assert cls.pendulum_length_m is not Instrument.pendulum_length_m, name
+            assert {"x_east", "y_north"} <= {c.name for c in cls.COLUMNS}, name
+        else:
+            assert set(cls.MEASURED_CHANNELS) <= {c.name for c in cls.COLUMNS}, name

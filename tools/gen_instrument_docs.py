@@ -18,7 +18,12 @@ def render():
            "in radians, rad/s and metres.", ""]
     for name, cls in sorted(INSTRUMENTS.items()):
         out += [f"## `{name}`", "", cls.summary, "",
-                f"Supported effects: {', '.join(sorted(cls.SUPPORTED_EFFECTS)) or 'none (exact model)'}.", "",
+                f"Supported effects: {', '.join(sorted(cls.SUPPORTED_EFFECTS)) or 'none (exact model)'}"
+                f" (it sums the terms of: {', '.join(sorted(cls.MECHANICS)) or 'none'}).", "",
+                f"Measured: {', '.join(f'`{c}`' for c in cls.MEASURED_CHANNELS)}"
+                f"{' (deflections x/l, y/l: a pendulum)' if cls.IS_PENDULUM else ''}; "
+                f"JointState joints: {', '.join(f'`{j}`' for j in cls.JOINTS)}; published by `{cls.SIMULATOR_NODE}`"
+                f"{'; estimable through its directing model' if 'directing_model' in vars(cls) else ''}.", "",
                 "| parameter | default | valid | meaning |", "|---|---|---|---|"]
         for p in cls.PARAMS:
             default = "required" if p.default is REQUIRED else repr(p.default)
@@ -26,11 +31,13 @@ def render():
         out += ["", "| channel | unit | meaning |", "|---|---|---|"]
         out += [f"| `{c.name}` | {c.unit} | {c.doc} |" for c in cls.COLUMNS]
         out.append("")
-    out += ["## Effects", "", "| effect | parameters | what it adds |", "|---|---|---|"]
+    out += ["## Effects", "", "Each effect contributes terms to the kinds of mechanics it names (gyro_instrument/core/effect.py);",
+            "an instrument supports the effects whose kinds it sums (docs/extending.md).", "",
+            "| effect | parameters | contributes to | what it adds |", "|---|---|---|---|"]
     for name, cls in sorted(EFFECTS.items()):
         params = ", ".join(f"`{p.name}` (default {p.default!r}; {p.describe_range().replace('must be ', '')})"
                            for p in cls.PARAMS) or "none"
-        out.append(f"| `{name}` | {params} | {cls.summary} |")
+        out.append(f"| `{name}` | {params} | {', '.join(sorted(cls.MECHANICS))} | {cls.summary} |")
     return "\n".join(out) + "\n"
 
 

@@ -43,8 +43,7 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import apply_overrides, read_yaml
-from gyro_instrument.estimators.pipeline import (ANGLE_CHANNELS, PENDULUMS, estimable, estimate_records, measure,
-                                                 pendulum_length, simulate_truth)
+from gyro_instrument.estimators.pipeline import estimable, estimate_records, measure, simulate_truth
 from gyro_instrument.scenes import scene_from_data, scene_path, shipped_scene_names
 
 HEADER = ("scene", "effect", "cpu_with_s", "cpu_without_s", "instrument", "column", "max_abs_diff_rad",
@@ -231,14 +230,10 @@ def _estimate(scene, insts, records):
 def _primary_angles(inst, sim):
     """{column name: array (rad)}: the angle channels the sensor reads (see the module docstring)."""
     cols = sim.columns
-    if inst.type_name in PENDULUMS:
-        l = pendulum_length(inst)
-        return {"deflection_east": cols["x_east"] / l, "deflection_north": cols["y_north"] / l}
-    model = getattr(inst, "directing_model", lambda: None)()
+    model = None if inst.IS_PENDULUM else inst.directing_model()
     if model is not None:
-        return {model["angle_channel"]: cols[model["angle_channel"]]}
-    chans = ANGLE_CHANNELS.get(inst.type_name) or tuple(c.name for c in inst.COLUMNS if c.unit == "rad")
-    return {c: cols[c] for c in chans if c in cols}
+        return {model.angle_channel: cols[model.angle_channel]}
+    return inst.measured_angles(cols)
 
 
 def _instrument_row(label, effect, ref, run, iname, base):

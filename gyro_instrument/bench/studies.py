@@ -117,15 +117,17 @@ def gyroscope_work_precision(duration_s, rtols, progress=print):
     return rows
 
 
-#: (scene, instrument, angle columns, fidelity tiers as (label, parameter overrides)) for the other
-#: instruments' work-precision: the gimbal (exact chain only: Quet's T, T', T'' are period
-#: formulas, checked in tests/test_gimbal.py), the free gyroscope (Quet's closed form, sec. 4 §II,
-#: against the numerical solution) and Puiseux's body (numerical only).
+#: (scene, instrument, angle columns, fidelity tiers as (label, parameter overrides), reference
+#: overrides besides rtol 1e-13) for the other instruments' work-precision: the gimbal (exact chain
+#: only: Quet's T, T', T'' are period formulas, checked in tests/test_gimbal.py), the free gyroscope
+#: (Quet's closed form, sec. 4 §II, against the numerical solution) and Puiseux's body (numerical only).
 OTHER_INSTRUMENTS = (
-    ("gimbal_paris", "gimbal_locked", ("outer_angle", "inner_angle"), (("exact equations (hinge chain), DOP853", {}),)),
+    ("gimbal_paris", "gimbal_locked", ("outer_angle", "inner_angle"), (("exact equations (hinge chain), DOP853", {}),),
+     {}),
     ("free_gyroscope", "free_gyro", ("axis_altitude", "axis_azimuth"),
-     (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}), ("exact equations, DOP853", {"model": "numerical"}))),
-    ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"), (("exact equations, DOP853", {}),)),
+     (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}), ("exact equations, DOP853", {"model": "numerical"})),
+     {"model": "numerical"}),
+    ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"), (("exact equations, DOP853", {}),), {}),
 )
 
 
@@ -134,7 +136,7 @@ def other_work_precision(duration_s, rtols, progress=print):
     largest end-of-run difference of the angle columns against the exact equations at rtol 1e-13
     (``model: numerical`` for the free gyroscope)."""
     rows = []
-    for scene_name, iname, columns, tiers in OTHER_INSTRUMENTS:
+    for scene_name, iname, columns, tiers, reference in OTHER_INSTRUMENTS:
         dur = duration_s if scene_name != "puiseux_spheroid" else min(duration_s, 60.0)
 
         def inst(**params):
@@ -142,9 +144,7 @@ def other_work_precision(duration_s, rtols, progress=print):
             scene = load_scene(scene_name, over)
             return build_instruments(scene)[iname], sample_times(scene)
         progress(f"  {scene_name}/{iname}: reference rtol 1e-13 over {dur:g} s")
-        ref_params = {"rtol": 1e-13}
-        if scene_name == "free_gyroscope":
-            ref_params["model"] = "numerical"
+        ref_params = {"rtol": 1e-13, **reference}
         g, t = inst(**ref_params)
         ref = g.simulate(t)
         name = f"{iname} ({scene_name}), {dur:g} s"

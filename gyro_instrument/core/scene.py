@@ -232,7 +232,9 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
     data : dict
         The raw scene (already overridden).
     instrument_registry : dict
-        type name -> instrument class with ``PARAMS`` and ``SUPPORTED_EFFECTS``.
+        type name -> instrument class with ``PARAMS``, ``SUPPORTED_EFFECTS`` and the classmethods
+        ``check_params(prefix, params)`` and ``check_effects(prefix, params, effect_names)`` (the
+        instrument protocol, ``gyro_instrument.instruments.base``).
     effect_registry : dict
         effect name -> :class:`~gyro_instrument.core.effect.Effect` subclass.
     sensor_params, estimator_params : sequence of Param
@@ -303,10 +305,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
                                      f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
         used.update(names)
         params = validate_params(prefix, cls.PARAMS, spec)
-        if hasattr(cls, "check_params"):
-            cls.check_params(prefix, params)
-        if hasattr(cls, "check_effects"):
-            cls.check_effects(prefix, params, tuple(names))
+        cls.check_params(prefix, params)
+        cls.check_effects(prefix, params, tuple(names))
         instruments[iname] = (itype, MappingProxyType(params), tuple(names))
     for e in effects:
         if e not in used:

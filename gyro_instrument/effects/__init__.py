@@ -1,8 +1,11 @@
 """Physical effects, one module each. Effects never import each other or any instrument.
 
-``REGISTRY`` maps the name used in scene files to the effect class.
+``REGISTRY`` maps the name used in scene files to the effect class, in the order in which
+instruments sum the effects' terms (:func:`canonical_order`). A new effect is one module and one
+:func:`register` call (docs/extending.md).
 """
 
+from gyro_instrument.core.effect import MECHANICS, Effect
 from gyro_instrument.effects.air_drag import AirDrag
 from gyro_instrument.effects.centrifugal import Centrifugal
 from gyro_instrument.effects.earth_rotation import EarthRotation
@@ -11,8 +14,47 @@ from gyro_instrument.effects.pivot_damping import PivotDamping
 from gyro_instrument.effects.ring_inertia import RingInertia
 from gyro_instrument.effects.spin_decay import SpinDecay
 
-REGISTRY = {cls.name: cls for cls in
-            (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag)}
+REGISTRY = {}
+
+
+def register(cls):
+    """Add an :class:`~gyro_instrument.core.effect.Effect` subclass to :data:`REGISTRY` under its
+    ``name`` (usable as a class decorator; returns ``cls``). Every instrument whose ``MECHANICS``
+    meet the effect's then supports it.
+
+    Raises
+    ------
+    ValueError
+        When ``cls`` is not an Effect subclass, its ``name`` is empty or taken, or its
+        ``MECHANICS`` name no known kind (:data:`gyro_instrument.core.effect.MECHANICS`).
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Effect)):
+        raise ValueError(f"register: {cls!r} is not an Effect subclass")
+    if not cls.name or cls.name in REGISTRY:
+        raise ValueError(f"register: effect name {cls.name!r} is empty or already registered "
+                         f"({', '.join(REGISTRY)})")
+    unknown = set(cls.MECHANICS) - MECHANICS
+    if unknown or not cls.MECHANICS:
+        raise ValueError(f"register: {cls.name} MECHANICS {sorted(cls.MECHANICS)} must be a non-empty subset "
+                         f"of {sorted(MECHANICS)}")
+    REGISTRY[cls.name] = cls
+    return cls
+
+
+def unregister(name):
+    """Remove the effect ``name`` from :data:`REGISTRY` (for tests that register their own)."""
+    REGISTRY.pop(name, None)
+
+
+def canonical_order(effects):
+    """``effects`` (name -> Effect) as a dict in :data:`REGISTRY` order: the order in which
+    instruments sum terms, so results do not depend on the order a scene lists its effects."""
+    order = {name: i for i, name in enumerate(REGISTRY)}
+    return dict(sorted(effects.items(), key=lambda item: order.get(item[0], len(order))))
+
+
+for _cls in (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag):
+    register(_cls)
 
 __all__ = ["REGISTRY", "AirDrag", "Centrifugal", "EarthRotation", "FiniteAmplitude", "PivotDamping",
-           "RingInertia", "SpinDecay"]
+           "RingInertia", "SpinDecay", "canonical_order", "register", "unregister"]

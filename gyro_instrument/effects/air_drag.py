@@ -6,7 +6,7 @@ acceleration is −(2/τ) v − c_q |v| v, so small linear-drag swings decay as 
 
 import numpy as np
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import POINT_MASS, Effect
 from gyro_instrument.core.params import Param
 
 
@@ -15,6 +15,7 @@ class AirDrag(Effect):
 
     name = "air_drag"
     summary = "air drag on the bob: linear (time constant tau) plus quadratic"
+    MECHANICS = frozenset({POINT_MASS})
     PARAMS = (Param("time_constant_s", default=7200.0, low=0.0, open_low=True,
                     doc="e-folding time of the amplitude under linear drag"),
               Param("quadratic_per_m", default=0.0, low=0.0,
@@ -24,5 +25,13 @@ class AirDrag(Effect):
         return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
 
     def acceleration(self, v):
-        """Drag acceleration −(2/τ) v − c_q |v| v."""
+        """Drag acceleration −(2/τ) v − c_q |v| v (m/s²) for a velocity ``v`` (3,) relative to the air."""
         return -(2.0 / self.time_constant_s) * v - self.quadratic_per_m * np.linalg.norm(v) * v
+
+    def point_mass_term(self, omega_enu):
+        """:meth:`acceleration` of the velocity relative to the Earth (still air); one state at a time."""
+        acceleration = self.acceleration
+
+        def drag(dx, dy, dz, vx, vy, vz):
+            return acceleration(np.array([vx, vy, vz]))
+        return drag

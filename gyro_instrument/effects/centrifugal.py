@@ -9,7 +9,7 @@ eqs. (1)–(3) of sec. 4 §1 drop; its relative size is n / (μ ρ0).
 """
 
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
 
 
@@ -18,6 +18,7 @@ class Centrifugal(Effect):
 
     name = "centrifugal"
     summary = "centrifugal gradient, second order in the Earth rate n"
+    MECHANICS = frozenset({POINT_MASS, RIGID_BODY})
 
     def relative_size(self, scales):
         n = scales["earth_rate_rad_s"]
@@ -25,6 +26,21 @@ class Centrifugal(Effect):
             return n / scales["gyro_rate_rad_s"], "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
         w0 = scales["restoring_rate_rad_s"]
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
+
+    def point_mass_term(self, omega_enu):
+        """−Ω × (Ω × δr) over the displacement δr from the rest point, written |Ω|² δr − (Ω·δr) Ω
+        (:func:`centrifugal_gradient_acceleration`, component form)."""
+        ox, oy, oz = omega_enu
+        o2 = ox * ox + oy * oy + oz * oz
+
+        def gradient(dx, dy, dz, vx, vy, vz):
+            od = ox * dx + oy * dy + oz * dz
+            return o2 * dx - od * ox, o2 * dy - od * oy, o2 * dz - od * oz
+        return gradient
+
+    def rigid_body_torque(self, inertia, w_rel, omega_b):
+        """The inertia torque's part quadratic in Ω (:func:`rigid_body_inertia_torque_quadratic`)."""
+        return rigid_body_inertia_torque_quadratic(inertia, omega_b)
 
 
 def centrifugal_gradient_acceleration(omega, dr):

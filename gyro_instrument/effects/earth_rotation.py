@@ -9,7 +9,7 @@ the part linear in Ω given here, and the O(Ω²) part of :mod:`.centrifugal`.
 """
 
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import FRAME_RATE, POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
 
 
@@ -18,6 +18,7 @@ class EarthRotation(Effect):
 
     name = "earth_rotation"
     summary = "Coriolis / gyroscopic coupling, first order in the Earth rate n"
+    MECHANICS = frozenset({POINT_MASS, RIGID_BODY, FRAME_RATE})
 
     def relative_size(self, scales):
         if scales.get("gyro_rate_rad_s"):
@@ -25,9 +26,25 @@ class EarthRotation(Effect):
         n = scales["earth_rate_rad_s"]
         return n * scales["duration_s"], "n * duration (swing-plane turn over the run, rad, at most)"
 
+    def point_mass_term(self, omega_enu):
+        """Coriolis acceleration −2 Ω × v (:func:`coriolis_acceleration`, component form)."""
+        ox, oy, oz = omega_enu
+
+        def coriolis(dx, dy, dz, vx, vy, vz):
+            return -2.0 * (oy * vz - oz * vy), -2.0 * (oz * vx - ox * vz), -2.0 * (ox * vy - oy * vx)
+        return coriolis
+
+    def rigid_body_torque(self, inertia, w_rel, omega_b):
+        """The inertia torque's part linear in Ω (:func:`rigid_body_inertia_torque_linear`)."""
+        return rigid_body_inertia_torque_linear(inertia, w_rel, omega_b)
+
+    def frame_rate_rad_s(self, site):
+        """The site's Earth rate n (the frame turns; without this effect n = 0 in the model)."""
+        return site.earth_rate_rad_s
+
 
 def coriolis_acceleration(omega, v):
-    """Coriolis acceleration −2 Ω × v (Quet sec. 1 eq. 16), all vectors in one frame."""
+    """Coriolis acceleration −2 Ω × v (Quet sec. 1 eq. 16), all vectors in one frame; ndarray (3,)."""
     return -2.0 * cross3(omega, v)
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from scipy.special import ellipk
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import RESTORING_LAW, Effect
 
 
 class FiniteAmplitude(Effect):
@@ -20,10 +20,15 @@ class FiniteAmplitude(Effect):
 
     name = "finite_amplitude"
     summary = "exact trigonometry (sin u) instead of the small-angle model (u)"
+    MECHANICS = frozenset({RESTORING_LAW})
 
     def relative_size(self, scales):
         a = scales.get("amplitude_rad", 0.0)
         return a * a / 16.0, "a^2 / 16 (relative period change, sec. 2 eq. 42)"
+
+    def restoring_law(self):
+        """``numpy.sin``: the exact restoring law (its absence means the small-angle law, u)."""
+        return np.sin
 
 
 def finite_amplitude_factor(amplitude_rad):

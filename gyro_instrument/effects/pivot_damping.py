@@ -4,7 +4,7 @@ A torque −2 J q̇ / τ on a hinge of swinging inertia J makes small oscillatio
 e^(−t/τ) in amplitude. Applied to the swinging hinges of gyroscopes and compound pendulums.
 """
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import DAMPING, Effect
 from gyro_instrument.core.params import Param
 
 
@@ -13,6 +13,7 @@ class PivotDamping(Effect):
 
     name = "pivot_damping"
     summary = "viscous friction at the swinging hinges (amplitude time constant tau)"
+    MECHANICS = frozenset({DAMPING})
     PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
                     doc="e-folding time of the oscillation amplitude"),)
 
@@ -22,3 +23,7 @@ class PivotDamping(Effect):
     def rate(self):
         """Damping rate 2/τ (per second) multiplying J q̇ in the hinge torque."""
         return 2.0 / self.time_constant_s
+
+    def damping_torque(self, inertia, rate):
+        """−(2/τ) J q̇ (N m) on a hinge of swinging inertia J = ``inertia`` turning at q̇ = ``rate``."""
+        return -self.rate() * inertia * rate

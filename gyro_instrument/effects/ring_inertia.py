@@ -7,7 +7,7 @@ perpendicular the swinging inertia is A + C1 + A2, which Quet writes A + 2A1 + A
 rings (C1 = 2A1) (sec. 4 §IV).
 """
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import CARRIER_INERTIA, Effect
 
 
 class RingInertia(Effect):
@@ -15,7 +15,12 @@ class RingInertia(Effect):
 
     name = "ring_inertia"
     summary = "inertia of the gimbal rings (A1, C1, A2)"
+    MECHANICS = frozenset({CARRIER_INERTIA})
 
     def relative_size(self, scales):
         r = scales.get("ring_inertia_ratio", 0.0)
         return r / 2.0, "(C1 + A2) / (2 A): relative change of the locked-ring period"
+
+    def carrier_inertia(self, inertia):
+        """The ring's own moment, unchanged: the ring takes part in the motion (absent: massless)."""
+        return inertia

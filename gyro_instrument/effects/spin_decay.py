@@ -5,7 +5,7 @@ and with it the gyroscopic restoring torque μ n ρ sin ω (Quet sec. 4 §1 eq. 
 duration grows as ρ^(−1/2) and, adiabatically, the amplitude as ρ^(−1/4).
 """
 
-from gyro_instrument.core.effect import Effect
+from gyro_instrument.core.effect import SPIN, Effect
 from gyro_instrument.core.params import Param
 
 
@@ -14,6 +14,7 @@ class SpinDecay(Effect):
 
     name = "spin_decay"
     summary = "rotor spin decay from bearing friction (time constant tau)"
+    MECHANICS = frozenset({SPIN})
     PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
                     doc="e-folding time of the rotor's relative spin"),)
 
@@ -21,5 +22,10 @@ class SpinDecay(Effect):
         return scales["duration_s"] / self.time_constant_s, "duration / tau (spin lost over the run)"
 
     def spin_torque_per_inertia(self, spin_rate_rad_s):
-        """Angular deceleration −ρ/τ of the rotor (torque divided by C)."""
+        """Angular deceleration −ρ/τ of the rotor (torque divided by C), rad/s²."""
         return -spin_rate_rad_s / self.time_constant_s
+
+    def spin_torque(self, inertia, spin_rate):
+        """Bearing torque −C ρ / τ (N m) on a rotor of axial moment C = ``inertia`` spinning at ρ =
+        ``spin_rate`` relative to its carrier (C times :meth:`spin_torque_per_inertia`)."""
+        return -inertia * spin_rate / self.time_constant_s

@@ -22,9 +22,6 @@ from gyro_instrument.scenes import build_instruments, load_scene
 from gyro_instrument.sensors import SensorModel, scene_rng
 
 
-
-PENDULUMS = ("spherical_pendulum", "compound_pendulum")
-
 #: The systematic corrections the estimator makes; ``estimate_records(..., corrections=...)`` can
 #: leave any of them out, which is how ``gyro-instrument bench`` measures what each one is worth:
 #: ``finite_amplitude`` — a gyroscope's swing reduced to small amplitude through (2/π)K(sin(a/2))
@@ -33,20 +30,12 @@ PENDULUMS = ("spherical_pendulum", "compound_pendulum")
 #: less the finite-amplitude precession of the swing ellipse (sec. 2 §III, from its areal velocity).
 CORRECTIONS = frozenset(("finite_amplitude", "spin_decay", "ellipse_precession"))
 
-#: Angle channels a sensor measures, per instrument type (the JointState positions).
-ANGLE_CHANNELS = {"plane_gyroscope": ("angle",), "gimbal_gyroscope": ("outer_angle", "inner_angle"),
-                  "free_gyroscope": ("axis_altitude", "axis_azimuth"), "puiseux_body": ("tilt", "tilt_azimuth")}
-
 
 def estimable(inst):
-    """True for instruments that measure an Earth rate: pendulums (k = n sin γ) and gyroscopes with a
-    directing line (K = gain n ρ s(γ)). Free gyroscopes and Puiseux's body do not."""
-    return inst.type_name in PENDULUMS or getattr(inst, "directing_model", lambda: None)() is not None
-
-
-def pendulum_length(inst):
-    """Rod length of a simple pendulum, or the pivot–centre distance of a compound one (m)."""
-    return getattr(inst, "l", None) or getattr(inst, "lc", 1.0)
+    """True for instruments that measure an Earth rate: pendulums (``IS_PENDULUM``: k = n sin γ) and
+    gyroscopes with a directing line (``directing_model()``: K = gain n ρ s(γ)). Free gyroscopes and
+    Puiseux's body do not."""
+    return inst.IS_PENDULUM or inst.directing_model() is not None
 
 
 def simulate_truth(scene):
@@ -66,18 +55,14 @@ def measure(scene, truth, seed=None):
         rng = scene_rng(seed, name)
         cols = sims[name].columns
         rec = {"t": t.copy()}
-        if inst.type_name in PENDULUMS:
-            l = pendulum_length(inst)
-            rec["deflection_east"] = sensor.measure_angle(cols["x_east"] / l, rng)
-            rec["deflection_north"] = sensor.measure_angle(cols["y_north"] / l, rng)
-        else:
-            for chan in ANGLE_CHANNELS.get(inst.type_name, ()):
-                rec[chan] = sensor.measure_angle(cols[chan], rng)
+        for chan, angle in inst.measured_angles(cols).items():
+            rec[chan] = sensor.measure_angle(angle, rng)
+        if not inst.IS_PENDULUM:
             if "spin_rate" in cols:
                 rec["spin_rate"] = sensor.measure_rate(cols["spin_rate"], rng)
-            model = getattr(inst, "directing_model", lambda: None)()
+            model = inst.directing_model()
             if model is not None:
-                rec["angle"] = rec[model["angle_channel"]]
+                rec["angle"] = rec[model.angle_channel]
         records[name] = rec
     return records
 
@@ -87,7 +72,7 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     t, y = rec["t"], rec["angle"]
     out = {"type": inst.type_name}
     model = inst.directing_model()
-    out["configuration"] = model["label"]
+    out["configuration"] = model.label
     spin = rec["spin_rate"]
     spin_ok = np.isfinite(spin)
     if not spin_ok.any():
@@ -125,11 +110,11 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
             warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
             fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
     except EstimationError as exc:
-        return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model['null_reason']}"}
+        return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model.null_reason}"}
     snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
     if snr < DETECTION_SNR:
         return out | {"swing_duration_s": None,
-                      "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model['null_reason']}"}
+                      "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model.null_reason}"}
     # damping: refit with an envelope when it lowers the residual significantly
     try:
         dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), damping=True, warp=warp,
@@ -160,14 +145,14 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     except EstimationError as exc:
         out["counting"] = {"swing_duration_s": None, "reason": str(exc)}
     K = (math.pi / T0) ** 2
-    y_val = K / (model["gain"] * rho_mean)
-    c2 = model.get("second_order", 0.0)
+    y_val = K / (model.gain * rho_mean)
+    c2 = model.second_order
     if c2:
         # invert y = y0 (1 + c2 y0/ρ) for y0 = n s(γ): the O(n²) centrifugal term of the exact equation
         y_val = 2.0 * y_val / (1.0 + math.sqrt(1.0 + 4.0 * c2 * y_val / rho_mean))
-        out["second_order_correction"] = K / (model["gain"] * rho_mean) / y_val - 1.0
+        out["second_order_correction"] = K / (model.gain * rho_mean) / y_val - 1.0
     rel = 2 * sig_T0 / T0
-    out["_measurement"] = RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model["normal_enu"]),
+    out["_measurement"] = RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model.normal_enu),
                                           True, y_val * 2 * crlb_T0 / T0)
     return out
 
@@ -268,8 +253,8 @@ def _null_combined(reason):
 def _classic_methods(result, gyros, pend):
     """Quet's item 9 and eq. (10), and the pendulum-only results, side by side."""
     methods = result["methods"]
-    hor = [g for g in gyros.values() if g[0].directing_model()["label"] == "horizontal"]
-    mer = [g for g in gyros.values() if g[0].directing_model()["label"] == "meridian"]
+    hor = [g for g in gyros.values() if g[0].directing_model().label == "horizontal"]
+    mer = [g for g in gyros.values() if g[0].directing_model().label == "meridian"]
     if hor and mer:
         (ih, eh, mh), (im, em, mm) = hor[0], mer[0]
         # cos γ = y_h / y_m with y = K/(gain ρ): Quet's (T_m/T_h)² ρ_m/ρ_h, with the finite-amplitude
@@ -302,7 +287,7 @@ def _classic_methods(result, gyros, pend):
         entry["uncorrected_cos_latitude"] = (em["swing_duration_s"] / eh["swing_duration_s"]) ** 2
         ch, cm = eh.get("counting", {}), em.get("counting", {})
         if ch.get("swing_duration_s") and cm.get("swing_duration_s"):
-            gain_ratio = im.directing_model()["gain"] / ih.directing_model()["gain"]
+            gain_ratio = im.directing_model().gain / ih.directing_model().gain
             cc = item9_cos_latitude(cm["small_amplitude_swing_duration_s"], ch["small_amplitude_swing_duration_s"],
                                     em["mean_spin_rad_s"], eh["mean_spin_rad_s"]) * gain_ratio
             methods["item9_counting"] = {"cos_latitude": cc,
@@ -318,7 +303,7 @@ def _classic_methods(result, gyros, pend):
         n = mm.value
         methods["item8_eq10"] = {"earth_rate_rad_s": n, "earth_rate_sigma_rad_s": mm.sigma,
                                  "formula": "n = pi^2 / (mu rho0 T_m^2) (eq. 10; item 8's printed pi/(mu rho0 T^2) is a misprint)",
-                                 "gain": model["gain"]}
+                                 "gain": model.gain}
     if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
         k, sk = pend[1]["foucault_rate_rad_s"], pend[1]["foucault_rate_sigma_rad_s"]
         entry = {"foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk}

@@ -1,4 +1,27 @@
-"""Instrument interface shared by every instrument module."""
+"""The instrument protocol: everything the package needs to know about an instrument type.
+
+An instrument type is one class; the rest of the package (scene loading, the sensor model and the
+estimator, the recorder's joint layout, the ROS nodes, the bench) asks the class and never keys a
+table by its ``type_name`` (``tests/test_architecture.py`` fails when a module outside
+``instruments/`` does). The declared members, each documented on :class:`Instrument`:
+
+=======================  ===================================================================
+``type_name``            the ``type`` used in scene files
+``summary``, ``PARAMS``  one line for ``describe``; the parameter specifications
+``MECHANICS``            the kinds of mechanics its right-hand side sums effect terms for
+                         (:mod:`gyro_instrument.core.effect`); ``SUPPORTED_EFFECTS`` follows
+``COLUMNS``              the simulated output channels
+``MEASURED_CHANNELS``    the angles a sensor reads (:meth:`Instrument.measured_angles`)
+``JOINTS``               the ``sensor_msgs/JointState`` joints it publishes
+``IS_PENDULUM``          a bob whose deflections x/l, y/l are measured (Foucault estimator)
+``SIMULATOR_NODE``       the ROS simulator node that hosts it
+``check_params``,        parameter checks beyond each parameter's own range (classmethods,
+``check_effects``        called by scene loading for every instrument)
+``directing_model``      a :class:`DirectingModel` for a gyroscope with a directing line
+=======================  ===================================================================
+
+Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports.
+"""
 
 import math
 from dataclasses import dataclass, field
@@ -7,7 +30,9 @@ from typing import ClassVar
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.effect import CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, supporting_effects
 from gyro_instrument.core.integrate import Trajectory
+from gyro_instrument.effects import canonical_order
 
 #: Most periods (swings, turns) one run may hold. An adaptive 8th-order step covers a few percent
 #: of a period at the default rtol (~50 right-hand-side evaluations per period), so 1e9 periods
@@ -40,6 +65,43 @@ class Column:
     doc: str
 
 
+@dataclass(frozen=True)
+class DirectingModel:
+    """What an estimator may know of a gyroscope whose axis swings about a directing line.
+
+    Small swings last T0 = π/√K with K = ``gain`` · n ρ · s(γ) · (1 + ``second_order`` · n s(γ)/ρ),
+    s(γ) = sin ω the sine of the angle between the swing plane's normal and Earth's axis (Quet
+    1853 sec. 4 §1 eq. 9; sec. 4 §IV for the gimbal), n the Earth rate (rad/s), ρ the rotor's
+    relative spin (rad/s).
+
+    Attributes
+    ----------
+    gain : float
+        Dimensionless: μ = C/A for the directing plane (μ / sin ε on a cone), C/J for the gimbal
+        (J = A + C1 + A2 locked, A + A1 outer ring fixed).
+    normal_enu : tuple of 3 float
+        Unit normal of the swing plane in ENU; s(γ) = |normal × Earth axis|.
+    label : str
+        ``"horizontal"`` or ``"meridian"`` for the configurations Quet's item 9 and eq. (10)
+        combine; any other text (``"polar"``, ``"custom"``, ``"outer_fixed"``...) otherwise.
+    angle_channel : str
+        The ``COLUMNS`` / ``MEASURED_CHANNELS`` name of the swing angle (rad).
+    null_reason : str
+        Why no oscillation may be measured (e.g. a plane perpendicular to Earth's axis), appended
+        to the estimator's reason when the fit fails.
+    second_order : float
+        c2 of the exact equation's O(n²) term, K/(gain ρ) = y (1 + c2 y/ρ), y = n s(γ); (μ − 1)/μ for
+        the directing plane (sec. 4 §1, the term eqs. (1)–(3) drop), 0 when not derived.
+    """
+
+    gain: float
+    normal_enu: tuple
+    label: str
+    angle_channel: str
+    null_reason: str
+    second_order: float = 0.0
+
+
 @dataclass
 class Simulation:
     """What an instrument's ``simulate`` returns.
@@ -60,25 +122,118 @@ class Simulation:
     extra: dict = field(default_factory=dict)
 
 
+class _SupportedEffects:
+    """``SUPPORTED_EFFECTS`` of an instrument class or object: the registered effects that contribute
+    to one of its ``MECHANICS`` kinds (frozenset of names), computed at each access so an effect
+    registered later (:func:`gyro_instrument.effects.register`) is supported without editing the
+    instrument."""
+
+    def __get__(self, obj, cls):
+        from gyro_instrument.effects import REGISTRY
+        return supporting_effects(REGISTRY, cls.MECHANICS)
+
+
 class Instrument:
     """Base class: parameters in, one ``simulate`` call, columns out.
 
-    Subclasses set ``type_name``, ``PARAMS`` (tuple of Param), ``SUPPORTED_EFFECTS``,
-    ``COLUMNS`` and implement ``simulate``, ``scales`` and ``predictions``.
+    Subclasses set the class members below and implement ``simulate``, ``scales`` and
+    ``predictions``; the hooks (``check_params``, ``check_effects``, ``directing_model``,
+    ``measured_angles``) have defaults that fit an instrument without them.
+
+    Attributes
+    ----------
+    type_name : str
+        The ``type`` in scene files; the key of :data:`gyro_instrument.instruments.REGISTRY`.
+    summary : str
+        One line for ``describe`` and msg_docs/instruments.md.
+    PARAMS : tuple of Param
+        Parameter specifications (validated by scene loading; msg_docs/scene.md).
+    MECHANICS : frozenset of str
+        The kinds of mechanics whose effect terms the right-hand side sums
+        (:data:`gyro_instrument.core.effect.MECHANICS`).
+    SUPPORTED_EFFECTS : frozenset of str
+        Derived, not set: the registered effects contributing to one of ``MECHANICS``.
+    COLUMNS : tuple of Column
+        The simulated channels, in ``Simulation.columns``.
+    MEASURED_CHANNELS : tuple of str
+        The angles (rad) the sensor model reads, in order (:meth:`measured_angles` gives their
+        true values); they are the positions of the first ``len(MEASURED_CHANNELS)`` joints.
+    JOINTS : tuple of str
+        ``sensor_msgs/JointState`` joint names (prefixed ``<instrument>/`` on the wire). The
+        measured channels first; then, for a pendulum, ``deflection`` (hypot of the two measured
+        deflections) and ``azimuth`` (compass, atan2(east, north)); otherwise one rotor joint
+        (position: integrated true spin; velocity: the measured ``spin_rate``, rad/s).
+    IS_PENDULUM : bool
+        A bob on a rod of length :meth:`pendulum_length_m`: its ``COLUMNS`` include ``x_east`` and
+        ``y_north`` (m), its two measured channels are the deflections x/l, y/l (east, north), it
+        is estimated by the Foucault method, its spin is not measured and a bob position is
+        published.
+    SIMULATOR_NODE : str
+        The ROS simulator node (an entry point in setup.py) that publishes it:
+        ``gyrocompass_sim``, ``pendulum_sim`` or ``top_sim``.
     """
 
     type_name: ClassVar[str] = ""
     summary: ClassVar[str] = ""
     PARAMS: ClassVar[tuple] = ()
-    SUPPORTED_EFFECTS: ClassVar[frozenset] = frozenset()
+    MECHANICS: ClassVar[frozenset] = frozenset()
+    SUPPORTED_EFFECTS = _SupportedEffects()
     COLUMNS: ClassVar[tuple] = ()
+    MEASURED_CHANNELS: ClassVar[tuple] = ()
+    JOINTS: ClassVar[tuple] = ()
+    IS_PENDULUM: ClassVar[bool] = False
+    SIMULATOR_NODE: ClassVar[str] = ""
+
+    @classmethod
+    def check_params(cls, prefix, params):
+        """Check the validated parameters together (each was range-checked alone).
+
+        Parameters
+        ----------
+        prefix : str
+            Field prefix for messages, ``instruments.<name>``.
+        params : dict
+            Validated parameters (``PARAMS`` names -> values).
+
+        Raises
+        ------
+        SceneError
+            With the field, the value and the valid range. The default accepts everything.
+        """
+
+    @classmethod
+    def check_effects(cls, prefix, params, effect_names):
+        """Check the parameters against the instrument's effect list (tuple of names, all in
+        ``SUPPORTED_EFFECTS``), e.g. an integrator that needs an effect. Raises SceneError; the
+        default accepts everything."""
+
+    def directing_model(self):
+        """The :class:`DirectingModel` of a gyroscope with a directing line, or None (the default:
+        the instrument measures no Earth rate through a swing duration)."""
+        return None
+
+    def pendulum_length_m(self):
+        """For a pendulum (``IS_PENDULUM``): the length l (m) whose ratio to the bob's east and north
+        displacements is the measured deflection. Raises NotImplementedError otherwise."""
+        raise NotImplementedError(f"{self.type_name} is not a pendulum")
+
+    def measured_angles(self, columns):
+        """True values of the ``MEASURED_CHANNELS`` from simulated ``columns``: dict name -> array
+        (rad), in ``MEASURED_CHANNELS`` order. The default reads the columns of the same names; for a
+        pendulum, ``x_east / l`` and ``y_north / l`` (l = :meth:`pendulum_length_m`)."""
+        if self.IS_PENDULUM:
+            east, north = self.MEASURED_CHANNELS
+            length = self.pendulum_length_m()
+            return {east: columns["x_east"] / length, north: columns["y_north"] / length}
+        return {c: columns[c] for c in self.MEASURED_CHANNELS}
 
     def __init__(self, name, site, params, effects):
-        """``effects`` maps name -> Effect for the effects active on this instrument only."""
+        """``effects`` maps name -> Effect for the effects active on this instrument only (kept in
+        the registry's order, the order their terms are summed)."""
         self.name = name
         self.site = site
         self.params = dict(params)
-        self.effects = dict(effects)
+        self.effects = canonical_order(dict(effects))
         for key, value in self.params.items():
             setattr(self, key, value)
 
@@ -89,6 +244,24 @@ class Instrument:
     def effect(self, effect_name):
         """The active Effect object, or None."""
         return self.effects.get(effect_name)
+
+    def effects_of(self, kind):
+        """The active effects contributing to the mechanics ``kind`` (list, summing order)."""
+        return [e for e in self.effects.values() if kind in e.MECHANICS]
+
+    def restoring_law(self):
+        """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
+        ``finite_amplitude``), or None: the small-angle law g(u) = u."""
+        laws = [e.restoring_law() for e in self.effects_of(RESTORING_LAW)]
+        return laws[-1] if laws else None
+
+    def carrier_inertia(self, inertia):
+        """What a carrier (gimbal ring) of moment ``inertia`` (kg m²) contributes to the motion: the
+        sum over the active ``carrier_inertia`` effects, 0.0 (massless) without one."""
+        total = 0.0
+        for e in self.effects_of(CARRIER_INERTIA):
+            total = total + e.carrier_inertia(inertia)
+        return total
 
     def scales(self, duration_s):
         """Characteristic scales for effect-size estimates (see ``Effect.relative_size``)."""
@@ -109,8 +282,12 @@ class Instrument:
         return {}
 
     def model_earth_rate(self):
-        """n as simulated: the site's Earth rate when ``earth_rotation`` is listed, else 0 (rad/s)."""
-        return self.site.earth_rate_rad_s if self.has("earth_rotation") else 0.0
+        """n as simulated (rad/s): the sum of the active ``frame_rate`` effects' rates (the site's
+        Earth rate with ``earth_rotation``), 0 without one."""
+        total = 0.0
+        for e in self.effects_of(FRAME_RATE):
+            total = total + e.frame_rate_rad_s(self.site)
+        return total
 
     def missing_effect_note(self, effect_name, consequence):
         """``"<effect> not simulated: <consequence>"`` when a supported effect is not listed, else None."""

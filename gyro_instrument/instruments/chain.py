@@ -13,22 +13,24 @@ Relative kinematics (with respect to the Earth) are built recursively in body ax
 
 with R_k = R0_k Rot(e_k, q_k). The absolute angular velocity is w_k + Ω_k and the absolute
 angular acceleration α_k + Ω_k × w_k (Ω constant in Earth axes), so the inertia torque
-I α_abs + ω_abs × I ω_abs = [I α + w × I w] + [terms linear in Ω] + [Ω × I Ω]. The last two
-come from the ``earth_rotation`` and ``centrifugal`` effects and are evaluated only when the
-scene lists them. Kane's equations Σ_k P_kjᵀ τ*_k = Q_j (P_kj = e_j in body-k axes, the
-partial angular velocity) give M(q) q̈ = Q − bias(q, q̇), solved at every step.
+I α_abs + ω_abs × I ω_abs = [I α + w × I w] + [terms linear in Ω] + [Ω × I Ω]. Every term
+beyond the first is an effect's ``rigid_body`` contribution (``earth_rotation``: the linear part;
+``centrifugal``: the quadratic part), summed over the instrument's active effects. Kane's
+equations Σ_k P_kjᵀ τ*_k = Q_j (P_kj = e_j in body-k axes, the partial angular velocity) give
+M(q) q̈ = Q − bias(q, q̇), solved at every step.
 
-Gravity acts through each body's centre-of-mass offset ``com_m`` and ``mass_kg``; hinge
-torques (damping, bearing friction) are callables of (q, q̇, w).
+Gravity acts through each body's centre-of-mass offset ``com_m`` and ``mass_kg``. Hinge torques
+come from the effects too: a link declared swinging (``swing_inertia``) gets each ``damping``
+effect's torque, a link declared a rotor's spin hinge (``spin_inertia``) each ``spin`` effect's
+torque — the instrument declares its hinges, the chain turns effects into torques in one place.
 """
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.effects.centrifugal import rigid_body_inertia_torque_quadratic
+from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN
 from gyro_instrument.core.vector import cross3
-from gyro_instrument.effects.earth_rotation import rigid_body_inertia_torque_linear
 
 
 def axis_rotation(axis, angle):
@@ -59,6 +61,10 @@ class Link:
         A locked hinge keeps q = ``locked_angle`` and q̇ = 0 (reaction torques absorb the rest).
     mass_kg, com_m : float, array (3,)
         Mass and centre-of-mass offset from the fixed point (body axes), for gravity.
+    swing_inertia : float, optional
+        A swinging hinge's inertia J (kg m²): ``damping`` effects act on it (e.g. −(2/τ) J q̇).
+    spin_inertia : float, optional
+        A rotor's spin hinge and the rotor's axial moment C (kg m²): ``spin`` effects act on it.
     """
 
     name: str
@@ -69,6 +75,8 @@ class Link:
     locked_angle: float = 0.0
     mass_kg: float = 0.0
     com_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    swing_inertia: float = None
+    spin_inertia: float = None
 
 
 class HingeChain:
@@ -83,16 +91,13 @@ class HingeChain:
         Earth-rate vector in ENU (rad/s).
     gravity_enu : array (3,)
         Gravity vector in ENU (m/s²), e.g. (0, 0, −g).
-    linear, quadratic : bool
-        Evaluate the O(Ω) (``earth_rotation``) and O(Ω²) (``centrifugal``) inertia torques.
-    hinge_torques : callable, optional
-        ``f(q, qd, w_rel_axis) -> array`` of applied hinge torques for all links (same length
-        as ``links``), e.g. damping or bearing friction. ``w_rel_axis[k]`` is the relative
-        angular velocity of body k along its own hinge axis.
+    effects : iterable of Effect
+        The instrument's active effects in summing order: their ``rigid_body`` terms enter every
+        body's inertia torque (dropped when Ω = 0: they vanish), their ``damping`` and ``spin``
+        terms the declared hinges (:func:`effect_hinge_torques`).
     """
 
-    def __init__(self, links, base_rotation, omega_enu, gravity_enu, linear=True, quadratic=True,
-                 hinge_torques=None):
+    def __init__(self, links, base_rotation, omega_enu, gravity_enu, effects=()):
         self.links = list(links)
         self.nl = len(self.links)
         self.free = [k for k, L in enumerate(self.links) if not L.locked]
@@ -100,9 +105,10 @@ class HingeChain:
         self.base = np.asarray(base_rotation, dtype=float)
         self.omega_base = self.base.T @ np.asarray(omega_enu, dtype=float)
         self.gravity_base = self.base.T @ np.asarray(gravity_enu, dtype=float)
-        self.linear = linear and np.any(self.omega_base != 0.0)
-        self.quadratic = quadratic and np.any(self.omega_base != 0.0)
-        self.hinge_torques = hinge_torques
+        effects = list(effects)
+        rotating = bool(np.any(self.omega_base != 0.0))
+        self.body_terms = [e.rigid_body_torque for e in effects if RIGID_BODY in e.MECHANICS] if rotating else []
+        self.hinge_torques = effect_hinge_torques(self.links, effects)
         self.axes = [np.asarray(L.axis, dtype=float) / np.linalg.norm(L.axis) for L in self.links]
         self.gravity_on = any(L.mass_kg != 0.0 and np.any(L.com_m) for L in self.links)
 
@@ -163,12 +169,10 @@ class HingeChain:
         for k, L in enumerate(self.links):
             I = L.inertia
             tau = I @ a0[k] + cross3(w[k], I @ w[k])
-            if self.linear or self.quadratic:
+            if self.body_terms:
                 om = B[k].T @ self.omega_base
-                if self.linear:
-                    tau = tau + rigid_body_inertia_torque_linear(I, w[k], om)
-                if self.quadratic:
-                    tau = tau + rigid_body_inertia_torque_quadratic(I, om)
+                for term in self.body_terms:
+                    tau = tau + term(I, w[k], om)
             if L.mass_kg and self.gravity_on:
                 g_b = B[k].T @ self.gravity_base
                 tau = tau - cross3(L.com_m, L.mass_kg * g_b)
@@ -209,28 +213,34 @@ class HingeChain:
         return self.base @ (B @ np.asarray(axis_body, dtype=float))
 
 
-def hinge_friction(n_links, damping_rate=0.0, swing_inertias=None, spin_link=None, spin_inertia=0.0,
-                   spin_time_constant_s=0.0):
-    """Hinge torques for the ``pivot_damping`` and ``spin_decay`` effects, or None when neither acts.
+def effect_hinge_torques(links, effects):
+    """Hinge torques from the effects' ``damping`` and ``spin`` terms, or None when none acts.
 
-    Swinging hinge k gets −(2/τ_d) J_k q̇_k (amplitude e-folding in τ_d); the rotor's bearing gets
-    −C q̇_spin / τ_s — friction acts on the joint rate, the rotor's rate relative to its carrier.
+    Each link with a ``swing_inertia`` J gets Σ ``damping_torque(J, q̇)`` over the ``damping``
+    effects (``pivot_damping``: −(2/τ) J q̇, small swings decaying as e^(−t/τ)); each link with a
+    ``spin_inertia`` C gets Σ ``spin_torque(C, q̇)`` over the ``spin`` effects (``spin_decay``:
+    −C q̇/τ) — friction acts on the joint rate, the rotor's rate relative to its carrier.
 
-    Parameters
-    ----------
-    swing_inertias : dict
-        link index -> swinging inertia J (kg m²).
+    Returns
+    -------
+    callable or None
+        ``f(q, qd, w_rel_axis) -> ndarray (len(links),)``, N m.
     """
-    swing = dict(swing_inertias or {})
-    if not (damping_rate and swing) and not (spin_time_constant_s and spin_link is not None):
+    damping = [e.damping_torque for e in effects if DAMPING in e.MECHANICS]
+    spinning = [e.spin_torque for e in effects if SPIN in e.MECHANICS]
+    swing = [(k, L.swing_inertia) for k, L in enumerate(links) if L.swing_inertia is not None] if damping else []
+    spin = [(k, L.spin_inertia) for k, L in enumerate(links) if L.spin_inertia is not None] if spinning else []
+    if not swing and not spin:
         return None
+    n_links = len(links)
 
     def torques(q, qd, w_axis):
         out = np.zeros(n_links)
-        if damping_rate:
-            for k, J in swing.items():
-                out[k] = -damping_rate * J * qd[k]
-        if spin_time_constant_s and spin_link is not None:
-            out[spin_link] = -spin_inertia * qd[spin_link] / spin_time_constant_s
+        for k, J in swing:
+            for term in damping:
+                out[k] += term(J, qd[k])
+        for k, C in spin:
+            for term in spinning:
+                out[k] += term(C, qd[k])
         return out
     return torques

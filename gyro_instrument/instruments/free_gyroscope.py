@@ -90,6 +90,7 @@ import time
 
 import numpy as np
 
+from gyro_instrument.core.effect import FRAME_RATE
 from gyro_instrument.core.integrate import Trajectory, integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
@@ -228,7 +229,10 @@ class FreeGyroscope(Instrument):
               doc="analytic: exact torque-free closed form; numerical: quaternion + DOP853"),
         Param("rtol", default=1e-12, low=1e-14, high=1e-3, doc="numerical path relative tolerance"),
     )
-    SUPPORTED_EFFECTS = frozenset({"earth_rotation"})
+    MECHANICS = frozenset({FRAME_RATE})
+    MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
+    JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
+    SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (
         Column("axis_altitude", "rad", "altitude of the figure axis above the horizon"),
         Column("axis_azimuth", "rad", "compass azimuth of the axis (0 north, clockwise), unwrapped"),
@@ -253,8 +257,9 @@ class FreeGyroscope(Instrument):
 
     # ---------------------------------------------------------------- constants of motion
     def model_rate(self):
-        """n used by the model: the site's Earth rate with ``earth_rotation`` listed, else 0."""
-        return self.site.earth_rate_rad_s if self.has("earth_rotation") else 0.0
+        """n used by the model: the active ``frame_rate`` effects' rate (``earth_rotation``: the
+        site's Earth rate), else 0 (:meth:`Instrument.model_earth_rate`)."""
+        return self.model_earth_rate()
 
     def motion_constants(self, n=None):
         """Exact constants of the torque-free motion (inertial frame = ENU at release).

@@ -86,12 +86,13 @@ import math
 
 import numpy as np
 
+from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, RIGID_BODY, SPIN
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
-from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
+from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
+from gyro_instrument.instruments.chain import HingeChain, Link
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
@@ -312,8 +313,10 @@ class GimbalGyroscope(Instrument):
               doc="initial θ̇, degrees/s (must be 0 for locked)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
-    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "ring_inertia", "spin_decay",
-                                   "pivot_damping"})
+    MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA})
+    MEASURED_CHANNELS = ("outer_angle", "inner_angle")
+    JOINTS = ("outer_ring", "inner_ring", "rotor")
+    SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (
         Column("outer_angle", "rad", "ψ − 90°: azimuth of the rotor axis' projection from ox, about PP' "
                                      "(outer ring joint; equilibrium line 0 when locked)"),
@@ -429,11 +432,10 @@ class GimbalGyroscope(Instrument):
         self.C2_given = 2.0 * self.A2_given if self.outer_ring_axial_inertia_kg_m2 is None \
             else self.outer_ring_axial_inertia_kg_m2
         # ... and as simulated: massless rings unless ``ring_inertia`` is listed.
-        rings = self.has("ring_inertia")
-        self.A1 = self.A1_given if rings else 0.0
-        self.C1 = self.C1_given if rings else 0.0
-        self.A2 = self.A2_given if rings else 0.0
-        self.C2 = self.C2_given if rings else 0.0
+        self.A1 = self.carrier_inertia(self.A1_given)
+        self.C1 = self.carrier_inertia(self.C1_given)
+        self.A2 = self.carrier_inertia(self.A2_given)
+        self.C2 = self.carrier_inertia(self.C2_given)
         conf = self.configuration
         self.alpha_fixed = math.radians(self.outer_fixed_angle_deg)
         if conf == "outer_fixed":
@@ -470,8 +472,8 @@ class GimbalGyroscope(Instrument):
             chan = "inner_angle"
         else:
             return None
-        return {"gain": gain, "normal_enu": tuple(float(v) for v in normal), "label": label, "angle_channel": chan,
-                "null_reason": "the swing plane is perpendicular to Earth's axis here: no restoring torque"}
+        return DirectingModel(gain=gain, normal_enu=tuple(float(v) for v in normal), label=label, angle_channel=chan,
+                              null_reason="the swing plane is perpendicular to Earth's axis here: no restoring torque")
 
     # ---------------------------------------------------------------- geometry helpers
     @property
@@ -609,16 +611,11 @@ class GimbalGyroscope(Instrument):
                  locked=(conf == "outer_fixed"), locked_angle=self.alpha_fixed + math.pi / 2),
             Link("inner_ring", np.array([1.0, 0.0, 0.0]), np.diag([self.A1, self.C1, self.A1]),
                  locked=(conf == "locked"), locked_angle=math.pi / 2),
-            Link("rotor", np.array([0.0, 0.0, 1.0]), np.diag([self.A, self.A, self.C])),
+            Link("rotor", np.array([0.0, 0.0, 1.0]), np.diag([self.A, self.A, self.C]), spin_inertia=self.C),
         ]
-        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
-        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
-        J_out, J_in = self.swing_inertias()
-        torques = hinge_friction(3, damp, {0: J_out, 1: J_in}, 2, self.C, tau_s)
+        links[0].swing_inertia, links[1].swing_inertia = self.swing_inertias()
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
-        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
-                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
-                          hinge_torques=torques)
+        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
 
     def initial_state(self, chain):
         """y0 = [q_free, q̇_free] at release: ψ0, θ0, φ0 = 0, ψ̇0, θ̇0, φ̇0 = ρ0 − ψ̇0 cos θ0."""

@@ -32,10 +32,11 @@ import numpy as np
 from scipy.special import ellipk
 
 from gyro_instrument.core.angles import unwrap
+from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, check_period_count, with_notes
-from gyro_instrument.instruments.chain import HingeChain, Link, hinge_friction
+from gyro_instrument.instruments.chain import HingeChain, Link
 
 PENDULUM_COLUMNS = (
     Column("deflection", "rad", "θ: angle of the bob from the downward vertical"),
@@ -46,6 +47,11 @@ PENDULUM_COLUMNS = (
     Column("y_north", "m", "bob north of the suspension point"),
     Column("z_up", "m", "bob height relative to the suspension point (negative below)"),
 )
+
+
+#: What a pendulum's sensor reads and publishes (``Instrument.MEASURED_CHANNELS``, ``JOINTS``).
+PENDULUM_MEASURED = ("deflection_east", "deflection_north")
+PENDULUM_JOINTS = PENDULUM_MEASURED + ("deflection", "azimuth")
 
 
 def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
@@ -151,8 +157,12 @@ class SphericalPendulum(Instrument):
         Param("shooting_tol", default=1e-9, low=1e-14, high=1e-3,
               doc="parareal: largest change of a swing's start state (relative to the amplitude) accepted"),
     )
-    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"})
+    MECHANICS = frozenset({POINT_MASS, RESTORING_LAW})
     COLUMNS = PENDULUM_COLUMNS
+    MEASURED_CHANNELS = PENDULUM_MEASURED
+    JOINTS = PENDULUM_JOINTS
+    IS_PENDULUM = True
+    SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
     def check_effects(cls, prefix, p, effects):
@@ -175,6 +185,10 @@ class SphericalPendulum(Instrument):
         self.g = site.gravity_m_s2
         self.theta0 = math.radians(self.initial_deflection_deg)
         self.psi0 = math.radians(self.initial_azimuth_deg)
+
+    def pendulum_length_m(self):
+        """The rod length l, m."""
+        return self.l
 
     def initial_state(self):
         """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
@@ -224,15 +238,19 @@ class SphericalPendulum(Instrument):
                 "restoring_rate_rad_s": math.sqrt(self.g / self.l), "amplitude_rad": self.theta0,
                 "duration_s": duration_s}
 
+    def point_mass_terms(self):
+        """The active effects' ``point_mass`` terms f(δr, v) -> a (ENU, rotating frame), summing order."""
+        om = self.site.earth_rate_enu()
+        terms = (e.point_mass_term(om) for e in self.effects_of(POINT_MASS))
+        return [f for f in terms if f is not None]
+
     def rhs_exact(self):
-        """Cartesian constrained right-hand side for y = [r, v] (ENU); only listed effects."""
+        """Cartesian constrained right-hand side for y = [r, v] (ENU): gravity, the tension and the
+        sum of the active effects' point-mass accelerations at δr = r − r_rest (module docstring).
+        Accepts a batch of states (y of shape (6, m)) when every term does."""
         l2 = self.l * self.l
         g = self.g
-        om = self.site.earth_rate_enu()
-        ox, oy, oz = om
-        cor = self.has("earth_rotation")
-        cen = self.has("centrifugal")
-        drag = self.effect("air_drag")
+        terms = self.point_mass_terms()
         a_b = 2.0 * math.sqrt(g / self.l)
         b2 = g / self.l
         zr = -self.l
@@ -240,19 +258,9 @@ class SphericalPendulum(Instrument):
         def rhs(t, y):
             x, yy, z, vx, vy, vz = y
             fx, fy, fz = 0.0, 0.0, -g
-            if cor:
-                fx -= 2.0 * (oy * vz - oz * vy)
-                fy -= 2.0 * (oz * vx - ox * vz)
-                fz -= 2.0 * (ox * vy - oy * vx)
-            if cen:
-                dz = z - zr
-                od = ox * x + oy * yy + oz * dz
-                o2 = ox * ox + oy * oy + oz * oz
-                fx += o2 * x - od * ox
-                fy += o2 * yy - od * oy
-                fz += o2 * dz - od * oz
-            if drag is not None:
-                ax, ay, az = drag.acceleration(np.array([vx, vy, vz]))
+            dz = z - zr
+            for term in terms:
+                ax, ay, az = term(x, yy, dz, vx, vy, vz)
                 fx += ax
                 fy += ay
                 fz += az
@@ -264,28 +272,19 @@ class SphericalPendulum(Instrument):
         return rhs
 
     def rhs_linear(self):
-        """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x + Coriolis
-        (vertical and horizontal Earth-rate parts on the horizontal velocity) + listed effects."""
+        """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x plus the
+        horizontal part of the active effects' point-mass accelerations, taken on the horizontal
+        plane (δr = (x, y, 0), v = (vx, vy, 0): Coriolis from the vertical Earth-rate part, ...)."""
         w0sq = self.g / self.l
-        ox, oy, oz = (float(c) for c in self.site.earth_rate_enu())
-        cor = self.has("earth_rotation")
-        cen = self.has("centrifugal")
-        drag = self.effect("air_drag")
+        terms = self.point_mass_terms()
 
         def rhs(t, y):
             x, yy, vx, vy = y
             ax, ay = -w0sq * x, -w0sq * yy
-            if cor:                       # −2 Ω × v with v = (vx, vy, 0)
-                ax += 2.0 * oz * vy
-                ay -= 2.0 * oz * vx
-            if cen:                       # −Ω × (Ω × r) = Ω² r − (Ω·r) Ω with r = (x, y, 0)
-                o2, od = ox * ox + oy * oy + oz * oz, ox * x + oy * yy
-                ax += o2 * x - od * ox
-                ay += o2 * yy - od * oy
-            if drag is not None:
-                a = drag.acceleration(np.array([vx, vy, 0.0]))
-                ax += a[0]
-                ay += a[1]
+            for term in terms:
+                tx, ty, _ = term(x, yy, 0.0, vx, vy, 0.0)
+                ax += tx
+                ay += ty
             return np.array([vx, vy, ax, ay])
         return rhs
 
@@ -304,7 +303,7 @@ class SphericalPendulum(Instrument):
         atol_z, atol_vz = max(atol_r, 1e-14 * self.l), max(atol_v, 1e-14 * self.l * w0)
         if self.integrator == "parareal":
             return self._simulate_parareal(t, r0, v0, amp, options.get("progress"))
-        if self.has("finite_amplitude"):
+        if self.restoring_law() is not None:          # finite_amplitude: the exact (Cartesian) model
             traj = integrate(self.rhs_exact(), np.concatenate([r0, v0]), t, rtol=self.rtol,
                              atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
             pos, vel = traj.y[:3], traj.y[3:]
@@ -437,8 +436,12 @@ class CompoundPendulum(Instrument):
         Param("initial_azimuth_deg", default=90.0, low=-360.0, high=360.0, doc="compass azimuth of the release"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
-    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "pivot_damping", "spin_decay"})
+    MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN})
     COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "relative spin about the figure axis"),)
+    MEASURED_CHANNELS = PENDULUM_MEASURED
+    JOINTS = PENDULUM_JOINTS
+    IS_PENDULUM = True
+    SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
     def check_params(cls, prefix, p):
@@ -463,6 +466,10 @@ class CompoundPendulum(Instrument):
         self.theta0 = math.radians(self.initial_deflection_deg)
         self.psi0 = math.radians(self.initial_azimuth_deg)
 
+    def pendulum_length_m(self):
+        """The pivot–centre-of-mass distance l, m (the deflections are those of the centre of mass)."""
+        return self.lc
+
     def predictions(self):
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
         ``earth_rotation``), the quarter period of the simple pendulum of length λ."""
@@ -484,14 +491,10 @@ class CompoundPendulum(Instrument):
         links = [Link("cardan_east", np.array([1.0, 0.0, 0.0]), np.zeros((3, 3))),
                  Link("cardan_north", np.array([0.0, 1.0, 0.0]), np.zeros((3, 3))),
                  Link("body", np.array([0.0, 0.0, -1.0]), np.diag([self.A, self.A, self.C]),
-                      mass_kg=self.M, com_m=np.array([0.0, 0.0, -self.lc]))]
-        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
-        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
-        torques = hinge_friction(3, damp, {0: self.A, 1: self.A}, 2, self.C, tau_s)
+                      mass_kg=self.M, com_m=np.array([0.0, 0.0, -self.lc]), spin_inertia=self.C)]
+        links[0].swing_inertia = links[1].swing_inertia = self.A
         return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
-                          np.array([0.0, 0.0, -self.site.gravity_m_s2]),
-                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
-                          hinge_torques=torques)
+                          np.array([0.0, 0.0, -self.site.gravity_m_s2]), self.effects.values())
 
     def simulate(self, t, **options):
         t = np.asarray(t, dtype=float)

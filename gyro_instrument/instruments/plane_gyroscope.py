@@ -35,8 +35,9 @@ from gyro_instrument.core.integrate import Trajectory, integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
-from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation, hinge_friction
+from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN
+from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
+from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 
 
 def plane_normal_enu(plane, normal_enu, site):
@@ -237,8 +238,10 @@ class PlaneGyroscope(Instrument):
               doc="reduced 1-DOF equation or the generic hinge chain (cone: always chain)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
-    SUPPORTED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay",
-                                   "pivot_damping"})
+    MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, RESTORING_LAW})
+    MEASURED_CHANNELS = ("angle",)
+    JOINTS = ("axis", "rotor")
+    SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),
                Column("angle_rate", "rad/s", "du/dt"),
                Column("spin_rate", "rad/s", "ρ: relative spin of the rotor about its axis"))
@@ -294,11 +297,10 @@ class PlaneGyroscope(Instrument):
         # The exact equation adds (μ − 1) n² sin² ω to K (module docstring): K/(μρ) = y0 (1 + c2 y0 / ρ)
         # with y0 = n sin ω and c2 = (μ − 1)/μ. Derived for the plane only (ε = 90°).
         c2 = 0.0 if self.is_cone else (self.mu - 1.0) / self.mu
-        return {"gain": gain, "second_order": c2, "normal_enu": tuple(float(v) for v in self.normal),
-                "label": self.plane,
-                "angle_channel": "angle",
-                "null_reason": "a directing plane perpendicular to Earth's axis (horizontal at a pole) has no "
-                               "restoring torque (Quet sec. 4 §1 item 4)"}
+        return DirectingModel(gain=gain, second_order=c2, normal_enu=tuple(float(v) for v in self.normal),
+                              label=self.plane, angle_channel="angle",
+                              null_reason="a directing plane perpendicular to Earth's axis (horizontal at a pole) "
+                                          "has no restoring torque (Quet sec. 4 §1 item 4)")
 
     def scales(self, duration_s):
         n = self.site.earth_rate_rad_s
@@ -328,7 +330,7 @@ class PlaneGyroscope(Instrument):
         decay = 1.0 / tau_s if tau_s else 0.0
         sin, cos = math.sin, math.cos
 
-        if self.has("finite_amplitude"):
+        if self.restoring_law() is not None:       # finite_amplitude: sin u
             def rhs(t, u, ud, rho):
                 su = sin(u)
                 return ud, -(a * rho + b * cos(u)) * su - damp * ud, pr * su * ud - decay * rho
@@ -353,20 +355,22 @@ class PlaneGyroscope(Instrument):
         links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)))]
         # Rotor axis along body x; tilt about y by (π/2 − ε) puts it at ε from the normal.
         tilt = axis_rotation([0.0, 1.0, 0.0], -(math.pi / 2 - self.eps)) if self.is_cone else np.eye(3)
+        links[0].swing_inertia = self.A * (math.sin(self.eps) ** 2 if self.is_cone else 1.0)
         links.append(Link("rotor", np.array([1.0, 0.0, 0.0]), np.diag([self.C, self.A, self.A]),
-                          pre_rotation=tilt))
-        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
-        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
-        J = self.A * (math.sin(self.eps) ** 2 if self.is_cone else 1.0)
-        torques = hinge_friction(2, damp, {0: J}, 1, self.C, tau_s)
+                          pre_rotation=tilt, spin_inertia=self.C))
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
-        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g,
-                          linear=self.has("earth_rotation"), quadratic=self.has("centrifugal"),
-                          hinge_torques=torques)
+        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
+
+    #: The effects :meth:`reduced_rhs_scalar` is derived for by hand. With any other active effect
+    #: (one registered later for a kind this instrument sums) the hinge chain, which sums every
+    #: active effect's terms, is integrated instead, as for a cone.
+    REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"})
 
     def simulate(self, t, model=None):
-        """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0."""
-        model = "chain" if self.is_cone else (model or self.model)
+        """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model
+        (scalar DOP853) or the hinge chain — always the chain on a cone or with an active effect
+        outside :data:`REDUCED_EFFECTS` (``extra["model"]`` says which ran)."""
+        model = "chain" if self.is_cone or not set(self.effects) <= self.REDUCED_EFFECTS else (model or self.model)
         t = np.asarray(t, dtype=float)
         if model == "reduced":
             if not self.has("finite_amplitude") and abs(self.u0) > 0.5:
@@ -377,7 +381,7 @@ class PlaneGyroscope(Instrument):
             else:   # unusual sample times: the generic driver (same method) validates or handles them
                 traj = integrate(self.reduced_rhs(), y0, t, rtol=self.rtol, atol=1e-13)
             u, ud, rho = traj.y
-            return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj)
+            return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj, extra={"model": model})
         chain = self.build_chain()
         # ρ = φ̇ + u̇ cos ε (the frame's rate has a component cos ε along a cone axis).
         cos_eps = math.cos(self.eps) if self.is_cone else 0.0
@@ -386,4 +390,4 @@ class PlaneGyroscope(Instrument):
         u, phi, ud, phid = traj.y
         rho = phid + ud * cos_eps
         return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj,
-                          extra={"rotor_angle": phi, "chain": chain})
+                          extra={"rotor_angle": phi, "chain": chain, "model": model})

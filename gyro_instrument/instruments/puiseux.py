@@ -6,9 +6,9 @@ in equilibrium when Gz is vertical. It is spun at r about Gz and slightly tilted
 when Gz stays near the vertical (sec. I for an ellipsoid with G at its centre, sec. II for any
 body, through the principal curvature radii ρ, ρ' of the surface at A).
 
-Earth rotation is ignored, as in the paper (``SUPPORTED_EFFECTS`` is empty): the simulated
-model is the exact nonlinear rigid body on the frictionless plane, with no small-angle or
-other approximation, so there is nothing to switch on or off.
+Earth rotation is ignored, as in the paper (``MECHANICS`` and so ``SUPPORTED_EFFECTS`` are
+empty): the simulated model is the exact nonlinear rigid body on the frictionless plane, with no
+small-angle or other approximation, so there is nothing to switch on or off.
 
 Notation (the paper's)
 ----------------------
@@ -605,7 +605,10 @@ class PuiseuxBody(Instrument):
               doc="initial rate of the axis' compass azimuth (clockwise from above), degrees/s"),
         Param("rtol", default=1e-10, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
-    SUPPORTED_EFFECTS = frozenset()
+    MECHANICS = frozenset()
+    MEASURED_CHANNELS = ("tilt", "tilt_azimuth")
+    JOINTS = ("tilt", "tilt_azimuth", "spin")
+    SIMULATOR_NODE = "top_sim"
     COLUMNS = (
         Column("tilt", "rad", "theta: angle between the body axis Gz and the upward vertical"),
         Column("tilt_azimuth", "rad", "compass azimuth of the axis' horizontal projection (0 north, clockwise)"),

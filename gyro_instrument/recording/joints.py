@@ -3,16 +3,11 @@
 One layout, used by the simulator nodes to publish, by the estimator node to rebuild its input,
 and by ``replay`` to read a bag — so all three feed the estimator bit-identical floats.
 
-Per instrument (joint names are prefixed ``<instrument>/``):
-
-=================  ==========================================================================
-plane_gyroscope    ``axis`` (u, measured), ``rotor`` (rotor angle; velocity = measured spin ρ)
-gimbal_gyroscope   ``outer_ring``, ``inner_ring`` (measured), ``rotor`` (velocity = measured ρ)
-free_gyroscope     ``axis_altitude``, ``axis_azimuth`` (measured), ``rotor`` (velocity = ρ)
-puiseux_body       ``tilt``, ``tilt_azimuth`` (measured), ``spin`` (velocity = spin rate)
-pendulums          ``deflection_east``, ``deflection_north`` (measured components x/l, y/l),
-                   ``deflection`` = hypot, ``azimuth`` = atan2(east, north) (compass, rad)
-=================  ==========================================================================
+Per instrument, the joints its class declares (``Instrument.JOINTS``, prefixed ``<instrument>/``;
+msg_docs/topics.md lists them per type): first one per measured channel (``MEASURED_CHANNELS``,
+position = the measured angle); then, for a pendulum (``IS_PENDULUM``), ``deflection`` = hypot of
+the measured deflections x/l, y/l and ``azimuth`` = atan2(east, north) (compass, rad); otherwise
+one rotor joint (position = integrated true spin, velocity = measured spin ρ).
 
 Velocities of measured angles are centred differences of the published positions; rotor angles
 integrate the simulated spin; efforts are 0 (no torque sensor) — every array is filled, as
@@ -24,21 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gyro_instrument.core.scene import sample_times_ns
-from gyro_instrument.estimators.pipeline import (ANGLE_CHANNELS, PENDULUMS, measure, pendulum_length,
-                                                 simulate_truth)
-
-JOINT_NAMES = {
-    "plane_gyroscope": ("axis", "rotor"),
-    "gimbal_gyroscope": ("outer_ring", "inner_ring", "rotor"),
-    "free_gyroscope": ("axis_altitude", "axis_azimuth", "rotor"),
-    "puiseux_body": ("tilt", "tilt_azimuth", "spin"),
-    "spherical_pendulum": ("deflection_east", "deflection_north", "deflection", "azimuth"),
-    "compound_pendulum": ("deflection_east", "deflection_north", "deflection", "azimuth"),
-}
-_RECORD_KEY = {"axis": "angle", "outer_ring": "outer_angle", "inner_ring": "inner_angle",
-               "axis_altitude": "axis_altitude", "axis_azimuth": "axis_azimuth", "tilt": "tilt",
-               "tilt_azimuth": "tilt_azimuth", "deflection_east": "deflection_east",
-               "deflection_north": "deflection_north"}
+from gyro_instrument.estimators.pipeline import measure, simulate_truth
 
 
 @dataclass
@@ -83,16 +64,16 @@ def joint_streams(scene, kinds=None, seed=None, truth=None):
         if kinds is not None and inst.type_name not in kinds:
             continue
         rec, cols = records[name], sims[name].columns
-        names = JOINT_NAMES[inst.type_name]
-        if inst.type_name in PENDULUMS:
-            e, n = rec["deflection_east"], rec["deflection_north"]
+        names = inst.JOINTS
+        if inst.IS_PENDULUM:
+            e, n = (rec[c] for c in inst.MEASURED_CHANNELS)
             pos = np.column_stack([e, n, np.hypot(e, n), np.arctan2(e, n)])
             vel = np.column_stack([_rate(t, pos[:, j]) for j in range(4)])
-            l = pendulum_length(inst)
+            l = inst.pendulum_length_m()
             x, y = l * e, l * n
             bob = np.column_stack([x, y, -np.sqrt(np.maximum(l * l - x * x - y * y, 0.0))])
         else:
-            chans = ANGLE_CHANNELS[inst.type_name]
+            chans = inst.MEASURED_CHANNELS
             spin = rec.get("spin_rate", np.zeros_like(t))
             pos_cols = [rec[c] for c in chans]
             vel_cols = [_rate(t, c) for c in pos_cols]
@@ -114,7 +95,7 @@ def records_from_joints(insts, samples):
         instrument name -> instrument (from ``build_instruments``).
     samples : dict
         instrument name -> (t_ns int array, position (m, k), velocity (m, k)), joints in
-        :data:`JOINT_NAMES` order.
+        ``Instrument.JOINTS`` order.
     """
     records = {}
     for name, (t_ns, pos, vel) in samples.items():
@@ -123,14 +104,12 @@ def records_from_joints(insts, samples):
         pos = np.asarray(pos, dtype=float).reshape(len(t_ns), -1)
         vel = np.asarray(vel, dtype=float).reshape(len(t_ns), -1)
         rec = {"t": t_ns / 1e9}
-        for j, joint in enumerate(JOINT_NAMES[inst.type_name]):
-            key = _RECORD_KEY.get(joint)
-            if key:
-                rec[key] = pos[:, j].copy()
-        if inst.type_name not in PENDULUMS:
+        for j, key in enumerate(inst.MEASURED_CHANNELS):
+            rec[key] = pos[:, j].copy()
+        if not inst.IS_PENDULUM:
             rec["spin_rate"] = vel[:, -1].copy()
-            model = getattr(inst, "directing_model", lambda: None)()
+            model = inst.directing_model()
             if model is not None:
-                rec["angle"] = rec[model["angle_channel"]]
+                rec["angle"] = rec[model.angle_channel]
         records[name] = rec
     return records

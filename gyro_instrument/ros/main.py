@@ -6,7 +6,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException
 
 from gyro_instrument.ros.nodes import EstimatorNode, PlayerNode, RecorderNode, SimulatorNode
-from gyro_instrument.ros.topics import SIMULATOR_KINDS
+from gyro_instrument.instruments import simulator_kinds
 
 
 def _spin(node, on_exit=None):
@@ -23,7 +23,7 @@ def _spin(node, on_exit=None):
 
 def _simulator(name, args=None):
     rclpy.init(args=args)
-    node = SimulatorNode(name, SIMULATOR_KINDS[name])
+    node = SimulatorNode(name, simulator_kinds().get(name, ()))
     node.start()
     _spin(node)
 

@@ -32,7 +32,7 @@ from rclpy.serialization import deserialize_message
 from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
-from gyro_instrument.recording.joints import JOINT_NAMES, joint_streams, records_from_joints
+from gyro_instrument.recording.joints import joint_streams, records_from_joints
 from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
@@ -263,7 +263,7 @@ class EstimatorNode(SceneNode):
         for name, inst in self.insts.items():
             if estimable(inst):
                 self.buffers[name] = JointBuffer(m.joint_state_layout(
-                    tuple(f"{name}/{j}" for j in JOINT_NAMES[inst.type_name])))
+                    tuple(f"{name}/{j}" for j in inst.JOINTS)))
                 self.subs[joint_topic(name)] = self.create_subscription(
                     m.JointState, joint_topic(name), lambda data, n=name: self._on_joint_raw(n, data),
                     RELIABLE_ALL, raw=True)
@@ -313,7 +313,7 @@ class EstimatorNode(SceneNode):
         self._on_joint(name, msg)
 
     def _on_joint(self, name, msg):
-        expected = JOINT_NAMES[self.insts[name].type_name]
+        expected = self.insts[name].JOINTS
         names = tuple(n.split("/")[-1] for n in msg.name)
         if names != expected or len(msg.position) != len(expected) or len(msg.velocity) != len(expected):
             self._reject(name, f"joints {list(names)} do not match {list(expected)}")

@@ -25,7 +25,7 @@ from rclpy.parameter import Parameter
 from rclpy.subscription import Subscription
 
 from gyro_instrument.ros.nodes import EstimatorNode, RecorderNode, SimulatorNode
-from gyro_instrument.ros.topics import SIMULATOR_KINDS
+from gyro_instrument.instruments import simulator_kinds
 
 
 #: samples per batch at full speed; at most the publishers' KEEP_LAST depth (1000), so a writer
@@ -181,7 +181,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         sims = []
         owner = True
         types = {spec[0] for spec in scene_obj.instruments.values()}
-        for name, kinds in SIMULATOR_KINDS.items():
+        for name, kinds in simulator_kinds().items():
             if types & set(kinds):
                 sims.append(SimulatorNode(name, kinds, context=context, parameter_overrides=_params(
                     scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner)))

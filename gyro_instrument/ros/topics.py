@@ -1,7 +1,5 @@
 """The topics of a scene: name -> ROS type (documented in msg_docs/topics.md)."""
 
-from gyro_instrument.estimators.pipeline import PENDULUMS
-
 CLOCK = "/clock"
 ESTIMATOR_TOPICS = {
     "/estimator/latitude_rad": "std_msgs/msg/Float64",
@@ -10,12 +8,6 @@ ESTIMATOR_TOPICS = {
     "/estimator/earth_rate_sigma_rad_s": "std_msgs/msg/Float64",
     "/estimator/earth_rate_enu": "geometry_msgs/msg/Vector3Stamped",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
-}
-
-SIMULATOR_KINDS = {
-    "gyrocompass_sim": ("plane_gyroscope", "gimbal_gyroscope", "free_gyroscope"),
-    "pendulum_sim": ("spherical_pendulum", "compound_pendulum"),
-    "top_sim": ("puiseux_body",),
 }
 
 
@@ -32,7 +24,7 @@ def scene_topics(insts):
     out = {CLOCK: "rosgraph_msgs/msg/Clock"}
     for name, inst in insts.items():
         out[joint_topic(name)] = "sensor_msgs/msg/JointState"
-        if inst.type_name in PENDULUMS:
+        if inst.IS_PENDULUM:
             out[bob_topic(name)] = "geometry_msgs/msg/PointStamped"
     out.update(ESTIMATOR_TOPICS)
     return out

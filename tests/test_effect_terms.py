@@ -1,0 +1,142 @@
+"""Effects contribute terms, instruments sum them (issue 12 part 2), and the hand-derived fast paths
+are held to the summed terms for every combination of the effects they support.
+
+* The plane gyroscope's scalar right-hand side (Quet sec. 4 §1 eqs. 2–3 with the dropped O(n²) term,
+  spin decay and pivot damping written out by hand) against the generic hinge chain, which sums the
+  effects' ``rigid_body``, ``damping`` and ``spin`` terms — all 2⁵ subsets of its five effects.
+* The pendulum's parareal fast path (first guesses from Quet's comparison pendulum) against the
+  adaptive integration of the summed point-mass terms, for every effect set it accepts.
+* The effects' component-form terms against their vector helpers (Quet sec. 1 eqs. 16, 19).
+"""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from gyro_instrument.core.effect import MECHANICS, POINT_MASS, Effect
+from gyro_instrument.core.site import Site
+from gyro_instrument.effects import REGISTRY as EFFECTS
+from gyro_instrument.effects.centrifugal import centrifugal_gradient_acceleration
+from gyro_instrument.effects.earth_rotation import coriolis_acceleration
+from gyro_instrument.instruments import REGISTRY as INSTRUMENTS
+from gyro_instrument.scenes import build_instruments, load_scene
+
+PLANE_EFFECTS = ("earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping")
+EFFECT_PARAMS = {"spin_decay": "{time_constant_s: 100.0}", "pivot_damping": "{time_constant_s: 200.0}"}
+
+
+def _gyroscopes(effects):
+    """quet_paris's two plane gyroscopes (horizontal, meridian) with exactly ``effects``."""
+    over = ["effects=null", "instruments.pendulum=null"] + [f"effects.{e}={EFFECT_PARAMS.get(e, '{}')}"
+                                                             for e in effects]
+    if not effects:
+        over = ["effects=null", "instruments.pendulum=null"]
+    insts = build_instruments(load_scene("quet_paris", over))
+    return [insts["gyro_horizontal"], insts["gyro_meridian"]]
+
+
+STATES = [(0.1, 0.05, 628.3), (1.0, -0.3, 628.3), (-2.5, 0.2, 50.0), (3.0, 0.0, -300.0)]
+
+
+@pytest.mark.parametrize("effects", [c for r in range(6) for c in itertools.combinations(PLANE_EFFECTS, r)],
+                         ids=lambda c: "+".join(c) or "none")
+def test_plane_gyroscope_scalar_path_equals_the_summed_terms(effects):
+    """ü and ρ̇ of the hand-derived scalar path equal the hinge chain's (the summed effect terms)
+    to rounding. Without ``finite_amplitude`` the scalar path uses the small-angle law u for sin u in
+    the restoring torque only: the chain's torque at u̇ = 0 is scaled by u / sin u (the restoring
+    law's contribution), its u̇-dependent rest (damping) kept. Tolerance: 1e-12 of the largest term
+    (aρ + |b|) — the chain's 3x3 rotations and linear solve round at ~1e-15 relative."""
+    for inst in _gyroscopes(effects):
+        fast = inst.reduced_rhs_scalar()
+        chain = inst.build_chain()
+        for u, ud, rho in STATES:
+            _, udd, rhod = fast(0.0, u, ud, rho)
+            full = chain.rhs(0.0, np.array([u, 0.0, ud, rho]))
+            still = chain.rhs(0.0, np.array([u, 0.0, 0.0, rho]))
+            udd_ref, rhod_ref = full[2], full[3]
+            if "finite_amplitude" not in effects:
+                udd_ref = still[2] * u / math.sin(u) + (full[2] - still[2])
+            p = inst.site.earth_rate_rad_s * inst.sin_omega
+            scale = max(inst.mu * p * abs(rho) + abs(ud) + abs(rho) / 100.0, 1e-30)
+            assert udd == pytest.approx(udd_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
+            assert rhod == pytest.approx(rhod_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
+
+
+@pytest.mark.parametrize("effects", [("finite_amplitude",), ("finite_amplitude", "earth_rotation"),
+                                     ("finite_amplitude", "centrifugal"),
+                                     ("finite_amplitude", "earth_rotation", "centrifugal")],
+                         ids=lambda c: "+".join(c))
+def test_parareal_fast_path_equals_the_summed_terms(effects):
+    """Every effect set the parareal path accepts (finite_amplitude, no air_drag): its bob positions
+    over 4 swings match DOP853 on the summed point-mass terms (rtol 1e-11) to 1e-7 of the amplitude
+    (shooting_tol 1e-9 per swing, RK8 at 48 steps per period: ~1e-9 measured; margin for rounding)."""
+    over = ["duration_s=66", "sample_rate_hz=2", "effects=null"] + [f"effects.{e}={{}}" for e in effects]
+    fast = build_instruments(load_scene("foucault_pantheon", over + ["instruments.pendulum.integrator=parareal"]))
+    slow = build_instruments(load_scene("foucault_pantheon", over))
+    t = np.arange(0.0, 66.0, 0.5)
+    a, b = fast["pendulum"].simulate(t), slow["pendulum"].simulate(t)
+    amp = 67.0 * math.sin(math.radians(2.0))
+    for c in ("x_east", "y_north"):
+        assert np.max(np.abs(a.columns[c] - b.columns[c])) < 1e-7 * amp
+
+
+def test_point_mass_terms_equal_the_vector_helpers():
+    """Component-form terms equal −2 Ω × v and −Ω × (Ω × δr) (Quet sec. 1 eqs. 16, 19) to rounding."""
+    om = Site.from_degrees(48.8462).earth_rate_enu()
+    rng = np.random.default_rng(3)
+    cor = EFFECTS["earth_rotation"]().point_mass_term(om)
+    cen = EFFECTS["centrifugal"]().point_mass_term(om)
+    for _ in range(5):
+        dr, v = rng.normal(size=3) * 5.0, rng.normal(size=3)
+        np.testing.assert_allclose(cor(*dr, *v), coriolis_acceleration(om, v), rtol=0, atol=1e-19)
+        np.testing.assert_allclose(cen(*dr, *v), centrifugal_gradient_acceleration(om, dr), rtol=0, atol=1e-21)
+
+
+def test_spin_and_damping_terms():
+    """spin_decay's bearing torque is C times its angular deceleration −ρ/τ; pivot damping −(2/τ) J q̇."""
+    sd = EFFECTS["spin_decay"](time_constant_s=50.0)
+    assert sd.spin_torque(2.0, 600.0) == pytest.approx(2.0 * sd.spin_torque_per_inertia(600.0), rel=1e-15)
+    assert EFFECTS["pivot_damping"](time_constant_s=10.0).damping_torque(3.0, 0.5) == pytest.approx(-0.3)
+
+
+def test_every_effect_declares_known_kinds_and_implements_their_hooks():
+    """An effect's MECHANICS name known kinds; each declared kind's hook is overridden (the base
+    hook contributes nothing); each instrument supports exactly the effects meeting its kinds."""
+    hooks = {"point_mass": "point_mass_term", "rigid_body": "rigid_body_torque", "damping": "damping_torque",
+             "spin": "spin_torque", "restoring_law": "restoring_law", "carrier_inertia": "carrier_inertia",
+             "frame_rate": "frame_rate_rad_s"}
+    assert set(hooks) == MECHANICS
+    for name, cls in EFFECTS.items():
+        assert cls.MECHANICS and cls.MECHANICS <= MECHANICS, name
+        for kind in cls.MECHANICS:
+            assert getattr(cls, hooks[kind]) is not getattr(Effect, hooks[kind]), (name, kind)
+    for tname, cls in INSTRUMENTS.items():
+        assert cls.SUPPORTED_EFFECTS == {e for e, ec in EFFECTS.items() if ec.MECHANICS & cls.MECHANICS}
+
+
+def test_supported_effects_are_unchanged_by_the_derivation():
+    """The derived sets are the ones each instrument declared before issue 12 (msg_docs/instruments.md)."""
+    expected = {
+        "plane_gyroscope": {"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"},
+        "spherical_pendulum": {"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"},
+        "compound_pendulum": {"earth_rotation", "centrifugal", "pivot_damping", "spin_decay"},
+        "free_gyroscope": {"earth_rotation"},
+        "puiseux_body": set(),
+        "gimbal_gyroscope": {"earth_rotation", "centrifugal", "ring_inertia", "spin_decay", "pivot_damping"},
+    }
+    assert {t: set(INSTRUMENTS[t].SUPPORTED_EFFECTS) for t in expected} == expected
+
+
+def test_terms_are_summed_in_registry_order_whatever_the_scene_order():
+    """Floating-point sums depend on order: the instrument sums in the registry's order, so listing
+    the effects in another order gives bit-identical results."""
+    a = build_instruments(load_scene("foucault_pantheon", ["duration_s=20"]))["pendulum"]
+    b = build_instruments(load_scene("foucault_pantheon", [
+        "duration_s=20", "effects=null", "effects.finite_amplitude={}", "effects.centrifugal={}",
+        "effects.earth_rotation={}"]))["pendulum"]
+    assert list(a.effects) == list(b.effects) == ["earth_rotation", "centrifugal", "finite_amplitude"]
+    t = np.linspace(0.0, 20.0, 41)
+    np.testing.assert_array_equal(a.simulate(t).columns["x_east"], b.simulate(t).columns["x_east"])
+    assert POINT_MASS in EFFECTS["earth_rotation"].MECHANICS
