@@ -175,15 +175,20 @@ def labelled(key, value):
     """``key = value`` for a prediction, with the period convention beside a period or duration and
     deg/h beside a rad/s rate."""
     text = f"{key} = {value:.10g}" if isinstance(value, float) else f"{key} = {_fmt(value, '')}"
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
+    numbers = isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) for v in value)
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)) and not numbers:
         return text
     if "quarter_period" in key:
         return f"{text} {QUARTER_PERIOD}"
+    if "half_period" in key:
+        return f"{text} (half period)"
     if "swing_duration" in key or key.startswith("T_"):
         return f"{text} {SWING}"
     if "period" in key and key.endswith("_s"):
         return f"{text} {FULL_PERIOD}"
-    if key.endswith("_rad_s"):
+    if key.endswith("_rad_s") and not numbers:
+        if "spin" in key:     # a rotor's spin: turn/s is how people think of it
+            return f"{text} ({value / (2 * math.pi):.6g} turn/s)"
         return f"{text} ({deg_h(value)})"
     return text
 
@@ -352,9 +357,9 @@ def print_estimate(r, stream=None):
     for name, e in r["instruments"].items():
         if e.get("swing_duration_s") is not None:
             c = e.get("counting", {})
-            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s {SWING} (fit), "
-              f"T0 = {e['small_amplitude_swing_duration_s']:.9f} s {SWING}; counting: "
-              f"{_fmt(c.get('swing_duration_s'), '.6f')} s {SWING} ({c.get('swings')} swings)\n")
+            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s (fit; one swing = "
+              f"half period), T0 = {e['small_amplitude_swing_duration_s']:.9f} s (small amplitude, one swing); "
+              f"counting: {_fmt(c.get('swing_duration_s'), '.6f')} s (one swing; {c.get('swings')} swings)\n")
         elif e.get("foucault_rate_rad_s") is not None:
             w(f"  {name}: k = {e['foucault_rate_rad_s']:.6e} +/- {e['foucault_rate_sigma_rad_s']:.2g} rad/s "
               f"({deg_h(e['foucault_rate_rad_s'])}; ellipse correction {e['ellipse_correction_rad_s']:.2g} rad/s), "

@@ -354,9 +354,14 @@ def _quantity_value(quantity, si, name):
     return None if si is None else si / TARGETS[name][1]
 
 
+#: The overrides that switch the sensor off (the same as ``bench.effect_cost.NOISE_FREE``, which the
+#: systematic-floor study uses; the bench is a layer above and cannot be imported here).
+NOISE_FREE = ("sensor.noise_rad=0", "sensor.quantization_rad=0", "sensor.spin_noise_rad_s=0",
+              "sensor.dropout_fraction=0")
+
+
 def noise_free_overrides():
     """The overrides that switch the sensor off (as ``bench``'s systematic-floor study does)."""
-    from gyro_instrument.bench.effect_cost import NOISE_FREE
     return list(NOISE_FREE)
 
 
