@@ -527,6 +527,11 @@ def build_parser():
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
+    p.add_argument("--scene", default=None, metavar="SCENE",
+                   help="run only the observation-time study (error versus observation time, systematic floors "
+                        "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene (as for 'estimate')")
     p = sub.add_parser("plan", help="how long must I observe? the observation time per configuration each "
                                     "--target needs (Cramer-Rao bound of the scene's sensor model), its dependence "
                                     "on the time, the systematic floor, the effect of the sensor's noise and "
@@ -669,8 +674,14 @@ def run_command(args):
         return 0
     if args.command == "bench":
         from gyro_instrument.bench.studies import run_bench
+        if args.overrides and args.scene is None:
+            raise SceneError("--set", args.overrides[0], "applies to a --scene; give --scene SCENE")
+        if args.scene is not None:
+            from gyro_instrument.scenes import load_scene
+            load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
         check_output_dir(args.out)
-        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
+        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr), scene=args.scene,
+                        overrides=args.overrides))
         return 0
     if args.command == "plan":
         return plan_command(args)

@@ -180,3 +180,21 @@ def test_cli_verify_reports_achieved_next_to_target(capsys, user_gyro):
     v = json.loads(cap.out)["targets"][0]["verify"]
     assert v["seeds"] == 4 and v["achieved_rms"] > 0 and "4/4 seeds" in cap.err
     assert ARCSEC_RAD > 0
+
+
+def test_bench_observation_time_on_any_scene():
+    # bench --scene: the observation-time study on a scene other than quet_paris (a gimbal pair, no
+    # pendulum): its rows are filled, the fit is far better than counting, and the floor rows are
+    # those of the scope the scene has (the gyroscope pair), with its own effects
+    from gyro_instrument.bench.studies import observation_time
+    rows, floors = observation_time((2,), 4, scene="gimbal_paris", overrides=["seed=3"])
+    (r,) = rows
+    assert r[1] is not None and r[3] is not None and r[4] is not None and abs(r[4]) > 100 * r[1]
+    assert floors and {f[2] for f in floors} == {"gyroscope pair (item 9, eq. 10)"}
+
+
+def test_bench_scene_options_are_checked(capsys, tmp_path):
+    assert main(["bench", "--set", "seed=3", "--out", str(tmp_path / "b")]) == 2
+    assert "give --scene SCENE" in capsys.readouterr().err
+    assert main(["bench", "--scene", "quet_pari", "--quick", "--out", str(tmp_path / "b")]) == 2
+    assert "shipped scene" in capsys.readouterr().err and not (tmp_path / "b").exists()
