@@ -463,9 +463,10 @@ def print_plan(d, stream=None):
             elif fl["reachable"]:
                 w(f"  floor: noise-free bias {fl['bias']:.2g} {unit} at the planned T: below the target\n")
             else:
-                by = f", set by {fl['set_by']}" if fl.get("set_by") else ""
+                by = (f": set by {fl['set_by']}, a systematic effect the estimator does not correct" if fl.get("set_by")
+                      else ": no single effect sets it (the estimator's own bias at this record length)")
                 w(f"  floor: NOT REACHABLE: the noise-free estimate is off by {fl['bias']:.3g} {unit} at the planned T"
-                  f"{by} (a systematic effect the estimator does not correct)\n")
+                  f"{by}\n")
                 for c in fl.get("effects", []):
                     w(f"    without {c['effect']}: bias {_fmt(c['bias_without'], '.3g')} {unit}\n")
         rows = "; ".join(f"{r['change']} -> {human_duration(r['observation_s'])} (law {r['law_observation_s']:.4g} s)"

@@ -198,3 +198,13 @@ def test_bench_scene_options_are_checked(capsys, tmp_path):
     assert "give --scene SCENE" in capsys.readouterr().err
     assert main(["bench", "--scene", "quet_pari", "--quick", "--out", str(tmp_path / "b")]) == 2
     assert "shipped scene" in capsys.readouterr().err and not (tmp_path / "b").exists()
+
+
+def test_noise_free_sensor_is_limited_by_the_shortest_record():
+    # σ = 0: the bound vanishes, so the plan is the estimator's shortest record (two swings of the
+    # slower gyroscope), and what is left is the systematic floor
+    d = plan("quet_gyroscopes", ["sensor.noise_rad=0"], parse_targets(["earth_rate_rad_s=1e-12"]),
+             noise_factors=(), rate_factors=(), floor=False)
+    e = d["targets"][0]
+    assert e["observation_s"] == pytest.approx(d["min_record_s"]) and e["planned_sigma"] < 1e-12
+    assert e["limited_by"] == "the estimator's shortest record"

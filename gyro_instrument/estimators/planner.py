@@ -208,8 +208,10 @@ def sine_fit_covariance(T, rate_hz, omega, coef, sigma, keep=1.0):
     dt = 1.0 / rate_hz
     a1, b1, a3, b3 = coef
     amp = math.hypot(a1, b1)
-    if n < 7 or sigma <= 0 or amp <= 0:
-        return (math.inf if sigma > 0 else 0.0), math.inf, 0.0, "too few samples"
+    if sigma <= 0:
+        return 0.0, 0.0, 0.0, "noise-free sensor"
+    if n < 7 or amp <= 0:
+        return math.inf, math.inf, 0.0, "too few samples"
     span = (n - 1) * dt
     cycles = omega * span / (2.0 * math.pi)
     if n > EXACT_SAMPLES and cycles >= CLOSED_FORM_CYCLES:
@@ -271,6 +273,8 @@ def counting_sigma(m, T):
 def combined(models, sigmas, hemisphere=None, latitude_rad=None):
     """Combined 1-σ bounds from per-instrument σ: dict with latitude_rad, earth_rate_rad_s (None with
     ``*_reason`` when not determined), via ``solve_latitude(..., use_crlb=True)``."""
+    # a noise-free sensor has a zero bound: keep its structure (what it can determine) with a vanishing σ
+    sigmas = [s if s > 0 else 1e-20 * abs(m.value) for m, s in zip(models, sigmas)]
     meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s)
             for m, s in zip(models, sigmas) if math.isfinite(s) and s > 0]
     if not meas:
