@@ -160,6 +160,39 @@ def to_jsonable(x):
     return x
 
 
+#: Period conventions printed beside every period (physics_notes, 'What a printed T means').
+SWING = "(one swing = half period)"
+FULL_PERIOD = "(full period)"
+QUARTER_PERIOD = "(quarter period, sec. 2 eq. 42)"
+
+
+def deg_h(rate_rad_s):
+    """A rate in rad/s as ``x deg/h`` (for printing beside the rad/s value)."""
+    return "null deg/h" if rate_rad_s is None else f"{math.degrees(rate_rad_s) * 3600.0:.6g} deg/h"
+
+
+def labelled(key, value):
+    """``key = value`` for a prediction, with the period convention beside a period or duration and
+    deg/h beside a rad/s rate."""
+    text = f"{key} = {value:.10g}" if isinstance(value, float) else f"{key} = {_fmt(value, '')}"
+    numbers = isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) for v in value)
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)) and not numbers:
+        return text
+    if "quarter_period" in key:
+        return f"{text} {QUARTER_PERIOD}"
+    if "half_period" in key:
+        return f"{text} (half period)"
+    if "swing_duration" in key or key.startswith("T_"):
+        return f"{text} {SWING}"
+    if "period" in key and key.endswith("_s"):
+        return f"{text} {FULL_PERIOD}"
+    if key.endswith("_rad_s") and not numbers:
+        if "spin" in key:     # a rotor's spin: turn/s is how people think of it
+            return f"{text} ({value / (2 * math.pi):.6g} turn/s)"
+        return f"{text} ({deg_h(value)})"
+    return text
+
+
 # ----------------------------------------------------------------------------- describe
 def describe(scene):
     """Dict describing a scene: site, instruments, active effects, effect sizes, predictions."""
@@ -189,7 +222,8 @@ def print_description(d, stream=None):
     w = (stream or sys.stdout).write
     s = d["site"]
     w(f"scene {d['scene']}: {d['description']}\n")
-    w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s, "
+    w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s "
+      f"({deg_h(s['earth_rate_rad_s'])}), "
       f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
     w(f"  effects listed: {', '.join(d['scene_effects']) or 'none'}\n")
     for note in d.get("scene_notes", []):
@@ -201,8 +235,7 @@ def print_description(d, stream=None):
             size = e["relative_size"]
             size_txt = f"{size:.3g}" if size is not None else "n/a"
             w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
-        preds = ", ".join(f"{k} = {v:.10g}" if isinstance(v, float) else f"{k} = {_fmt(v, '')}"
-                          for k, v in inst["predictions"].items() if k != "notes")
+        preds = ", ".join(labelled(k, v) for k, v in inst["predictions"].items() if k != "notes")
         w(f"    predictions: {preds}\n")
         for note in inst["predictions"].get("notes", []):
             w(f"    prediction note: {note}\n")
@@ -314,6 +347,7 @@ def print_estimate(r, stream=None):
     for o in r.get("other_latitudes_deg") or ():
         w(f"  also consistent: latitude {o['latitude_deg']:.7f} deg (delta chi2 = {o['delta_chi2']:.3g})\n")
     w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
+      f" ({deg_h(r['earth_rate_rad_s'])})"
       f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
     if r.get("method"):
         w(f"  method: {r['method']}\n")
@@ -323,12 +357,13 @@ def print_estimate(r, stream=None):
     for name, e in r["instruments"].items():
         if e.get("swing_duration_s") is not None:
             c = e.get("counting", {})
-            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s (fit), "
-              f"T0 = {e['small_amplitude_swing_duration_s']:.9f} s; counting: {_fmt(c.get('swing_duration_s'), '.6f')} s"
-              f" ({c.get('swings')} swings)\n")
+            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s (fit; one swing = "
+              f"half period), T0 = {e['small_amplitude_swing_duration_s']:.9f} s (small amplitude, one swing); "
+              f"counting: {_fmt(c.get('swing_duration_s'), '.6f')} s (one swing; {c.get('swings')} swings)\n")
         elif e.get("foucault_rate_rad_s") is not None:
             w(f"  {name}: k = {e['foucault_rate_rad_s']:.6e} +/- {e['foucault_rate_sigma_rad_s']:.2g} rad/s "
-              f"(ellipse correction {e['ellipse_correction_rad_s']:.2g})\n")
+              f"({deg_h(e['foucault_rate_rad_s'])}; ellipse correction {e['ellipse_correction_rad_s']:.2g} rad/s), "
+              f"swing period {e['period_s']:.6g} s {FULL_PERIOD}\n")
         else:
             w(f"  {name}: null: {e.get('reason')}\n")
     for mname, m in r["methods"].items():
@@ -336,7 +371,8 @@ def print_estimate(r, stream=None):
         w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
           + (" (|latitude|: hemisphere not determined)" if m.get("latitude_is_absolute") else "")
           + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None and m.get("latitude_sigma_deg") is not None else "")
-          + (f", n = {m['earth_rate_rad_s']:.9e}" if m.get("earth_rate_rad_s") is not None else "")
+          + (f", n = {m['earth_rate_rad_s']:.9e} rad/s ({deg_h(m['earth_rate_rad_s'])})"
+             if m.get("earth_rate_rad_s") is not None else "")
           + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
           + "\n")
 
@@ -370,6 +406,84 @@ def print_damage(r, w):
         w(f"  damaged: {damage_line(d)}\n")
     for n in r.get("replay_notes") or ():
         w(f"  note: {n}\n")
+
+
+# ----------------------------------------------------------------------------- plan
+def human_duration(s):
+    """``161.6 s (2.69 min)``: seconds with the largest sensible unit beside them."""
+    if s is None:
+        return "null"
+    for unit, size in (("years", 365.25 * 86400), ("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if s >= 2 * size:
+            return f"{s:.4g} s ({s / size:.3g} {unit})"
+    return f"{s:.4g} s"
+
+
+def print_plan(d, stream=None):
+    """Human-readable plan (:func:`gyro_instrument.estimators.planner.plan`)."""
+    w = (stream or sys.stdout).write
+    sen = d["sensor"]
+    n = d["earth_rate_rad_s"]
+    w(f"plan for {d['scene']}: latitude {d['latitude_deg']:.6f} deg, n = {n:.8g} rad/s ({deg_h(n)}); sensor "
+      f"{sen['effective_noise_rad']:.3g} rad rms" + (f" (incl. quantization {sen['quantization_rad']:.3g} rad)"
+                                                    if sen["quantization_rad"] else "")
+      + (f", {100 * sen['dropout_fraction']:.3g} % dropouts" if sen["dropout_fraction"] else "")
+      + f" at {sen['sample_rate_hz']:g} Hz\n")
+    for name, m in d["instruments"].items():
+        what = (f"swing {m['swing_duration_s']:.6g} s {SWING}" if m["kind"] == "gyro"
+                else f"period {m['period_s']:.6g} s {FULL_PERIOD}")
+        w(f"  {name} ({m['configuration']}): {what}, amplitude {m['amplitude_rad']:.3g} rad, measures "
+          f"{m['measures']}\n")
+    for name, why in d.get("not_used", {}).items():
+        w(f"  {name}: not used ({why})\n")
+    for e in d["targets"]:
+        unit = e["target"].split("_", 1)[1] if e["target"].startswith("latitude") else e["target"][len("earth_rate_"):]
+        unit = unit.replace("_", "/")
+        w(f"\ntarget {e['target']} = {e['value']:g} (1 sigma):\n")
+        if e.get("observation_s") is None:
+            w(f"  not reachable: {e.get('reason')}\n")
+            continue
+        w(f"  observe {human_duration(e['observation_s'])} per configuration ({e['samples_per_instrument']} samples "
+          f"each): Cramer-Rao bound {e['planned_sigma']:.4g} {unit}; limited by {e['limited_by']}\n")
+        if e.get("latitude_note"):
+            w(f"  note: {e['latitude_note']}\n")
+        dep = e["dependence"]
+        sl, ss = dep["slope_at_plan"], dep["slope_short_record"]
+        w(f"  dependence: bound ~ T^{_fmt(sl, '.2f')} around the plan (T^-1.5 law once two cycles are in the "
+          f"record); below the estimator's shortest record ({d['min_record_s']:.4g} s) ~ T^{_fmt(ss, '.2f')}\n")
+        w("      T (s)        bound\n")
+        for row in dep["curve"]:
+            mark = "  <- plan" if row["observation_s"] == e["observation_s"] else (
+                "  (short record)" if row["regime"].startswith("short") else "")
+            w(f"    {row['observation_s']:10.4g}  {_fmt(row['sigma'], '11.4g')} {unit}{mark}\n")
+        fl = e.get("floor")
+        if fl:
+            if fl.get("bias") is None:
+                w(f"  floor: {fl.get('reason')}\n")
+            elif fl["reachable"]:
+                w(f"  floor: noise-free bias {fl['bias']:.2g} {unit} at the planned T: below the target\n")
+            else:
+                by = (f": set by {fl['set_by']}, a systematic effect the estimator does not correct" if fl.get("set_by")
+                      else ": no single effect sets it (the estimator's own bias at this record length)")
+                w(f"  floor: NOT REACHABLE: the noise-free estimate is off by {fl['bias']:.3g} {unit} at the planned T"
+                  f"{by}\n")
+                for c in fl.get("effects", []):
+                    w(f"    without {c['effect']}: bias {_fmt(c['bias_without'], '.3g')} {unit}\n")
+        rows = "; ".join(f"{r['change']} -> {human_duration(r['observation_s'])} (law {r['law_observation_s']:.4g} s)"
+                         for r in e["sensitivity"]["rows"])
+        w(f"  sensitivity: {rows}; law T ~ (sigma^2/f)^(1/3)\n")
+        c = e["counting"]
+        if c.get("observation_s") is None:
+            w(f"  Quet's counting: {c.get('reason')}\n")
+        else:
+            yr = " -- more than a year" if c["exceeds_a_year"] else ""
+            w(f"  Quet's counting of whole swings ({', '.join(c['instruments'])}): {human_duration(c['observation_s'])}"
+              f" ({c['observation_s'] / e['observation_s']:.3g}x the fit's){yr}\n")
+        v = e.get("verify")
+        if v:
+            w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
+              f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
+              + (f"; {v['null']} null" if v["null"] else "") + "\n")
 
 
 # ----------------------------------------------------------------------------- main
@@ -414,6 +528,34 @@ def build_parser():
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
+    p.add_argument("--scene", default=None, metavar="SCENE",
+                   help="run only the observation-time study (error versus observation time, systematic floors "
+                        "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene (as for 'estimate')")
+    p = sub.add_parser("plan", help="how long must I observe? the observation time per configuration each "
+                                    "--target needs (Cramer-Rao bound of the scene's sensor model), its dependence "
+                                    "on the time, the systematic floor, the effect of the sensor's noise and "
+                                    "rate, and Quet's counting for the same target")
+    p.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene value, as for 'estimate' (e.g. --set "
+                        "instruments.gyro_meridian.spin_rate_turn_s=200); duration_s is what is planned")
+    p.add_argument("--target", dest="targets", action="append", default=[], metavar="NAME=VALUE",
+                   help="a 1-sigma accuracy wanted (repeatable): latitude_arcsec, latitude_deg, latitude_rad, "
+                        "earth_rate_rad_s or earth_rate_deg_h, e.g. --target latitude_arcsec=1 --target "
+                        "earth_rate_rad_s=1e-10")
+    p.add_argument("--noise-factor", dest="noise_factors", action="append", type=float, default=None,
+                   metavar="X", help="sensitivity: replan with the sensor noise times X (repeatable; default 0.1 and 10)")
+    p.add_argument("--rate-factor", dest="rate_factors", action="append", type=float, default=None,
+                   metavar="X", help="sensitivity: replan with the sample rate times X (repeatable; default 2 and 0.5)")
+    p.add_argument("--no-floor", action="store_true",
+                   help="skip the noise-free run at the planned time (the systematic floor)")
+    p.add_argument("--verify", action="store_true",
+                   help="run a seeded Monte Carlo at each planned time (process pool, progress on stderr) and "
+                        "print the achieved rms next to the target")
+    p.add_argument("--seeds", type=int, default=100, help="seeds for --verify (default 100)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/plan.md)")
     p = sub.add_parser("recover", help="rewrite a recording truncated inside its data (no footer: disk "
                                        "full, copied mid-write) or damaged (chunks failing their CRC, a broken "
                                        "summary) into a complete, indexed MCAP of its intact records; the lost "
@@ -533,9 +675,17 @@ def run_command(args):
         return 0
     if args.command == "bench":
         from gyro_instrument.bench.studies import run_bench
+        if args.overrides and args.scene is None:
+            raise SceneError("--set", args.overrides[0], "applies to a --scene; give --scene SCENE")
+        if args.scene is not None:
+            from gyro_instrument.scenes import load_scene
+            load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
         check_output_dir(args.out)
-        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
+        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr), scene=args.scene,
+                        overrides=args.overrides))
         return 0
+    if args.command == "plan":
+        return plan_command(args)
     if args.command == "recover":
         from gyro_instrument.core.scene import EPOCH_NS
         from gyro_instrument.recording.bag_scan import check_mcap, scan_bag
@@ -560,6 +710,25 @@ def run_command(args):
             print_estimate(result)
         return 0
     raise AssertionError(args.command)
+
+
+def plan_command(args):
+    """``gyro-instrument plan``: see :mod:`gyro_instrument.estimators.planner`."""
+    from gyro_instrument.estimators.planner import NOISE_FACTORS, RATE_FACTORS, parse_targets, plan, verify_plan
+    targets = parse_targets(args.targets)
+    if args.verify and args.seeds < 2:
+        raise SceneError("--seeds", args.seeds, "must be an integer >= 2 (the rms of the Monte Carlo)")
+    err = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    d = plan(args.scene, args.overrides, targets, args.noise_factors or NOISE_FACTORS,
+             args.rate_factors or RATE_FACTORS, floor=not args.no_floor)
+    if args.verify:
+        verify_plan(d, args.seeds, progress=err)
+    d = to_jsonable(d)
+    if args.json:
+        print(json.dumps(d, indent=2))
+    else:
+        print_plan(d)
+    return 0
 
 
 def replay_bag(path):

@@ -112,3 +112,13 @@ def test_site_sweep(bench):
         ratio = float(r["mean_sigma_deg"]) / float(r["crlb_deg"])
         assert 0.8 < ratio < 1.25, r
         assert 0.05 < float(r["rms_error_deg"]) / float(r["mean_sigma_deg"]) < 3.0, r
+
+
+def test_bench_planner_accuracy(bench):
+    # the planner's accuracy (planned vs achieved) in the bench: quick runs 16 seeds, whose rms has a
+    # relative standard deviation of 1/√32 = 18 %: within [0.55, 1.45] of the target is ±2.5 σ
+    pl = rows(bench, "planner.csv")
+    assert {r["target"] for r in pl} == {"latitude_arcsec", "earth_rate_rad_s"}
+    for r in pl:
+        assert 0.55 < float(r["achieved_over_target"]) < 1.45, r
+    assert "How long must I observe?" in (bench / "summary.md").read_text()

@@ -130,7 +130,7 @@ def overrides(draw, scene):
 @st.composite
 def command_lines(draw, tmp):
     cmd = draw(st.sampled_from(["scenes", "describe", "simulate", "simulate", "estimate", "estimate", "replay",
-                                "recover", "bench", "run", "noise"]))
+                                "recover", "bench", "run", "plan", "noise"]))
     scene = draw(st.sampled_from(SCENES))
     dur = ["--duration-s", draw(st.sampled_from(DURATIONS))]
     out = os.path.join(tmp, draw(st.sampled_from(["o.csv"] * 6 + ["no/such/dir/o.csv", ""])))
@@ -162,6 +162,12 @@ def command_lines(draw, tmp):
     elif cmd == "run":                            # the ROS suite: fails fast, or a run of <= 2 s
         argv = ["run", scene, "--quiet"] + draw(overrides(scene)) + dur + draw(st.sampled_from(
             [[], ["--bag", os.path.join(tmp, "no/dir/b.mcap")], ["--real-time-factor", "-1"]]))
+    elif cmd == "plan":                           # targets valid or not; the 3 s budget interrupts long plans
+        targets = draw(st.lists(st.sampled_from(["latitude_arcsec=1", "earth_rate_rad_s=1e-10", "latitude_deg=1e-9",
+                                                 "earth_rate_deg_h=100", "latitud_arcsec=1", "latitude_arcsec=-1",
+                                                 "latitude_arcsec=nan", "x"]), max_size=2))
+        argv = ["plan", scene] + draw(overrides(scene)) + [a for t in targets for a in ("--target", t)] + \
+            draw(st.sampled_from([[], ["--no-floor"], ["--json", "--no-floor"], ["--noise-factor", "0"]]))
     elif cmd == "bench":                          # fails fast: an output path that cannot be a directory
         argv = ["bench", "--quick", "--out", draw(st.sampled_from(["/proc/nope", os.path.join(BAG, "x"), BAG]))]
     else:                                         # random tokens: argparse's errors

@@ -6,7 +6,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyro_instrument.core.params import REQUIRED  # noqa: E402
+from gyro_instrument.core.params import REQUIRED, alias_note  # noqa: E402
 from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
 
@@ -15,7 +15,8 @@ def render():
     out = ["# Instruments and effects", "",
            "Generated from the code by `tools/gen_instrument_docs.py`; `tests/test_docs.py` fails when it",
            "is stale. Angles are given in degrees only in parameter names ending in `_deg`; channels are",
-           "in radians, rad/s and metres.", ""]
+           "in radians, rad/s and metres. A rate `<stem>_rad_s` may also be given as `<stem>_turn_s`,",
+           "`<stem>_rpm` or `<stem>_deg_h`; it is converted and stored under its `_rad_s` name.", ""]
     for name, cls in sorted(INSTRUMENTS.items()):
         out += [f"## `{name}`", "", cls.summary, "",
                 f"Supported effects: {', '.join(sorted(cls.SUPPORTED_EFFECTS)) or 'none (exact model)'}"
@@ -27,7 +28,9 @@ def render():
                 "| parameter | default | valid | meaning |", "|---|---|---|---|"]
         for p in cls.PARAMS:
             default = "required" if p.default is REQUIRED else repr(p.default)
-            out.append(f"| `{p.name}` | {default} | {p.describe_range().replace('must be ', '')} | {p.doc} |")
+            note = alias_note(p, cls.PARAMS)
+            out.append(f"| `{p.name}` | {default} | {p.describe_range().replace('must be ', '')} | {p.doc}"
+                       f"{'; ' + note if note else ''} |")
         out += ["", "| channel | unit | meaning |", "|---|---|---|"]
         out += [f"| `{c.name}` | {c.unit} | {c.doc} |" for c in cls.COLUMNS]
         out.append("")
@@ -35,7 +38,8 @@ def render():
             "an instrument supports the effects whose kinds it sums (docs/extending.md).", "",
             "| effect | parameters | contributes to | what it adds |", "|---|---|---|---|"]
     for name, cls in sorted(EFFECTS.items()):
-        params = ", ".join(f"`{p.name}` (default {p.default!r}; {p.describe_range().replace('must be ', '')})"
+        params = ", ".join(f"`{p.name}` (default {p.default!r}; {p.describe_range().replace('must be ', '')}"
+                           f"{'; ' + alias_note(p, cls.PARAMS) if alias_note(p, cls.PARAMS) else ''})"
                            for p in cls.PARAMS) or "none"
         out.append(f"| `{name}` | {params} | {', '.join(sorted(cls.MECHANICS))} | {cls.summary} |")
     return "\n".join(out) + "\n"

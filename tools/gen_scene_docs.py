@@ -7,7 +7,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyro_instrument.core.params import REQUIRED  # noqa: E402
+from gyro_instrument.core.params import REQUIRED, alias_note  # noqa: E402
 from gyro_instrument.core.scene import SECTIONS, SITE_PARAMS, TOP_PARAMS  # noqa: E402
 from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
@@ -47,7 +47,9 @@ def _optional(params):
 def param_table(params, prefix):
     rows = ["| key | default | valid | meaning |", "|---|---|---|---|"]
     for p in params:
-        rows.append(f"| `{prefix}{p.name}` | {_default(p)} | {p.describe_range().replace('must be ', '')} | {_cell(p.doc)} |")
+        note = alias_note(p, params)
+        rows.append(f"| `{prefix}{p.name}` | {_default(p)} | {p.describe_range().replace('must be ', '')} | "
+                    f"{_cell(p.doc)}{'; ' + note if note else ''} |")
     return rows
 
 
@@ -59,6 +61,10 @@ def render():
            "ROS nodes with exit status 2 and one line `field = value is invalid: valid range`. An unknown",
            "name anywhere (top-level key, section key, effect, instrument, instrument type) is refused",
            "with the closest valid name: `unknown instrument (did you mean 'pendulum'?)`.", "",
+           "Rates: a key `<stem>_rad_s` may also be written `<stem>_turn_s` (turns per second), `<stem>_rpm`",
+           "or `<stem>_deg_h` (degrees per hour), e.g. `spin_rate_turn_s: 200` or `earth_rate_deg_h: 15.04`;",
+           "the value is converted and the scene holds the `_rad_s` name after loading. Two spellings of one",
+           "key in a mapping are refused, naming both; a `--set` in one spelling replaces the other.", "",
            "```yaml",
            "name: quet_paris",
            "site: {latitude_deg: 48.8462}",
@@ -88,7 +94,8 @@ def render():
         for i, p in enumerate(cls.PARAMS):
             what = cls.summary if i == 0 else ""
             out.append(f"| `{name}` | `effects.{name}.{p.name}` | {_default(p)} | "
-                       f"{p.describe_range().replace('must be ', '')} | {_cell(what)}{'; ' if what else ''}{_cell(p.doc)} | {users} |")
+                       f"{p.describe_range().replace('must be ', '')} | {_cell(what)}{'; ' if what else ''}{_cell(p.doc)}"
+                       f"{'; ' + alias_note(p, cls.PARAMS) if alias_note(p, cls.PARAMS) else ''} | {users} |")
     out += ["", "## `sensor`", "", _optional(SENSOR_PARAMS), ""]
     out += param_table(SENSOR_PARAMS, "sensor.")
     out += ["", "## `estimator`", "", _optional(ESTIMATOR_PARAMS), ""]

@@ -23,8 +23,14 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 * ``systematic_floors.csv`` — the noise-free bias of the gyroscope pair (item 9, eq. 10) and of
   the pendulum alone on quet_paris with a 1 h spin decay, with every estimator correction applied
   and with each of finite amplitude, spin decay and the ellipse precession left out;
+* ``planner.csv`` — the planner's accuracy: for ``quet_paris`` (1″ of latitude, 1e-10 rad/s of
+  Earth rate) the observation time ``gyro-instrument plan`` gives and the rms achieved by seeded
+  runs at that time (:func:`.studies.planner_accuracy`);
 * ``site_sweep.csv`` — the same errors for the default scene moved over latitudes −85°…85°;
 * ``effect_cost.csv`` (:mod:`.effect_cost`) — for each effect of a scene: CPU with and without
   it, and the error made by leaving it out (angles, noise-free latitude and Earth rate);
+* ``--scene SCENE`` (with ``--set``): only the observation-time study (floors with the scene's own
+  effects) and the planner's accuracy on that scene (:func:`.studies.run_scene_bench`), with
+  targets whose plans land near the scene's ``duration_s``;
 * ``*.png`` (:mod:`.plots`) — work-precision, observation-time and effect-cost diagrams.
 """

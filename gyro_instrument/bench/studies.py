@@ -283,17 +283,28 @@ def _obs_rows(minutes, results):
     out = []
     for r in results:
         truth = r["truth"]
+        lat0 = abs(truth["latitude_deg"]) if r.get("latitude_is_absolute") else truth["latitude_deg"]
         cnt = r["methods"].get("item9_counting", {}).get("latitude_deg")
-        out.append((minutes, r["latitude_deg"] - truth["latitude_deg"], r["latitude_sigma_deg"],
-                    r["crlb"]["latitude_deg"], None if cnt is None else cnt - truth["latitude_deg"],
-                    r["earth_rate_rad_s"] - truth["earth_rate_rad_s"], r["earth_rate_sigma_rad_s"],
-                    r["crlb"]["earth_rate_rad_s"], _counting_earth_rate(r) - truth["earth_rate_rad_s"]))
+        lat, n = r.get("latitude_deg"), r.get("earth_rate_rad_s")
+        crlb = r.get("crlb") or {}
+        out.append((minutes, None if lat is None else lat - lat0, r.get("latitude_sigma_deg"),
+                    crlb.get("latitude_deg"), None if cnt is None else cnt - abs(lat0),
+                    None if n is None else n - truth["earth_rate_rad_s"], r.get("earth_rate_sigma_rad_s"),
+                    crlb.get("earth_rate_rad_s"), _counting_earth_rate(r) - truth["earth_rate_rad_s"]))
     return out
+
+
+def _meridian_gyro(r):
+    """The estimate of the scene's meridian gyroscope (eq. 10's), or {}."""
+    for e in r["instruments"].values():
+        if isinstance(e, dict) and e.get("configuration") == "meridian" and e.get("swing_duration_s") is not None:
+            return e
+    return {}
 
 
 def _counting_earth_rate(r):
     """Eq. (10) with Quet's counted meridian swing instead of the fitted one: n ∝ 1/T²."""
-    g = r["instruments"].get("gyro_meridian", {})
+    g = _meridian_gyro(r)
     cnt = g.get("counting", {}).get("small_amplitude_swing_duration_s")
     if not cnt or r.get("earth_rate_rad_s") is None:
         return math.nan
@@ -321,11 +332,18 @@ def systematic_floor_rows(minutes):
     the floor scene with every correction applied (``left_out`` = ``none``: the estimator's own
     floor with all three effects present) and with each correction of
     :data:`~gyro_instrument.estimators.pipeline.CORRECTIONS` left out (the floor a user would hit
-    without it). One picklable argument, so it runs through any executor."""
+    without it). One picklable argument, so it runs through any executor: ``minutes`` alone (the
+    floor scene, quet_paris with a 1 h spin decay) or ``(scene, overrides, minutes)`` for any scene
+    with its own effects."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
     from gyro_instrument.estimators.pipeline import CORRECTIONS, estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import load_scene
-    scene = load_scene("quet_paris", [f"duration_s={60.0 * minutes}", FLOOR_SCENE_EFFECTS] + list(NOISE_FREE))
+    if isinstance(minutes, tuple):
+        name, overrides, minutes = minutes
+        over = list(overrides)
+    else:
+        name, over = "quet_paris", [FLOOR_SCENE_EFFECTS]
+    scene = load_scene(name, [f"duration_s={60.0 * minutes}"] + over + list(NOISE_FREE))
     truth = simulate_truth(scene)
     records = measure(scene, truth)
     lat0, n0 = scene.site.latitude_deg, scene.site.earth_rate_rad_s
@@ -338,40 +356,45 @@ def systematic_floor_rows(minutes):
             rows.append((minutes, left_out, GYRO_PAIR, None if lat is None else lat - lat0,
                          None if n is None else n - n0))
         if left_out in ("none", "ellipse_precession"):
-            k = r["instruments"].get("pendulum", {}).get("foucault_rate_rad_s")
+            k = next((e.get("foucault_rate_rad_s") for e in r["instruments"].values()
+                      if isinstance(e, dict) and "foucault_rate_rad_s" in e), None)
             lat = None if k is None or abs(k) > n0 else math.degrees(math.asin(k / n0))
             rows.append((minutes, left_out, PENDULUM_ALONE, None if lat is None else lat - lat0, None))
     return rows
 
 
-def observation_time(minutes_list, n_seeds, executor=None):
+def observation_time(minutes_list, n_seeds, executor=None, scene="quet_paris", overrides=()):
     """Rows :data:`OBS_HEADER` (rms over seeds of the fit, its reported σ, the Cramér–Rao bound
     and Quet's counting, for the latitude and eq. (10)'s Earth rate; the noise-free error is the
     estimator's own systematic floor) and :data:`FLOOR_HEADER` rows from
     :func:`systematic_floor_rows`: the bias left with every correction and without each of
-    finite amplitude, spin decay and the Foucault ellipse precession."""
+    finite amplitude, spin decay and the Foucault ellipse precession. ``scene`` (name or YAML path)
+    with ``overrides``: the study on any scene (its floors then with the scene's own effects)."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
-    jobs = [("quet_paris", [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
-    free = [("quet_paris", [f"duration_s={60.0 * m}"] + list(NOISE_FREE), [0]) for m in minutes_list]
+    over = list(overrides)
+    jobs = [(scene, over + [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
+    free = [(scene, over + [f"duration_s={60.0 * m}"] + list(NOISE_FREE), [0]) for m in minutes_list]
+    floor_jobs = list(minutes_list) if scene == "quet_paris" and not over else \
+        [(scene, over, m) for m in minutes_list]
     own = executor is None
     executor = executor or process_executor()
     try:
         results = [_obs_rows(m, res) for m, res in zip(minutes_list, executor.map(seed_sweep, jobs))]
         noise_free = list(executor.map(seed_sweep, free))
-        floor_rows = list(executor.map(systematic_floor_rows, minutes_list))
+        floor_rows = list(executor.map(systematic_floor_rows, floor_jobs))
     finally:
         if own:
             executor.shutdown()
     rows = []
     for res, nf in zip(results, noise_free):
         a = np.array([[x if x is not None else np.nan for x in r] for r in res], dtype=float)
-        rms = lambda j: float(np.sqrt(np.nanmean(a[:, j] ** 2)))  # noqa: E731
-        mean = lambda j: float(np.mean(a[:, j]))  # noqa: E731
-        e = nf[0]
-        rows.append((a[0, 0], rms(1), mean(2), mean(3), rms(4), rms(5), mean(6), mean(7), rms(8),
-                     e["latitude_deg"] - e["truth"]["latitude_deg"],
-                     e["earth_rate_rad_s"] - e["truth"]["earth_rate_rad_s"]))
-    fl = [row for rws in floor_rows for row in rws]
+        rms = lambda j: float(np.sqrt(np.nanmean(a[:, j] ** 2))) if np.isfinite(a[:, j]).any() else None  # noqa: E731
+        mean = lambda j: float(np.nanmean(a[:, j])) if np.isfinite(a[:, j]).any() else None  # noqa: E731
+        e = _obs_rows(a[0, 0], nf)[0]
+        rows.append((a[0, 0], rms(1), mean(2), mean(3), rms(4), rms(5), mean(6), mean(7), rms(8), e[1], e[5]))
+    # a scope the scene has no instrument for (no pendulum, no gyroscope pair) gives only empty rows
+    scopes = {r[2] for rws in floor_rows for r in rws if r[3] is not None or r[4] is not None}
+    fl = [row for rws in floor_rows for row in rws if row[2] in scopes]
     return rows, fl
 
 
@@ -404,8 +427,116 @@ def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
     return rows
 
 
-def run_bench(out_dir, quick=False, progress=print):
-    """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text."""
+PLANNER_HEADER = ("scene", "target", "value", "planned_observation_s", "planned_sigma", "achieved_rms", "seeds",
+                  "achieved_over_target")
+
+
+def default_targets(scene, overrides=()):
+    """Targets whose plans land near the scene's own duration_s: its latitude and Earth-rate bounds there,
+    rounded to two significant digits (SceneError when the scene has no Earth-rate instrument)."""
+    from gyro_instrument.estimators.planner import ARCSEC_RAD, Planner, SensorSpec, instrument_models
+    sc = load_scene(scene, list(overrides))
+    models = instrument_models(sc)[0]
+    if not models:
+        return []
+    b = Planner(models, SensorSpec.from_scene(sc), sc.estimator.get("hemisphere")).bounds(sc.duration_s)[0]
+    two = lambda x: format(x, ".2g")  # noqa: E731
+    out = []
+    if b.get("latitude_rad"):
+        out.append("latitude_arcsec=" + two(b["latitude_rad"] / ARCSEC_RAD))
+    if b.get("earth_rate_rad_s"):
+        out.append("earth_rate_rad_s=" + two(b["earth_rate_rad_s"]))
+    return out
+
+
+def planner_accuracy(cases, n_seeds, executor=None, progress=print):
+    """Rows :data:`PLANNER_HEADER`: for each (scene, overrides, target strings) the planned
+    observation time and bound (:func:`gyro_instrument.estimators.planner.plan`) and the rms achieved
+    over ``n_seeds`` seeded runs at that time (``verify_plan``, through the executor)."""
+    from gyro_instrument.estimators.planner import parse_targets, plan, verify_plan
+    own = executor is None
+    executor = executor or process_executor()
+    rows = []
+    try:
+        for scene, overrides, targets in cases:
+            d = plan(scene, overrides, parse_targets(targets), noise_factors=(), rate_factors=(), floor=False)
+            verify_plan(d, n_seeds, executor, progress=lambda m: progress(f"  {scene}: {m.strip()}"))
+            for e in d["targets"]:
+                v = e.get("verify") or {}
+                rows.append((d["scene"], e["target"], e["value"], e.get("observation_s"), e.get("planned_sigma"),
+                             v.get("achieved_rms"), n_seeds, v.get("achieved_over_target")))
+    finally:
+        if own:
+            executor.shutdown()
+    return rows
+
+
+def _planner_lines(pl):
+    lines = ["", "## How long must I observe? The planner against the Monte Carlo", "",
+             "`gyro-instrument plan SCENE --target ...`: the observation time per configuration from the "
+             "Cramér–Rao bound, and the rms achieved by seeded runs at that time.", "",
+             "| scene | target | planned T (s) | planned σ | achieved rms | seeds | achieved / target |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {sc} | {t} = {v:g} | {_fmt(T, '.4g')} | {_fmt(s, '.3g')} | {_fmt(a, '.3g')} | {n} | {_fmt(r, '.3f')} |"
+              for sc, t, v, T, s, a, n, r in pl]
+    return lines
+
+
+def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print):
+    """``bench --scene``: the observation-time study (with its systematic floors, the scene's own
+    effects) and the planner's accuracy on any scene; CSVs, plot and summary.md. Returns the text."""
+    os.makedirs(out_dir, exist_ok=True)
+    name = load_scene(scene, list(overrides)).name
+    progress(f"observation time ({name})")
+    ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
+                                  scene=scene, overrides=overrides)
+    _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
+    _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
+    progress(f"planner accuracy ({name})")
+    targets = default_targets(scene, overrides)
+    pl = planner_accuracy([(scene, list(overrides), targets)], 16 if quick else 100, progress=progress) if targets else []
+    _write(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
+    from gyro_instrument.bench.plots import write_plots
+    pngs = write_plots(out_dir)
+    lines = [f"# gyro-instrument bench --scene {scene}" + (" (quick)" if quick else ""), "",
+             f"Regenerate: `gyro-instrument bench --scene {scene}" + "".join(f" --set {o}" for o in overrides)
+             + (" --quick" if quick else "") + f" --out {out_dir}`.", ""]
+    lines += _obs_lines(ot, floors, name, "the scene's own effects")
+    lines += _planner_lines(pl)
+    if pngs:
+        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
+    text = "\n".join(lines) + "\n"
+    with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
+        fh.write(text)
+    return text
+
+
+def _obs_lines(ot, floors, name, floor_scene):
+    lines = ["## Error versus observation time (" + name + ", per configuration)", "",
+             "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free error | "
+             "Earth rate n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free error |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    obs_cols = ("rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg", "noise_free_error_deg",
+                "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
+                "rms_counting_earth_rate_rad_s", "noise_free_earth_rate_error_rad_s")
+    for r in ot:
+        d = dict(zip(OBS_HEADER, r))
+        lines.append("| {:g} | ".format(d["minutes"]) + " | ".join(
+            _fmt(d[k], ".1e" if k.startswith("noise_free") else ".2e") for k in obs_cols) + " |")
+    lines += ["", f"Systematic floors: the noise-free bias on {floor_scene}, with every "
+              "correction of the estimator applied (left out: none) and with one left out:", "",
+              "| minutes | correction left out | scope | latitude bias (deg) | Earth-rate bias (rad/s) |",
+              "|---|---|---|---|---|"]
+    lines += [f"| {m:g} | {e} | {sc} | {_fmt(a, '.2e')} | {_fmt(b, '.2e')} |" for m, e, sc, a, b in floors]
+    return lines
+
+
+def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=()):
+    """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text.
+    With ``scene``: only the observation-time study and the planner's accuracy on that scene
+    (:func:`run_scene_bench`)."""
+    if scene is not None:
+        return run_scene_bench(out_dir, scene, overrides, quick, progress)
     from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
     from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
     from gyro_instrument.bench.plots import write_plots
@@ -421,6 +552,11 @@ def run_bench(out_dir, quick=False, progress=print):
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
     _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
     _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
+    progress("planner accuracy (plan, then the Monte Carlo at the planned time)")
+    pl = planner_accuracy([("quet_paris", [], ["latitude_arcsec=1", "earth_rate_rad_s=1e-10"])]
+                          + ([] if quick else [("quet_gyroscopes", ["site.latitude_deg=60"], ["latitude_arcsec=1"])]),
+                          16 if quick else 200, progress=progress)
+    _write(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
     progress("site sweep")
     ss = site_sweep((-85, -60, -33.9, 5, 30, 48.8462, 70, 85) if not quick else (-33.9, 48.8462),
                     40 if not quick else 4, minutes=10.0 if not quick else 2.0)
@@ -440,22 +576,8 @@ def run_bench(out_dir, quick=False, progress=print):
     lines += ["", "## Work-precision (error at the end against a tight reference)", "",
               "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
     lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
-    lines += ["", "## Error versus observation time (quet_paris, per configuration)", "",
-              "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free error | "
-              "Earth rate n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free error |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    obs_cols = ("rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg", "noise_free_error_deg",
-                "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
-                "rms_counting_earth_rate_rad_s", "noise_free_earth_rate_error_rad_s")
-    for r in ot:
-        d = dict(zip(OBS_HEADER, r))
-        lines.append("| {:g} | ".format(d["minutes"]) + " | ".join(
-            _fmt(d[k], ".1e" if k.startswith("noise_free") else ".2e") for k in obs_cols) + " |")
-    lines += ["", "Systematic floors: the noise-free bias on quet_paris with a 1 h spin decay added, with every "
-              "correction of the estimator applied (left out: none) and with one left out:", "",
-              "| minutes | correction left out | scope | latitude bias (deg) | Earth-rate bias (rad/s) |",
-              "|---|---|---|---|---|"]
-    lines += [f"| {m:g} | {e} | {sc} | {_fmt(a, '.2e')} | {_fmt(b, '.2e')} |" for m, e, sc, a, b in floors]
+    lines += [""] + _obs_lines(ot, floors, "quet_paris", "quet_paris with a 1 h spin decay added")
+    lines += _planner_lines(pl)
     lines += ["", "## Error versus site latitude (quet_paris moved, rms over seeds)", "",
               "| latitude (deg) | rms error (deg) | reported σ (deg) | Cramér–Rao (deg) | n rms error (rad/s) | "
               "n Cramér–Rao (rad/s) |", "|---|---|---|---|---|---|"]

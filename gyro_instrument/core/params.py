@@ -89,11 +89,76 @@ def _fmt(x):
     return f"{x:g}"
 
 
+#: Other spellings of a rate: a parameter named ``<stem>_rad_s`` also accepts ``<stem>_turn_s``
+#: (turns per second), ``<stem>_rpm`` and ``<stem>_deg_h`` (degrees per hour); the value is
+#: converted and stored under the canonical ``_rad_s`` name. (suffix, factor to rad/s).
+RATE_ALIASES = (("_turn_s", 2.0 * math.pi), ("_rpm", 2.0 * math.pi / 60.0), ("_deg_h", math.pi / 180.0 / 3600.0))
+
+
+def unit_aliases(param, known=()):
+    """The accepted other spellings of ``param`` (a :class:`Param`): ``["spin_rate_turn_s", ...]``
+    for a float named ``*_rad_s``, leaving out names in ``known`` (parameters of their own)."""
+    if param.kind != "float" or not param.name.endswith("_rad_s"):
+        return []
+    stem = param.name[:-len("_rad_s")]
+    return [stem + suffix for suffix, _ in RATE_ALIASES if stem + suffix not in known]
+
+
+def alias_note(param, params=()):
+    """Doc text for a rate's other spellings: ``also as `spin_rate_turn_s`, ... (converted)``, or ''."""
+    names = unit_aliases(param, {p.name for p in params})
+    if not names:
+        return ""
+    return "also as " + ", ".join(f"`{n}`" for n in names) + " (turn/s, rpm, deg/h; converted, stored as rad/s)"
+
+
+def _canonical_rates(prefix, by_name, raw):
+    """``raw`` with rate aliases (:data:`RATE_ALIASES`) converted to their ``_rad_s`` parameter.
+
+    Raises
+    ------
+    SceneError
+        Two spellings of one parameter (naming both), or an alias whose converted value is out of
+        the parameter's range (quoting the conversion).
+    """
+    out, given = {}, {}
+    for key, value in raw.items():
+        canon, factor = key, None
+        if key not in by_name and isinstance(key, str):
+            for suffix, f in RATE_ALIASES:
+                stem = key[:-len(suffix)] if key.endswith(suffix) else None
+                p = by_name.get(f"{stem}_rad_s") if stem else None
+                if p is not None and key in unit_aliases(p, by_name):
+                    canon, factor = p.name, f
+                    break
+        if canon in given:
+            field = f"{prefix}.{key}" if prefix else str(key)
+            raise SceneError(field, value, f"gives {canon} a second time (also given as {given[canon]}); "
+                                           f"give one of {canon}, {', '.join(unit_aliases(by_name[canon], by_name))}")
+        given[canon] = key
+        if factor is not None and value is not None:
+            field = f"{prefix}.{key}" if prefix else str(key)
+            p = by_name[canon]
+            if not _is_number(value) or not math.isfinite(float(value)):
+                raise SceneError(field, value, f"must be a finite number (converted to {canon}, which "
+                                               f"{p.describe_range()})")
+            converted = float(value) * factor
+            try:
+                p.check(field, converted)
+            except SceneError:
+                raise SceneError(field, value, f"is {converted:g} rad/s as {canon}, which {p.describe_range()}") from None
+            value = converted
+        out[canon] = value
+    return out
+
+
 def validate_params(prefix, params, raw):
     """Validate ``raw`` (a mapping) against ``params`` (a sequence of :class:`Param`).
 
     Unknown keys are refused with a close-match suggestion; missing required keys are
-    refused; defaults fill the rest. A key given as ``None`` (YAML ``null``, ``--set key=null``)
+    refused; defaults fill the rest. A rate ``<stem>_rad_s`` may be given as ``<stem>_turn_s``,
+    ``<stem>_rpm`` or ``<stem>_deg_h`` (:data:`RATE_ALIASES`): converted, stored under its ``_rad_s``
+    name; two spellings of one parameter are refused. A key given as ``None`` (YAML ``null``, ``--set key=null``)
     means "use the default": it takes the default when there is one and is refused, naming the
     field and the valid range, when the key is required.
 
@@ -107,6 +172,7 @@ def validate_params(prefix, params, raw):
     if not isinstance(raw, dict):
         raise SceneError(prefix, raw, "must be a mapping of key: value")
     by_name = {p.name: p for p in params}
+    raw = _canonical_rates(prefix, by_name, raw)
     for key in raw:
         if key not in by_name:
             raise SceneError(f"{prefix}.{key}" if prefix else str(key), raw[key],

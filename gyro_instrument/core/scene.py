@@ -126,6 +126,9 @@ def apply_overrides(data, overrides, effect_names=()):
     with the closest name, unless the overrides also give that instrument's ``type`` (which adds
     a new instrument, e.g. ``instruments.p2.type=spherical_pendulum``). ``effect_names`` (the
     effect registry's names) lets ``effects.<name>=null`` refuse an unknown effect.
+
+    A rate set in another spelling (``spin_rate_turn_s`` for ``spin_rate_rad_s``, see
+    :data:`~gyro_instrument.core.params.RATE_ALIASES`) replaces the spelling the scene gave.
     """
     import copy
     data = copy.deepcopy(data)
@@ -141,8 +144,24 @@ def apply_overrides(data, overrides, effect_names=()):
         if value is None:
             _remove(data, path, effect_names)
         else:
+            _drop_other_spellings(data, path)
             _set(data, path, value)
     return data
+
+
+def _drop_other_spellings(data, path):
+    """Before an override sets ``a.b.<stem><suffix>``, remove the same rate's other spellings there."""
+    from gyro_instrument.core.params import RATE_ALIASES
+    suffixes = ("_rad_s",) + tuple(s for s, _ in RATE_ALIASES)
+    key = path[-1]
+    stem = next((key[:-len(s)] for s in suffixes if key.endswith(s)), None)
+    node = data
+    for part in path[:-1]:
+        node = node.get(part) if isinstance(node, dict) else None
+    if stem and isinstance(node, dict):
+        for s in suffixes:
+            if stem + s != key:
+                node.pop(stem + s, None)
 
 
 def _check_instrument_name(data, path, value, typed):
