@@ -125,7 +125,6 @@ def instrument_models(scene):
     """(models, skipped): :class:`InstrumentModel` per Earth-rate instrument of ``scene``, probed by
     a noise-free simulation of four periods (its amplitudes and frequency, as the fit sees them),
     and name -> reason for the instruments that give no Earth-rate measurement."""
-    from gyro_instrument.estimators.pipeline import PENDULUMS
     from gyro_instrument.scenes import build_instruments
     site = scene.site
     n = site.earth_rate_rad_s
@@ -134,25 +133,25 @@ def instrument_models(scene):
         if not inst.has("earth_rotation") and "earth_rotation" in inst.SUPPORTED_EFFECTS:
             skipped[name] = "earth_rotation is not simulated for it: it measures no Earth rate"
             continue
-        if inst.type_name in PENDULUMS:
+        if inst.IS_PENDULUM:
             pred = inst.predictions()
             alpha = math.sin(math.radians(inst.initial_deflection_deg))
             period = 4.0 * pred["quarter_period_s"] if "quarter_period_s" in pred else \
-                2.0 * math.pi * math.sqrt(getattr(inst, "l", 1.0) / site.gravity_m_s2)
+                2.0 * math.pi * math.sqrt(inst.pendulum_length_m() / site.gravity_m_s2)
             models.append(InstrumentModel(name, "pendulum", 2.0 * math.pi / period, n * math.sin(site.latitude_rad),
                                           amplitude=alpha, label="pendulum"))
             continue
-        model = getattr(inst, "directing_model", lambda: None)()
+        model = inst.directing_model()
         if model is None:
             skipped[name] = f"{inst.type_name} has no directing line: it gives no Earth-rate measurement"
             continue
         T0 = inst.predictions().get("swing_duration_small_s")
         if T0 is None or not math.isfinite(T0) or T0 <= 0:
-            skipped[name] = f"no swing to time: {model['null_reason']}"
+            skipped[name] = f"no swing to time: {model.null_reason}"
             continue
         rate = scene.sample_rate_hz
         t = np.arange(0.0, 8.0 * T0 * 1.1, 1.0 / rate)
-        y = inst.simulate(t).columns[model["angle_channel"]]
+        y = inst.simulate(t).columns[model.angle_channel]
         try:
             fit = fit_oscillation(t, y, harmonics=(1, 3))
         except EstimationError as exc:
@@ -161,10 +160,10 @@ def instrument_models(scene):
         w = fit.omega_rad_s
         X = np.column_stack([np.ones_like(t), np.cos(w * t), np.sin(w * t), np.cos(3 * w * t), np.sin(3 * w * t)])
         coef = np.linalg.lstsq(X, y, rcond=None)[0][1:]
-        meas = RateMeasurement(name, "gyro", 0.0, 1.0, tuple(model["normal_enu"]))
+        meas = RateMeasurement(name, "gyro", 0.0, 1.0, tuple(model.normal_enu))
         value = n * float(meas.shape(site.latitude_rad))
-        models.append(InstrumentModel(name, "gyro", w, value, tuple(model["normal_enu"]), tuple(float(c) for c in coef),
-                                      spin=float(getattr(inst, "spin_rate_rad_s", 0.0) or 0.0), label=model["label"]))
+        models.append(InstrumentModel(name, "gyro", w, value, tuple(model.normal_enu), tuple(float(c) for c in coef),
+                                      spin=float(getattr(inst, "spin_rate_rad_s", 0.0) or 0.0), label=model.label))
     return models, skipped
 
 
