@@ -305,6 +305,8 @@ def damage_line(d):
     where = f" at byte {d['offset']}" if d.get("offset") is not None else ""
     what = (f"chunk{where} failed its CRC" if reason.startswith("chunk CRC mismatch")
             else f"{reason}{where}")
+    if d.get("file"):
+        what = f"{d['file']}: {what}"
     if d.get("before_recovery"):
         what = f"before recovery: {what}"
     if d.get("lost_from_s") is None and d.get("lost_to_s") is None and d.get("span_from") is None:
@@ -348,7 +350,8 @@ def build_parser():
     p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
                                       "live 'run' estimate to the last digit. Every chunk's CRC is checked: a "
                                       "damaged chunk is left out and the log-time span it held is reported")
-    p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
+    p.add_argument("bag", help="a bag written by 'gyro-instrument run --bag' or the recorder node: an .mcap file "
+                               "or a rosbag2 bag directory (metadata.yaml + .mcap files, split or not)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate', with "
                                                        "'damaged' and 'replay_notes' when the bag lost data")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
@@ -363,7 +366,8 @@ def build_parser():
                                        "summary) into a complete, indexed MCAP of its intact records; the lost "
                                        "spans are printed and kept in the new file (metadata "
                                        "'gyro_instrument_damage'). Exit 2 when nothing intact is found")
-    p.add_argument("bag", help="the damaged .mcap")
+    p.add_argument("bag", help="the damaged .mcap, or a rosbag2 bag directory (every file is read; the "
+                               "output is one .mcap)")
     p.add_argument("--out", required=True, metavar="FIXED.mcap",
                    help="where to write the recovered file: never the input; an existing file is refused "
                         "unless --overwrite")
@@ -433,11 +437,11 @@ def run_command(args):
         return 0
     if args.command == "recover":
         from gyro_instrument.core.scene import EPOCH_NS
-        from gyro_instrument.recording.bag_scan import check_mcap, scan_bag
+        from gyro_instrument.recording.bag_layout import bag_files, bag_inputs, scan_path
         from gyro_instrument.recording.mcap_io import recover
-        check_mcap(args.bag, "bag")
-        check_output(args.out, "--out", (args.bag,), args.overwrite)
-        scan = scan_bag(args.bag)
+        bag_files(args.bag, "bag")
+        check_output(args.out, "--out", bag_inputs(args.bag), args.overwrite)
+        scan = scan_path(args.bag)
         n, scan = recover(args.bag, args.out, scan)
         print(f"recovered {n} messages from {args.bag} into {args.out}")
         for d in scan.damage_dicts(EPOCH_NS):
