@@ -22,9 +22,18 @@ from gyro_instrument.effects import REGISTRY as EFFECTS
 EXIT_BAD_INPUT = 2
 
 
-def add_scene_arguments(parser):
-    """The scene arguments shared by every subcommand (and mirrored by the ROS parameters)."""
-    parser.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path")
+def add_scene_arguments(parser, positional=True):
+    """The scene arguments shared by every subcommand (and mirrored by the ROS parameters).
+    ``positional=False``: the scene is the option ``--scene`` (replay, plot); ``"optional"``: either
+    (estimate: ``estimate SCENE`` or ``estimate --data FILE --scene SCENE``)."""
+    scene_help = "shipped scene name (see 'gyro-instrument scenes') or a YAML path"
+    if positional is True:
+        parser.add_argument("scene", help=scene_help)
+    else:
+        if positional == "optional":
+            parser.add_argument("scene", nargs="?", default=None, help=scene_help)
+        parser.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                            help=scene_help + (" (the same as the positional SCENE)" if positional else ""))
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a scene value, e.g. --set site.latitude_deg=-33.87 "
                              "--set instruments.pendulum.length_m=20 (repeatable; values are YAML). "
@@ -38,13 +47,27 @@ def add_scene_arguments(parser):
                         help="simulated time per instrument, s (default: the scene's duration_s)")
 
 
+def scene_arg(args):
+    """The scene named by the positional SCENE or ``--scene`` (None when neither is given).
+
+    Raises
+    ------
+    SceneError
+        Both are given and differ.
+    """
+    pos, opt = getattr(args, "scene", None), getattr(args, "scene_option", None)
+    if pos and opt and pos != opt:
+        raise SceneError("--scene", opt, f"conflicts with the scene {pos!r} given before it; give one")
+    return pos or opt
+
+
 def scene_from_args(args):
     """Load the scene named on the command line with its overrides."""
     from gyro_instrument.scenes import load_scene
     overrides = list(args.overrides)
     if getattr(args, "duration_s", None) is not None:
         overrides.append(f"duration_s={args.duration_s!r}")
-    return load_scene(args.scene, overrides)
+    return load_scene(scene_arg(args), overrides)
 
 
 def print_scene_notes(scene, stream=None):
@@ -318,10 +341,11 @@ def damage_line(d):
 
 
 def print_damage(r, w):
-    """The bag's lost stretches and the reader's notes (replay); nothing for a live estimate."""
+    """The bag's lost stretches and the reader's notes (replay, estimate --data); nothing for a
+    live estimate."""
     for d in r.get("damaged") or ():
         w(f"  damaged: {damage_line(d)}\n")
-    for n in r.get("replay_notes") or ():
+    for n in (r.get("replay_notes") or []) + (r.get("data_notes") or []):
         w(f"  note: {n}\n")
 
 
@@ -336,16 +360,24 @@ def build_parser():
                                         "every effect each instrument supports")
     add_scene_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV")
+    p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV or Parquet")
     add_scene_arguments(p)
-    p.add_argument("--out", required=True, metavar="FILE.csv",
-                   help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+    p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
+                   help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+                        "CSV, or Parquet (float64 columns, pyarrow) for a name ending in .parquet; "
                         "an existing file is refused unless --overwrite; never the scene file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p = sub.add_parser("estimate", help="simulate the scene's instruments through their sensors and estimate "
-                                        "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors")
-    add_scene_arguments(p)
+                                        "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors; "
+                                        "with --data, estimate from measured data instead")
+    add_scene_arguments(p, positional="optional")
+    p.add_argument("--data", metavar="FILE.csv|FILE.parquet",
+                   help="estimate from this table of measured channels instead of simulating: time_s and "
+                        "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
+                        "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
+                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
+                        "Missing values, NaN, irregular and out-of-order times are accepted and noted")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
     p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
                                       "live 'run' estimate to the last digit. Every chunk's CRC is checked: a "
@@ -404,12 +436,14 @@ def run_command(args):
             print_description(d)
         return 0
     if args.command == "simulate":
+        from gyro_instrument.estimators.data_io import table_kind, write_table
+        table_kind(args.out, "--out")
         check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
         scene = scene_from_args(args)
         print_scene_notes(scene)
         progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
         t, columns, sims = simulate_scene(scene, progress)
-        write_csv(args.out, t, columns)
+        write_table(args.out, t, columns)
         if progress:
             nfev = sum(s.trajectory.nfev for s in sims.values())
             wall = sum(s.trajectory.wall_time_s for s in sims.values())
@@ -419,10 +453,16 @@ def run_command(args):
     if args.command == "estimate":
         from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
         from gyro_instrument.scenes import scene_notes
+        if scene_arg(args) is None:
+            raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
         scene = scene_from_args(args)
-        with terminal_progress("simulating"):
-            truth = simulate_truth(scene)
-        result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
+        if args.data:
+            from gyro_instrument.estimators.data_io import estimate_data
+            result = to_jsonable(estimate_data(scene, args.data))
+        else:
+            with terminal_progress("simulating"):
+                truth = simulate_truth(scene)
+            result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
         result["seed"] = scene.seed
         result["scene_notes"] = scene_notes(scene)
         without_rotation_reason(result, scene)
