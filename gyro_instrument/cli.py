@@ -386,6 +386,15 @@ def build_parser():
                                "or a rosbag2 bag directory (metadata.yaml + .mcap files, split or not)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate', with "
                                                        "'damaged' and 'replay_notes' when the bag lost data")
+    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                   help="the scene of a bag recorded by another tool (no gyro_instrument record; or to use instead "
+                        "of the bag's record): the instruments' topics are found by the documented names and types "
+                        "(/<instrument>/joint_states, sensor_msgs/msg/JointState, joints as in msg_docs/topics.md); "
+                        "the JSON gains 'topics' (matched, unmatched with the reason, unused)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene scene (as for 'estimate')")
+    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
+                   help="read this instrument's JointState from another topic (repeatable)")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -492,7 +501,7 @@ def run_command(args):
             print("  note: the input was cut short (no summary): read up to its last complete record")
         return 0
     if args.command == "replay":
-        result = replay_bag(args.bag)
+        result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
         if args.json:
             print(json.dumps(result, indent=2))
         else:
@@ -501,16 +510,22 @@ def run_command(args):
     raise AssertionError(args.command)
 
 
-def replay_bag(path):
+def replay_bag(path, scene=None, overrides=(), topics=()):
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
     JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
     out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
+    ``path``: an ``.mcap`` or a rosbag2 bag directory. With ``scene`` (and its ``overrides``) or
+    ``topics`` remaps, a bag recorded by another tool: see
+    :func:`gyro_instrument.recording.foreign.replay_foreign`.
 
     Raises
     ------
     SceneError
-        ``path`` is missing or not an MCAP file, or holds no scene metadata record.
+        ``path`` is missing or not a bag, or holds no scene metadata record and no ``scene`` is given.
     """
+    if scene is not None or topics or overrides:
+        from gyro_instrument.recording.foreign import replay_foreign
+        return replay_foreign(path, scene, list(overrides), list(topics))
     from gyro_instrument.estimators.pipeline import estimable, estimate_records
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
@@ -519,7 +534,8 @@ def replay_bag(path):
     if meta is None or "scene_yaml" not in meta:
         lost = " (damaged stretches: it may have been lost)" if damaged else ""
         raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
-                                      f"'gyro-instrument run --bag' or the recorder node{lost}")
+                                      f"'gyro-instrument run --bag' or the recorder node, or give the scene with "
+                                      f"--scene SCENE{lost}")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
     samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}
