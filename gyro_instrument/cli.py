@@ -395,6 +395,23 @@ def build_parser():
                    help="override a value of the --scene scene (as for 'estimate')")
     p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
                    help="read this instrument's JointState from another topic (repeatable)")
+    p = sub.add_parser("plot", help="draw the standard views of a table or a bag to PNG: angles over time, the "
+                                    "swing-plane azimuth with the k = n sin(latitude) line, the bob's path seen "
+                                    "from above, the fit residuals (needs matplotlib: pip install "
+                                    "'gyro_instrument[plot]')")
+    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="directory for angles.png, swing_azimuth.png, bob_path.png, residuals.png (default: "
+                        "<file name>_plots beside the current directory); PNGs already there are refused unless "
+                        "--overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace the view PNGs already in --out")
+    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                   help="the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
+                        "k line's latitude). A bag written by this package carries its own")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene scene")
+    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
+                   help="a foreign bag's topic for an instrument (as for replay)")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -499,6 +516,16 @@ def run_command(args):
             print(f"  note: {note}")
         if scan.truncated:
             print("  note: the input was cut short (no summary): read up to its last complete record")
+        return 0
+    if args.command == "plot":
+        import time
+        from gyro_instrument.views import plot_file
+        out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
+        t0 = time.perf_counter()
+        pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
+        for note in notes:
+            print(f"gyro-instrument: note: {note}", file=sys.stderr)
+        print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
         return 0
     if args.command == "replay":
         result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
