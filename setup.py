@@ -24,8 +24,10 @@ setup(
     install_requires=["numpy>=1.24", "scipy>=1.10", "pyyaml>=6", "pyarrow>=12"],
     extras_require={
         "ros": ROS,
-        "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6"],
+        "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
+                       "dask[distributed]>=2023.1"],
         "plot": ["matplotlib>=3.6"],
+        "cluster": ["dask[distributed]>=2023.1"],
     },
     zip_safe=True,
     maintainer="gyro_instrument developers",

@@ -419,6 +419,11 @@ def build_parser():
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the sweeps (observation time, site sweep, effect cost) on the Dask cluster whose "
+                        "scheduler is at ADDRESS (tcp://HOST:8786; its workers need gyro_instrument installed) "
+                        "instead of local processes; needs the 'cluster' extra (pip install "
+                        "'gyro_instrument[cluster]')")
     p = sub.add_parser("recover", help="rewrite a recording truncated inside its data (no footer: disk "
                                        "full, copied mid-write) or damaged (chunks failing their CRC, a broken "
                                        "summary) into a complete, indexed MCAP of its intact records; the lost "
@@ -499,7 +504,14 @@ def run_command(args):
         return 0
     if args.command == "bench":
         from gyro_instrument.bench.studies import run_bench
-        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr)))
+        progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+        if args.scheduler:
+            from gyro_instrument.core.parallel import dask_executor
+            with dask_executor(args.scheduler) as ex:
+                progress(f"sweeps on the Dask scheduler {args.scheduler}")
+                print(run_bench(args.out, args.quick, progress=progress, executor=ex))
+        else:
+            print(run_bench(args.out, args.quick, progress=progress))
         return 0
     if args.command == "recover":
         from gyro_instrument.core.scene import EPOCH_NS

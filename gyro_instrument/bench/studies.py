@@ -403,8 +403,12 @@ def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
     return rows
 
 
-def run_bench(out_dir, quick=False, progress=print):
-    """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text."""
+def run_bench(out_dir, quick=False, progress=print, executor=None):
+    """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text.
+
+    ``executor``: where the sweeps run (observation time, site sweep, effect cost); default a
+    spawned process pool per study (:func:`~gyro_instrument.core.parallel.process_executor`), e.g.
+    a Dask client's executor for ``bench --scheduler``."""
     from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
     from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
     from gyro_instrument.bench.plots import write_plots
@@ -424,16 +428,17 @@ def run_bench(out_dir, quick=False, progress=print):
                "<= 30", secs is not None and secs <= 30.0))
     _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
     progress("observation time")
-    ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40)
+    ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
+                                  executor=executor)
     _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
     _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
     progress("site sweep")
     ss = site_sweep((-85, -60, -33.9, 5, 30, 48.8462, 70, 85) if not quick else (-33.9, 48.8462),
-                    40 if not quick else 4, minutes=10.0 if not quick else 2.0)
+                    40 if not quick else 4, minutes=10.0 if not quick else 2.0, executor=executor)
     _write(os.path.join(out_dir, "site_sweep.csv"), SITE_HEADER, ss)
     progress("effect cost")
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
-                          duration_s=120.0 if quick else None)
+                          duration_s=120.0 if quick else None, executor=executor)
     write_effect_cost_csv(os.path.join(out_dir, "effect_cost.csv"), ec)
     pngs = write_plots(out_dir)
     if not pngs:
