@@ -6,7 +6,6 @@ Bad input exits with status 2 and one line naming the field, the value and the v
 """
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -241,16 +240,10 @@ def terminal_progress(label, enabled=True, stream=None, force=False):
 
 
 def write_csv(path, t, columns):
-    """CSV: first column ``time_s``, then one column per channel, full float precision."""
-    keys = list(columns)
-    tmp = f"{path}.partial"
-    with open(tmp, "w", newline="") as fh:
-        wr = csv.writer(fh)
-        wr.writerow(["time_s"] + keys)
-        data = np.column_stack([t] + [columns[k] for k in keys])
-        for row in data:
-            wr.writerow([repr(float(v)) for v in row])
-    os.replace(tmp, path)
+    """CSV: first column ``time_s``, then one column per channel, full float precision
+    (:func:`gyro_instrument.estimators.data_io.write_csv`)."""
+    from gyro_instrument.estimators.data_io import write_csv as _write_csv
+    return _write_csv(path, t, columns)
 
 
 def _fmt(v, spec):
@@ -364,7 +357,7 @@ def build_parser():
     add_scene_arguments(p)
     p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
                    help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
-                        "CSV, or Parquet (float64 columns, pyarrow) for a name ending in .parquet; "
+                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV; "
                         "an existing file is refused unless --overwrite; never the scene file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
@@ -467,8 +460,7 @@ def run_command(args):
             print_description(d)
         return 0
     if args.command == "simulate":
-        from gyro_instrument.estimators.data_io import table_kind, write_table
-        table_kind(args.out, "--out")
+        from gyro_instrument.estimators.data_io import write_table
         check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
         scene = scene_from_args(args)
         print_scene_notes(scene)

@@ -62,13 +62,13 @@ def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE"):
     SceneError
         Unreadable input, a bag without a scene record and no ``--scene``, nothing to draw.
     """
-    from gyro_instrument.estimators.data_io import TABLE_SUFFIXES, TIME_COLUMN, read_table
+    from gyro_instrument.estimators.data_io import TIME_COLUMN, read_table
     from gyro_instrument.estimators.pipeline import ANGLE_CHANNELS, PENDULUMS, pendulum_length
     from gyro_instrument.scenes import build_instruments, load_scene
     scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
     notes = []
     series = {}
-    if str(path).lower().endswith(TABLE_SUFFIXES):
+    if not os.path.isdir(path) and not str(path).lower().endswith(".mcap"):
         cols = read_table(path, field)
         t = cols[TIME_COLUMN]
         insts = build_instruments(scene) if scene else {}

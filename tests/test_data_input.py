@@ -90,7 +90,7 @@ def test_hand_made_csv_with_a_gap_nan_and_disorder_estimates_with_notes(tmp_path
 
 
 @pytest.mark.parametrize("case", ["no time column", "wrong instrument type", "columns missing", "not a number",
-                                  "no matching instrument", "unknown suffix", "missing file"])
+                                  "no matching instrument", "not parquet", "missing file"])
 def test_bad_data_exits_2_with_one_line(tmp_path, capsys, case):
     path = tmp_path / "d.csv"
     header, row = ["time_s", "pendulum.x_east", "pendulum.y_north"], ["0", "0.1", "0.2"]
@@ -99,7 +99,7 @@ def test_bad_data_exits_2_with_one_line(tmp_path, capsys, case):
               "columns missing": "needs pendulum.x_east, pendulum.y_north or pendulum.deflection_east",
               "not a number": "line 2, column pendulum.x_east: 'abc' is not a number",
               "no matching instrument": "no instrument's columns found",
-              "unknown suffix": "must end in .csv or .parquet",
+              "not parquet": "cannot be read as Parquet",
               "missing file": "file not found"}[case]
     if case == "no time column":
         header[0] = "t"
@@ -111,8 +111,8 @@ def test_bad_data_exits_2_with_one_line(tmp_path, capsys, case):
         row[1] = "abc"
     elif case == "no matching instrument":
         header[1:] = ["other.x_east", "other.y_north"]
-    elif case == "unknown suffix":
-        path = tmp_path / "d.txt"
+    elif case == "not parquet":
+        path = tmp_path / "d.parquet"
     if case != "missing file":
         path.write_text(",".join(header) + "\n" + ",".join(row) + "\n")
     before = sorted(p.name for p in tmp_path.iterdir())

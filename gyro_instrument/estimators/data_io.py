@@ -30,23 +30,11 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.pipeline import ANGLE_CHANNELS, PENDULUMS, estimable, pendulum_length
 
 TIME_COLUMN = "time_s"
-TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
 
 
-def table_kind(path, field="--data"):
-    """``csv`` or ``parquet`` from the file name.
-
-    Raises
-    ------
-    SceneError
-        Any other suffix.
-    """
-    low = str(path).lower()
-    if low.endswith(".csv"):
-        return "csv"
-    if low.endswith((".parquet", ".pq")):
-        return "parquet"
-    raise SceneError(field, path, "must end in .csv or .parquet (columns as in msg_docs/csv.md)")
+def table_kind(path):
+    """``parquet`` for a name ending in ``.parquet`` or ``.pq``, else ``csv``."""
+    return "parquet" if str(path).lower().endswith((".parquet", ".pq")) else "csv"
 
 
 def _pyarrow():
@@ -75,7 +63,7 @@ def read_table(path, field="--data"):
     """
     if not os.path.isfile(path):
         raise SceneError(field, path, "file not found" if not os.path.exists(path) else "is not a file")
-    kind = table_kind(path, field)
+    kind = table_kind(path)
     if kind == "csv":
         try:
             with open(path, newline="", encoding="utf-8") as fh:
@@ -115,17 +103,30 @@ def read_table(path, field="--data"):
 
 
 def write_table(path, t, columns):
-    """Write ``time_s`` and the channel columns as CSV (full precision, ``repr``) or Parquet
-    (float64 columns through pyarrow), chosen by the suffix; written to ``<path>.partial`` and
-    renamed."""
-    if table_kind(path, "--out") == "csv":
-        from gyro_instrument.cli import write_csv
+    """Write ``time_s`` and the channel columns as Parquet (float64 columns through pyarrow) for a
+    name ending in ``.parquet``/``.pq``, else as CSV (full precision, ``repr``); written to
+    ``<path>.partial`` and renamed."""
+    if table_kind(path) == "csv":
         return write_csv(path, t, columns)
     pa = _pyarrow()
     table = pa.table({TIME_COLUMN: np.asarray(t, dtype=float),
                       **{k: np.asarray(v, dtype=float) for k, v in columns.items()}})
     tmp = f"{path}.partial"
     pa.parquet.write_table(table, tmp)
+    os.replace(tmp, path)
+
+
+def write_csv(path, t, columns):
+    """CSV: first column ``time_s``, then one column per channel, full float precision (``repr``);
+    written to ``<path>.partial`` and renamed."""
+    keys = list(columns)
+    tmp = f"{path}.partial"
+    with open(tmp, "w", newline="") as fh:
+        wr = csv.writer(fh)
+        wr.writerow([TIME_COLUMN] + keys)
+        data = np.column_stack([t] + [columns[k] for k in keys])
+        for row in data:
+            wr.writerow([repr(float(v)) for v in row])
     os.replace(tmp, path)
 
 
