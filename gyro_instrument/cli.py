@@ -19,7 +19,6 @@ if __name__ == "__main__":
     sys.exit(_main())
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -40,9 +39,18 @@ EXIT_INTEGRATION_FAILED = 3
 EXIT_INTERRUPTED = 130
 
 
-def add_scene_arguments(parser):
-    """The scene arguments shared by every subcommand (and mirrored by the ROS parameters)."""
-    parser.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path")
+def add_scene_arguments(parser, positional=True):
+    """The scene arguments shared by every subcommand (and mirrored by the ROS parameters).
+    ``positional=False``: the scene is the option ``--scene`` (replay, plot); ``"optional"``: either
+    (estimate: ``estimate SCENE`` or ``estimate --data FILE --scene SCENE``)."""
+    scene_help = "shipped scene name (see 'gyro-instrument scenes') or a YAML path"
+    if positional is True:
+        parser.add_argument("scene", help=scene_help)
+    else:
+        if positional == "optional":
+            parser.add_argument("scene", nargs="?", default=None, help=scene_help)
+        parser.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                            help=scene_help + (" (the same as the positional SCENE)" if positional else ""))
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="override a scene value, e.g. --set site.latitude_deg=-33.87 "
                              "--set instruments.pendulum.length_m=20 (repeatable; values are YAML). "
@@ -56,13 +64,27 @@ def add_scene_arguments(parser):
                         help="simulated time per instrument, s (default: the scene's duration_s)")
 
 
+def scene_arg(args):
+    """The scene named by the positional SCENE or ``--scene`` (None when neither is given).
+
+    Raises
+    ------
+    SceneError
+        Both are given and differ.
+    """
+    pos, opt = getattr(args, "scene", None), getattr(args, "scene_option", None)
+    if pos and opt and pos != opt:
+        raise SceneError("--scene", opt, f"conflicts with the scene {pos!r} given before it; give one")
+    return pos or opt
+
+
 def scene_from_args(args):
     """Load the scene named on the command line with its overrides."""
     from gyro_instrument.scenes import load_scene
     overrides = list(args.overrides)
     if getattr(args, "duration_s", None) is not None:
         overrides.append(f"duration_s={args.duration_s!r}")
-    return load_scene(args.scene, overrides)
+    return load_scene(scene_arg(args), overrides)
 
 
 def print_scene_notes(scene, stream=None):
@@ -295,17 +317,10 @@ def terminal_progress(label, enabled=True, stream=None, force=False):
 
 
 def write_csv(path, t, columns):
-    """CSV: first column ``time_s``, then one column per channel, full float precision.
-
-    Written to ``<path>.partial`` and renamed when complete: an interrupted write leaves no
-    ``path`` (or the previous one) and no ``.partial``."""
-    keys = list(columns)
-    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
-        wr = csv.writer(fh)
-        wr.writerow(["time_s"] + keys)
-        data = np.column_stack([t] + [columns[k] for k in keys])
-        for row in data:
-            wr.writerow([repr(float(v)) for v in row])
+    """CSV: first column ``time_s``, then one column per channel, full float precision
+    (:func:`gyro_instrument.estimators.data_io.write_csv`)."""
+    from gyro_instrument.estimators.data_io import write_csv as _write_csv
+    return _write_csv(path, t, columns)
 
 
 def _fmt(v, spec):
@@ -390,6 +405,8 @@ def damage_line(d):
     where = f" at byte {d['offset']}" if d.get("offset") is not None else ""
     what = (f"chunk{where} failed its CRC" if reason.startswith("chunk CRC mismatch")
             else f"{reason}{where}")
+    if d.get("file"):
+        what = f"{d['file']}: {what}"
     if d.get("before_recovery"):
         what = f"before recovery: {what}"
     if d.get("lost_from_s") is None and d.get("lost_to_s") is None and d.get("span_from") is None:
@@ -401,10 +418,11 @@ def damage_line(d):
 
 
 def print_damage(r, w):
-    """The bag's lost stretches and the reader's notes (replay); nothing for a live estimate."""
+    """The bag's lost stretches and the reader's notes (replay, estimate --data); nothing for a
+    live estimate."""
     for d in r.get("damaged") or ():
         w(f"  damaged: {damage_line(d)}\n")
-    for n in r.get("replay_notes") or ():
+    for n in (r.get("replay_notes") or []) + (r.get("data_notes") or []):
         w(f"  note: {n}\n")
 
 
@@ -504,23 +522,58 @@ def build_parser():
                                         "every effect each instrument supports")
     add_scene_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV")
+    p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV or Parquet")
     add_scene_arguments(p)
-    p.add_argument("--out", required=True, metavar="FILE.csv",
-                   help="output CSV: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+    p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
+                   help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV; "
                         "an existing file is refused unless --overwrite; never the scene file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p = sub.add_parser("estimate", help="simulate the scene's instruments through their sensors and estimate "
-                                        "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors")
-    add_scene_arguments(p)
+                                        "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors; "
+                                        "with --data, estimate from measured data instead")
+    add_scene_arguments(p, positional="optional")
+    p.add_argument("--data", metavar="FILE.csv|FILE.parquet",
+                   help="estimate from this table of measured channels instead of simulating: time_s and "
+                        "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
+                        "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
+                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
+                        "Missing values, NaN, irregular and out-of-order times are accepted and noted")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
     p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
                                       "live 'run' estimate to the last digit. Every chunk's CRC is checked: a "
                                       "damaged chunk is left out and the log-time span it held is reported")
-    p.add_argument("bag", help="an .mcap file written by 'gyro-instrument run --bag' or the recorder node")
+    p.add_argument("bag", help="a bag written by 'gyro-instrument run --bag' or the recorder node: an .mcap file "
+                               "or a rosbag2 bag directory (metadata.yaml + .mcap files, split or not)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate', with "
                                                        "'damaged' and 'replay_notes' when the bag lost data")
+    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                   help="the scene of a bag recorded by another tool (no gyro_instrument record; or to use instead "
+                        "of the bag's record): the instruments' topics are found by the documented names and types "
+                        "(/<instrument>/joint_states, sensor_msgs/msg/JointState, joints as in msg_docs/topics.md); "
+                        "the JSON gains 'topics' (matched, unmatched with the reason, unused)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene scene (as for 'estimate')")
+    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
+                   help="read this instrument's JointState from another topic (repeatable)")
+    p = sub.add_parser("plot", help="draw the standard views of a table or a bag to PNG: angles over time, the "
+                                    "swing-plane azimuth with the k = n sin(latitude) line, the bob's path seen "
+                                    "from above, the fit residuals (needs matplotlib: pip install "
+                                    "'gyro_instrument[plot]')")
+    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="directory for angles.png, swing_azimuth.png, bob_path.png, residuals.png (default: "
+                        "<file name>_plots beside the current directory); PNGs already there are refused unless "
+                        "--overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace the view PNGs already in --out")
+    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
+                   help="the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
+                        "k line's latitude). A bag written by this package carries its own")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the --scene scene")
+    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
+                   help="a foreign bag's topic for an instrument (as for replay)")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -533,6 +586,11 @@ def build_parser():
                         "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a value of the --scene (as for 'estimate')")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the sweeps (observation time, site sweep, effect cost) on the Dask cluster whose "
+                        "scheduler is at ADDRESS (tcp://HOST:8786; its workers need gyro_instrument installed) "
+                        "instead of local processes; needs the 'cluster' extra (pip install "
+                        "'gyro_instrument[cluster]')")
     p = sub.add_parser("plan", help="how long must I observe? the observation time per configuration each "
                                     "--target needs (Cramer-Rao bound of the scene's sensor model), its dependence "
                                     "on the time, the systematic floor, the effect of the sensor's noise and "
@@ -561,7 +619,8 @@ def build_parser():
                                        "summary) into a complete, indexed MCAP of its intact records; the lost "
                                        "spans are printed and kept in the new file (metadata "
                                        "'gyro_instrument_damage'). Exit 2 when nothing intact is found")
-    p.add_argument("bag", help="the damaged .mcap")
+    p.add_argument("bag", help="the damaged .mcap, or a rosbag2 bag directory (every file is read; the "
+                               "output is one .mcap)")
     p.add_argument("--out", required=True, metavar="FIXED.mcap",
                    help="where to write the recovered file: never the input; an existing file is refused "
                         "unless --overwrite")
@@ -646,12 +705,13 @@ def run_command(args):
             print_description(d)
         return 0
     if args.command == "simulate":
+        from gyro_instrument.estimators.data_io import write_table
         check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
         scene = scene_from_args(args)
         print_scene_notes(scene)
         progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
         t, columns, sims = simulate_scene(scene, progress)
-        write_csv(args.out, t, columns)
+        write_table(args.out, t, columns)
         if progress:
             nfev = sum(s.trajectory.nfev for s in sims.values())
             wall = sum(s.trajectory.wall_time_s for s in sims.values())
@@ -661,10 +721,16 @@ def run_command(args):
     if args.command == "estimate":
         from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
         from gyro_instrument.scenes import scene_notes
+        if scene_arg(args) is None:
+            raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
         scene = scene_from_args(args)
-        with terminal_progress("simulating"):
-            truth = simulate_truth(scene)
-        result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
+        if args.data:
+            from gyro_instrument.estimators.data_io import estimate_data
+            result = to_jsonable(estimate_data(scene, args.data))
+        else:
+            with terminal_progress("simulating"):
+                truth = simulate_truth(scene)
+            result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
         result["seed"] = scene.seed
         result["scene_notes"] = scene_notes(scene)
         without_rotation_reason(result, scene)
@@ -680,19 +746,27 @@ def run_command(args):
         if args.scene is not None:
             from gyro_instrument.scenes import load_scene
             load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
-        check_output_dir(args.out)
-        print(run_bench(args.out, args.quick, progress=lambda m: print(m, file=sys.stderr), scene=args.scene,
-                        overrides=args.overrides))
+        progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+        if args.scheduler:
+            from gyro_instrument.core.parallel import dask_executor
+            with dask_executor(args.scheduler) as ex:      # no scheduler: exit 2 before --out is made
+                check_output_dir(args.out)
+                progress(f"sweeps on the Dask scheduler {args.scheduler}")
+                print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides,
+                                executor=ex))
+        else:
+            check_output_dir(args.out)
+            print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides))
         return 0
     if args.command == "plan":
         return plan_command(args)
     if args.command == "recover":
         from gyro_instrument.core.scene import EPOCH_NS
-        from gyro_instrument.recording.bag_scan import check_mcap, scan_bag
+        from gyro_instrument.recording.bag_layout import bag_files, bag_inputs, scan_path
         from gyro_instrument.recording.mcap_io import recover
-        check_mcap(args.bag, "bag")
-        check_output(args.out, "--out", (args.bag,), args.overwrite)
-        scan = scan_bag(args.bag)
+        bag_files(args.bag, "bag")
+        check_output(args.out, "--out", bag_inputs(args.bag), args.overwrite)
+        scan = scan_path(args.bag)
         n, scan = recover(args.bag, args.out, scan)
         print(f"recovered {n} messages from {args.bag} into {args.out}")
         for d in scan.damage_dicts(EPOCH_NS):
@@ -702,8 +776,18 @@ def run_command(args):
         if scan.truncated:
             print("  note: the input was cut short (no summary): read up to its last complete record")
         return 0
+    if args.command == "plot":
+        import time
+        from gyro_instrument.views import plot_file
+        out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
+        t0 = time.perf_counter()
+        pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
+        for note in notes:
+            print(f"gyro-instrument: note: {note}", file=sys.stderr)
+        print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
+        return 0
     if args.command == "replay":
-        result = replay_bag(args.bag)
+        result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
         if args.json:
             print(json.dumps(result, indent=2))
         else:
@@ -731,10 +815,13 @@ def plan_command(args):
     return 0
 
 
-def replay_bag(path):
+def replay_bag(path, scene=None, overrides=(), topics=()):
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
     JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
     out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
+    ``path``: an ``.mcap`` or a rosbag2 bag directory. With ``scene`` (and its ``overrides``) or
+    ``topics`` remaps, a bag recorded by another tool: see
+    :func:`gyro_instrument.recording.foreign.replay_foreign`.
 
     For a cut recording it adds ``observation_read_s`` (the span of joint stamps decoded, the shortest
     over the instruments), ``recording_cut`` (why it falls short of the scene's ``duration_s``);
@@ -743,8 +830,11 @@ def replay_bag(path):
     Raises
     ------
     SceneError
-        ``path`` is missing or not an MCAP file, or holds no scene metadata record.
+        ``path`` is missing or not a bag, or holds no scene metadata record and no ``scene`` is given.
     """
+    if scene is not None or topics or overrides:
+        from gyro_instrument.recording.foreign import replay_foreign
+        return replay_foreign(path, scene, list(overrides), list(topics))
     from gyro_instrument.estimators.pipeline import estimable, estimate_records
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
@@ -754,7 +844,8 @@ def replay_bag(path):
     if meta is None or "scene_yaml" not in meta:
         lost = " (damaged stretches: it may have been lost)" if damaged else ""
         raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
-                                      f"'gyro-instrument run --bag' or the recorder node{lost}")
+                                      f"'gyro-instrument run --bag' or the recorder node, or give the scene with "
+                                      f"--scene SCENE{lost}")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
     samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}

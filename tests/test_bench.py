@@ -71,6 +71,11 @@ def test_targets_and_observation_time(bench):
     assert float(suite["measured"]) > 0          # measured, and the recording held every message
     az = [r for k, r in tg.items() if k.endswith("end azimuth error")][0]
     assert float(az["measured"]) <= 1e-6
+    # plotting a long record is bounded (the full bench draws a day, 1.7 million samples, in about 8 s)
+    plot = [r for k, r in tg.items() if k.startswith("plot 3 h of pendulum data")][0]
+    assert plot["met"] == "True" and 0 < float(plot["measured"]) <= 30
+    assert sorted(p.name for p in (bench / "plot_day").iterdir()) == \
+        ["angles.png", "bob_path.png", "residuals.png", "swing_azimuth.png"]
     for r in rows(bench, "observation_time.csv"):
         assert float(r["rms_counting_deg"]) > 100 * float(r["rms_fit_deg"])
         assert float(r["rms_counting_earth_rate_rad_s"]) > 100 * float(r["rms_fit_earth_rate_rad_s"])

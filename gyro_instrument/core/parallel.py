@@ -4,7 +4,8 @@ Workers are *spawned* with single-threaded BLAS: forked workers inherit OpenBLAS
 and two workers × two busy-waiting BLAS threads on a 2-core machine ran 3× slower than one
 process. Any executor with the same ``map``/``submit`` interface (for example a
 ``dask.distributed`` client's ``get_executor()``) can replace it for studies larger than one
-machine: the sweep functions take an ``executor`` argument.
+machine: the sweep functions take an ``executor`` argument; :func:`dask_executor` connects to a
+Dask scheduler and yields such an executor (``gyro-instrument bench --scheduler ADDRESS``).
 
 Ctrl-C: workers ignore SIGINT (a terminal sends it to the whole process group, and each worker
 would print its own KeyboardInterrupt traceback); the parent gets the KeyboardInterrupt, and
@@ -17,6 +18,7 @@ import os
 import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
 _BLAS_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -47,3 +49,32 @@ def process_executor(max_workers=None):
         os.environ.setdefault(var, "1")
     return _InterruptiblePool(max_workers=max_workers or os.cpu_count() or 1,
                               mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
+
+
+@contextmanager
+def dask_executor(address, timeout_s=10.0):
+    """A ``dask.distributed`` client's ``concurrent.futures`` executor on the scheduler at
+    ``address`` (``tcp://host:8786``); the client is closed on exit. The cluster's workers need
+    this package installed (the tasks are its picklable sweep functions).
+
+    Raises
+    ------
+    SceneError
+        Dask is not installed (the ``cluster`` extra), or no scheduler answers at ``address``
+        within ``timeout_s``.
+    """
+    from gyro_instrument.core.errors import SceneError
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise SceneError("--scheduler", address, "needs Dask: pip install 'gyro_instrument[cluster]' "
+                                                 "(or: pip install 'dask[distributed]')") from None
+    try:
+        client = Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SceneError("--scheduler", address, f"no Dask scheduler answered ({exc.__class__.__name__}): "
+                                                 f"give tcp://HOST:PORT of a running scheduler") from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()

@@ -1,13 +1,15 @@
 """Joint samples from a recorded bag, decoded without ROS (``mcap_ros2``'s dynamic decoder)."""
 
 import numpy as np
-from gyro_instrument.recording.bag_scan import scan_bag
+from gyro_instrument.recording.bag_layout import scan_path
 
 
 def samples_from_bag(path, scan=None):
     """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes, damaged).
 
-    Reads every ``/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
+    ``path``: a bare ``.mcap`` or a rosbag2 bag directory, split or not
+    (:func:`~gyro_instrument.recording.bag_layout.scan_path`). Reads every
+    ``/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
     damaged chunk is skipped and the chunks after it are read; a file cut short is read up to its
     last complete record. Out-of-order or duplicated stamps are left for the estimator to sort out
     (it reports what it dropped).
@@ -27,11 +29,12 @@ def samples_from_bag(path, scan=None):
     Raises
     ------
     SceneError
-        ``path`` is not an MCAP file.
+        ``path`` is not an MCAP file nor a bag directory (see
+        :func:`~gyro_instrument.recording.bag_layout.bag_files`).
     """
     from mcap_ros2.decoder import DecoderFactory
     from gyro_instrument.core.scene import EPOCH_NS
-    scan = scan or scan_bag(path)
+    scan = scan or scan_path(path)
     meta = scan.metadata_record("gyro_instrument")
     data, notes = {}, list(scan.notes)
     notes += [f"before recovery: {n}" for n in scan.recorded_notes]
@@ -67,6 +70,9 @@ def samples_from_bag(path, scan=None):
     elif state == "recording":
         notes.append(f"recording interrupted (killed) after its last commit: the file is complete up to there; "
                      f"read {count} joint messages")
+    elif state == "split":
+        notes.append(f"this file is one part of a split bag (status split): read {count} joint messages; "
+                     f"replay the bag directory for all of it")
     elif state not in (None, "complete"):
         notes.append(f"recording {state}: read {count} joint messages")
     if scan.recorded_status not in (None, "complete", state):

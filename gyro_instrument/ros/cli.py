@@ -18,9 +18,22 @@ def build_parser():
                                    "recorder) over DDS on loopback and print the recovered latitude and "
                                    "Earth rate next to the truth")
     core_cli.add_scene_arguments(p)
-    p.add_argument("--bag", metavar="OUT.mcap", help="record every topic to this MCAP file (rosbag2 layout); an "
-                                                     "existing file is refused unless --overwrite; never the scene file")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --bag file")
+    p.add_argument("--bag", metavar="OUT.mcap|DIR/", help="record every topic: to this MCAP file (rosbag2's MCAP "
+                                                          "layout), or, for a path ending in '/' (or --bag-format "
+                                                          "rosbag2), to a rosbag2 bag directory (metadata.yaml + "
+                                                          "DIR_0.mcap, DIR_1.mcap ...); an existing file or "
+                                                          "directory is refused unless --overwrite; never the scene file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --bag file (or the bag files of an "
+                                                            "existing bag directory; any other directory is refused)")
+    p.add_argument("--bag-format", choices=("mcap", "rosbag2"), default=None,
+                   help="mcap: one bare .mcap file; rosbag2: a bag directory as 'ros2 bag record' writes it "
+                        "(default: rosbag2 when --bag ends in '/' or splitting is asked for, else mcap)")
+    p.add_argument("--max-bag-size", type=float, default=0, metavar="BYTES",
+                   help="rosbag2 layout: start a new .mcap file when the current one reaches this many bytes "
+                        "(0, default: no limit)")
+    p.add_argument("--max-bag-duration", type=float, default=0, metavar="S",
+                   help="rosbag2 layout: start a new .mcap file when the current one spans this many seconds of "
+                        "log time (0, default: no limit)")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
@@ -46,15 +59,22 @@ def _command(core_cli, argv):
     args = build_parser().parse_args(argv)
     if args.command != "run":
         return core_cli.run_command(args)
+    bag_format = None
     if args.bag:
-        core_cli.check_output(args.bag, "--bag", core_cli.scene_inputs(args.scene), args.overwrite)
+        from gyro_instrument.recording.bag_layout import bag_format as layout_of, check_bag_output
+        bag_format = layout_of(args.bag, args.bag_format, args.max_bag_size, args.max_bag_duration)
+        check_bag_output(args.bag, bag_format, "--bag", core_cli.scene_inputs(args.scene), args.overwrite,
+                         args.max_bag_size, args.max_bag_duration)
+    elif args.bag_format or args.max_bag_size or args.max_bag_duration:
+        raise SceneError("--bag", None, "is needed by --bag-format, --max-bag-size and --max-bag-duration")
     if args.real_time_factor < 0 or args.real_time_factor != args.real_time_factor:
         raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
     from gyro_instrument.ros.suite import run_suite
     progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
     result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
                               command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
-                              overwrite=args.overwrite)
+                              overwrite=args.overwrite, bag_format=bag_format,
+                              max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration)
     if result is None:
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3

@@ -33,8 +33,8 @@ from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joints import joint_streams, records_from_joints
-from gyro_instrument.recording.bag_scan import scan_bag
-from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
+from gyro_instrument.recording.bag_layout import bag_format, check_bag_output, open_bag_writer, scan_path
+from gyro_instrument.recording.mcap_io import qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros.topics import CLOCK, ESTIMATOR_TOPICS, bob_topic, joint_topic, scene_topics
 from gyro_instrument.scenes import build_instruments, load_scene
@@ -364,6 +364,9 @@ class RecorderNode(SceneNode):
         self._declare("overwrite", False)
         self._declare("topics", Parameter.Type.STRING_ARRAY)
         self._declare("command", "recorder node")
+        self._declare("format", "")
+        self._declare("max_bag_size", 0)
+        self._declare("max_bag_duration", 0.0)
         self.writer = None
         self.counts = {}
         self.subs = {}
@@ -376,25 +379,38 @@ class RecorderNode(SceneNode):
         if not out:
             self.get_logger().error("output = '' is invalid: give an .mcap path to record to")
             return
-        directory = os.path.dirname(os.path.abspath(out)) or "."
-        if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
-            self.get_logger().error(f"output = {out!r} is invalid: directory {directory} is missing or not writable")
+        try:
+            fmt = bag_format(out, self.value("format", "") or None, self.value("max_bag_size", 0),
+                             self.value("max_bag_duration", 0.0), field="format")
+            if fmt == "rosbag2":
+                scene_file = self.value("scene", "")
+                check_bag_output(out, fmt, "output", (scene_file,) if os.path.isfile(scene_file) else (),
+                                 self.value("overwrite", False), self.value("max_bag_size", 0),
+                                 self.value("max_bag_duration", 0.0))
+        except SceneError as exc:
+            self.get_logger().error(str(exc))
             return
-        if os.path.isdir(out):
-            self.get_logger().error(f"output = {out!r} is invalid: is a directory; give an .mcap file path")
-            return
-        scene_file = self.value("scene", "")
-        if os.path.isfile(scene_file) and os.path.exists(out) and os.path.samefile(out, scene_file):
-            self.get_logger().error(f"output = {out!r} is invalid: is the scene file this node reads; record "
-                                    f"elsewhere (overwrite never replaces an input)")
-            return
-        if os.path.lexists(out) and not self.value("overwrite", False):
-            self.get_logger().error(f"output = {out!r} is invalid: the file exists and parameter overwrite is "
-                                    f"false; set overwrite:=true to replace it, or give a new path")
-            return
+        if fmt != "rosbag2":       # a bag directory was checked above (bag_layout.check_bag_output)
+            directory = os.path.dirname(os.path.abspath(out)) or "."
+            if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
+                self.get_logger().error(f"output = {out!r} is invalid: directory {directory} is missing or not writable")
+                return
+            if os.path.isdir(out):
+                self.get_logger().error(f"output = {out!r} is invalid: is a directory; give an .mcap file path")
+                return
+            scene_file = self.value("scene", "")
+            if os.path.isfile(scene_file) and os.path.exists(out) and os.path.samefile(out, scene_file):
+                self.get_logger().error(f"output = {out!r} is invalid: is the scene file this node reads; record "
+                                        f"elsewhere (overwrite never replaces an input)")
+                return
+            if os.path.lexists(out) and not self.value("overwrite", False):
+                self.get_logger().error(f"output = {out!r} is invalid: the file exists and parameter overwrite is "
+                                        f"false; set overwrite:=true to replace it, or give a new path")
+                return
         types = scene_topics(self.insts)
         wanted = self.value("topics", []) or list(types)
-        self.writer = BagWriter(out)
+        self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
+                                      overwrite=bool(self.value("overwrite", False)))
         # the scene first, so that a recording cut short still says what it holds (replay needs it)
         self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
                                                      "scene": self.scene.name, "seed": self.scene.seed,
@@ -445,10 +461,10 @@ class PlayerNode(Node):
         self.damaged = []
         bag = self.get_parameter("bag").value
         if not bag or not os.path.exists(bag):
-            self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file")
+            self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file or rosbag2 bag directory")
             return
         try:
-            scan = scan_bag(bag)
+            scan = scan_path(bag)
         except SceneError as exc:
             self.get_logger().error(str(exc))
             return

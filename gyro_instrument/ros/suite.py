@@ -143,12 +143,16 @@ def _params(scene, overrides, duration_s, **extra):
 
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
-              timeout_s=10.0, progress=None, batch=None, overwrite=False):
+              timeout_s=10.0, progress=None, batch=None, overwrite=False, bag_format=None, max_bag_size=0,
+              max_bag_duration_s=0.0):
     """Run the scene's nodes; return (estimate dict, stats dict).
 
     ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
     of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
     existing file there is replaced only with ``overwrite`` (never when it is the scene file).
+    ``bag_format``: ``mcap`` (one file) or ``rosbag2`` (a bag directory, split at ``max_bag_size``
+    bytes or ``max_bag_duration_s`` of log time; see :mod:`gyro_instrument.recording.bag_layout`);
+    default from the path (a trailing slash or splitting: rosbag2).
 
     Raises
     ------
@@ -164,8 +168,10 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
     if bag:
-        from gyro_instrument.cli import check_output, scene_inputs
-        check_output(bag, "bag", scene_inputs(scene), overwrite)
+        from gyro_instrument.cli import scene_inputs
+        from gyro_instrument.recording.bag_layout import bag_format as layout_of, check_bag_output
+        bag_format = layout_of(bag, bag_format, max_bag_size, max_bag_duration_s)
+        check_bag_output(bag, bag_format, "bag", scene_inputs(scene), overwrite, max_bag_size, max_bag_duration_s)
     check_memory(scene_obj)                               # and a run that cannot fit in memory
     context = rclpy.Context()
     # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
@@ -190,7 +196,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             scene, overrides, duration_s, use_sim_time=True))
         rec = RecorderNode(context=context, parameter_overrides=_params(
             scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), use_sim_time=True,
-            command=command)) if bag else None
+            command=command, format=bag_format or "", max_bag_size=int(max_bag_size or 0),
+            max_bag_duration=float(max_bag_duration_s or 0.0))) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:

@@ -1,0 +1,258 @@
+"""Measured data in and out: CSV and Parquet tables of instrument channels (msg_docs/csv.md).
+
+``gyro-instrument estimate --data FILE --scene SCENE`` reads a table whose first column (or any
+column) is ``time_s`` and whose other columns are ``<instrument>.<channel>``, matches them to the
+scene's instruments and estimates from them with the same estimator as ``estimate`` and
+``replay``. What each instrument type needs:
+
+=====================================  ==================================================================
+spherical / compound pendulum          ``x_east`` and ``y_north`` (m; divided by the scene's length to the
+                                       deflections the sensor measures), or ``deflection_east`` and
+                                       ``deflection_north`` (rad, x/l and y/l)
+gyroscope with a directing line        its angle (``angle``; the gimbal: ``outer_angle`` or
+(plane, cone, gimbal)                  ``inner_angle``, whichever the scene's configuration swings) and
+                                       ``spin_rate`` (rad/s)
+free gyroscope, Puiseux's body         nothing (not used by the estimator)
+=====================================  ==================================================================
+
+Samples may be missing (empty cell or ``nan``: left out, as a dropout), irregular, duplicated or
+out of order (sorted by time, stable; the fits drop duplicated stamps and say so). Times are
+taken from the first valid sample when it is not 0 (a note says so).
+"""
+
+import csv
+import math
+import os
+
+import numpy as np
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.estimators.pipeline import estimable
+
+TIME_COLUMN = "time_s"
+
+
+def table_kind(path):
+    """``parquet`` for a name ending in ``.parquet`` or ``.pq``, else ``csv``."""
+    return "parquet" if str(path).lower().endswith((".parquet", ".pq")) else "csv"
+
+
+def _pyarrow():
+    try:
+        import pyarrow
+        import pyarrow.parquet  # noqa: F401
+    except ImportError:
+        raise SceneError("parquet", "pyarrow", "is not installed: pip install pyarrow (a dependency of "
+                                               "gyro_instrument; reinstall the package)") from None
+    return pyarrow
+
+
+def read_table(path, field="--data"):
+    """Every column of a CSV or Parquet table as float arrays.
+
+    Returns
+    -------
+    dict
+        column name -> ndarray (NaN for empty or ``nan`` cells), in file order.
+
+    Raises
+    ------
+    SceneError
+        Missing or unreadable file, an empty table, a cell that is not a number, no ``time_s``
+        column.
+    """
+    if not os.path.isfile(path):
+        raise SceneError(field, path, "file not found" if not os.path.exists(path) else "is not a file")
+    kind = table_kind(path)
+    if kind == "csv":
+        try:
+            with open(path, newline="", encoding="utf-8") as fh:
+                rows = list(csv.reader(fh))
+        except (OSError, UnicodeDecodeError, csv.Error) as exc:
+            raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__})") from None
+        rows = [r for r in rows if r and any(c.strip() for c in r)]
+        if not rows:
+            raise SceneError(field, path, "is empty; expected a header row time_s,<instrument>.<channel>,...")
+        header = [h.strip() for h in rows[0]]
+        cols = {h: np.full(len(rows) - 1, np.nan) for h in header}
+        for i, row in enumerate(rows[1:], start=2):
+            for h, cell in zip(header, row):
+                cell = cell.strip()
+                if cell:
+                    try:
+                        cols[h][i - 2] = float(cell)
+                    except ValueError:
+                        raise SceneError(field, path, f"line {i}, column {h}: {cell!r} is not a number") from None
+    else:
+        pa = _pyarrow()
+        try:
+            table = pa.parquet.read_table(path)
+        except Exception as exc:        # pyarrow raises its own error classes for a bad file
+            raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
+        cols = {}
+        for name in table.column_names:
+            try:
+                cols[name] = np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
+            except (TypeError, ValueError, pa.ArrowException):
+                raise SceneError(field, path, f"column {name} is not numeric") from None
+    if TIME_COLUMN not in cols:
+        shown = ", ".join(list(cols)[:6]) + (", ..." if len(cols) > 6 else "")
+        raise SceneError(field, path, f"has no time column '{TIME_COLUMN}' (columns: {shown or 'none'}); "
+                                      f"see msg_docs/csv.md")
+    return cols
+
+
+def write_table(path, t, columns):
+    """Write ``time_s`` and the channel columns as Parquet (float64 columns through pyarrow) for a
+    name ending in ``.parquet``/``.pq``, else as CSV (full precision, ``repr``); written to
+    ``<path>.partial`` and renamed."""
+    if table_kind(path) == "csv":
+        return write_csv(path, t, columns)
+    pa = _pyarrow()
+    table = pa.table({TIME_COLUMN: np.asarray(t, dtype=float),
+                      **{k: np.asarray(v, dtype=float) for k, v in columns.items()}})
+    from gyro_instrument.core.files import replaced_atomically
+    with replaced_atomically(path) as tmp:
+        pa.parquet.write_table(table, tmp)
+
+
+def write_csv(path, t, columns):
+    """CSV: first column ``time_s``, then one column per channel, full float precision (``repr``);
+    written to ``<path>.partial`` and renamed when complete: an interrupted write leaves no ``path``
+    (or the previous one) and no ``.partial`` (:func:`~gyro_instrument.core.files.replaced_atomically`)."""
+    from gyro_instrument.core.files import replaced_atomically
+    keys = list(columns)
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
+        wr = csv.writer(fh)
+        wr.writerow([TIME_COLUMN] + keys)
+        data = np.column_stack([t] + [columns[k] for k in keys])
+        for row in data:
+            wr.writerow([repr(float(v)) for v in row])
+
+
+def _needs(inst):
+    """Alternative column sets (each a tuple of channel names) that give this instrument's record;
+    () for an instrument the estimator does not use."""
+    if inst.IS_PENDULUM:
+        return (("x_east", "y_north"), tuple(inst.MEASURED_CHANNELS))
+    if not estimable(inst):
+        return ()
+    model = inst.directing_model()
+    return ((model.angle_channel, "spin_rate"),)
+
+
+def records_from_table(insts, cols, path="data", field="--data"):
+    """Estimator records from table columns (see the module docstring).
+
+    Returns
+    -------
+    records : dict
+        instrument name -> record (``t`` and the measured channels), for the instruments matched.
+    notes : list of str
+        Instruments left out, columns not used, rows dropped, re-ordering, time origin.
+    observation_s : float
+        Time from the first to the last valid sample.
+
+    Raises
+    ------
+    SceneError
+        An instrument has some of its columns but not a complete set (the scene does not match the
+        data: wrong type, or columns missing), or no instrument the estimator uses has its columns.
+    """
+    notes = []
+    t = np.asarray(cols[TIME_COLUMN], dtype=float)
+    bad_t = ~np.isfinite(t)
+    if bad_t.all():
+        raise SceneError(field, path, f"column {TIME_COLUMN} holds no finite time")
+    if bad_t.any():
+        notes.append(f"{int(bad_t.sum())} rows without a finite {TIME_COLUMN} left out")
+    keep = ~bad_t
+    t = t[keep]
+    order = np.argsort(t, kind="stable")
+    if np.any(np.diff(order) < 0):
+        notes.append(f"rows out of time order: sorted by {TIME_COLUMN}")
+    t = t[order]
+    t0 = float(t[0])
+    if t0 != 0.0:
+        notes.append(f"times taken from the first sample ({TIME_COLUMN} = {t0!r} s)")
+        t = t - t0
+
+    def col(name):
+        return np.asarray(cols[name], dtype=float)[keep][order]
+
+    records, used = {}, set()
+    wanted = []
+    for name, inst in insts.items():
+        present = sorted(c.split(".", 1)[1] for c in cols if c.startswith(f"{name}."))
+        options = _needs(inst)
+        if not options:
+            used.update(f"{name}.{c}" for c in present)
+            records[name] = {"t": t.copy()}
+            continue
+        wanted.append(f"{name} ({inst.type_name}): " + " or ".join(
+            "+".join(f"{name}.{c}" for c in opt) for opt in options))
+        full = next((opt for opt in options if all(c in present for c in opt)), None)
+        if full is None:
+            if not present:
+                notes.append(f"{name} ({inst.type_name}): no column in the data; left out")
+                continue
+            need = " or ".join(", ".join(f"{name}.{c}" for c in opt) for opt in options)
+            raise SceneError(field, path, f"does not match the scene's {name} ({inst.type_name}): needs {need}; "
+                                          f"the data has {', '.join(f'{name}.{c}' for c in present)}")
+        used.update(f"{name}.{c}" for c in full)
+        rec = {"t": t.copy()}
+        if inst.IS_PENDULUM:
+            if full[0] == "x_east":
+                l = inst.pendulum_length_m()
+                rec["deflection_east"] = col(f"{name}.x_east") / l
+                rec["deflection_north"] = col(f"{name}.y_north") / l
+            else:
+                rec["deflection_east"] = col(f"{name}.deflection_east")
+                rec["deflection_north"] = col(f"{name}.deflection_north")
+        else:
+            for chan in inst.MEASURED_CHANNELS:
+                if f"{name}.{chan}" in cols:
+                    rec[chan] = col(f"{name}.{chan}")
+            rec["spin_rate"] = col(f"{name}.spin_rate")
+            rec["angle"] = rec[full[0]]
+        n_nan = int(sum((~np.isfinite(rec[c])).sum() for c in rec if c not in ("t", "angle")))
+        if n_nan:
+            notes.append(f"{name}: {n_nan} missing or NaN values left out")
+        records[name] = rec
+    if not any(_needs(insts[n]) for n in records):
+        raise SceneError(field, path, "does not match the scene: no instrument's columns found; expected "
+                                      + "; ".join(wanted) if wanted else
+                                      "the scene has no instrument the estimator uses")
+    # columns the instrument writes but the estimator does not read (angle_rate, swing_azimuth ...)
+    # are passed over silently; columns of no instrument or channel of the scene are noted
+    known = {f"{n}.{c.name}" for n, inst in insts.items() for c in getattr(inst, "COLUMNS", ())}
+    unknown = [c for c in cols if c != TIME_COLUMN and c not in used and c not in known]
+    if unknown:
+        shown = ", ".join(unknown[:8]) + (f" and {len(unknown) - 8} more" if len(unknown) > 8 else "")
+        notes.append(f"columns matching no channel of the scene's instruments, not used: {shown}")
+    t_ok = t[np.isfinite(t)]
+    return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
+
+
+def estimate_data(scene, path, field="--data"):
+    """The ``estimate`` JSON object from a CSV or Parquet table of measured channels, with
+    ``data`` (the file), ``observation_s`` (the data's span) and ``data_notes``.
+
+    Raises
+    ------
+    SceneError
+        See :func:`read_table` and :func:`records_from_table`.
+    """
+    from gyro_instrument.estimators.pipeline import estimate_records
+    from gyro_instrument.scenes import build_instruments
+    insts = build_instruments(scene)
+    cols = read_table(path, field)
+    records, notes, span = records_from_table(insts, cols, path, field)
+    result = estimate_records(scene, {n: insts[n] for n in records}, records)
+    result["observation_s"] = span
+    result["data"] = os.path.basename(path)
+    if notes:
+        result["data_notes"] = notes
+    if not math.isfinite(span):
+        result["observation_s"] = None
+    return result

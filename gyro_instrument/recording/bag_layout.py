@@ -1,0 +1,463 @@
+"""rosbag2's directory layout: a bag directory (``metadata.yaml`` plus one or more ``.mcap``
+files), written with optional splitting and read like a bare ``.mcap``.
+
+Writing (:class:`BagDirectoryWriter`): ``DIR/DIR_0.mcap``, ``DIR/DIR_1.mcap``, ... as rosbag2
+names its splits, each file a :class:`~gyro_instrument.recording.mcap_io.BagWriter` (so each is a
+complete, indexed MCAP after every commit); a new file starts when the current one reaches
+``max_bag_size`` bytes or holds ``max_bag_duration`` of log time. Every file registers every topic
+known so far and repeats the metadata records added before it (the scene), so each file can be
+read alone. ``metadata.yaml`` (rosbag2 version 9, the fields ``rosbag2.Writer`` of rosbags and
+rosbag2 jazzy write) is written atomically when the bag is opened, at every split and at close, so
+a recording killed between them still has a ``metadata.yaml`` naming every file; its counts are
+then those of the last split (the files themselves hold what was committed).
+
+Reading (:func:`bag_files`, :func:`scan_path`): a bare ``.mcap``, a bag directory, or a split bag.
+Every file is read through :func:`~gyro_instrument.recording.bag_scan.scan_bag`, so every CRC is
+checked and every loss reported (with the file it is in). A directory without ``metadata.yaml``
+(a recording killed before it was written, or a copy that lost it) is read from the ``.mcap``
+files found in it, in split order, with a note; so is a ``.mcap`` of the directory that the
+``metadata.yaml`` does not list.
+"""
+
+import dataclasses
+import os
+import re
+
+import yaml
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.recording.bag_scan import STATUS_RECORD, BagScan, check_mcap, scan_bag
+
+METADATA = "metadata.yaml"
+ROSBAG2_VERSION = 9
+FORMATS = ("mcap", "rosbag2")
+
+_HISTORY = {0: "system_default", 1: "keep_last", 2: "keep_all", 3: "unknown"}
+_RELIABILITY = {0: "system_default", 1: "reliable", 2: "best_effort", 3: "unknown", 4: "best_available"}
+_DURABILITY = {0: "system_default", 1: "transient_local", 2: "volatile", 3: "unknown", 4: "best_available"}
+_LIVELINESS = {0: "system_default", 1: "automatic", 2: "manual_by_node", 3: "manual_by_topic", 4: "unknown",
+               5: "best_available"}
+
+
+# ----------------------------------------------------------------------------- output
+def bag_format(path, fmt=None, max_bag_size=0, max_bag_duration_s=0.0, field="--bag-format"):
+    """The layout to record ``path`` in: ``rosbag2`` (a bag directory) when asked for, when the
+    path ends with a slash or names an existing directory, or when splitting is asked for;
+    ``mcap`` (one bare file) otherwise.
+
+    Raises
+    ------
+    SceneError
+        ``fmt`` is not a known layout, or splitting is asked for with ``fmt`` = ``mcap``.
+    """
+    if fmt not in (None, "", *FORMATS):
+        raise SceneError(field, fmt, f"must be one of {', '.join(FORMATS)}")
+    split = bool(max_bag_size) or bool(max_bag_duration_s)
+    if fmt == "mcap" and split:
+        raise SceneError(field, fmt, "splitting (--max-bag-size, --max-bag-duration) needs the rosbag2 layout")
+    if fmt:
+        return fmt
+    if split or path.endswith(("/", os.sep)) or os.path.isdir(path):
+        return "rosbag2"
+    return "mcap"
+
+
+def _bag_dir_contents_ok(path):
+    """True when a directory holds only what a bag directory holds (metadata.yaml, .mcap files)."""
+    return all(n == METADATA or n.endswith((".mcap", ".yaml.partial")) for n in os.listdir(path))
+
+
+def check_bag_output(path, fmt, field="--bag", inputs=(), overwrite=False, max_bag_size=0,
+                     max_bag_duration_s=0.0):
+    """Refuse a recording destination before anything runs (see ``cli.check_output`` for a file).
+
+    A rosbag2 destination is a directory that must not exist, unless ``overwrite`` and it holds
+    nothing but a bag (``metadata.yaml`` and ``.mcap`` files): any other directory is never
+    written over. Its parent must exist and be writable, and no input may lie inside it.
+
+    Raises
+    ------
+    SceneError
+        One line naming ``field``, the path and why.
+    """
+    from gyro_instrument.cli import check_output, same_file
+    if max_bag_size and (max_bag_size < 0 or not float(max_bag_size).is_integer()):
+        raise SceneError("--max-bag-size", max_bag_size, "must be a whole number of bytes >= 0 (0: no limit)")
+    if max_bag_duration_s and not max_bag_duration_s > 0:
+        raise SceneError("--max-bag-duration", max_bag_duration_s, "must be > 0 s (0: no limit)")
+    if fmt != "rosbag2":
+        return check_output(path, field, inputs, overwrite)
+    d = path.rstrip("/" + os.sep) or path
+    parent = os.path.dirname(os.path.abspath(d)) or "."
+    if not os.path.isdir(parent):
+        raise SceneError(field, path, f"directory {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise SceneError(field, path, f"directory {parent} is not writable")
+    for inp in inputs:
+        if inp and (same_file(inp, d) or os.path.realpath(inp).startswith(os.path.realpath(d) + os.sep)):
+            raise SceneError(field, path, f"holds the input {inp}; record elsewhere (--overwrite never replaces "
+                                          f"an input)")
+    if os.path.lexists(d):
+        if not os.path.isdir(d):
+            raise SceneError(field, path, "exists and is not a directory; a rosbag2 bag is a directory")
+        if not overwrite:
+            raise SceneError(field, path, "exists; pass --overwrite to replace it, or give a new path")
+        if not _bag_dir_contents_ok(d):
+            raise SceneError(field, path, "holds files that are not a bag's (only metadata.yaml and .mcap files "
+                                          "are replaced): not written over")
+
+
+def open_bag_writer(path, fmt="mcap", max_bag_size=0, max_bag_duration_s=0.0, overwrite=False, **kwargs):
+    """A :class:`~gyro_instrument.recording.mcap_io.BagWriter` (``mcap``) or a
+    :class:`BagDirectoryWriter` (``rosbag2``); the caller checked the path
+    (:func:`check_bag_output`)."""
+    from gyro_instrument.recording.mcap_io import BagWriter
+    if fmt == "rosbag2":
+        return BagDirectoryWriter(path, max_bag_size=max_bag_size, max_bag_duration_s=max_bag_duration_s,
+                                  overwrite=overwrite, **kwargs)
+    return BagWriter(path, **kwargs)
+
+
+def _qos_v9(qos_text):
+    """A channel's ``offered_qos_profiles`` (YAML text, numeric enums) as metadata.yaml version 9
+    writes it: a list of mappings with the policies by name."""
+    out = []
+    for p in yaml.safe_load(qos_text or "[]") or []:
+        q = dict(p)
+        for key, names in (("history", _HISTORY), ("reliability", _RELIABILITY), ("durability", _DURABILITY),
+                           ("liveliness", _LIVELINESS)):
+            if isinstance(q.get(key), int):
+                q[key] = names.get(q[key], "unknown")
+        out.append(q)
+    return out
+
+
+class BagDirectoryWriter:
+    """Record to a rosbag2 bag directory (see the module docstring); the interface of
+    :class:`~gyro_instrument.recording.mcap_io.BagWriter` (``add_topic``, ``write``,
+    ``add_metadata``, ``commit``, ``close``, ``counts``, ``closed``).
+
+    Parameters
+    ----------
+    path : str
+        The bag directory (created; must not exist unless ``overwrite``).
+    max_bag_size : int
+        Start a new file before a message when the current one holds this many bytes (committed
+        bytes plus the uncompressed messages of the chunk in progress); 0: no limit. A file ends
+        past the limit by at most its last chunk and its summary and closing metadata records.
+    max_bag_duration_s : float
+        Start a new file before a message whose log time is this many seconds or more after the
+        current file's first message; 0: no limit.
+    overwrite : bool
+        Replace the bag files (metadata.yaml, .mcap) of an existing directory.
+    **writer_kwargs
+        Passed to each file's ``BagWriter`` (``chunk_size``, ``commit_period_s``...).
+    """
+
+    def __init__(self, path, max_bag_size=0, max_bag_duration_s=0.0, overwrite=False, **writer_kwargs):
+        self.path = path.rstrip("/" + os.sep) or path
+        self.name = os.path.basename(os.path.abspath(self.path))
+        self.max_bag_size = int(max_bag_size or 0)
+        self.max_bag_duration_ns = int(round(float(max_bag_duration_s or 0.0) * 1e9))
+        self._kwargs = writer_kwargs
+        if os.path.isdir(self.path):
+            if not overwrite:
+                raise SceneError("bag", path, "exists; pass overwrite to replace it")
+            for n in os.listdir(self.path):
+                if n == METADATA or n.endswith((".mcap", ".yaml.partial")):
+                    os.unlink(os.path.join(self.path, n))
+        else:
+            os.mkdir(self.path)
+        self._topics = {}             # topic -> (type, qos text)
+        self._carried = []            # metadata records repeated in every new file
+        self.counts = {}
+        self.files = []               # per file: dict(path, start, end, count)
+        self.closed = False
+        self.commits = 0
+        self._cur = None
+        self._open_next()
+
+    # -------------------------------------------------------------- files
+    def _open_next(self):
+        from gyro_instrument.recording.mcap_io import BagWriter
+        name = f"{self.name}_{len(self.files)}.mcap"
+        self._cur = BagWriter(os.path.join(self.path, name), **self._kwargs)
+        self.files.append({"path": name, "start": None, "end": None, "count": 0})
+        for rec_name, data in self._carried:
+            self._cur.add_metadata(rec_name, data)
+        for topic, (type_name, qos) in self._topics.items():
+            self._cur.add_topic(topic, type_name, qos)
+        self.write_metadata()
+
+    def _close_current(self, state):
+        self._cur.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(self.bag_information(),
+                                                                                 sort_keys=False),
+                                           "ros_distro": "jazzy"})
+        self.commits += self._cur.commits
+        self._cur.close(state=state)
+
+    def split(self):
+        """Close the current file (status ``split``) and continue in the next one."""
+        self._close_current("split")
+        self._open_next()
+
+    # -------------------------------------------------------------- BagWriter interface
+    def add_topic(self, topic, type_name, qos=None):
+        """Register a topic in the current file and every later one."""
+        from gyro_instrument.recording.mcap_io import qos_yaml
+        qos = qos or qos_yaml()
+        self._topics.setdefault(topic, (type_name, qos))
+        self.counts.setdefault(topic, 0)
+        return self._cur.add_topic(topic, type_name, qos)
+
+    def write(self, topic, log_time_ns, data, publish_time_ns=None):
+        """Append one message, starting a new file first when a limit is reached."""
+        f = self.files[-1]
+        if f["count"] and ((self.max_bag_size and self._cur._fh.tell() + self._cur._bytes >= self.max_bag_size)
+                           or (self.max_bag_duration_ns
+                               and int(log_time_ns) - f["start"] >= self.max_bag_duration_ns)):
+            self.split()
+            f = self.files[-1]
+        self._cur.write(topic, log_time_ns, data, publish_time_ns)
+        t = int(log_time_ns)
+        f["start"] = t if f["start"] is None else min(f["start"], t)
+        f["end"] = t if f["end"] is None else max(f["end"], t)
+        f["count"] += 1
+        self.counts[topic] += 1
+
+    def add_metadata(self, name, data):
+        """A metadata record in the current file; records added before the first message (the
+        scene) are repeated at the start of every later file."""
+        if not any(f["count"] for f in self.files):
+            self._carried.append((name, data))
+        self._cur.add_metadata(name, data)
+
+    def commit(self):
+        self._cur.commit()
+
+    def close(self, state="complete"):
+        """Finish the last file with status ``state`` and write the final ``metadata.yaml``."""
+        if not self.closed:
+            self._close_current(state)
+            self.write_metadata()
+            self.closed = True
+
+    # -------------------------------------------------------------- metadata.yaml
+    def bag_information(self):
+        """The ``rosbag2_bagfile_information`` mapping (version 9) for the files so far."""
+        starts = [f["start"] for f in self.files if f["start"] is not None]
+        ends = [f["end"] for f in self.files if f["end"] is not None]
+        start = min(starts) if starts else 0
+        return {
+            "version": ROSBAG2_VERSION,
+            "storage_identifier": "mcap",
+            "duration": {"nanoseconds": (max(ends) - start) if ends else 0},
+            "starting_time": {"nanoseconds_since_epoch": start},
+            "message_count": sum(f["count"] for f in self.files),
+            "topics_with_message_count": [
+                {"topic_metadata": {"name": topic, "type": type_name, "serialization_format": "cdr",
+                                    "offered_qos_profiles": _qos_v9(qos),
+                                    "type_description_hash": _type_hash(type_name)},
+                 "message_count": self.counts.get(topic, 0)}
+                for topic, (type_name, qos) in self._topics.items()],
+            "compression_format": "",
+            "compression_mode": "",
+            "relative_file_paths": [f["path"] for f in self.files],
+            "files": [{"path": f["path"],
+                       "starting_time": {"nanoseconds_since_epoch": f["start"] or 0},
+                       "duration": {"nanoseconds": (f["end"] - f["start"]) if f["count"] else 0},
+                       "message_count": f["count"]} for f in self.files],
+            "custom_data": None,
+            "ros_distro": "jazzy",
+        }
+
+    def write_metadata(self):
+        """Write ``metadata.yaml`` atomically (temporary file, then rename)."""
+        target = os.path.join(self.path, METADATA)
+        tmp = target + ".partial"
+        with open(tmp, "w", encoding="utf-8") as fh:
+            yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, fh, sort_keys=False)
+        os.replace(tmp, target)
+
+
+def _type_hash(type_name):
+    from gyro_instrument.recording.definitions import type_hash
+    try:
+        return type_hash(type_name)
+    except (KeyError, FileNotFoundError):
+        return ""
+
+
+# ----------------------------------------------------------------------------- input
+def _split_key(name):
+    m = re.search(r"_(\d+)\.mcap$", name)
+    return (0, int(m.group(1)), name) if m else (1, 0, name)
+
+
+def bag_files(path, field="bag"):
+    """The ``.mcap`` files of a bag, in order, and what was noticed on the way.
+
+    Parameters
+    ----------
+    path : str
+        A bare ``.mcap`` file, or a rosbag2 bag directory (``metadata.yaml`` + ``.mcap`` files).
+
+    Returns
+    -------
+    files : list of str
+    notes : list of str
+
+    Raises
+    ------
+    SceneError
+        Missing path; a directory with no bag in it; a ``metadata.yaml`` that does not parse, is
+        not a rosbag2 one, names a storage other than mcap, uses rosbag2 file/message compression,
+        or names files that are missing; a file that is not an MCAP.
+    """
+    if not os.path.exists(path):
+        raise SceneError(field, path, "not found; expected an MCAP file or a rosbag2 bag directory")
+    if not os.path.isdir(path):
+        check_mcap(path, field)
+        return [path], []
+    found = sorted((n for n in os.listdir(path) if n.endswith(".mcap") and os.path.isfile(os.path.join(path, n))),
+                   key=_split_key)
+    meta_path = os.path.join(path, METADATA)
+    notes = []
+    if not os.path.exists(meta_path):
+        if not found:
+            raise SceneError(field, path, "is a directory with no bag in it (no metadata.yaml, no .mcap file); "
+                                          "expected an MCAP file or a rosbag2 bag directory")
+        notes.append(f"no {METADATA}: read the {len(found)} .mcap file(s) found, in split order "
+                     f"({', '.join(found)})")
+        files = [os.path.join(path, n) for n in found]
+    else:
+        try:
+            with open(meta_path, encoding="utf-8") as fh:
+                doc = yaml.safe_load(fh)
+            info = doc["rosbag2_bagfile_information"]
+            listed = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
+            storage = info.get("storage_identifier", "mcap")
+            mode = str(info.get("compression_mode") or "").lower()
+        except (OSError, yaml.YAMLError, TypeError, KeyError, AttributeError) as exc:
+            raise SceneError(field, path, f"{METADATA} is not a rosbag2 metadata file "
+                                          f"({exc.__class__.__name__})") from None
+        if storage != "mcap":
+            raise SceneError(field, path, f"{METADATA} names storage '{storage}'; only mcap is read "
+                                          f"(convert with 'ros2 bag convert')")
+        if mode not in ("", "none"):
+            raise SceneError(field, path, f"{METADATA} says compression_mode '{mode}'; only uncompressed bag "
+                                          f"files are read (MCAP chunk compression is fine)")
+        missing = [n for n in listed if not os.path.isfile(os.path.join(path, n))]
+        if missing:
+            raise SceneError(field, path, f"{METADATA} names missing files: {', '.join(missing)}")
+        extra = [n for n in found if n not in listed]
+        if extra:
+            notes.append(f"{', '.join(extra)} not listed in {METADATA} (a recording killed before it was "
+                         f"rewritten?): read too")
+        names = sorted(set(listed) | set(extra), key=lambda n: (listed.index(n) if n in listed else len(listed),
+                                                                  _split_key(n)))
+        if not names:
+            raise SceneError(field, path, f"is a directory with no bag in it ({METADATA} lists no file and "
+                                          f"there is no .mcap file)")
+        files = [os.path.join(path, n) for n in names]
+    for f in files:
+        check_mcap(f, field)
+    return files, notes
+
+
+def bag_inputs(path):
+    """Every path a command reads for the bag ``path`` (the directory and its files), for the
+    never-write-over-an-input checks; a missing or bad bag gives just ``path``."""
+    try:
+        files, _ = bag_files(path)
+    except SceneError:
+        return (path,)
+    return (path, *files) if os.path.isdir(path) else (path,)
+
+
+@dataclasses.dataclass
+class BagSetScan(BagScan):
+    """A bag directory read file by file (each one CRC-checked by ``scan_bag``) and merged:
+    schemas and channels renumbered across files, messages in log-time order (ties: file order),
+    the metadata records of every file (repeats dropped; status records of the last file), losses
+    and notes of every file naming the file."""
+
+    files: list = dataclasses.field(default_factory=list)
+    file_scans: list = dataclasses.field(default_factory=list)
+
+    def damage_dicts(self, epoch_ns):
+        out = []
+        for f, s in zip(self.files, self.file_scans):
+            out += [dict(d, file=os.path.basename(f)) for d in s.damage_dicts(epoch_ns)]
+        return out
+
+
+def _merge(path, files, scans, notes):
+    merged = BagSetScan(path=path, size=sum(s.size for s in scans), files=list(files), file_scans=list(scans))
+    merged.header = next((s.header for s in scans if s.header is not None), None)
+    schema_ids, channel_ids = {}, {}
+    seen_meta = set()
+    many = len(files) > 1
+    for k, (f, s) in enumerate(zip(files, scans)):
+        base = os.path.basename(f)
+        smap, cmap = {}, {}
+        for sid, sc in s.schemas.items():
+            key = (sc.name, sc.encoding, bytes(sc.data))
+            if key not in schema_ids:
+                schema_ids[key] = len(schema_ids) + 1
+                merged.schemas[schema_ids[key]] = dataclasses.replace(sc, id=schema_ids[key])
+            smap[sid] = schema_ids[key]
+        for cid, ch in s.channels.items():
+            sid = smap.get(ch.schema_id, 0)
+            key = (ch.topic, ch.message_encoding, sid, tuple(sorted(ch.metadata.items())))
+            if key not in channel_ids:
+                channel_ids[key] = len(channel_ids) + 1
+                merged.channels[channel_ids[key]] = dataclasses.replace(ch, id=channel_ids[key], schema_id=sid)
+            cmap[cid] = channel_ids[key]
+        for t, pos, i, msg in s.messages:
+            if msg.channel_id in cmap:
+                msg = dataclasses.replace(msg, channel_id=cmap[msg.channel_id])
+            merged.messages.append((t, (k, pos), i, msg))
+        last = k == len(files) - 1
+        for rec in s.metadata:
+            if rec.name == STATUS_RECORD:
+                if last:
+                    merged.metadata.append(rec)
+                continue
+            key = (rec.name, tuple(sorted(rec.metadata.items())))
+            if key not in seen_meta:
+                seen_meta.add(key)
+                merged.metadata.append(rec)
+        merged.damaged += s.damaged
+        merged.recorded_damage += s.recorded_damage
+        merged.recorded_notes += [f"{base}: {n}" if many else n for n in s.recorded_notes]
+        merged.notes += [f"{base}: {n}" if many else n for n in s.notes]
+        if s.recorded_status is not None:
+            merged.recorded_status = s.recorded_status
+        if not last:
+            if s.truncated:
+                merged.notes.append(f"{base} (not the last file) was cut short: read up to its last complete record")
+            elif s.state not in ("split", "complete", None):
+                merged.notes.append(f"{base} (not the last file) has status '{s.state}'")
+    merged.messages.sort(key=lambda x: x[:3])
+    merged.summary_ok = all(s.summary_ok for s in scans)
+    merged.data_end = scans[-1].data_end
+    merged.truncated = scans[-1].truncated
+    merged.notes = list(notes) + merged.notes
+    return merged
+
+
+def scan_path(path, field="bag"):
+    """:func:`~gyro_instrument.recording.bag_scan.scan_bag` for a bare ``.mcap``, or the merged
+    :class:`BagSetScan` of a bag directory (every file CRC-checked); see :func:`bag_files` for
+    what is accepted.
+
+    Raises
+    ------
+    SceneError
+        See :func:`bag_files`.
+    """
+    files, notes = bag_files(path, field)
+    if not os.path.isdir(path):
+        return scan_bag(files[0], field)
+    return _merge(path, files, [scan_bag(f, field) for f in files], notes)
