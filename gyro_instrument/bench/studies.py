@@ -503,8 +503,14 @@ def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print):
              + (" --quick" if quick else "") + f" --out {out_dir}`.", ""]
     lines += _obs_lines(ot, floors, name, "the scene's own effects")
     lines += _planner_lines(pl)
+    return _write_summary(out_dir, lines, pngs)
+
+
+def _write_summary(out_dir, lines, pngs):
+    """summary.md in ``out_dir`` from ``lines`` and the plots' PNG paths (written last, atomically:
+    a bench directory without it is an interrupted bench); returns the text."""
     if pngs:
-        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
+        lines = lines + ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
     text = "\n".join(lines) + "\n"
     with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
         fh.write(text)
@@ -604,12 +610,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
             instrument=d["instrument"] or "—", a=_fmt(d["cpu_with_s"], ".3g"),
             b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
             dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
-    if pngs:
-        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
-    text = "\n".join(lines) + "\n"
-    with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
-        fh.write(text)
-    return text
+    return _write_summary(out_dir, lines, pngs)
 
 
 def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0):
