@@ -132,12 +132,16 @@ def test_replay_of_a_cut_bag_says_how_much_was_read(tmp_path, capsys):
     (["estimate", "gimbal_paris", "--duration-s", "2", "--set", "instruments.gimbal_locked.inertia_ratio=1e-300"],
      "instruments.gimbal_locked.inertia_ratio"),                           # was an overflow, then a hang
     (["describe", "quet_paris", "--set", "instruments.pendulum.type=[1]"], "instruments.pendulum.type"),  # TypeError
-    (["replay", "/tmp"], "bag"),                                           # was IsADirectoryError
-    (["recover", "/tmp", "--out", "/tmp/never.mcap"], "bag"),
+    (["replay", "EMPTY_DIR"], "bag"),                                      # was IsADirectoryError
+    (["recover", "EMPTY_DIR", "--out", "OUT_DIR/never.mcap"], "bag"),
     (["bench", "--quick", "--out", "/proc/nope"], "--out"),                # was FileNotFoundError
     (["describe", "quet_paris", "--set", "effects={\"\\r\": null}"], "effects.\\r"),  # was two lines
 ])
-def test_fuzzer_findings_are_one_line_exit_2(capsys, argv, field):
+def test_fuzzer_findings_are_one_line_exit_2(capsys, tmp_path, argv, field):
+    # a directory holding no bag (a directory of .mcap files is a bag since rosbag2 layouts are read)
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "out").mkdir()
+    argv = [a.replace("EMPTY_DIR", str(tmp_path / "empty")).replace("OUT_DIR", str(tmp_path / "out")) for a in argv]
     rc = main(argv)
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1, err
