@@ -7,7 +7,7 @@ from gyro_instrument.recording.bag_scan import scan_bag
 def samples_from_bag(path, scan=None):
     """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes, damaged).
 
-    Reads every ``/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
+    Reads every ``[/<namespace>]/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
     damaged chunk is skipped and the chunks after it are read; a file cut short is read up to its
     last complete record. Out-of-order or duplicated stamps are left for the estimator to sort out
     (it reports what it dropped).
@@ -52,7 +52,8 @@ def samples_from_bag(path, scan=None):
         except Exception:  # an intact record holding a message that does not decode
             undecodable += 1
             continue
-        name = channel.topic.strip("/").split("/")[0]
+        parts = channel.topic.strip("/").split("/")          # [<namespace>/...]<instrument>/joint_states
+        name = parts[-2] if len(parts) >= 2 else parts[0]
         ts, ps, vs = data.setdefault(name, ([], [], []))
         ts.append(stamp)
         ps.append(pos)

@@ -20,17 +20,36 @@ def build_parser():
     p.add_argument("--overwrite", action="store_true", help="replace an existing --bag file")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
+    p.add_argument("--namespace", metavar="NS", default="",
+                   help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
+                        "NS/...; suites in different namespaces run side by side")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "
+                "the suite does not set itself), e.g. gyro-instrument run quet_paris --ros-args "
+                "--log-level warn")
     p.add_argument("--stats", action="store_true",
                    help="print the suite's statistics (samples, wall time, real-time factor, messages recorded "
                         "per topic) as one JSON line on stderr (implies --quiet)")
     return parser
 
 
+def split_ros_args(argv):
+    """(own arguments, arguments after ``--ros-args``) of a command line."""
+    argv = list(argv)
+    if "--ros-args" in argv:
+        i = argv.index("--ros-args")
+        return argv[:i], argv[i + 1:]
+    return argv, []
+
+
 def main(argv=None):
     parser = build_parser()
-    args = parser.parse_args(argv)
+    full = list(sys.argv[1:] if argv is None else argv)
+    own, ros_args = split_ros_args(full)
+    args = parser.parse_args(own)
+    if ros_args and args.command != "run":
+        parser.error(f"--ros-args is only for 'run' (the ROS suite), not '{args.command}'")
     if args.command != "run":
         try:
             return core_cli.run_command(args)
@@ -40,13 +59,16 @@ def main(argv=None):
     try:
         if args.bag:
             core_cli.check_output(args.bag, "--bag", core_cli.scene_inputs(args.scene), args.overwrite)
+        if args.namespace and not args.namespace.lstrip("/").replace("/", "").replace("_", "a").isalnum():
+            raise SceneError("--namespace", args.namespace, "must be a ROS namespace such as /ship1 (letters, "
+                                                            "digits, _ and /)")
         if args.real_time_factor < 0:
             raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
         from gyro_instrument.ros.suite import run_suite
         progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
         result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                                  command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
-                                  overwrite=args.overwrite)
+                                  command=" ".join(["gyro-instrument"] + full), progress=progress,
+                                  overwrite=args.overwrite, namespace=args.namespace, ros_args=ros_args)
     except SceneError as exc:
         print(f"gyro-instrument: error: {exc}", file=sys.stderr)
         return core_cli.EXIT_BAD_INPUT

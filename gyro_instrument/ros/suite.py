@@ -1,15 +1,17 @@
 """The whole suite in one process (there is no ``ros2 launch`` on PyPI): simulators, estimator
 and recorder as nodes of one context over DDS, stepped in lock-step so nothing is dropped.
 
-The simulators own ``/clock`` and step in the suite's loop, a batch of samples at a time: each
-simulator publishes the batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue
-it), then :class:`LockStep` takes every message of the batch from the estimator's and the
-recorder's subscriptions, waiting on a wait set for any not yet delivered, and runs their
-callbacks sample by sample (sample i of every topic before sample i + 1), so the recorder writes
-the same ordered stream as one sample at a time. Then the nodes' other subscriptions (their
-sim-time ``/clock``) are drained: a node's clock reaches a sample's time only once that sample's
-data is delivered. With ``real_time_factor`` > 0 the batches are at most 20 ms of wall time
-and paced to the wall clock; 0 runs as fast as possible.
+The first simulator owns ``clock`` (``/clock``; ``<namespace>/clock`` with a namespace) and the
+simulators step in the suite's loop, a batch of samples at a time: each simulator publishes the
+batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
+:class:`LockStep` takes every message of the batch from the estimator's and the recorder's
+subscriptions, waiting on a wait set for any not yet delivered, and runs their callbacks sample
+by sample (sample i of every topic before sample i + 1), so the recorder writes the same ordered
+stream as one sample at a time. Then the nodes' other subscriptions (the estimator's ``clock``)
+are drained: its sim time reaches a sample's time only once that sample's data is delivered.
+With ``real_time_factor`` > 0 the batches are at most 20 ms of wall time and paced to the wall
+clock; 0 runs as fast as possible. The separate-node route (one process per node, as a launch
+file starts them) is :mod:`gyro_instrument.ros.launch`.
 """
 
 import json
@@ -24,7 +26,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.parameter import Parameter
 from rclpy.subscription import Subscription
 
-from gyro_instrument.ros.nodes import EstimatorNode, RecorderNode, SimulatorNode
+from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 from gyro_instrument.ros.topics import SIMULATOR_KINDS
 
 
@@ -143,8 +145,13 @@ def _params(scene, overrides, duration_s, **extra):
 
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
-              timeout_s=10.0, progress=None, batch=None, overwrite=False):
+              timeout_s=10.0, progress=None, batch=None, overwrite=False, namespace="", ros_args=()):
     """Run the scene's nodes; return (estimate dict, stats dict).
+
+    ``namespace``: every node (and so every topic, ``clock`` included) in this namespace, so that
+    suites in different namespaces run side by side. ``ros_args``: the arguments after
+    ``--ros-args`` (remapping, log levels, ``-p`` for parameters the suite does not set itself),
+    applied to every node.
 
     ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
     of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
@@ -173,7 +180,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     if threading.current_thread() is threading.main_thread():
         for sig in (signal.SIGINT, signal.SIGTERM):
             handlers[sig] = signal.signal(sig, lambda signum, frame: stop.append(signum))
-    rclpy.init(context=context, args=[], signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else [])
+    rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    ns = {"namespace": namespace} if namespace else {}
     nodes = []
     try:
         sims = []
@@ -181,14 +190,13 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         types = {spec[0] for spec in scene_obj.instruments.values()}
         for name, kinds in SIMULATOR_KINDS.items():
             if types & set(kinds):
-                sims.append(SimulatorNode(name, kinds, context=context, parameter_overrides=_params(
+                sims.append(SimulatorNode(name, kinds, context=context, pub_qos=RELIABLE_1000, **ns,
+                                          parameter_overrides=_params(
                     scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner)))
                 owner = False
-        est = EstimatorNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, use_sim_time=True))
-        rec = RecorderNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), use_sim_time=True,
-            command=command)) if bag else None
+        est = EstimatorNode(context=context, **ns, parameter_overrides=_params(scene, overrides, duration_s))
+        rec = RecorderNode(context=context, reorder=False, **ns, parameter_overrides=_params(
+            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), command=command)) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:
@@ -196,8 +204,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         # the subscriptions that get one message per sample of a simulator topic, and the rest
         sim_pubs = {}
         for s in sims:
-            pubs = ([s.clock_pub] if s.clock_pub is not None else []) + list(s.pubs.values())
-            sim_pubs.update(zip(s.topics(), pubs))
+            sim_pubs.update(zip(s.topics(), s.publishers()))
         counted = [(topic, sub) for n in (est, rec) if n is not None for topic, sub in n.subs.items()
                    if topic in sim_pubs]
         counted_ids = {id(sub) for _, sub in counted}
@@ -252,8 +259,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         base = rec.received() if rec else 0
         result = est.finalize()
         if rec:
-            want = base + (len([t for t in rec.counts if t.startswith("/estimator") or t == "/diagnostics"])
-                           if result is not None else 0)
+            want = base + (len([t for t in rec.counts if t not in rec.sample_topics]) if result is not None else 0)
             t_wait = time.monotonic() + timeout_s
             while rec.received() < want and time.monotonic() < t_wait:
                 ex.spin_once(timeout_sec=0.001)

@@ -1,15 +1,19 @@
-"""The topics of a scene: name -> ROS type (documented in msg_docs/topics.md)."""
+"""The topics of a scene: name -> ROS type (documented in msg_docs/topics.md).
+
+Every name is relative, so ``-r __ns:=/ship1`` (or ``--namespace``) moves a node's topics and
+remapping works; in the root namespace ``clock`` is ``/clock``, which rclpy's sim time listens to.
+"""
 
 from gyro_instrument.estimators.pipeline import PENDULUMS
 
-CLOCK = "/clock"
+CLOCK = "clock"
 ESTIMATOR_TOPICS = {
-    "/estimator/latitude_rad": "std_msgs/msg/Float64",
-    "/estimator/latitude_sigma_rad": "std_msgs/msg/Float64",
-    "/estimator/earth_rate_rad_s": "std_msgs/msg/Float64",
-    "/estimator/earth_rate_sigma_rad_s": "std_msgs/msg/Float64",
-    "/estimator/earth_rate_enu": "geometry_msgs/msg/Vector3Stamped",
-    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    "estimator/latitude_rad": "std_msgs/msg/Float64",
+    "estimator/latitude_sigma_rad": "std_msgs/msg/Float64",
+    "estimator/earth_rate_rad_s": "std_msgs/msg/Float64",
+    "estimator/earth_rate_sigma_rad_s": "std_msgs/msg/Float64",
+    "estimator/earth_rate_enu": "geometry_msgs/msg/Vector3Stamped",
+    "diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
 }
 
 SIMULATOR_KINDS = {
@@ -20,11 +24,11 @@ SIMULATOR_KINDS = {
 
 
 def joint_topic(instrument):
-    return f"/{instrument}/joint_states"
+    return f"{instrument}/joint_states"
 
 
 def bob_topic(instrument):
-    return f"/{instrument}/bob_position"
+    return f"{instrument}/bob_position"
 
 
 def scene_topics(insts):
@@ -36,3 +40,16 @@ def scene_topics(insts):
             out[bob_topic(name)] = "geometry_msgs/msg/PointStamped"
     out.update(ESTIMATOR_TOPICS)
     return out
+
+
+def resolve(namespace, topic):
+    """Fully qualified name of a relative ``topic`` in ``namespace``."""
+    if topic.startswith("/"):
+        return topic
+    return "/" + "/".join(p for p in (namespace.strip("/"), topic) if p)
+
+
+def instrument_of(topic):
+    """Instrument name of a ``.../<instrument>/joint_states`` (or ``bob_position``) topic."""
+    parts = topic.strip("/").split("/")
+    return parts[-2] if len(parts) >= 2 else parts[0]
