@@ -392,8 +392,8 @@ class SimulatorNode(SceneNode):
         if self.timer is not None:
             self.timer.cancel()                  # destroyed on restart or with the node
         self.state = "done"
-        _acked(self, self.publishers())
         self.get_logger().info(f"published {self.samples} samples of {', '.join(self.streams)}")
+        _acked(self, self.publishers())
 
 
 class JointBuffer:
@@ -717,10 +717,12 @@ class RecorderNode(SceneNode):
         n = int(sample_times_ns(self.scene).size)
         self.stamped = set()
         self.sample_topics = set()
+        self.rank = {}
         for topic in wanted:
             name = self.resolve_topic_name(topic)         # namespace and remapping applied
             self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
             self.counts[name] = 0
+            self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
             if types[topic] != "std_msgs/msg/Float64":
                 self.stamped.add(name)
             if not (topic.startswith("estimator/") or topic == "diagnostics"):
@@ -759,7 +761,7 @@ class RecorderNode(SceneNode):
         self._last_arrival = time.monotonic()
         if topic in self.sample_topics:
             self._last_in[topic] = st
-        heapq.heappush(self._held, (st, self._seq, topic, data))
+        heapq.heappush(self._held, (st, self.rank[topic], self._seq, topic, data))
         self._seq += 1
         if self._seq % 64 == 0 or topic not in self.sample_topics:
             self._flush(self._watermark())
@@ -783,7 +785,7 @@ class RecorderNode(SceneNode):
         if upto is None:
             return
         while held and held[0][0] <= upto:
-            st, _, topic, data = heapq.heappop(held)
+            st, _, _, topic, data = heapq.heappop(held)
             self._write(topic, st, data)
 
     def _control(self):

@@ -61,7 +61,8 @@ class Spec:
 
     def range_text(self):
         if self.type in ("double", "int") and self.lo is not None:
-            return f"[{self.lo:g}, {self.hi:g}]"
+            fmt = (lambda v: str(int(v))) if self.type == "int" else (lambda v: f"{v:g}")
+            return f"[{fmt(self.lo)}, {fmt(self.hi)}]"
         return {"bool": "true or false", "string": "a string", "string[]": "a list of strings"}.get(self.type, "")
 
     def descriptor(self):
