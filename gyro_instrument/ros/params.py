@@ -115,8 +115,8 @@ WAIT = [
          read_only=True),
 ]
 SIMULATOR = SCENE + [
-    Spec("real_time_factor", "double", 1.0, "1: paced to the wall clock, 0: as fast as the subscribers take it "
-                                            "(flow-controlled, nothing dropped); applies at once", 0.0, 1000.0),
+    Spec("real_time_factor", "double", 1.0, "1: paced to the wall clock, 0: as fast as possible (RELIABLE / "
+                                            "KEEP_ALL: nothing dropped); applies at once", 0.0, 1000.0),
     Spec("publish_clock", "bool", False, "true: this node owns clock (/clock in the root namespace) and drives sim "
                                          "time; false: it follows the clock another node publishes (one owner per "
                                          "namespace)", read_only=True),
@@ -143,8 +143,8 @@ RECORDER = [Spec(s.name, s.type, s.default, s.description + " (read-only: a reco
 ]
 PLAYER = [
     Spec("bag", "string", "", ".mcap file to play (every chunk's CRC checked)", read_only=True),
-    Spec("real_time_factor", "double", 1.0, "1: recorded pace, 0: as fast as the subscribers take it "
-                                            "(flow-controlled)", 0.0, 1000.0),
+    Spec("real_time_factor", "double", 1.0, "1: recorded pace, 0: as fast as possible (RELIABLE / KEEP_ALL: "
+                                            "nothing dropped)", 0.0, 1000.0),
     Spec("loop", "bool", False, "start again at the end instead of exiting"),
     Spec("wait_for", "string[]", [], "nodes (same namespace) that must subscribe to one of the bag's topics before "
                                      "playing", read_only=True),
