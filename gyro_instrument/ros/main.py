@@ -19,12 +19,15 @@ _SUMMARIES = {
     "player": "Plays an MCAP bag back to DDS, driving clock; exits at the end (or loops).",
 }
 _SIM_TOPICS = ["<instrument>/joint_states (sensor_msgs/msg/JointState), per sample",
+               "<instrument>/markers (visualization_msgs/msg/MarkerArray, site_enu), once per second of sim time",
                "clock (rosgraph_msgs/msg/Clock): published with publish_clock:=true, else subscribed (followed)"]
 _TOPICS = {
-    "gyrocompass_sim": _SIM_TOPICS,
-    "pendulum_sim": _SIM_TOPICS[:1] + ["<pendulum>/bob_position (geometry_msgs/msg/PointStamped), per sample"]
-    + _SIM_TOPICS[1:],
-    "top_sim": _SIM_TOPICS,
+    "gyrocompass_sim": _SIM_TOPICS + ["<gyro>/axis_direction (geometry_msgs/msg/Vector3Stamped, site_enu), once "
+                                      "per second of sim time"],
+    "pendulum_sim": _SIM_TOPICS[:1] + ["<pendulum>/bob_position (geometry_msgs/msg/PointStamped), per sample",
+                                       "<pendulum>/swing_plane (sensor_msgs/msg/JointState: swing-plane azimuth, "
+                                       "compass, rad), once per second of sim time"] + _SIM_TOPICS[1:],
+    "top_sim": _SIM_TOPICS[:1] + _SIM_TOPICS[2:],
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()],
     "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
     "player": ["the bag's topics (relative names), clock"],

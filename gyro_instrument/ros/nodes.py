@@ -35,7 +35,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 
 from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
@@ -46,8 +46,10 @@ from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, SIMULATOR_KINDS, bob_topic, joint_topic,
-                                        scene_topics)
+from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, SIMULATOR_KINDS, TRAIL, axis_topic, visual_every,
+                                        bob_topic, joint_topic, markers_topic, scene_topics, swing_plane_topic)
+from gyro_instrument.recording.visual import axis_directions, swing_plane_azimuth
+from gyro_instrument.estimators.pipeline import PENDULUMS, pendulum_length
 from gyro_instrument.scenes import build_instruments, load_scene
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
@@ -200,6 +202,8 @@ class SimulatorNode(SceneNode):
         self.clock_pub = None
         self.clock_sub = None
         self.timer = None
+        self.visual = {}
+        self.offsets = {}
         self.state = "idle"
         self._ctl = None
         if self.load():
@@ -217,8 +221,50 @@ class SimulatorNode(SceneNode):
             if s.bob_enu_m is not None:
                 self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), self.pub_qos)
                 self.layouts[name + "/bob"] = m.point_stamped_layout(f"{name}_pivot")
+        self._prepare_visuals()
         self.clock_pub = self.create_publisher(m.Clock, CLOCK, self.pub_qos) if self.clock_owner else None
         self.index = 0
+
+    def _prepare_visuals(self):
+        """What there is to see, once per second of sim time: the swing-plane azimuth
+        (pendulums), the rotor-axis direction (plane and free gyroscopes), and markers in
+        ``site_enu``; instruments stand 3 m apart along east in the scene's order."""
+        self.visual = {}
+        self.visual_every = visual_every(self.scene.sample_rate_hz)
+        t_s = self.t_ns / 1e9
+        order = list(self.insts)
+        for name, s in self.streams.items():
+            inst = self.insts[name]
+            origin = np.array([3.0 * order.index(name), 0.0, 0.0])
+            v = {"origin": origin}
+            if inst.type_name in PENDULUMS:
+                l = pendulum_length(inst)
+                az, rate = swing_plane_azimuth(t_s, s.position[:, 0], s.position[:, 1],
+                                               2 * math.pi * math.sqrt(l / 9.80665))
+                v.update(plane=np.column_stack([az]), plane_rate=np.column_stack([rate]), length=l,
+                         half=max(float(np.nanmax(s.position[:, 2])) * l, 1e-3) if len(az) else 1.0)
+                self.pubs[name + "/plane"] = self.create_publisher(m.JointState, swing_plane_topic(name), self.pub_qos)
+                self.layouts[name + "/plane"] = m.joint_state_layout((f"{name}/swing_plane_azimuth",))
+            axis = axis_directions(inst, s)
+            if axis is not None:
+                v["axis"] = axis
+                self.pubs[name + "/axis"] = self.create_publisher(m.Vector3Stamped, axis_topic(name), self.pub_qos)
+                self.layouts[name + "/axis"] = m.point_stamped_layout(m.SITE_FRAME)
+            if len(v) > 1:
+                self.pubs[name + "/markers"] = self.create_publisher(m.message_class(
+                    "visualization_msgs/msg/MarkerArray"), markers_topic(name), self.pub_qos)
+                self.visual[name] = v
+
+    def _markers(self, name, i):
+        v, s, t = self.visual[name], self.streams[name], int(self.t_ns[i])
+        if "axis" in v:
+            return m.axis_markers(t, name, v["origin"], np.nan_to_num(v["axis"][i]), 1.0)
+        l = v["length"]
+        size = min(max(0.03 * l, 0.05), 2.0)
+        trail = s.bob_enu_m[max(i - self.visual_every * TRAIL, 0):i + 1:self.visual_every]
+        v["msg"] = m.pendulum_markers(t, name, v["origin"] + np.array([0.0, 0.0, l]), np.nan_to_num(s.bob_enu_m[i]),
+                                      np.nan_to_num(trail), float(v["plane"][i, 0]), v["half"], size, v.get("msg"))
+        return v["msg"]
 
     def teardown(self):
         for t in (self.timer,):
@@ -230,7 +276,7 @@ class SimulatorNode(SceneNode):
             self.clock_sub = None
         for pub in list(self.pubs.values()) + ([self.clock_pub] if self.clock_pub is not None else []):
             self.destroy_publisher(pub)
-        self.pubs, self.layouts, self.streams, self.clock_pub = {}, {}, {}, None
+        self.pubs, self.layouts, self.streams, self.clock_pub, self.visual = {}, {}, {}, None, {}
         self.t_ns = np.zeros(0, dtype=np.int64)
         self.index = 0
 
@@ -270,6 +316,7 @@ class SimulatorNode(SceneNode):
             return 0
         t = self.t_ns[i0:i1]
         batches = []
+        self.offsets = {}
         if self.clock_pub is not None:
             batches.append((self.clock_pub, m.CLOCK_LAYOUT.encode(t)))
         for name, s in self.streams.items():
@@ -277,6 +324,22 @@ class SimulatorNode(SceneNode):
                 t, s.position[i0:i1], s.velocity[i0:i1], s.effort[i0:i1])))
             if s.bob_enu_m is not None:
                 batches.append((self.pubs[name + "/bob"], self.layouts[name + "/bob"].encode(t, s.bob_enu_m[i0:i1])))
+            v = self.visual.get(name)
+            if v is None:
+                continue
+            # once per VISUAL_PERIOD_S of sim time: cheap beside the samples themselves
+            every = self.visual_every
+            marks = np.arange(-(-i0 // every) * every, i1, every)
+            tm = self.t_ns[marks]
+            if "plane" in v:
+                batches.append((self.pubs[name + "/plane"], self.layouts[name + "/plane"].encode(
+                    tm, v["plane"][marks], v["plane_rate"][marks], np.zeros((marks.size, 1)))))
+            if "axis" in v:
+                batches.append((self.pubs[name + "/axis"], self.layouts[name + "/axis"].encode(tm, v["axis"][marks])))
+            batches.append((self.pubs[name + "/markers"], [serialize_message(self._markers(name, i)) for i in marks]))
+            for key in ("/plane", "/axis", "/markers"):
+                if name + key in self.pubs:
+                    self.offsets[self.pubs[name + key].topic_name] = (marks - i0).tolist()
         for pub, datas in batches:
             with pub.handle:
                 publish = pub.handle.publish_raw
@@ -715,7 +778,9 @@ class RecorderNode(SceneNode):
                                                      "scene": self.scene.name, "seed": self.scene.seed,
                                                      "command": self.value("command", "recorder node")})
         n = int(sample_times_ns(self.scene).size)
+        n_markers = len(range(0, n, visual_every(self.scene.sample_rate_hz)))
         self.stamped = set()
+        self.marker_topics = set()
         self.sample_topics = set()
         self.rank = {}
         for topic in wanted:
@@ -723,13 +788,16 @@ class RecorderNode(SceneNode):
             self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
             self.counts[name] = 0
             self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
-            if types[topic] != "std_msgs/msg/Float64":
+            if types[topic] == "visualization_msgs/msg/MarkerArray":
+                self.marker_topics.add(name)
+            elif types[topic] != "std_msgs/msg/Float64":
                 self.stamped.add(name)
             if not (topic.startswith("estimator/") or topic == "diagnostics"):
                 self.sample_topics.add(name)
             # what the scene publishes: every sample on clock and the instruments' topics, and at
             # least one estimate on each estimator topic
-            self.expected[name] = n if name in self.sample_topics else 1
+            sparse = topic.endswith(("/markers", "/swing_plane", "/axis_direction"))
+            self.expected[name] = (n_markers if sparse else n) if name in self.sample_topics else 1
             self.subs[name] = self.create_subscription(m.message_class(types[topic]), topic,
                                                        lambda data, tp=name: self._on_raw(tp, data),
                                                        RELIABLE_ALL, raw=True)
@@ -749,7 +817,8 @@ class RecorderNode(SceneNode):
     def _on_raw(self, topic, data):
         # Header-first types and Clock carry their sim time; Float64 takes the latest sim time
         # received (never wall time), so one bag has one time base.
-        st = m.cdr_stamp_ns(data) if topic in self.stamped else None
+        st = m.cdr_stamp_ns(data) if topic in self.stamped else \
+            m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
         if st is None:
             st = self.max_ns
         self.counts[topic] += 1

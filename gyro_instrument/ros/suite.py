@@ -67,9 +67,12 @@ class LockStep:
     def deliver(self, published, timeout_s, describe=lambda: ""):
         """Take ``published[topic]`` messages from every counted subscription of that topic, run
         the callbacks sample-major (message i of each subscription in order, then i + 1), then
-        drain the other subscriptions. Raises :class:`DeliveryError` after ``timeout_s`` without
+        drain the other subscriptions. ``published[topic]`` is a count (one message per sample
+        of the batch) or a list of the sample offsets in the batch its messages belong to (the
+        markers, every few samples). Raises :class:`DeliveryError` after ``timeout_s`` without
         a complete batch."""
-        want = [published.get(topic, 0) for topic, _ in self.counted]
+        offsets = [published.get(topic, 0) for topic, _ in self.counted]
+        want = [len(o) if isinstance(o, list) else o for o in offsets]
         got = [[] for _ in self.counted]
         deadline = None
         while True:
@@ -102,16 +105,31 @@ class LockStep:
                 calls.append([(sub.callback, (taken[0],)) for taken in q])
             else:
                 calls.append([(sub.callback, taken) for taken in q])
-        if len(set(want)) == 1:                      # every topic published the same samples
-            for row in zip(*calls):
-                for cb, args in row:
-                    cb(*args)
+        dense = [c for c, o in zip(calls, offsets) if not isinstance(o, list)]
+        sparse_at = {}                               # sample offset -> calls of sparse topics (markers)
+        for c, o in zip(calls, offsets):
+            if isinstance(o, list):
+                for off, call in zip(o, c):
+                    sparse_at.setdefault(off, []).append(call)
+        if len({len(c) for c in dense}) <= 1:        # every per-sample topic published the same samples
+            if not sparse_at:
+                for row in zip(*dense):
+                    for cb, args in row:
+                        cb(*args)
+            else:
+                for i, row in enumerate(zip(*dense)):
+                    for cb, args in row:
+                        cb(*args)
+                    for cb, args in sparse_at.get(i, ()):
+                        cb(*args)
         else:
-            for i in range(max(want, default=0)):
-                for c in calls:
+            for i in range(max(len(c) for c in dense)):
+                for c in dense:
                     if i < len(c):
                         cb, args = c[i]
                         cb(*args)
+                for cb, args in sparse_at.get(i, ()):
+                    cb(*args)
         self.drain()
 
     def drain(self):
@@ -240,8 +258,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             for s in sims:
                 k = s.publish_steps(batch)
                 for topic in s.topics():
-                    step[topic] = k
-                    published[topic] += k
+                    # per-sample topics: k messages; markers: at these offsets in the batch
+                    step[topic] = s.offsets.get(topic, k)
+                    published[topic] += len(step[topic]) if isinstance(step[topic], list) else k
             lockstep.deliver(step, timeout_s, lambda: f"samples {i}..{i + batch - 1}")
             i_next = i + batch
             now = time.perf_counter()

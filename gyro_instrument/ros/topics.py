@@ -31,6 +31,43 @@ def bob_topic(instrument):
     return f"{instrument}/bob_position"
 
 
+#: instruments whose rotor-axis direction is published (``<name>/axis_direction``)
+AXIS_SHOWN = ("plane_gyroscope", "free_gyroscope")
+#: swing plane, axis direction and markers are published once per this much sim time (the markers
+#: with a trail of TRAIL of them)
+VISUAL_PERIOD_S = 1.0
+TRAIL = 30
+
+
+def visual_every(sample_rate_hz):
+    """Samples between two visual messages (:data:`VISUAL_PERIOD_S`; at least 1)."""
+    return max(int(round(VISUAL_PERIOD_S * sample_rate_hz)), 1)
+
+
+def swing_plane_topic(instrument):
+    return f"{instrument}/swing_plane"
+
+
+def axis_topic(instrument):
+    return f"{instrument}/axis_direction"
+
+
+def markers_topic(instrument):
+    return f"{instrument}/markers"
+
+
+def visual_topics(name, inst):
+    """The topics to look at for one instrument, with their types."""
+    out = {}
+    if inst.type_name in PENDULUMS:
+        out[swing_plane_topic(name)] = "sensor_msgs/msg/JointState"
+    if inst.type_name in AXIS_SHOWN:
+        out[axis_topic(name)] = "geometry_msgs/msg/Vector3Stamped"
+    if out:
+        out[markers_topic(name)] = "visualization_msgs/msg/MarkerArray"
+    return out
+
+
 def scene_topics(insts):
     """All topics the suite publishes for these instruments, with their types."""
     out = {CLOCK: "rosgraph_msgs/msg/Clock"}
@@ -38,6 +75,7 @@ def scene_topics(insts):
         out[joint_topic(name)] = "sensor_msgs/msg/JointState"
         if inst.type_name in PENDULUMS:
             out[bob_topic(name)] = "geometry_msgs/msg/PointStamped"
+        out.update(visual_topics(name, inst))
     out.update(ESTIMATOR_TOPICS)
     return out
 
