@@ -135,7 +135,7 @@ def test_simulate_announces_on_stderr(capsys, handwritten, tmp_path):
     err = capsys.readouterr().err
     assert f"gyro-instrument: note: {NOTE}" in err
     assert out.exists()
-    assert main(["simulate", "quet_paris", "--duration-s", "2", "--out", str(out), "--quiet"]) == 0
+    assert main(["simulate", "quet_paris", "--duration-s", "2", "--out", str(tmp_path / "q.csv"), "--quiet"]) == 0
     assert NOTE not in capsys.readouterr().err
 
 
