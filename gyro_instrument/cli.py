@@ -848,7 +848,8 @@ def replay_bag(path, scene=None, overrides=(), topics=()):
                                       f"--scene SCENE{lost}")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
-    samples = {n: v for n, v in samples.items() if n in insts and estimable(insts[n]) and len(v[0]) >= 3}
+    # in the scene's instrument order, whatever order the bag's topics first appear in
+    samples = {n: samples[n] for n in insts if n in samples and estimable(insts[n]) and len(samples[n][0]) >= 3}
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     result = to_jsonable(result)
     if damaged:

@@ -14,7 +14,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1] / "gyro_instrument"
 LAYER = {"core": 0, "effects": 1, "instruments": 2, "scenes": 2, "sensors": 3, "estimators": 3,
          "recording": 4, "bench": 4, "cli": 4, "ros": 5}
 ROS_MODULES = ("rclpy", "std_msgs", "sensor_msgs", "geometry_msgs", "builtin_interfaces", "rosgraph_msgs",
-               "diagnostic_msgs", "rcl_interfaces", "rosidl_runtime_py")
+               "diagnostic_msgs", "rcl_interfaces", "rosidl_runtime_py", "visualization_msgs")
 
 
 def package_of(path):

@@ -81,8 +81,8 @@ def _run_node(install, exe_name, ros_args, until, timeout_s=180.0):
 
 def test_ros2_run_gyrocompass_sim_from_colcon_install(colcon_install):
     rc, out = _run_node(colcon_install, "gyrocompass_sim",
-                        ["-p", "scene:=quet_paris", "-p", "duration_s:=1.0", "-p", "real_time_factor:=0.0"],
-                        "published 21 samples")
+                        ["-p", "scene:=quet_paris", "-p", "duration_s:=1.0", "-p", "real_time_factor:=0.0",
+                         "-p", "publish_clock:=true", "-p", "wait_timeout_s:=0"], "published 21 samples")
     assert "published 21 samples of gyro_horizontal, gyro_meridian" in out, out
     assert "Traceback" not in out
 
@@ -100,6 +100,6 @@ def test_params_file(colcon_install, tmp_path):
     params = tmp_path / "params.yaml"
     params.write_text("gyrocompass_sim:\n  ros__parameters:\n    scene: quet_paris\n"
                       "    overrides: ['duration_s=0.5', 'instruments.gyro_meridian.spin_rate_rad_s=300.0']\n"
-                      "    real_time_factor: 0.0\n")
+                      "    real_time_factor: 0.0\n    publish_clock: true\n    wait_timeout_s: 0\n")
     rc, out = _run_node(colcon_install, "gyrocompass_sim", ["--params-file", str(params)], "published 11 samples")
     assert "published 11 samples of gyro_horizontal, gyro_meridian" in out, out

@@ -103,11 +103,14 @@ def test_batched_run_records_every_message_in_sample_order(tmp_path):
         bag = str(tmp_path / f"b{batch}.mcap")
         result, stats = run_suite("quet_paris", ["seed=5"], 3.0, bag, batch=batch)
         assert stats["batch"] == batch and stats["samples"] == 61
+        visual = {"/gyro_horizontal/axis_direction", "/gyro_horizontal/markers", "/gyro_meridian/axis_direction",
+                  "/gyro_meridian/markers", "/pendulum/swing_plane", "/pendulum/markers"}
         assert set(stats["published_topics"]) == {"/clock", "/gyro_horizontal/joint_states",
                                                   "/gyro_meridian/joint_states", "/pendulum/joint_states",
-                                                  "/pendulum/bob_position"}
+                                                  "/pendulum/bob_position"} | visual
         for topic, n in stats["published_topics"].items():
-            assert n == 61 and stats["recorded"][topic] == n
+            # per sample, or once per second of sim time (samples 0, 20, 40, 60) for what there is to see
+            assert n == (4 if topic in visual else 61) and stats["recorded"][topic] == n
         assert stats["estimator_messages"] == 3 * 61
         channels, order = {}, []
         with open(bag, "rb") as fh:                      # file order, not log-time order
@@ -116,6 +119,12 @@ def test_batched_run_records_every_message_in_sample_order(tmp_path):
                     channels[rec.id] = rec.topic
                 elif isinstance(rec, Message):
                     order.append((channels[rec.channel_id], rec.log_time, rec.data))
+        times = [t for _, t, _ in order]
+        assert times == sorted(times) and times[0] == EPOCH_NS
+        seen = [(tp, t) for tp, t, _ in order if tp in visual]
+        assert seen == sorted(seen, key=lambda x: x[1]) and {t for _, t in seen} == {
+            EPOCH_NS + k * 1_000_000_000 for k in range(4)}
+        order = [r for r in order if r[0] not in visual]
         per_sample = ["/clock", "/gyro_horizontal/joint_states", "/gyro_meridian/joint_states",
                       "/pendulum/joint_states", "/pendulum/bob_position"]
         assert [tp for tp, _, _ in order[:5 * 61]] == per_sample * 61

@@ -183,6 +183,8 @@ class Instrument:
     JOINTS: ClassVar[tuple] = ()
     IS_PENDULUM: ClassVar[bool] = False
     SIMULATOR_NODE: ClassVar[str] = ""
+    #: True when :meth:`axis_direction_enu` gives the rotor axis (published as ``<name>/axis_direction``)
+    SHOWS_AXIS: ClassVar[bool] = False
 
     @classmethod
     def check_params(cls, prefix, params):
@@ -210,6 +212,12 @@ class Instrument:
     def directing_model(self):
         """The :class:`DirectingModel` of a gyroscope with a directing line, or None (the default:
         the instrument measures no Earth rate through a swing duration)."""
+        return None
+
+    def axis_direction_enu(self, position):
+        """Unit rotor-axis vectors in ENU, shape (m, 3), from the published joint positions
+        ``position`` (m, len(JOINTS)), rad; None for an instrument whose axis is not shown
+        (``SHOWS_AXIS`` False)."""
         return None
 
     def pendulum_length_m(self):

@@ -232,6 +232,13 @@ class FreeGyroscope(Instrument):
     MECHANICS = frozenset({FRAME_RATE})
     MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
+    SHOWS_AXIS = True
+
+    def axis_direction_enu(self, position):
+        """Rotor axis in ENU, (m, 3), from the ``axis_altitude`` and ``axis_azimuth`` (compass) joints, rad."""
+        import numpy as np
+        alt, az = np.asarray(position)[:, 0], np.asarray(position)[:, 1]
+        return np.column_stack([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)])
     SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (
         Column("axis_altitude", "rad", "altitude of the figure axis above the horizon"),

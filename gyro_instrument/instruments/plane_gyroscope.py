@@ -241,6 +241,7 @@ class PlaneGyroscope(Instrument):
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, RESTORING_LAW})
     MEASURED_CHANNELS = ("angle",)
     JOINTS = ("axis", "rotor")
+    SHOWS_AXIS = True
     SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),
                Column("angle_rate", "rad/s", "du/dt"),
@@ -289,6 +290,15 @@ class PlaneGyroscope(Instrument):
                               f"swing durations null (with it T0 = {T_site:.6g} s)"),
             self.missing_effect_note(
             "finite_amplitude", "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
+
+    def axis_direction_enu(self, position):
+        """Rotor axis in ENU, (m, 3): cos u · ox + sin u · oy in the plane's frame (``core.site.plane_frame``),
+        u the ``axis`` joint (rad)."""
+        import numpy as np
+        from gyro_instrument.core.site import plane_frame
+        R, _ = plane_frame(self.normal, self.site)
+        u = np.asarray(position)[:, 0]
+        return np.cos(u)[:, None] * R[:, 0] + np.sin(u)[:, None] * R[:, 1]
 
     def directing_model(self):
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with

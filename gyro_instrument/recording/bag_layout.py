@@ -189,12 +189,12 @@ class BagDirectoryWriter:
             self._cur.add_topic(topic, type_name, qos)
         self.write_metadata()
 
-    def _close_current(self, state):
+    def _close_current(self, state, **fields):
         self._cur.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(self.bag_information(),
                                                                                  sort_keys=False),
                                            "ros_distro": "jazzy"})
         self.commits += self._cur.commits
-        self._cur.close(state=state)
+        self._cur.close(state=state, **fields)
 
     def split(self):
         """Close the current file (status ``split``) and continue in the next one."""
@@ -235,10 +235,11 @@ class BagDirectoryWriter:
     def commit(self):
         self._cur.commit()
 
-    def close(self, state="complete"):
-        """Finish the last file with status ``state`` and write the final ``metadata.yaml``."""
+    def close(self, state="complete", **fields):
+        """Finish the last file with status ``state`` (and the recorder's ``fields``: per-topic counts,
+        late messages; see :meth:`BagWriter.close`) and write the final ``metadata.yaml``."""
         if not self.closed:
-            self._close_current(state)
+            self._close_current(state, **fields)
             self.write_metadata()
             self.closed = True
 

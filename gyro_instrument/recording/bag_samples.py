@@ -9,7 +9,7 @@ def samples_from_bag(path, scan=None):
 
     ``path``: a bare ``.mcap`` or a rosbag2 bag directory, split or not
     (:func:`~gyro_instrument.recording.bag_layout.scan_path`). Reads every
-    ``/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
+    ``[/<namespace>]/<instrument>/joint_states`` message of every intact chunk (CRCs checked): a
     damaged chunk is skipped and the chunks after it are read; a file cut short is read up to its
     last complete record. Out-of-order or duplicated stamps are left for the estimator to sort out
     (it reports what it dropped).
@@ -55,7 +55,8 @@ def samples_from_bag(path, scan=None):
         except Exception:  # an intact record holding a message that does not decode
             undecodable += 1
             continue
-        name = channel.topic.strip("/").split("/")[0]
+        parts = channel.topic.strip("/").split("/")          # [<namespace>/...]<instrument>/joint_states
+        name = parts[-2] if len(parts) >= 2 else parts[0]
         ts, ps, vs = data.setdefault(name, ([], [], []))
         ts.append(stamp)
         ps.append(pos)

@@ -179,10 +179,13 @@ class BagWriter:
         w.finish()
         return bytes(sink.buf)
 
-    def close(self, state="complete"):
-        """Finish the file: final status record, summary, indexes, footer."""
+    def close(self, state="complete", **fields):
+        """Finish the file: final status record (``state``, ``messages`` and any ``fields``, e.g. the
+        per-topic counts of an ``incomplete`` recording), summary, indexes, footer."""
         if not self.closed:
-            self._w.add_metadata(STATUS_RECORD, {"state": state, "messages": str(sum(self.counts.values()))})
+            status = {"state": state, "messages": str(sum(self.counts.values()))}
+            status.update({str(k): str(v) for k, v in fields.items()})
+            self._w.add_metadata(STATUS_RECORD, status)
             self._w.finish()
             self._fh.commit()
             self._fh.close()

@@ -36,12 +36,27 @@ def build_parser():
                         "log time (0, default: no limit)")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
+    p.add_argument("--namespace", metavar="NS", default="",
+                   help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
+                        "NS/...; suites in different namespaces run side by side")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "
+                "the suite does not set itself), e.g. gyro-instrument run quet_paris --ros-args "
+                "--log-level warn")
     p.add_argument("--stats", action="store_true",
                    help="print the suite's statistics (samples, wall time, real-time factor, messages recorded "
                         "per topic) as one JSON line on stderr (implies --quiet)")
     return parser
+
+
+def split_ros_args(argv):
+    """(own arguments, arguments after ``--ros-args``) of a command line."""
+    argv = list(argv)
+    if "--ros-args" in argv:
+        i = argv.index("--ros-args")
+        return argv[:i], argv[i + 1:]
+    return argv, []
 
 
 def main(argv=None):
@@ -56,9 +71,17 @@ def main(argv=None):
 
 def _command(core_cli, argv):
     from gyro_instrument.core.errors import SceneError
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    full = list(sys.argv[1:] if argv is None else argv)
+    own, ros_args = split_ros_args(full)
+    args = parser.parse_args(own)
+    if ros_args and args.command != "run":
+        parser.error(f"--ros-args is only for 'run' (the ROS suite), not '{args.command}'")
     if args.command != "run":
         return core_cli.run_command(args)
+    if args.namespace and not args.namespace.lstrip("/").replace("/", "").replace("_", "a").isalnum():
+        raise SceneError("--namespace", args.namespace, "must be a ROS namespace such as /ship1 (letters, "
+                                                        "digits, _ and /)")
     bag_format = None
     if args.bag:
         from gyro_instrument.recording.bag_layout import bag_format as layout_of, check_bag_output
@@ -72,9 +95,10 @@ def _command(core_cli, argv):
     from gyro_instrument.ros.suite import run_suite
     progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
     result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                              command=" ".join(["gyro-instrument"] + (argv or sys.argv[1:])), progress=progress,
+                              command=" ".join(["gyro-instrument"] + full), progress=progress,
                               overwrite=args.overwrite, bag_format=bag_format,
-                              max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration)
+                              max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
+                              namespace=args.namespace, ros_args=ros_args)
     if result is None:
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3

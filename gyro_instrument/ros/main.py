@@ -1,64 +1,126 @@
-"""Entry points of the nodes (``ros2 run gyro_instrument <node>``), Jazzy ``main()`` pattern."""
+"""Entry points of the nodes (``ros2 run gyro_instrument <node>``), Jazzy ``main()`` pattern, each
+with ``--help`` (parameters with their descriptors, topics, an example) before ``--ros-args``."""
 
 import sys
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy._rclpy_pybind11 import RCLError
 
-from gyro_instrument.ros.nodes import EstimatorNode, PlayerNode, RecorderNode, SimulatorNode
+from gyro_instrument.ros import params as P
 from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.ros.topics import ESTIMATOR_TOPICS
+
+_SUMMARIES = {
+    "gyrocompass_sim": "Simulates the scene's gyroscopes (plane, gimbal, free) and publishes their joint states.",
+    "pendulum_sim": "Simulates the scene's pendulums and publishes their joint states and bob positions.",
+    "top_sim": "Simulates the scene's Puiseux bodies and publishes their joint states.",
+    "estimator": "Estimates latitude and Earth rate from the instruments' joint states.",
+    "recorder": "Records the scene's topics to MCAP (rosbag2 layout, sim-time log times, completeness status).",
+    "player": "Plays an MCAP bag back to DDS, driving clock; exits at the end (or loops).",
+}
+_SIM_TOPICS = ["<instrument>/joint_states (sensor_msgs/msg/JointState), per sample",
+               "<instrument>/markers (visualization_msgs/msg/MarkerArray, site_enu), once per second of sim time",
+               "clock (rosgraph_msgs/msg/Clock): published with publish_clock:=true, else subscribed (followed)"]
+_TOPICS = {
+    "gyrocompass_sim": _SIM_TOPICS + ["<gyro>/axis_direction (geometry_msgs/msg/Vector3Stamped, site_enu), once "
+                                      "per second of sim time"],
+    "pendulum_sim": _SIM_TOPICS[:1] + ["<pendulum>/bob_position (geometry_msgs/msg/PointStamped), per sample",
+                                       "<pendulum>/swing_plane (sensor_msgs/msg/JointState: swing-plane azimuth, "
+                                       "compass, rad), once per second of sim time"] + _SIM_TOPICS[1:],
+    "top_sim": _SIM_TOPICS[:1] + _SIM_TOPICS[2:],
+    "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()],
+    "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
+    "player": ["the bag's topics (relative names), clock"],
+}
+_EXAMPLES = {
+    "gyrocompass_sim": "gyrocompass_sim --ros-args -p scene:=quet_paris -p publish_clock:=true "
+                       "-p real_time_factor:=0 --params-file params.yaml",
+    "pendulum_sim": "pendulum_sim --ros-args -r __ns:=/ship1 -p scene:=foucault_pantheon -p duration_s:=60",
+    "top_sim": "top_sim --ros-args -p scene:=puiseux_spheroid -p publish_clock:=true",
+    "estimator": "estimator --ros-args -p scene:=quet_paris",
+    "recorder": "recorder --ros-args -p scene:=quet_paris -p output:=out.mcap -p stop_when_complete:=true",
+    "player": "player --ros-args -p bag:=bags/quet_paris.mcap -p real_time_factor:=0",
+}
+
+
+def help_text(name):
+    return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name], _EXAMPLES[name])
+
+
+def _wants_help(name, args):
+    argv = list(sys.argv[1:] if args is None else args[1:])
+    if "--ros-args" in argv:
+        argv = argv[:argv.index("--ros-args")]
+    if "-h" in argv or "--help" in argv:
+        print(help_text(name))
+        return True
+    return False
 
 
 def _spin(node, on_exit=None):
+    """Spin until shutdown (SIGINT/SIGTERM) or until the node says it is ``done``."""
+    ex = SingleThreadedExecutor(context=node.context)
+    ex.add_node(node)
     try:
-        rclpy.spin(node)
+        while node.context.ok() and not getattr(node, "done", False):
+            try:
+                ex.spin_once(timeout_sec=0.1)
+            except RCLError:
+                if node.context.ok():
+                    raise
+                break                      # SIGINT/SIGTERM shut the context down mid-wait
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         if on_exit:
             on_exit()
+        ex.remove_node(node)
         node.destroy_node()
         rclpy.try_shutdown()
 
 
-def _simulator(name, args=None):
+def _run(name, make, args=None, on_exit=None):
+    if _wants_help(name, args):
+        return 0
     rclpy.init(args=args)
-    node = SimulatorNode(name, simulator_kinds().get(name, ()))
+    node = make()
     node.start()
-    _spin(node)
+    _spin(node, on_exit=(lambda: on_exit(node)) if on_exit else None)
+    return 0
+
+
+def _simulator(name, args=None):
+    from gyro_instrument.ros.nodes import SimulatorNode
+    return _run(name, lambda: SimulatorNode(name, simulator_kinds().get(name, ())), args)
 
 
 def gyrocompass_sim(args=None):
-    _simulator("gyrocompass_sim", args)
+    return _simulator("gyrocompass_sim", args)
 
 
 def pendulum_sim(args=None):
-    _simulator("pendulum_sim", args)
+    return _simulator("pendulum_sim", args)
 
 
 def top_sim(args=None):
-    _simulator("top_sim", args)
+    return _simulator("top_sim", args)
 
 
 def estimator(args=None):
-    rclpy.init(args=args)
-    node = EstimatorNode()
-    if not node.has_parameter("publish_period_s") or node.get_parameter("publish_period_s").value <= 0:
-        node.create_timer(10.0, node.finalize)
-    _spin(node)
+    from gyro_instrument.ros.nodes import EstimatorNode
+    return _run("estimator", EstimatorNode, args)
 
 
 def recorder(args=None):
-    rclpy.init(args=args)
-    node = RecorderNode()
-    _spin(node, on_exit=node.close)      # SIGINT finishes a complete, indexed MCAP
+    from gyro_instrument.ros.nodes import RecorderNode
+    # SIGINT (or stop_when_complete) finishes a complete, indexed MCAP with its status
+    return _run("recorder", RecorderNode, args, on_exit=lambda node: node.close())
 
 
 def player(args=None):
-    rclpy.init(args=args)
-    node = PlayerNode()
-    node.start()
-    _spin(node)
+    from gyro_instrument.ros.nodes import PlayerNode
+    return _run("player", PlayerNode, args)
 
 
 if __name__ == "__main__":

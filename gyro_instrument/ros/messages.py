@@ -81,6 +81,80 @@ def diagnostics(t_ns, name, level_ok, message, values):
     return arr
 
 
+def marker_array_stamp_ns(data):
+    """Stamp of a serialized visualization_msgs/MarkerArray: its first marker's header (after the
+    encapsulation header and the uint32 sequence length); None when empty."""
+    if len(data) < 16 or struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)[0] == 0:
+        return None
+    sec, nsec = (_STAMP_LE if data[1] == 1 else _STAMP_BE)(data, 8)
+    return sec * 1_000_000_000 + nsec
+
+
+def _marker(t_ns, ns, mid, mtype, rgba, scale, points=(), position=(0.0, 0.0, 0.0), frame_id=SITE_FRAME):
+    from visualization_msgs.msg import Marker
+    from geometry_msgs.msg import Point
+    from std_msgs.msg import ColorRGBA
+    mk = Marker()
+    mk.header.stamp = stamp(t_ns)
+    mk.header.frame_id = frame_id
+    mk.ns, mk.id, mk.type, mk.action = ns, int(mid), mtype, Marker.ADD
+    mk.pose.orientation.w = 1.0
+    mk.pose.position.x, mk.pose.position.y, mk.pose.position.z = (float(v) for v in position)
+    mk.scale.x, mk.scale.y, mk.scale.z = (float(v) for v in scale)
+    mk.color = ColorRGBA(r=float(rgba[0]), g=float(rgba[1]), b=float(rgba[2]), a=float(rgba[3]))
+    mk.points = [Point(x=float(p[0]), y=float(p[1]), z=float(p[2])) for p in points]
+    mk.frame_locked = False
+    return mk
+
+
+def _set_points(mk, pts):
+    """Set a marker's points, reusing its Point objects (cheaper than new ones)."""
+    from geometry_msgs.msg import Point
+    have = mk.points
+    while len(have) < len(pts):
+        have.append(Point())
+    del have[len(pts):]
+    for p, xyz in zip(have, pts):
+        p.x, p.y, p.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
+
+
+def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, half_length_m, size_m, reuse=None):
+    """visualization_msgs/MarkerArray of a pendulum in ``site_enu``: the bob (sphere), the wire,
+    the bob's recent trail and the swing plane (a line through the point below the pivot along
+    the compass azimuth ``plane_azimuth``). ``reuse``: a MarkerArray this function returned
+    before, updated in place."""
+    from visualization_msgs.msg import Marker, MarkerArray
+    pivot = np.asarray(pivot_enu, dtype=float)
+    bob = pivot + np.asarray(bob_enu, dtype=float)
+    foot = np.array([pivot[0], pivot[1], bob[2]])
+    d = np.array([math.sin(plane_azimuth), math.cos(plane_azimuth), 0.0]) * half_length_m
+    arr = reuse or MarkerArray(markers=[
+        _marker(t_ns, name, 0, Marker.SPHERE, (0.9, 0.6, 0.1, 1.0), (size_m,) * 3),
+        _marker(t_ns, name, 1, Marker.LINE_LIST, (0.7, 0.7, 0.7, 1.0), (size_m / 10, 0, 0)),
+        _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0)),
+        _marker(t_ns, name, 3, Marker.LINE_LIST, (1.0, 0.2, 0.2, 1.0), (size_m / 5, 0, 0)),
+    ])
+    st = stamp(t_ns)
+    for mk in arr.markers:
+        mk.header.stamp = st
+    pos = arr.markers[0].pose.position
+    pos.x, pos.y, pos.z = float(bob[0]), float(bob[1]), float(bob[2])
+    _set_points(arr.markers[1], [pivot, bob])
+    _set_points(arr.markers[2], pivot + np.asarray(trail_enu, dtype=float).reshape(-1, 3))
+    _set_points(arr.markers[3], [foot - d, foot + d])
+    return arr
+
+
+def axis_markers(t_ns, name, origin_enu, axis_enu, length_m):
+    """visualization_msgs/MarkerArray of a gyroscope's rotor axis (an arrow) in ``site_enu``."""
+    from visualization_msgs.msg import Marker, MarkerArray
+    o = np.asarray(origin_enu, dtype=float)
+    return MarkerArray(markers=[
+        _marker(t_ns, name, 0, Marker.ARROW, (0.2, 0.8, 0.3, 1.0), (length_m / 20, length_m / 10, length_m / 6),
+                [o, o + length_m * np.asarray(axis_enu, dtype=float)]),
+    ])
+
+
 def message_class(type_name):
     """Class of ``pkg/msg/Type``."""
     pkg, _, name = type_name.split("/")

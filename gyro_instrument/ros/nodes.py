@@ -2,82 +2,131 @@
 
 * :class:`SimulatorNode` (``gyrocompass_sim``, ``pendulum_sim``, ``top_sim``): one core call
   (:func:`~gyro_instrument.recording.joints.joint_streams`: simulate, measure, lay out) then
-  publishes the samples as ``sensor_msgs/JointState`` (and the bob position) and owns ``/clock``;
-  messages are serialized with numpy (:class:`~gyro_instrument.ros.messages.CdrLayout`), many
-  samples at a time, and published as CDR bytes.
+  publishes the samples as ``sensor_msgs/JointState`` (and the bob position); messages are
+  serialized with numpy (:class:`~gyro_instrument.ros.messages.CdrLayout`), many samples at a
+  time, and published as CDR bytes. Run alone (:meth:`SimulatorNode.start`) it waits for the
+  subscribers the scene expects (``wait_for``), then either owns ``clock`` (``publish_clock``) and
+  paces it, or follows the owner's clock, publishing each sample when sim time reaches it.
 * :class:`EstimatorNode`: collects joint samples (raw CDR, decoded in bulk) and calls the core
-  estimator.
-* :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL; an existing
-  ``output`` file is refused unless the parameter ``overwrite`` is true (never the scene file).
+  estimator; run alone it publishes once every expected sample has arrived.
+* :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL, log time =
+  sim time, written in log-time order; knows what the scene publishes and marks the file
+  ``complete`` or ``incomplete`` with per-topic counts. An existing ``output`` file is refused
+  unless the parameter ``overwrite`` is true (never the scene file).
 * :class:`PlayerNode`: republishes a bag's intact messages (every chunk's CRC checked; what was
-  lost is logged with its log-time span), driving ``/clock``.
+  lost is logged with its log-time span), driving ``clock``; waits for its subscribers, exits at
+  the end (or loops).
 
-Every node takes ``scene`` (name or path), ``overrides`` (``key.path=value`` strings) and
-``duration_s``; a bad value is logged with the field, the value and the valid range, the change
-is refused, and the node stays up.
+Topic names are relative (``-r __ns:=/ship1`` moves them). Every parameter is declared with a
+descriptor (:mod:`gyro_instrument.ros.params`); a bad value is logged with the field, the value
+and the valid range, the change is refused, and the node stays up.
 """
 
+import heapq
 import json
 import math
 import os
+import time
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.exceptions import ParameterUninitializedException
+from rclpy.clock import Clock as RclClock, ClockType
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 
 from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.scene import sample_times_ns
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joints import joint_streams, records_from_joints
 from gyro_instrument.recording.bag_layout import bag_format, check_bag_output, open_bag_writer, scan_path
 from gyro_instrument.recording.mcap_io import qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
-from gyro_instrument.ros.topics import CLOCK, ESTIMATOR_TOPICS, bob_topic, joint_topic, scene_topics
+from gyro_instrument.ros import params as P
+from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, TRAIL, axis_topic, visual_every,
+                                        bob_topic, joint_topic, markers_topic, scene_topics, swing_plane_topic)
+from gyro_instrument.recording.visual import axis_directions, swing_plane_azimuth
 from gyro_instrument.scenes import build_instruments, load_scene
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: publishers of a node run alone: a sample is kept until every matched subscriber has it, however
+#: far ahead of a slow subscriber the publisher runs (real-time factor 0), so nothing is overwritten
+PUBLISH_ALL = RELIABLE_ALL
+#: timers that pace or wait run on the steady clock: never on sim time (a clock owner would wait for itself)
+STEADY = RclClock(clock_type=ClockType.STEADY_TIME)
+#: samples (or messages) a node run alone publishes per timer tick at real-time factor 0
+FLOW_BATCH = 200
+ACK_TIMEOUT = Duration(seconds=5)
+
+
+def _acked(node, pubs):
+    """Wait until every subscriber acknowledged what ``pubs`` published; warn once per topic if not."""
+    for pub in pubs:
+        if not pub.wait_for_all_acked(ACK_TIMEOUT):
+            if pub.topic_name not in node._ack_warned:
+                node._ack_warned.add(pub.topic_name)
+                node.get_logger().warning(f"{pub.topic_name}: a subscriber did not acknowledge within 5 s "
+                                          f"(slow or gone); publishing on")
 
 
 class SceneNode(Node):
-    """Common scene parameters and their validation."""
+    """Parameters declared from a table with descriptors, checked on every change; the scene."""
 
-    def __init__(self, name, **kwargs):
+    SPECS = P.SCENE
+    #: a change of these reloads the scene and restarts the run (simulators, estimator)
+    RESTART_ON = P.SCENE_NAMES
+
+    def __init__(self, name, specs=None, **kwargs):
         super().__init__(name, **kwargs)
-        self._declare("scene", "quet_paris")
-        self._declare("overrides", Parameter.Type.STRING_ARRAY)
-        self._declare("duration_s", 0.0)
+        self.specs = specs or self.SPECS
+        self.refused = P.declare_all(self, self.specs)
         self.scene = None
         self.insts = {}
+        self.clock_owner = False
+        self.standalone = False
+        self._ack_warned = set()
+        self._restart = False
+        self.add_pre_set_parameters_callback(P.pre_set_checker(self, self.specs))
         self.add_on_set_parameters_callback(self._check_params)
-
-    def _declare(self, name, default):
-        if not self.has_parameter(name):
-            self.declare_parameter(name, default)
+        self.add_post_set_parameters_callback(self._after_set)
 
     def value(self, name, default=None):
-        """A parameter's value; ``default`` for a declared-but-unset one (string arrays)."""
-        try:
-            v = self.get_parameter(name).value
-        except ParameterUninitializedException:
+        """A parameter's value (``default`` if it is not declared)."""
+        if not self.has_parameter(name):
             return default
+        v = self.get_parameter(name).value
         return default if v is None else v
 
+    def refuse_sim_time_if_owner(self):
+        """A clock owner started with ``use_sim_time:=true`` would wait for its own clock: refused."""
+        if self.clock_owner and self.value("use_sim_time", False):
+            self.get_logger().error("use_sim_time = true is invalid on the clock owner (it publishes clock and "
+                                    "would wait for itself): use_sim_time set back to false")
+            self.set_parameters([Parameter("use_sim_time", value=False)])
+
     def _scene_args(self, changes=None):
-        vals = {p: self.value(p) for p in ("scene", "overrides", "duration_s")}
+        vals = {p: self.value(p) for p in P.SCENE_NAMES}
         for p in changes or ():
-            vals[p.name] = p.value
+            if p.name in vals:
+                vals[p.name] = p.value
         overrides = list(vals["overrides"] or [])
         if vals["duration_s"]:
             overrides.append(f"duration_s={float(vals['duration_s'])!r}")
         return vals["scene"], overrides
 
     def _check_params(self, params):
-        if not any(p.name in ("scene", "overrides", "duration_s") for p in params):
+        for p in params:
+            if p.name == "use_sim_time" and p.value is True and self.clock_owner:
+                reason = ("use_sim_time = true is invalid on the clock owner: it publishes clock and would wait "
+                          "for itself")
+                self.get_logger().error(f"parameter refused: {reason}")
+                return SetParametersResult(successful=False, reason=reason)
+        if not any(p.name in P.SCENE_NAMES for p in params):
             return SetParametersResult(successful=True)
         try:
             load_scene(*self._scene_args(params))
@@ -86,8 +135,26 @@ class SceneNode(Node):
             return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
+    def _after_set(self, params):
+        for p in params:
+            self.refused.pop(p.name, None)
+        if any(p.name in self.RESTART_ON for p in params):
+            self._restart = True
+            if not self.standalone:
+                self.restart()
+
+    def restart(self):
+        """Reload the scene after a parameter change (subclasses tear down and start again)."""
+        self._restart = False
+
     def load(self):
         """Load the scene from the parameters; on bad input log it and return False (stay up)."""
+        bad = [n for n in self.refused if n in P.SCENE_NAMES or n == "seed"]
+        if bad:
+            self.get_logger().error(f"not running: {', '.join(bad)} refused at start-up; set a valid value "
+                                    f"(ros2 param set) to start")
+            self.scene, self.insts = None, {}
+            return False
         try:
             self.scene = load_scene(*self._scene_args())
             self.insts = build_instruments(self.scene)
@@ -97,23 +164,48 @@ class SceneNode(Node):
             self.scene, self.insts = None, {}
             return False
 
+    def _named_nodes_ready(self, expected):
+        """expected: {node name: [resolved topics it must subscribe to]} -> names still missing."""
+        ns = self.get_namespace()
+        missing = []
+        for node_name, topics in expected.items():
+            for topic in topics:
+                infos = self.get_subscriptions_info_by_topic(topic)
+                if not any(i.node_name == node_name and i.node_namespace == ns for i in infos):
+                    missing.append(node_name)
+                    break
+        return missing
+
+    def _unmatched(self, pubs):
+        """Topics with a subscription the graph knows of that a publisher has not matched yet."""
+        return [pub.topic_name for pub in pubs
+                if pub.get_subscription_count() < len(self.get_subscriptions_info_by_topic(pub.topic_name))]
+
 
 class SimulatorNode(SceneNode):
-    """Publishes the scene's instruments of the given kinds; owns ``/clock``."""
+    """Publishes the scene's instruments of the given kinds; owns ``clock`` when ``publish_clock``."""
 
-    def __init__(self, name, kinds, **kwargs):
+    SPECS = P.SIMULATOR
+    RESTART_ON = P.SCENE_NAMES + ("seed",)
+
+    def __init__(self, name, kinds, pub_qos=PUBLISH_ALL, **kwargs):
         super().__init__(name, **kwargs)
         self.kinds = tuple(kinds)
-        self._declare("real_time_factor", 1.0)
-        self._declare("publish_clock", True)
-        self._declare("seed", -1)
+        self.pub_qos = pub_qos
+        self.clock_owner = bool(self.value("publish_clock", False))
+        self.refuse_sim_time_if_owner()
         self.index = 0
         self.t_ns = np.zeros(0, dtype=np.int64)
         self.streams = {}
         self.pubs = {}
         self.layouts = {}
         self.clock_pub = None
+        self.clock_sub = None
         self.timer = None
+        self.visual = {}
+        self.offsets = {}
+        self.state = "idle"
+        self._ctl = None
         if self.load():
             self.prepare()
 
@@ -124,14 +216,81 @@ class SimulatorNode(SceneNode):
         if not self.streams:
             self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
         for name, s in self.streams.items():
-            self.pubs[name] = self.create_publisher(m.JointState, joint_topic(name), RELIABLE_1000)
+            self.pubs[name] = self.create_publisher(m.JointState, joint_topic(name), self.pub_qos)
             self.layouts[name] = m.joint_state_layout(s.names)
             if s.bob_enu_m is not None:
-                self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), RELIABLE_1000)
+                self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), self.pub_qos)
                 self.layouts[name + "/bob"] = m.point_stamped_layout(f"{name}_pivot")
-        self.clock_pub = (self.create_publisher(m.Clock, CLOCK, RELIABLE_1000)
-                          if self.get_parameter("publish_clock").value else None)
+        self._prepare_visuals()
+        self.clock_pub = self.create_publisher(m.Clock, CLOCK, self.pub_qos) if self.clock_owner else None
         self.index = 0
+
+    def _prepare_visuals(self):
+        """What there is to see, once per second of sim time: the swing-plane azimuth
+        (pendulums), the rotor-axis direction (plane and free gyroscopes), and markers in
+        ``site_enu``; instruments stand 3 m apart along east in the scene's order."""
+        self.visual = {}
+        self.visual_every = visual_every(self.scene.sample_rate_hz)
+        t_s = self.t_ns / 1e9
+        order = list(self.insts)
+        for name, s in self.streams.items():
+            inst = self.insts[name]
+            origin = np.array([3.0 * order.index(name), 0.0, 0.0])
+            v = {"origin": origin}
+            if inst.IS_PENDULUM:
+                l = inst.pendulum_length_m()
+                az, rate = swing_plane_azimuth(t_s, s.position[:, 0], s.position[:, 1],
+                                               2 * math.pi * math.sqrt(l / 9.80665))
+                v.update(plane=np.column_stack([az]), plane_rate=np.column_stack([rate]), length=l,
+                         half=max(float(np.nanmax(s.position[:, 2])) * l, 1e-3) if len(az) else 1.0)
+                self.pubs[name + "/plane"] = self.create_publisher(m.JointState, swing_plane_topic(name), self.pub_qos)
+                self.layouts[name + "/plane"] = m.joint_state_layout((f"{name}/swing_plane_azimuth",))
+            axis = axis_directions(inst, s)
+            if axis is not None:
+                v["axis"] = axis
+                self.pubs[name + "/axis"] = self.create_publisher(m.Vector3Stamped, axis_topic(name), self.pub_qos)
+                self.layouts[name + "/axis"] = m.point_stamped_layout(m.SITE_FRAME)
+            if len(v) > 1:
+                self.pubs[name + "/markers"] = self.create_publisher(m.message_class(
+                    "visualization_msgs/msg/MarkerArray"), markers_topic(name), self.pub_qos)
+                self.visual[name] = v
+
+    def _markers(self, name, i):
+        v, s, t = self.visual[name], self.streams[name], int(self.t_ns[i])
+        if "axis" in v:
+            return m.axis_markers(t, name, v["origin"], np.nan_to_num(v["axis"][i]), 1.0)
+        l = v["length"]
+        size = min(max(0.03 * l, 0.05), 2.0)
+        trail = s.bob_enu_m[max(i - self.visual_every * TRAIL, 0):i + 1:self.visual_every]
+        v["msg"] = m.pendulum_markers(t, name, v["origin"] + np.array([0.0, 0.0, l]), np.nan_to_num(s.bob_enu_m[i]),
+                                      np.nan_to_num(trail), float(v["plane"][i, 0]), v["half"], size, v.get("msg"))
+        return v["msg"]
+
+    def teardown(self):
+        for t in (self.timer,):
+            if t is not None:
+                self.destroy_timer(t)
+        self.timer = None
+        if self.clock_sub is not None:
+            self.destroy_subscription(self.clock_sub)
+            self.clock_sub = None
+        for pub in list(self.pubs.values()) + ([self.clock_pub] if self.clock_pub is not None else []):
+            self.destroy_publisher(pub)
+        self.pubs, self.layouts, self.streams, self.clock_pub, self.visual = {}, {}, {}, None, {}
+        self.t_ns = np.zeros(0, dtype=np.int64)
+        self.index = 0
+
+    def restart(self):
+        """A scene (or seed) change: stop, reload, and run again from t = 0."""
+        super().restart()
+        self.teardown()
+        if self.load():
+            self.prepare()
+            self.get_logger().info(f"scene {self.scene.name}: restarting the run from t = 0")
+            if self.standalone:
+                self._wait_begin()
+        else:
+            self.state = "idle"
 
     @property
     def samples(self):
@@ -140,14 +299,13 @@ class SimulatorNode(SceneNode):
     def messages_per_step(self):
         return sum(2 if s.bob_enu_m is not None else 1 for s in self.streams.values())
 
+    def publishers(self):
+        """This node's publishers, the clock first."""
+        return ([self.clock_pub] if self.clock_pub is not None else []) + list(self.pubs.values())
+
     def topics(self):
-        """Topics this node publishes, each once per sample."""
-        out = [CLOCK] if self.clock_pub is not None else []
-        for name, s in self.streams.items():
-            out.append(joint_topic(name))
-            if s.bob_enu_m is not None:
-                out.append(bob_topic(name))
-        return out
+        """Topics this node publishes (fully qualified), each once per sample."""
+        return [pub.topic_name for pub in self.publishers()]
 
     def publish_steps(self, k):
         """Publish samples ``index`` .. ``index + k - 1`` (fewer at the end): topic by topic, the
@@ -158,6 +316,7 @@ class SimulatorNode(SceneNode):
             return 0
         t = self.t_ns[i0:i1]
         batches = []
+        self.offsets = {}
         if self.clock_pub is not None:
             batches.append((self.clock_pub, m.CLOCK_LAYOUT.encode(t)))
         for name, s in self.streams.items():
@@ -165,6 +324,22 @@ class SimulatorNode(SceneNode):
                 t, s.position[i0:i1], s.velocity[i0:i1], s.effort[i0:i1])))
             if s.bob_enu_m is not None:
                 batches.append((self.pubs[name + "/bob"], self.layouts[name + "/bob"].encode(t, s.bob_enu_m[i0:i1])))
+            v = self.visual.get(name)
+            if v is None:
+                continue
+            # once per VISUAL_PERIOD_S of sim time: cheap beside the samples themselves
+            every = self.visual_every
+            marks = np.arange(-(-i0 // every) * every, i1, every)
+            tm = self.t_ns[marks]
+            if "plane" in v:
+                batches.append((self.pubs[name + "/plane"], self.layouts[name + "/plane"].encode(
+                    tm, v["plane"][marks], v["plane_rate"][marks], np.zeros((marks.size, 1)))))
+            if "axis" in v:
+                batches.append((self.pubs[name + "/axis"], self.layouts[name + "/axis"].encode(tm, v["axis"][marks])))
+            batches.append((self.pubs[name + "/markers"], [serialize_message(self._markers(name, i)) for i in marks]))
+            for key in ("/plane", "/axis", "/markers"):
+                if name + key in self.pubs:
+                    self.offsets[self.pubs[name + key].topic_name] = (marks - i0).tolist()
         for pub, datas in batches:
             with pub.handle:
                 publish = pub.handle.publish_raw
@@ -177,18 +352,111 @@ class SimulatorNode(SceneNode):
         """Publish sample ``index`` (clock first); return False when none remain."""
         return self.publish_steps(1) > 0
 
-    def start(self):
-        """Standalone pacing: a wall timer at dt / real_time_factor (0: as fast as possible)."""
-        if not self.samples:
-            return
-        rtf = float(self.get_parameter("real_time_factor").value)
-        dt = 1.0 / self.scene.sample_rate_hz
-        self.timer = self.create_timer(dt / rtf if rtf > 0 else 0.0, self._tick)
+    # ---- run alone (ros2 run): wait for subscribers, then own or follow the clock -----------------
 
-    def _tick(self):
-        if not self.publish_step():
-            self.timer.cancel()
-            self.get_logger().info(f"published {self.samples} samples of {', '.join(self.streams)}")
+    def expected_subscribers(self):
+        """{node name: [topics it must subscribe to]} from ``wait_for`` and the scene: the recorder
+        every topic, the estimator the joint states of estimable instruments, another name any of
+        this node's topics; the clock owner also waits for the scene's other simulators (they
+        subscribe to clock once their own subscribers are matched)."""
+        mine = self.topics()
+        out = {}
+        for name in self.value("wait_for", []):
+            if name == "recorder":
+                out[name] = mine
+            elif name == "estimator":
+                topics = [self.pubs[n].topic_name for n, inst in self.insts.items()
+                          if n in self.pubs and estimable(inst)]
+                if topics:
+                    out[name] = topics
+            elif mine:
+                out[name] = mine[:1]
+        if self.clock_owner and self.clock_pub is not None:
+            types = {inst.type_name for inst in self.insts.values()}
+            for sim, kinds in simulator_kinds().items():
+                if sim != self.get_name() and types & set(kinds):
+                    out[sim] = [self.clock_pub.topic_name]
+        return out
+
+    def start(self):
+        """Run alone: log what is published, wait for the expected subscribers (at most
+        ``wait_timeout_s``), then publish (owner: paced by ``real_time_factor``; follower: as the
+        owner's clock reaches each sample)."""
+        self.standalone = True
+        self._ctl = self.create_timer(0.05, self._control, clock=STEADY)
+        if self.samples:
+            self._wait_begin()
+
+    def startup_line(self):
+        pubs = ", ".join(f"{pub.topic_name} ({pub.msg_type.__module__.split('.')[0]}/msg/{pub.msg_type.__name__})"
+                         for pub in self.publishers())
+        clock = ("owns the clock (publish_clock = true): publishes " + self.clock_pub.topic_name
+                 if self.clock_pub is not None else "follows the clock another node publishes (publish_clock = false)")
+        return (f"scene {self.scene.name}: {self.samples} samples at {self.scene.sample_rate_hz:g} Hz; publishes "
+                f"{pubs}; {clock}")
+
+    def _wait_begin(self):
+        self.get_logger().info(self.startup_line())
+        self.state = "waiting"
+        self._wait_t0 = time.monotonic()
+        exp = self.expected_subscribers()
+        if exp:
+            self.get_logger().info(f"waiting up to {self.value('wait_timeout_s'):g} s for {', '.join(exp)} "
+                                   f"(parameter wait_for) before sim time starts")
+
+    def _control(self):
+        if self._restart:
+            self.restart()
+        if self.state != "waiting":
+            return
+        missing = self._named_nodes_ready(self.expected_subscribers())
+        unmatched = self._unmatched(self.publishers())
+        if missing or unmatched:
+            if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
+                return
+            self.get_logger().warning(f"wait_timeout_s = {self.value('wait_timeout_s'):g} s passed without "
+                                      f"{', '.join(missing + unmatched)}: starting anyway (those may miss samples)")
+        self._begin()
+
+    def _begin(self):
+        self.state = "running"
+        if self.clock_owner:
+            self._rtf = None
+            self.timer = self.create_timer(0.002, self._run, clock=STEADY)
+        else:
+            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
+
+    def _run(self):
+        """Owner: publish what is due (paced) or the next flow-controlled batch (real_time_factor 0)."""
+        rtf = float(self.value("real_time_factor", 1.0))
+        if rtf <= 0:
+            k = FLOW_BATCH
+        else:
+            now = time.monotonic()
+            if rtf != self._rtf:
+                self._rtf, self._w0, self._i0 = rtf, now, self.index
+            dt = 1.0 / self.scene.sample_rate_hz
+            k = min(self._i0 + int((now - self._w0) * rtf / dt) + 1, self.samples) - self.index
+        if k > 0:
+            self.publish_steps(min(k, FLOW_BATCH))
+        if self.index >= self.samples:
+            self._finish()
+
+    def _on_clock(self, data):
+        """Follower: publish every sample up to the owner's clock."""
+        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        k = int(np.searchsorted(self.t_ns, t, side="right")) - self.index
+        if k > 0 and self.state == "running":
+            self.publish_steps(k)
+            if self.index >= self.samples:
+                self._finish()
+
+    def _finish(self):
+        if self.timer is not None:
+            self.timer.cancel()                  # destroyed on restart or with the node
+        self.state = "done"
+        self.get_logger().info(f"published {self.samples} samples of {', '.join(self.streams)}")
+        _acked(self, self.publishers())
 
 
 class JointBuffer:
@@ -247,31 +515,105 @@ class JointBuffer:
 class EstimatorNode(SceneNode):
     """Subscribes to the instruments' joint states and publishes latitude and Earth rate."""
 
+    SPECS = P.ESTIMATOR
+
     def __init__(self, name="estimator", **kwargs):
         super().__init__(name, **kwargs)
-        self._declare("publish_period_s", 0.0)
         self.buffers = {}
         self.subs = {}
         self.rejected = {}
         self.wrong_types = {}
         self.result = None
         self.pubs = {}
+        self.timers_ = []
+        self.clock_sub = None
+        self.last_clock_ns = None
+        self.expected = 0
+        self.final = False
+        self._clock_done_at = None
         if self.load():
             self.prepare()
 
     def prepare(self):
+        self.expected = int(sample_times_ns(self.scene).size)
         for name, inst in self.insts.items():
             if estimable(inst):
                 self.buffers[name] = JointBuffer(m.joint_state_layout(
                     tuple(f"{name}/{j}" for j in inst.JOINTS)))
-                self.subs[joint_topic(name)] = self.create_subscription(
+                sub = self.create_subscription(
                     m.JointState, joint_topic(name), lambda data, n=name: self._on_joint_raw(n, data),
                     RELIABLE_ALL, raw=True)
+                self.subs[sub.topic_name] = sub
+        # sim time from the clock: the stamp of an estimate that used no sample
+        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
         for topic, type_name in ESTIMATOR_TOPICS.items():
             self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
         period = float(self.get_parameter("publish_period_s").value)
         if period > 0:
-            self.create_timer(period, self.finalize)
+            self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
+
+    def teardown(self):
+        for t in self.timers_:
+            self.destroy_timer(t)
+        for sub in list(self.subs.values()) + ([self.clock_sub] if self.clock_sub is not None else []):
+            self.destroy_subscription(sub)
+        for pub in self.pubs.values():
+            self.destroy_publisher(pub)
+        self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
+        self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
+
+    def restart(self):
+        super().restart()
+        self.teardown()
+        if self.load():
+            self.prepare()
+            self.get_logger().info(f"scene {self.scene.name}: estimator restarted, waiting for samples")
+            if self.standalone:
+                self.get_logger().info(self.startup_line())
+
+    def start(self):
+        """Run alone: publish once every expected sample has arrived (or 5 s of wall time after the
+        clock reached the last sample, with what there is)."""
+        self.standalone = True
+        self.create_timer(0.5, self._control, clock=STEADY)
+        if self.scene is not None:
+            self.get_logger().info(self.startup_line())
+
+    def startup_line(self):
+        subs = ", ".join(self.subs) or "no joint states (nothing estimable in this scene)"
+        pubs = ", ".join(pub.topic_name for pub in self.pubs.values())
+        return (f"scene {self.scene.name}: expects {self.expected} samples on {subs}; publishes {pubs} once "
+                f"they have arrived")
+
+    def _control(self):
+        if self._restart:
+            self.restart()
+        if self.final or self.scene is None:
+            return
+        if self._clock_done_at is not None and time.monotonic() - self._clock_done_at > 5.0:
+            have = {n: len(b) for n, b in self.buffers.items()}
+            self.get_logger().warning(f"the clock reached the end 5 s ago; estimating from the samples received "
+                                      f"{have} of {self.expected} each")
+            self._final()
+
+    def _final(self):
+        self.final = True
+        r = self.finalize()
+        if r is not None:
+            self.get_logger().info(f"estimate published: latitude {r.get('latitude_deg')} deg, Earth rate "
+                                   f"{r.get('earth_rate_rad_s')} rad/s ({r.get('method') or r.get('reason', '')})")
+
+    def _check_complete(self):
+        if self.standalone and not self.final and all(len(b) >= self.expected for b in self.buffers.values()):
+            if self.buffers or self._clock_done_at is not None:
+                self._final()
+
+    def _on_clock(self, data):
+        self.last_clock_ns = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        if self.standalone and self._clock_done_at is None and self.expected and self.scene is not None \
+                and self.last_clock_ns >= int(sample_times_ns(self.scene)[-1]):
+            self._clock_done_at = time.monotonic()
+            self._check_complete()
 
     def received(self):
         return sum(len(b) for b in self.buffers.values())
@@ -281,8 +623,7 @@ class EstimatorNode(SceneNode):
         matches them, so nothing arrives): {topic: [types]}; logged once and put in diagnostics."""
         wrong = {}
         for topic, types in self.get_topic_names_and_types():
-            name = topic.strip("/").split("/")[0]
-            if name in self.buffers and topic == joint_topic(name):
+            if topic in self.subs:
                 others = [t for t in types if t != "sensor_msgs/msg/JointState"]
                 if others:
                     wrong[topic] = others
@@ -304,6 +645,8 @@ class EstimatorNode(SceneNode):
         buf = self.buffers[name]
         if buf.layout.matches(data):
             buf.add_raw(data)
+            if self.standalone and len(buf) >= self.expected:
+                self._check_complete()
             return
         try:
             msg = deserialize_message(data, m.JointState)
@@ -319,6 +662,8 @@ class EstimatorNode(SceneNode):
             self._reject(name, f"joints {list(names)} do not match {list(expected)}")
             return
         self.buffers[name].add(m.stamp_to_release_ns(msg.header.stamp), list(msg.position), list(msg.velocity))
+        if self.standalone and len(self.buffers[name]) >= self.expected:
+            self._check_complete()
 
     def estimate(self):
         """Core call on everything received so far (None if nothing usable)."""
@@ -327,6 +672,13 @@ class EstimatorNode(SceneNode):
         samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
+
+    def stamp_ns(self):
+        """Stamp of an estimate: the last sample it used, else the last clock tick (sim time), else 0."""
+        t = max((b.last_stamp() for b in self.buffers.values() if len(b)), default=None)
+        if t is None:
+            t = self.last_clock_ns
+        return 0 if t is None else max(int(t), 0)
 
     def finalize(self):
         """Estimate and publish; returns the result dict."""
@@ -338,39 +690,55 @@ class EstimatorNode(SceneNode):
         if self.result is None:
             return None
         r = self.result
-        t = max((b.last_stamp() for b in self.buffers.values() if len(b)), default=0)
+        t = self.stamp_ns()
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
-        self.pubs["/estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
-        self.pubs["/diagnostics"].publish(m.diagnostics(
+        self.pubs["estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        self.pubs["diagnostics"].publish(m.diagnostics(
             t, "gyro_instrument/estimator", r.get("method") is not None,
             r.get("method") or r.get("reason", ""),
             {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
              "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
              "rejected_messages": self.rejected, "wrong_topic_types": self.check_topic_types()}))
-        self.pubs["/estimator/latitude_rad"].publish(m.float64(lat))
-        self.pubs["/estimator/latitude_sigma_rad"].publish(m.float64(sig))
-        self.pubs["/estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
-        self.pubs["/estimator/earth_rate_sigma_rad_s"].publish(m.float64(r.get("earth_rate_sigma_rad_s")))
+        self.pubs["estimator/latitude_rad"].publish(m.float64(lat))
+        self.pubs["estimator/latitude_sigma_rad"].publish(m.float64(sig))
+        self.pubs["estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
+        self.pubs["estimator/earth_rate_sigma_rad_s"].publish(m.float64(r.get("earth_rate_sigma_rad_s")))
         return r
 
 
 class RecorderNode(SceneNode):
-    """Records topics (raw CDR) to MCAP; log time = the message stamp (sim time) when it has one."""
+    """Records the scene's topics (raw CDR) to MCAP with sim-time log times, in log-time order, and
+    marks the file ``complete`` or ``incomplete`` (per-topic counts against what the scene publishes).
 
-    def __init__(self, name="recorder", **kwargs):
+    Parameters
+    ----------
+    reorder : bool
+        True (alone): messages of different topics, arriving interleaved from separate processes,
+        are held until every sample topic has reached their stamp and written in stamp order. False
+        (the lock-step suite, which delivers sample by sample): written as they arrive.
+    """
+
+    SPECS = P.RECORDER
+    RESTART_ON = ()
+    #: wall time (s) after which held messages are written even if a topic lags (it then writes late)
+    HOLD_S = 2.0
+
+    def __init__(self, name="recorder", reorder=True, **kwargs):
         super().__init__(name, **kwargs)
-        self._declare("output", "")
-        self._declare("overwrite", False)
-        self._declare("topics", Parameter.Type.STRING_ARRAY)
-        self._declare("command", "recorder node")
-        self._declare("format", "")
-        self._declare("max_bag_size", 0)
-        self._declare("max_bag_duration", 0.0)
         self.writer = None
         self.counts = {}
+        self.expected = {}
         self.subs = {}
         self.last_ns = 0
+        self.max_ns = 0
+        self.reorder = bool(reorder)
+        self._held = []
+        self._seq = 0
+        self._last_in = {}
+        self._last_arrival = time.monotonic()
+        self.late = 0
+        self.done = False
         if self.load():
             self.prepare()
 
@@ -408,57 +776,151 @@ class RecorderNode(SceneNode):
                                         f"false; set overwrite:=true to replace it, or give a new path")
                 return
         types = scene_topics(self.insts)
-        wanted = self.value("topics", []) or list(types)
+        resolved = {self.resolve_topic_name(tp): tp for tp in types}
+        wanted = []
+        for topic in self.value("topics", []) or list(types):
+            rel = resolved.get(self.resolve_topic_name(topic))
+            if rel is None:
+                self.get_logger().error(f"topics: {topic!r} is not a topic of this scene; valid: {', '.join(types)}")
+                continue
+            wanted.append(rel)
         self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
                                       overwrite=bool(self.value("overwrite", False)))
         # the scene first, so that a recording cut short still says what it holds (replay needs it)
         self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
                                                      "scene": self.scene.name, "seed": self.scene.seed,
                                                      "command": self.value("command", "recorder node")})
-        self.stamped = {tp for tp, ty in types.items() if ty != "std_msgs/msg/Float64"}
+        n = int(sample_times_ns(self.scene).size)
+        n_markers = len(range(0, n, visual_every(self.scene.sample_rate_hz)))
+        self.stamped = set()
+        self.marker_topics = set()
+        self.sample_topics = set()
+        self.rank = {}
         for topic in wanted:
-            if topic not in types:
-                self.get_logger().error(f"topics: {topic!r} is not a topic of this scene; valid: {', '.join(types)}")
-                continue
-            self.writer.add_topic(topic, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
-            self.counts[topic] = 0
-            self.subs[topic] = self.create_subscription(m.message_class(types[topic]), topic,
-                                                        lambda data, tp=topic: self._on_raw(tp, data),
-                                                        RELIABLE_ALL, raw=True)
+            name = self.resolve_topic_name(topic)         # namespace and remapping applied
+            self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
+            self.counts[name] = 0
+            self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
+            if types[topic] == "visualization_msgs/msg/MarkerArray":
+                self.marker_topics.add(name)
+            elif types[topic] != "std_msgs/msg/Float64":
+                self.stamped.add(name)
+            if not (topic.startswith("estimator/") or topic == "diagnostics"):
+                self.sample_topics.add(name)
+            # what the scene publishes: every sample on clock and the instruments' topics, and at
+            # least one estimate on each estimator topic
+            sparse = topic.endswith(("/markers", "/swing_plane", "/axis_direction"))
+            self.expected[name] = (n_markers if sparse else n) if name in self.sample_topics else 1
+            self.subs[name] = self.create_subscription(m.message_class(types[topic]), topic,
+                                                       lambda data, tp=name: self._on_raw(tp, data),
+                                                       RELIABLE_ALL, raw=True)
+        if self.reorder:
+            self.create_timer(0.5, self._control, clock=STEADY)
+
+    def start(self):
+        self.standalone = True
+        if self.writer is not None:
+            self.get_logger().info(
+                f"recording {', '.join(self.subs)} to {self.writer.path}; expects "
+                f"{max(self.expected.values(), default=0)} samples per sample topic and one estimate")
 
     def received(self):
         return sum(self.counts.values())
 
     def _on_raw(self, topic, data):
-        # Header-first types and Clock carry their sim time; Float64 takes the clock (never earlier
-        # than the last stamp, so the file stays deterministic and ordered in lock-step).
-        st = m.cdr_stamp_ns(data) if topic in self.stamped else None
+        # Header-first types and Clock carry their sim time; Float64 takes the latest sim time
+        # received (never wall time), so one bag has one time base.
+        st = m.cdr_stamp_ns(data) if topic in self.stamped else \
+            m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
         if st is None:
-            st = max(self.last_ns, self.get_clock().now().nanoseconds)
-        self.last_ns = max(self.last_ns, st)
-        self.writer.write(topic, st, data)
+            st = self.max_ns
         self.counts[topic] += 1
+        if st > self.max_ns:
+            self.max_ns = st
+        if not self.reorder:
+            self._write(topic, st, data)
+            return
+        self._last_arrival = time.monotonic()
+        if topic in self.sample_topics:
+            self._last_in[topic] = st
+        heapq.heappush(self._held, (st, self.rank[topic], self._seq, topic, data))
+        self._seq += 1
+        if self._seq % 64 == 0 or topic not in self.sample_topics:
+            self._flush(self._watermark())
 
-    def close(self, metadata=None, name="gyro_instrument", state="complete"):
+    def _write(self, topic, st, data):
+        if st < self.last_ns:            # arrived after later stamps were written: logged at that time
+            self.late += 1
+            st = self.last_ns
+        self.last_ns = st
+        self.writer.write(topic, st, data)
+
+    def _watermark(self):
+        """Stamps up to here are complete on every sample topic still publishing."""
+        open_topics = [tp for tp in self.sample_topics if self.counts[tp] < self.expected[tp]]
+        if any(tp not in self._last_in for tp in open_topics):
+            return None
+        return min((self._last_in[tp] for tp in open_topics), default=math.inf)
+
+    def _flush(self, upto):
+        held = self._held
+        if upto is None:
+            return
+        while held and held[0][0] <= upto:
+            st, _, _, topic, data = heapq.heappop(held)
+            self._write(topic, st, data)
+
+    def _control(self):
+        if self._held and time.monotonic() - self._last_arrival > self.HOLD_S:
+            self._flush(math.inf)        # a topic lags or stopped: write what is held
+        if self.value("stop_when_complete", False) and self.writer is not None and not self.done \
+                and self.missing() == {}:
+            self.get_logger().info(f"every expected message recorded ({self.received()}): finishing {self.writer.path}")
+            self.done = True
+
+    def missing(self):
+        """{topic: (recorded, expected)} of every topic short of what the scene publishes."""
+        return {tp: (self.counts[tp], n) for tp, n in self.expected.items() if self.counts[tp] < n}
+
+    def close(self, metadata=None, name="gyro_instrument", state=None):
         """Write an optional metadata record and finish the file (summary, indexes, footer) with
-        the status record ``state`` (``complete``, or ``interrupted`` when a run is cut short)."""
+        the status record: ``state`` if given (``interrupted`` when a run is cut short), else
+        ``complete`` when every topic holds what the scene publishes, ``incomplete`` otherwise;
+        with the per-topic counts (``topics``: {topic: [recorded, expected]}) and ``late`` (messages
+        that arrived after later stamps were written and carry that later log time)."""
         if self.writer is not None and not self.writer.closed:
+            self._flush(math.inf)
             if metadata:
                 self.writer.add_metadata(name, metadata)
-            self.writer.close(state=state)
+            missing = self.missing()
+            if state is None:
+                state = "incomplete" if missing else "complete"
+                if missing:
+                    self.get_logger().warning("recording incomplete: " + ", ".join(
+                        f"{tp} {k} of {n}" for tp, (k, n) in missing.items()))
+            topics = {tp: [self.counts[tp], n] for tp, n in self.expected.items()}
+            self.writer.close(state=state, topics=json.dumps(topics), late=self.late)
 
 
-class PlayerNode(Node):
-    """Republishes a bag on its topics, driving ``/clock`` from the log times."""
+class PlayerNode(SceneNode):
+    """Republishes a bag on its topics (relative names), driving ``clock`` from the log times; waits
+    for its subscribers, exits at the end (``done``) or loops."""
+
+    SPECS = P.PLAYER
+    RESTART_ON = ()
 
     def __init__(self, name="player", **kwargs):
         super().__init__(name, **kwargs)
-        self.declare_parameter("bag", "")
-        self.declare_parameter("real_time_factor", 1.0)
+        self.clock_owner = True
+        self.refuse_sim_time_if_owner()
         self.pubs = {}
+        self.pub_qos = PUBLISH_ALL
         self.queue = []
         self.index = 0
         self.damaged = []
+        self.done = False
+        self.state = "idle"
+        self.has_clock = False
         bag = self.get_parameter("bag").value
         if not bag or not os.path.exists(bag):
             self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file or rosbag2 bag directory")
@@ -473,41 +935,88 @@ class PlayerNode(Node):
             self.get_logger().warning(f"bag {bag}: damaged: {damage_line(d)}; those messages are not published")
         for note in scan.notes:
             self.get_logger().warning(f"bag {bag}: {note}")
-        self.queue = list(read_messages(bag, scan=scan))
-        self.has_clock = any(tp == CLOCK for tp, *_ in self.queue)
+        self.queue = [(tp.lstrip("/"), ty, t, data) for tp, ty, t, data in read_messages(bag, scan=scan)]
+        self.has_clock = any(tp.split("/")[-1] == CLOCK for tp, *_ in self.queue)
         for topic, type_name, _, _ in self.queue:
             if topic not in self.pubs:
-                self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
+                self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, self.pub_qos)
         if not self.has_clock:
-            self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, RELIABLE_1000)
+            self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, self.pub_qos)
+        self._last_clock = None
+
+    def load(self):
+        return False
 
     def publish_next(self):
         """Publish the next message (and a clock tick when the bag has none); False when done."""
         if self.index >= len(self.queue):
             return False
         topic, _, log_ns, data = self.queue[self.index]
-        if not self.has_clock:
-            from builtin_interfaces.msg import Time
-            self.pubs[CLOCK].publish(m.Clock(clock=Time(sec=log_ns // 10 ** 9, nanosec=log_ns % 10 ** 9)))
+        if not self.has_clock and log_ns != self._last_clock:
+            self.pubs[CLOCK].publish(m.CLOCK_LAYOUT.encode([log_ns - m.EPOCH_NS])[0])
+            self._last_clock = log_ns
         self.pubs[topic].publish(data)
         self.index += 1
         return True
 
     def start(self):
-        rtf = float(self.get_parameter("real_time_factor").value)
-        self.t_wall0 = None
+        """Wait for the subscribers (``wait_for``, ``min_subscribers``, at most ``wait_timeout_s``),
+        then play."""
+        self.standalone = True
+        if not self.queue:
+            self.done = True
+            return
+        self.get_logger().info(f"publishes {len(self.queue)} messages on "
+                               f"{', '.join(p.topic_name for p in self.pubs.values())}; waiting for "
+                               f"{self.value('min_subscribers')} subscriber(s)"
+                               + (f" and {', '.join(self.value('wait_for'))}" if self.value("wait_for") else ""))
+        self.state = "waiting"
+        self._wait_t0 = time.monotonic()
+        self.timer = self.create_timer(0.002, self._tick, clock=STEADY)
 
-        def tick():
-            if self.index >= len(self.queue):
-                self.timer.cancel()
-                return
-            if rtf > 0:
-                now = self.get_clock().now().nanoseconds
-                if self.t_wall0 is None:
-                    self.t_wall0, self.t_log0 = now, self.queue[0][2]
-                while self.index < len(self.queue) and \
-                        (self.queue[self.index][2] - self.t_log0) <= (now - self.t_wall0) * rtf:
-                    self.publish_next()
-            else:
+    def _ready(self):
+        pubs = list(self.pubs.values())
+        topics = [p.topic_name for p in pubs]
+        missing = self._named_nodes_ready({n: topics for n in self.value("wait_for", [])})
+        # named nodes subscribe to any of the bag's topics
+        missing = [n for n in missing if not any(
+            i.node_name == n and i.node_namespace == self.get_namespace()
+            for t in topics for i in self.get_subscriptions_info_by_topic(t))]
+        few = sum(p.get_subscription_count() for p in pubs) < self.value("min_subscribers", 1)
+        return missing + (["min_subscribers"] if few else []) + self._unmatched(pubs)
+
+    def _tick(self):
+        if self.state == "waiting":
+            missing = self._ready()
+            if missing:
+                if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
+                    return
+                self.get_logger().warning(f"wait_timeout_s passed without {', '.join(missing)}: playing anyway")
+            self.state = "playing"
+            self._rtf = None
+        if self.state != "playing":
+            return
+        rtf = float(self.value("real_time_factor", 1.0))
+        if rtf <= 0:
+            for _ in range(FLOW_BATCH):
+                if not self.publish_next():
+                    break
+        else:
+            now = time.monotonic()
+            if rtf != self._rtf or self.index == 0:
+                self._rtf, self._w0, self._t0 = rtf, now, self.queue[min(self.index, len(self.queue) - 1)][2]
+            k = 0
+            while k < FLOW_BATCH and self.index < len(self.queue) and \
+                    (self.queue[self.index][2] - self._t0) <= (now - self._w0) * rtf * 1e9:
                 self.publish_next()
-        self.timer = self.create_timer(0.001 if rtf > 0 else 0.0, tick)
+                k += 1
+        if self.index >= len(self.queue):
+            _acked(self, self.pubs.values())
+            if self.value("loop", False):
+                self.get_logger().info(f"played {len(self.queue)} messages; looping")
+                self.index, self._rtf, self._last_clock = 0, None, None
+            else:
+                self.get_logger().info(f"played {len(self.queue)} messages; exiting")
+                self.timer.cancel()
+                self.state = "done"
+                self.done = True

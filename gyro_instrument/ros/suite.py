@@ -1,15 +1,17 @@
 """The whole suite in one process (there is no ``ros2 launch`` on PyPI): simulators, estimator
 and recorder as nodes of one context over DDS, stepped in lock-step so nothing is dropped.
 
-The simulators own ``/clock`` and step in the suite's loop, a batch of samples at a time: each
-simulator publishes the batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue
-it), then :class:`LockStep` takes every message of the batch from the estimator's and the
-recorder's subscriptions, waiting on a wait set for any not yet delivered, and runs their
-callbacks sample by sample (sample i of every topic before sample i + 1), so the recorder writes
-the same ordered stream as one sample at a time. Then the nodes' other subscriptions (their
-sim-time ``/clock``) are drained: a node's clock reaches a sample's time only once that sample's
-data is delivered. With ``real_time_factor`` > 0 the batches are at most 20 ms of wall time
-and paced to the wall clock; 0 runs as fast as possible.
+The first simulator owns ``clock`` (``/clock``; ``<namespace>/clock`` with a namespace) and the
+simulators step in the suite's loop, a batch of samples at a time: each simulator publishes the
+batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
+:class:`LockStep` takes every message of the batch from the estimator's and the recorder's
+subscriptions, waiting on a wait set for any not yet delivered, and runs their callbacks sample
+by sample (sample i of every topic before sample i + 1), so the recorder writes the same ordered
+stream as one sample at a time. Then the nodes' other subscriptions (the estimator's ``clock``)
+are drained: its sim time reaches a sample's time only once that sample's data is delivered.
+With ``real_time_factor`` > 0 the batches are at most 20 ms of wall time and paced to the wall
+clock; 0 runs as fast as possible. The separate-node route (one process per node, as a launch
+file starts them) is :mod:`gyro_instrument.ros.launch`.
 """
 
 import json
@@ -24,7 +26,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.parameter import Parameter
 from rclpy.subscription import Subscription
 
-from gyro_instrument.ros.nodes import EstimatorNode, RecorderNode, SimulatorNode
+from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 from gyro_instrument.instruments import simulator_kinds
 
 
@@ -65,9 +67,12 @@ class LockStep:
     def deliver(self, published, timeout_s, describe=lambda: ""):
         """Take ``published[topic]`` messages from every counted subscription of that topic, run
         the callbacks sample-major (message i of each subscription in order, then i + 1), then
-        drain the other subscriptions. Raises :class:`DeliveryError` after ``timeout_s`` without
+        drain the other subscriptions. ``published[topic]`` is a count (one message per sample
+        of the batch) or a list of the sample offsets in the batch its messages belong to (the
+        markers, every few samples). Raises :class:`DeliveryError` after ``timeout_s`` without
         a complete batch."""
-        want = [published.get(topic, 0) for topic, _ in self.counted]
+        offsets = [published.get(topic, 0) for topic, _ in self.counted]
+        want = [len(o) if isinstance(o, list) else o for o in offsets]
         got = [[] for _ in self.counted]
         deadline = None
         while True:
@@ -100,16 +105,31 @@ class LockStep:
                 calls.append([(sub.callback, (taken[0],)) for taken in q])
             else:
                 calls.append([(sub.callback, taken) for taken in q])
-        if len(set(want)) == 1:                      # every topic published the same samples
-            for row in zip(*calls):
-                for cb, args in row:
-                    cb(*args)
+        dense = [c for c, o in zip(calls, offsets) if not isinstance(o, list)]
+        sparse_at = {}                               # sample offset -> calls of sparse topics (markers)
+        for c, o in zip(calls, offsets):
+            if isinstance(o, list):
+                for off, call in zip(o, c):
+                    sparse_at.setdefault(off, []).append(call)
+        if len({len(c) for c in dense}) <= 1:        # every per-sample topic published the same samples
+            if not sparse_at:
+                for row in zip(*dense):
+                    for cb, args in row:
+                        cb(*args)
+            else:
+                for i, row in enumerate(zip(*dense)):
+                    for cb, args in row:
+                        cb(*args)
+                    for cb, args in sparse_at.get(i, ()):
+                        cb(*args)
         else:
-            for i in range(max(want, default=0)):
-                for c in calls:
+            for i in range(max(len(c) for c in dense)):
+                for c in dense:
                     if i < len(c):
                         cb, args = c[i]
                         cb(*args)
+                for cb, args in sparse_at.get(i, ()):
+                    cb(*args)
         self.drain()
 
     def drain(self):
@@ -144,8 +164,13 @@ def _params(scene, overrides, duration_s, **extra):
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
               timeout_s=10.0, progress=None, batch=None, overwrite=False, bag_format=None, max_bag_size=0,
-              max_bag_duration_s=0.0):
+              max_bag_duration_s=0.0, namespace="", ros_args=()):
     """Run the scene's nodes; return (estimate dict, stats dict).
+
+    ``namespace``: every node (and so every topic, ``clock`` included) in this namespace, so that
+    suites in different namespaces run side by side. ``ros_args``: the arguments after
+    ``--ros-args`` (remapping, log levels, ``-p`` for parameters the suite does not set itself),
+    applied to every node.
 
     ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
     of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
@@ -181,7 +206,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     if threading.current_thread() is threading.main_thread():
         for sig in (signal.SIGINT, signal.SIGTERM):
             handlers[sig] = signal.signal(sig, lambda signum, frame: stop.append(signum))
-    rclpy.init(context=context, args=[], signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else [])
+    rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    ns = {"namespace": namespace} if namespace else {}
     nodes = []
     try:
         sims = []
@@ -189,14 +216,14 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         types = {spec[0] for spec in scene_obj.instruments.values()}
         for name, kinds in simulator_kinds().items():
             if types & set(kinds):
-                sims.append(SimulatorNode(name, kinds, context=context, parameter_overrides=_params(
+                sims.append(SimulatorNode(name, kinds, context=context, pub_qos=RELIABLE_1000, **ns,
+                                          parameter_overrides=_params(
                     scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner)))
                 owner = False
-        est = EstimatorNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, use_sim_time=True))
-        rec = RecorderNode(context=context, parameter_overrides=_params(
-            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), use_sim_time=True,
-            command=command, format=bag_format or "", max_bag_size=int(max_bag_size or 0),
+        est = EstimatorNode(context=context, **ns, parameter_overrides=_params(scene, overrides, duration_s))
+        rec = RecorderNode(context=context, reorder=False, **ns, parameter_overrides=_params(
+            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), command=command,
+            format=bag_format or "", max_bag_size=int(max_bag_size or 0),
             max_bag_duration=float(max_bag_duration_s or 0.0))) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
@@ -205,8 +232,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         # the subscriptions that get one message per sample of a simulator topic, and the rest
         sim_pubs = {}
         for s in sims:
-            pubs = ([s.clock_pub] if s.clock_pub is not None else []) + list(s.pubs.values())
-            sim_pubs.update(zip(s.topics(), pubs))
+            sim_pubs.update(zip(s.topics(), s.publishers()))
         counted = [(topic, sub) for n in (est, rec) if n is not None for topic, sub in n.subs.items()
                    if topic in sim_pubs]
         counted_ids = {id(sub) for _, sub in counted}
@@ -242,8 +268,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             for s in sims:
                 k = s.publish_steps(batch)
                 for topic in s.topics():
-                    step[topic] = k
-                    published[topic] += k
+                    # per-sample topics: k messages; markers: at these offsets in the batch
+                    step[topic] = s.offsets.get(topic, k)
+                    published[topic] += len(step[topic]) if isinstance(step[topic], list) else k
             lockstep.deliver(step, timeout_s, lambda: f"samples {i}..{i + batch - 1}")
             i_next = i + batch
             now = time.perf_counter()
@@ -261,8 +288,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         base = rec.received() if rec else 0
         result = est.finalize()
         if rec:
-            want = base + (len([t for t in rec.counts if t.startswith("/estimator") or t == "/diagnostics"])
-                           if result is not None else 0)
+            want = base + (len([t for t in rec.counts if t not in rec.sample_topics]) if result is not None else 0)
             t_wait = time.monotonic() + timeout_s
             while rec.received() < want and time.monotonic() < t_wait:
                 ex.spin_once(timeout_sec=0.001)

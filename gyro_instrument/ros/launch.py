@@ -1,0 +1,108 @@
+"""The separate-node route: every node of a scene in its own process, started the way a launch file
+(or a user with ``ros2 run``) starts them, configured by one params file.
+
+:func:`write_params` writes that file (one section per node); :func:`launch` starts the recorder
+(``stop_when_complete``) and the estimator, then the simulators (the first one owns ``clock``),
+waits for the recorder to finish the bag and stops the others with SIGINT. Nothing here steps the
+nodes: they find each other over DDS, the simulators wait for their subscribers, the followers
+follow the owner's clock, the recorder orders what arrives — so the bag checks the same
+guarantees as the lock-step suite (:mod:`gyro_instrument.ros.suite`). Run it on loopback
+(``tools/loopback``).
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import yaml
+
+from gyro_instrument.instruments import simulator_kinds
+
+
+def simulators_of(scene_obj):
+    """Names of the simulator nodes the scene needs, in :func:`~gyro_instrument.instruments.simulator_kinds` order."""
+    types = {spec[0] for spec in scene_obj.instruments.values()}
+    return [name for name, kinds in simulator_kinds().items() if types & set(kinds)]
+
+
+def write_params(path, scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, sims=(),
+                 overwrite=False, any_namespace=False):
+    """A ROS 2 params file (``--params-file``) for every node of the scene; the first simulator in
+    ``sims`` owns the clock; ``any_namespace``: sections keyed ``/**/<node>`` (they apply whatever
+    ``__ns`` the nodes get). Returns the dict written."""
+    def common(**more):
+        out = {"scene": scene, "duration_s": float(duration_s or 0.0)}
+        if overrides:
+            out["overrides"] = list(overrides)
+        out.update(more)
+        return out
+    doc = {"recorder": {"ros__parameters": common(output=bag, stop_when_complete=True, overwrite=bool(overwrite))},
+           "estimator": {"ros__parameters": common()}}
+    for i, name in enumerate(sims):
+        doc[name] = {"ros__parameters": common(real_time_factor=float(real_time_factor),
+                                             publish_clock=(i == 0),
+                                             wait_for=["estimator", "recorder"])}
+    if any_namespace:
+        doc = {f"/**/{name}": v for name, v in doc.items()}
+    with open(path, "w", encoding="utf-8") as fh:
+        yaml.safe_dump(doc, fh, sort_keys=False, default_flow_style=None)
+    return doc
+
+
+def _command(node):
+    return [sys.executable, "-c", f"import sys; from gyro_instrument.ros.main import {node}; sys.exit({node}())"]
+
+
+def launch(scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, namespace="", timeout_s=300.0,
+           log_dir=None, overwrite=False, extra_ros_args=(), delay_s=0.0):
+    """Start the scene's nodes as separate processes and wait until the recorder finished ``bag``.
+
+    Returns
+    -------
+    dict
+        ``returncodes`` {node: exit status}, ``logs`` {node: text}, ``params`` (the params file).
+
+    Raises
+    ------
+    TimeoutError
+        The recorder did not finish within ``timeout_s`` (every process is stopped first).
+    """
+    from gyro_instrument.scenes import load_scene
+    scene_obj = load_scene(scene, list(overrides) + ([f"duration_s={float(duration_s)!r}"] if duration_s else []))
+    sims = simulators_of(scene_obj)
+    log_dir = log_dir or os.path.dirname(os.path.abspath(bag))
+    params = os.path.join(log_dir, "params.yaml")
+    write_params(params, scene, bag, overrides, duration_s, real_time_factor, sims, overwrite, bool(namespace))
+    ros = ["--ros-args", "--params-file", params] + (["-r", f"__ns:={namespace}"] if namespace else []) \
+        + list(extra_ros_args)
+    procs, logs = {}, {}
+    order = ["recorder", "estimator"] + sims[1:] + sims[:1]   # the clock owner last
+    try:
+        for node in order:
+            if node == order[2] and delay_s:
+                time.sleep(delay_s)             # simulators started later than the recorder
+            logs[node] = open(os.path.join(log_dir, f"{node}.log"), "w+", encoding="utf-8")
+            procs[node] = subprocess.Popen(_command(node) + ros, stdout=logs[node], stderr=subprocess.STDOUT,
+                                           start_new_session=True)
+        try:
+            procs["recorder"].wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            raise TimeoutError(f"the recorder did not finish {bag} within {timeout_s} s") from None
+    finally:
+        for node, p in procs.items():
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        for node, p in procs.items():
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+    out = {"returncodes": {n: p.returncode for n, p in procs.items()}, "logs": {}, "params": params}
+    for node, fh in logs.items():
+        fh.seek(0)
+        out["logs"][node] = fh.read()
+        fh.close()
+    return out
