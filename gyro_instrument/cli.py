@@ -386,7 +386,8 @@ def print_estimate(r, stream=None):
         w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
           + (" (|latitude|: hemisphere not determined)" if m.get("latitude_is_absolute") else "")
           + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None and m.get("latitude_sigma_deg") is not None else "")
-          + (f", n = {m['earth_rate_rad_s']:.9e} rad/s ({deg_h(m['earth_rate_rad_s'])})"
+          + (("," if "latitude_deg" in m else "") + f" n = {m['earth_rate_rad_s']:.9e} rad/s "
+             f"({deg_h(m['earth_rate_rad_s'])})"
              if m.get("earth_rate_rad_s") is not None else "")
           + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
           + "\n")
