@@ -4,6 +4,22 @@ import numpy as np
 from gyro_instrument.recording.bag_layout import scan_path
 
 
+class MessageDecoder:
+    """Decode CDR messages with ``mcap_ros2``'s dynamic decoder, one decoder per schema (cached):
+    ``decode(schema, channel, data)`` -> the message object. Raises what the decoder raises for
+    bytes that do not decode."""
+
+    def __init__(self):
+        from mcap_ros2.decoder import DecoderFactory
+        self._factory, self._decoders = DecoderFactory(), {}
+
+    def __call__(self, schema, channel, data):
+        dec = self._decoders.get(schema.id)
+        if dec is None:
+            dec = self._decoders[schema.id] = self._factory.decoder_for(channel.message_encoding, schema)
+        return dec(data)
+
+
 def samples_from_bag(path, scan=None):
     """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes, damaged).
 
@@ -32,24 +48,19 @@ def samples_from_bag(path, scan=None):
         ``path`` is not an MCAP file nor a bag directory (see
         :func:`~gyro_instrument.recording.bag_layout.bag_files`).
     """
-    from mcap_ros2.decoder import DecoderFactory
     from gyro_instrument.core.scene import EPOCH_NS
     scan = scan or scan_path(path)
     meta = scan.metadata_record("gyro_instrument")
     data, notes = {}, list(scan.notes)
     notes += [f"before recovery: {n}" for n in scan.recorded_notes]
-    factory = DecoderFactory()
-    decoders = {}
+    decode = MessageDecoder()
     count = undecodable = 0
     for schema, channel, message in scan.records():
         if schema is None or not channel.topic.endswith("/joint_states") \
                 or schema.name != "sensor_msgs/msg/JointState":
             continue
         try:
-            dec = decoders.get(schema.id)
-            if dec is None:
-                dec = decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
-            msg = dec(message.data)
+            msg = decode(schema, channel, message.data)
             stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS
             pos, vel = list(msg.position), list(msg.velocity)
         except Exception:  # an intact record holding a message that does not decode

@@ -90,7 +90,7 @@ def foreign_samples(scan, insts, remaps=None):
         ``matched``, ``unmatched``, ``unused`` (see the module docstring).
     notes : list of str
     """
-    from mcap_ros2.decoder import DecoderFactory
+    from gyro_instrument.recording.bag_samples import MessageDecoder
     remaps = remaps or {}
     by_topic = {}
     for ch in scan.channels.values():
@@ -110,7 +110,7 @@ def foreign_samples(scan, insts, remaps=None):
             report["unmatched"][name] = f"topic {topic} has type {', '.join(sorted(types))}, expected {JOINT_STATE}"
         else:
             wanted[topic] = (name, inst, joints)
-    factory, decoders = DecoderFactory(), {}
+    decode = MessageDecoder()
     rows = {name: ([], [], [], []) for name, _, _ in wanted.values()}     # stamps, log times, pos, vel
     columns, undecodable = {}, 0
     for schema, channel, message in scan.records(set(wanted)):
@@ -120,10 +120,7 @@ def foreign_samples(scan, insts, remaps=None):
         if name in report["unmatched"]:
             continue
         try:
-            dec = decoders.get(schema.id)
-            if dec is None:
-                dec = decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
-            msg = dec(message.data)
+            msg = decode(schema, channel, message.data)
             names = list(msg.name)
             stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
             pos, vel = list(msg.position), list(msg.velocity)
