@@ -18,8 +18,9 @@ REQUIRED = object()
 @dataclass(frozen=True)
 class Param:
     """One parameter: ``name`` carries its unit (``length_m``), ``kind`` is one of
-    ``float``, ``int``, ``bool``, ``str``, ``vec3``; ``low``/``high`` bound numbers (``open_low``
-    and ``open_high`` make a bound strict); ``choices`` restricts strings."""
+    ``float``, ``int``, ``bool``, ``str``, ``vec3`` (and ``pair``, :class:`PairParam`);
+    ``low``/``high`` bound numbers (``open_low`` and ``open_high`` make a bound strict);
+    ``choices`` restricts strings."""
 
     name: str
     kind: str = "float"
@@ -77,6 +78,20 @@ class Param:
         if too_low or too_high:
             raise SceneError(field, value, self.describe_range())
         return value
+
+
+class PairParam(Param):
+    """A parameter holding two finite positive numbers (``kind = "pair"``), e.g. ρ, ρ'."""
+
+    def describe_range(self):
+        return "must be a list of 2 finite numbers > 0"
+
+    def check(self, field, value):
+        if (not isinstance(value, (list, tuple)) or len(value) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+                or not all(math.isfinite(float(v)) and float(v) > 0.0 for v in value)):
+            raise SceneError(field, value, self.describe_range())
+        return tuple(float(v) for v in value)
 
 
 def _is_number(v):
