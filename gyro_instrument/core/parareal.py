@@ -24,15 +24,17 @@ points (position, velocity and acceleration known at both ends).
 import math
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _dop
+from scipy.integrate import DOP853
 
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.integrate import report
 
-_S = _dop.N_STAGES                 # 12 stages of the 8th-order formula
-_A = _dop.A[:_S, :_S]
-_B = _dop.B
-_C = _dop.C[:_S]
+# The 8th-order formula of the DOP853 tableau, from scipy's public class (the same arrays as the
+# private ``scipy.integrate._ivp.dop853_coefficients`` module's A[:12, :12], B, C[:12]).
+_S = DOP853.n_stages               # 12 stages of the 8th-order formula
+_A = DOP853.A
+_B = DOP853.B
+_C = DOP853.C
 
 
 def rk8_batch(rhs, y0, h, m, keep=False):
