@@ -2,7 +2,7 @@
 
 A scene names the site, the instruments and the list of effects; nothing else is simulated.
 The core knows no instrument: the caller passes the instrument and effect registries (the
-``instruments`` package does, in :func:`gyro_instrument.instruments.load_scene`).
+``scenes`` package does, in :func:`gyro_instrument.scenes.load_scene`).
 
 Layout::
 
@@ -55,7 +55,7 @@ SECTIONS = ("site", "effects", "instruments", "sensor", "estimator")
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene. Build it with :func:`load_scene`; it is immutable."""
+    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable."""
 
     name: str
     description: str
@@ -224,7 +224,7 @@ def _remove(data, path, effect_names):
 
 
 def build_scene(data, instrument_registry, effect_registry, sensor_params=(), estimator_params=(),
-                source=""):
+                source="") -> Scene:
     """Validate a raw scene mapping and build a frozen :class:`Scene`.
 
     Parameters
@@ -251,8 +251,23 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         raise SceneError("site", None, "is required (a mapping with latitude_deg)")
     site_raw = validate_params("site", SITE_PARAMS, data["site"])
     site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"])
+    effects_raw, effects = _build_effects(data.get("effects"), effect_registry)
+    instruments = _build_instruments(data.get("instruments"), instrument_registry, effect_registry, effects)
+    _check_effects_used(effects_raw, effects, instruments, instrument_registry)
+    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
+    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
+                 if estimator_params or data.get("estimator") else {})
+    return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
+                 sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
+                 effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
+                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
+                 source=source, raw=MappingProxyType(data))
 
-    effects_raw = data.get("effects") or {}
+
+def _build_effects(effects_raw, effect_registry):
+    """The ``effects`` section (a list of names or a mapping name: {params}) as (raw mapping,
+    name -> Effect instance)."""
+    effects_raw = effects_raw or {}
     if isinstance(effects_raw, list):
         if not all(isinstance(e, str) for e in effects_raw):
             raise SceneError("effects", effects_raw, "must be a list of effect names or a mapping name: {params}")
@@ -268,13 +283,15 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         if not isinstance(params, dict):
             raise SceneError(f"effects.{name}", params, "must be a mapping of parameters (or {})")
         effects[name] = effect_registry[name](**params)
+    return effects_raw, effects
 
-    inst_raw = data.get("instruments")
+
+def _build_instruments(inst_raw, instrument_registry, effect_registry, effects):
+    """The ``instruments`` section as name -> (type name, validated params, effect names)."""
     if not isinstance(inst_raw, dict) or not inst_raw:
         raise SceneError("instruments", inst_raw, "must be a non-empty mapping of name: {type: ..., ...}; a scene "
                                                   "needs at least one instrument")
     instruments = {}
-    used = set()
     for iname, spec in inst_raw.items():
         prefix = f"instruments.{iname}"
         if not isinstance(iname, str) or not iname.replace("_", "").isalnum():
@@ -288,40 +305,44 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         if not isinstance(itype, str) or itype not in instrument_registry:
             raise SceneError(f"{prefix}.type", itype, unknown_key_hint(itype, instrument_registry, "instrument type"))
         cls = instrument_registry[itype]
-        names = spec.pop("effects", None)
-        if names is None:
-            names = [e for e in effects if e in cls.SUPPORTED_EFFECTS]
-        else:
-            if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
-                raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
-            for e in names:
-                if e not in effect_registry:
-                    raise SceneError(f"{prefix}.effects", e, unknown_key_hint(e, effect_registry, "effect"))
-                if e not in effects:
-                    raise SceneError(f"{prefix}.effects", e,
-                                     f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
-                if e not in cls.SUPPORTED_EFFECTS:
-                    raise SceneError(f"{prefix}.effects", e,
-                                     f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
-        used.update(names)
+        names = _instrument_effects(prefix, itype, cls, spec.pop("effects", None), effect_registry, effects)
         params = validate_params(prefix, cls.PARAMS, spec)
         cls.check_params(prefix, params)
         cls.check_effects(prefix, params, tuple(names))
         instruments[iname] = (itype, MappingProxyType(params), tuple(names))
+    return instruments
+
+
+def _instrument_effects(prefix, itype, cls, names, effect_registry, effects):
+    """An instrument's ``effects:`` list, checked against the registry, the scene's effects and the
+    type's ``SUPPORTED_EFFECTS``; absent, every scene effect the type supports."""
+    if names is None:
+        return [e for e in effects if e in cls.SUPPORTED_EFFECTS]
+    if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
+        raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
+    for e in names:
+        if e not in effect_registry:
+            raise SceneError(f"{prefix}.effects", e, unknown_key_hint(e, effect_registry, "effect"))
+        if e not in effects:
+            raise SceneError(f"{prefix}.effects", e,
+                             f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
+        if e not in cls.SUPPORTED_EFFECTS:
+            raise SceneError(f"{prefix}.effects", e,
+                             f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
+    return names
+
+
+def _check_effects_used(effects_raw, effects, instruments, instrument_registry):
+    """Refuse a scene effect that no instrument of the scene simulates."""
+    used = set()
+    for _itype, _params, names in instruments.values():
+        used.update(names)
     for e in effects:
         if e not in used:
             supporters = sorted(t for t, c in instrument_registry.items() if e in c.SUPPORTED_EFFECTS)
             raise SceneError(f"effects.{e}", effects_raw[e] or {},
                              f"is not supported by any instrument in this scene; instruments that support it: "
                              f"{', '.join(supporters) or 'none'} (remove it with --set effects.{e}=null)")
-    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
-    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
-                 if estimator_params or data.get("estimator") else {})
-    return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
-                 sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
-                 effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
-                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
-                 source=source, raw=MappingProxyType(data))
 
 
 #: Sim time starts here (time 0 means "no time yet" to ROS): 1e9 s, 2001-09-09T01:46:40Z.
