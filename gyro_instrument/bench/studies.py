@@ -404,9 +404,8 @@ def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
     return rows
 
 
-def run_bench(out_dir, quick=False, progress=print):
+def run_bench(out_dir, quick=False, progress=print) -> str:
     """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text."""
-    from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
     from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
     from gyro_instrument.bench.plots import write_plots
     os.makedirs(out_dir, exist_ok=True)
@@ -432,6 +431,15 @@ def run_bench(out_dir, quick=False, progress=print):
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
+    text = _summary(out_dir, quick, wp, tg, ot, floors, ss, ec, pngs)
+    with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
+        fh.write(text)
+    return text
+
+
+def _summary(out_dir, quick, wp, tg, ot, floors, ss, ec, pngs):
+    """summary.md: the speed targets, work-precision, observation-time, systematic-floor, site and
+    effect-cost tables and the plots."""
     lines = ["# gyro-instrument bench" + (" (quick)" if quick else ""), "",
              "Regenerate: `gyro-instrument bench" + (" --quick" if quick else "") + f" --out {out_dir}`.", "",
              "## Speed targets (measured in this run)", "",
@@ -444,13 +452,7 @@ def run_bench(out_dir, quick=False, progress=print):
               "| minutes | latitude rms, fit (deg) | reported σ | Cramér–Rao | rms, counting | noise-free error | "
               "Earth rate n rms, fit (rad/s) | reported σ | Cramér–Rao | rms, counting | noise-free error |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
-    obs_cols = ("rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg", "noise_free_error_deg",
-                "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
-                "rms_counting_earth_rate_rad_s", "noise_free_earth_rate_error_rad_s")
-    for r in ot:
-        d = dict(zip(OBS_HEADER, r))
-        lines.append("| {:g} | ".format(d["minutes"]) + " | ".join(
-            _fmt(d[k], ".1e" if k.startswith("noise_free") else ".2e") for k in obs_cols) + " |")
+    lines += _observation_rows(ot)
     lines += ["", "Systematic floors: the noise-free bias on quet_paris with a 1 h spin decay added, with every "
               "correction of the estimator applied (left out: none) and with one left out:", "",
               "| minutes | correction left out | scope | latitude bias (deg) | Earth-rate bias (rad/s) |",
@@ -463,6 +465,29 @@ def run_bench(out_dir, quick=False, progress=print):
     lines += ["", "## Effect cost (leave one effect out; noise-free)", "",
               "| scene | effect | instrument | CPU with (s) | CPU without (s) | largest angle change (rad) | "
               "latitude change (deg) | Earth-rate change (rad/s) |", "|---|---|---|---|---|---|---|---|"]
+    lines += _effect_cost_rows(ec)
+    if pngs:
+        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
+    return "\n".join(lines) + "\n"
+
+
+def _observation_rows(ot):
+    """Markdown rows of the error-versus-observation-time table."""
+    lines = []
+    obs_cols = ("rms_fit_deg", "mean_sigma_deg", "crlb_deg", "rms_counting_deg", "noise_free_error_deg",
+                "rms_fit_earth_rate_rad_s", "mean_sigma_earth_rate_rad_s", "crlb_earth_rate_rad_s",
+                "rms_counting_earth_rate_rad_s", "noise_free_earth_rate_error_rad_s")
+    for r in ot:
+        d = dict(zip(OBS_HEADER, r))
+        lines.append("| {:g} | ".format(d["minutes"]) + " | ".join(
+            _fmt(d[k], ".1e" if k.startswith("noise_free") else ".2e") for k in obs_cols) + " |")
+    return lines
+
+
+def _effect_cost_rows(ec):
+    """Markdown rows of the effect-cost table."""
+    from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
+    lines = []
     for r in ec:
         d = dict(zip(EC_HEADER, r))
         lines.append("| {scene} | {effect} | {instrument} | {a} | {b} | {c} | {dl} | {dn} |".format(
@@ -470,12 +495,7 @@ def run_bench(out_dir, quick=False, progress=print):
             instrument=d["instrument"] or "—", a=_fmt(d["cpu_with_s"], ".3g"),
             b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
             dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
-    if pngs:
-        lines += ["", "## Plots", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]
-    text = "\n".join(lines) + "\n"
-    with replaced_atomically(os.path.join(out_dir, "summary.md")) as tmp, open(tmp, "w") as fh:
-        fh.write(text)
-    return text
+    return lines
 
 
 def _fmt(x, spec):
