@@ -10,8 +10,8 @@ same steps and the same number of RHS evaluations and agrees with ``integrate(..
 method="DOP853")`` to rounding (≤ 1e-13 rad in u over an hour of quet_paris, against the
 ~1e-10 rad integration error at rtol 1e-11). The stage arithmetic is generated once per state
 size with the coefficients as literals; the dense output is evaluated for all sample times at
-once after the run. Model: scipy's ``_ivp/rk.py`` (``RungeKutta._step_impl``, ``Dop853DenseOutput``)
-and ``_ivp/common.py`` (``select_initial_step``).
+once after the run. Model: scipy's ``scipy/integrate/_ivp/rk.py`` (``RungeKutta._step_impl``,
+``Dop853DenseOutput``) and ``scipy/integrate/_ivp/common.py`` (``select_initial_step``).
 """
 
 import math

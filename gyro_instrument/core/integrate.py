@@ -8,6 +8,7 @@ the same DOP853 on a small state held in Python floats (:mod:`gyro_instrument.co
 
 import contextvars
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -50,7 +51,7 @@ _REPORTER = contextvars.ContextVar("gyro_instrument_progress", default=None)
 
 
 @contextmanager
-def reporting(callback, every_s=0.5):
+def reporting(callback, every_s=0.5) -> Iterator:
     """Within the block, long integrations call ``callback(fraction_done)`` (0 to 1) at most
     every ``every_s`` seconds of wall time (the CLI draws a progress line from it)."""
     token = _REPORTER.set((callback, float(every_s), [time.perf_counter()]))
@@ -60,7 +61,7 @@ def reporting(callback, every_s=0.5):
         _REPORTER.reset(token)
 
 
-def report(fraction):
+def report(fraction) -> None:
     """Tell the active :func:`reporting` block (if any) how far a run has got; rate-limited."""
     rep = _REPORTER.get()
     if rep is not None:

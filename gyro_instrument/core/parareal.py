@@ -37,7 +37,7 @@ _B = DOP853.B
 _C = DOP853.C
 
 
-def rk8_batch(rhs, y0, h, m, keep=False):
+def rk8_batch(rhs, y0, h, m, keep=False) -> tuple:
     """Integrate ``m`` fixed steps of size ``h`` for every column of ``y0`` (shape (d, B)).
 
     ``rhs(t, y)`` must accept ``y`` of shape (d, B) and return the same shape; the systems are
@@ -65,7 +65,7 @@ def rk8_batch(rhs, y0, h, m, keep=False):
 
 
 def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_stride=32, align=None,
-             max_iter=8, progress=None):
+             max_iter=8, progress=None) -> tuple:
     """Segment starts ``U`` (shape (n + 1, d)) of the whole run, converged by Newton-type parareal.
 
     The coarse propagator over segment ``j`` is the linearisation of the fine one about the
@@ -161,7 +161,7 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     raise IntegrationError(f"parareal did not converge in {max_iter} iterations (changes {changes})")
 
 
-def dense_output(grid, segment_s, t, npos, chunk=16384):
+def dense_output(grid, segment_s, t, npos, chunk=16384) -> np.ndarray:
     """States at times ``t`` (seconds from the start of segment 0) from a pass's grid
     (:func:`parareal`): quintic Hermite interpolation of the first ``npos`` components
     (positions) from their values, velocities (the next ``npos`` components) and accelerations

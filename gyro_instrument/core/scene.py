@@ -26,6 +26,7 @@ import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+import numpy as np
 import yaml
 
 from gyro_instrument.core.errors import SceneError
@@ -71,7 +72,7 @@ class Scene:
     raw: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
 
-def read_yaml(path):
+def read_yaml(path) -> dict:
     """Read a scene file; a missing, unreadable, empty or non-mapping file is a SceneError."""
     if not os.path.exists(path):
         raise SceneError("scene", path, "file not found; give a shipped scene name or an existing YAML path")
@@ -90,7 +91,7 @@ def read_yaml(path):
     return data
 
 
-def parse_override(text):
+def parse_override(text) -> tuple:
     """Split ``key.path=value`` into (['key', 'path'], value parsed as YAML)."""
     if "=" not in text:
         raise SceneError("--set", text, "must look like key.path=value, e.g. site.latitude_deg=-33.87")
@@ -111,7 +112,7 @@ def parse_override(text):
     return key.split("."), parsed
 
 
-def apply_overrides(data, overrides, effect_names=()):
+def apply_overrides(data, overrides, effect_names=()) -> dict:
     """Return a copy of ``data`` with each ``key.path=value`` override applied, in order.
 
     A value sets the key, creating the mappings on its way. ``null`` removes:
@@ -349,18 +350,17 @@ def _check_effects_used(effects_raw, effects, instruments, instrument_registry):
 EPOCH_NS = 1_000_000_000 * 1_000_000_000
 
 
-def sample_times_ns(scene):
+def sample_times_ns(scene) -> np.ndarray:
     """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N.
 
     Raises SceneError (on ``duration_s``) when the run would not fit in the memory available
     (:func:`gyro_instrument.core.memory.check_memory`)."""
-    import numpy as np
     from gyro_instrument.core.memory import check_memory
     n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
     check_memory(scene, n)    # SceneError on duration_s before allocating a run that cannot fit
     return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
 
 
-def sample_times(scene):
+def sample_times(scene) -> np.ndarray:
     """Sample times in seconds, ``sample_times_ns / 1e9`` (the same floats a ROS stamp gives back)."""
     return sample_times_ns(scene) / 1e9

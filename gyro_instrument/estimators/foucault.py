@@ -17,8 +17,8 @@ measures them. Method:
    Released from rest this removes exactly Quet's (3/8) θ0 sin θ0 cos(θ0/2) lag (to O(θ0⁴)).
 
 The horizontal Earth-rate component n cos γ leaves a swing-direction-dependent residual of
-~2e-5 k for north–south swings (physics_notes), not corrected here; it is far below the noise
-of any record shorter than days.
+~2e-5 k for north–south swings (the k' = n cos γ terms of Quet sec. 2 eq. 21), not corrected
+here; it is far below the noise of any record shorter than days.
 
 Cramér–Rao bound for the rate of a plane swinging with amplitude α (rad) in white noise σ on each
 component, N samples over T_obs: var(k̂) ≥ 24 σ² / (α² N T_obs²) (the information

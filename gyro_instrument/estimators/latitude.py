@@ -63,7 +63,7 @@ class RateMeasurement:
     gain_known: bool = True
     crlb_sigma: float = math.nan
 
-    def shape(self, gamma):
+    def shape(self, gamma) -> np.ndarray | float:
         """s(γ): sin γ for a pendulum, sin ω(γ) for a gyroscope (γ scalar or array, rad)."""
         gamma = np.asarray(gamma, dtype=float)
         if self.kind == "pendulum":
@@ -73,7 +73,7 @@ class RateMeasurement:
         c = (ny * np.cos(gamma) + nz * np.sin(gamma)) / norm
         return np.sqrt(np.maximum(1.0 - c * c, 0.0))
 
-    def sign_sensitive(self):
+    def sign_sensitive(self) -> bool:
         """True when s(γ) ≠ s(−γ) somewhere: the measurement can tell the hemispheres apart."""
         s, m = self.shape(GRID), self.shape(-GRID)
         return float(np.max(np.abs(s - m))) > 1e-9 * max(float(np.max(np.abs(s))), 1e-300)
@@ -173,7 +173,7 @@ class LatitudeResult:
     reason: str = None
 
 
-def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None):
+def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None) -> LatitudeResult:
     """Latitude and Earth rate from :class:`RateMeasurement` objects (profile likelihood).
 
     Parameters
@@ -430,6 +430,6 @@ def _information_share(meas, n_hat, gp, gm, use_crlb):
     return {k: v / total for k, v in info.items()}
 
 
-def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_horizontal=1.0):
+def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_horizontal=1.0) -> float:
     """Quet item 9: cos γ = (T_m / T_h)² · ρ_m / ρ_h (small-amplitude one-swing durations)."""
     return (T_meridian_s / T_horizontal_s) ** 2 * spin_meridian / spin_horizontal

@@ -4,7 +4,7 @@
 frequency ω the amplitudes enter linearly and are solved in closed form, so only ω is searched
 (bracketed around an FFT peak, refined by Brent's method), then the full covariance comes from
 the Jacobian of all parameters. On clean sinusoids in white noise it reaches the Cramér–Rao bound
-var(ω̂) ≥ 24 σ² / (A² Δt² N (N² − 1)) (physics_notes, 'Estimation'). Extensions for real records:
+var(ω̂) ≥ 24 σ² / (A² Δt² N (N² − 1)) (Rife & Boorstyn 1974, single-tone estimation). Extensions for real records:
 
 * NaN samples and gaps are dropped (uneven sampling is fine for least squares);
 * ``damping=True`` adds an exponential envelope e^(−λt) (fitted by ``least_squares``);
@@ -59,15 +59,15 @@ class OscillationFit:
     notes: list = field(default_factory=list)
 
     @property
-    def swing_duration_s(self):
+    def swing_duration_s(self) -> float:
         return math.pi / self.omega_rad_s
 
     @property
-    def swing_duration_sigma_s(self):
+    def swing_duration_sigma_s(self) -> float:
         return math.pi * self.omega_sigma_rad_s / self.omega_rad_s ** 2
 
     @property
-    def crlb_swing_duration_s(self):
+    def crlb_swing_duration_s(self) -> float:
         return math.pi * self.crlb_omega_rad_s / self.omega_rad_s ** 2
 
 
@@ -80,7 +80,7 @@ class EstimationError(ValueError):
     """The record cannot give the requested quantity (too short, no oscillation, ...)."""
 
 
-def crlb_omega(sigma, amplitude, dt, n):
+def crlb_omega(sigma, amplitude, dt, n) -> float:
     """Cramér–Rao bound on σ(ω̂) for a sinusoid of amplitude A in white noise σ, N samples Δt apart:
     √(24 σ² / (A² Δt² N (N² − 1)))."""
     if n < 3 or amplitude <= 0:
@@ -96,7 +96,7 @@ def _design(tau, omega, harmonics, env):
     return np.column_stack(cols)
 
 
-def fft_guess(t, y, min_cycles=1.0):
+def fft_guess(t, y, min_cycles=1.0) -> float:
     """Angular frequency of the strongest FFT peak (zero-padded, resampled if uneven)."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -318,7 +318,7 @@ class CountResult:
     method: str = "counting"
 
 
-def count_oscillations(t, y):
+def count_oscillations(t, y) -> CountResult:
     """Quet's literal method: count whole swings (passages through equilibrium) in the record.
 
     T = T_obs / N with N the number of zero crossings of the (mean-removed) signal; an observer

@@ -31,21 +31,21 @@ from gyro_instrument.sensors import SensorModel, scene_rng
 CORRECTIONS = frozenset(("finite_amplitude", "spin_decay", "ellipse_precession"))
 
 
-def estimable(inst):
+def estimable(inst) -> bool:
     """True for instruments that measure an Earth rate: pendulums (``IS_PENDULUM``: k = n sin γ) and
     gyroscopes with a directing line (``directing_model()``: K = gain n ρ s(γ)). Free gyroscopes and
     Puiseux's body do not."""
     return inst.IS_PENDULUM or inst.directing_model() is not None
 
 
-def simulate_truth(scene):
+def simulate_truth(scene) -> tuple:
     """(t, instruments, sims): the noiseless simulation of every instrument."""
     t = sample_times(scene)
     insts = build_instruments(scene)
     return t, insts, {name: inst.simulate(t) for name, inst in insts.items()}
 
 
-def measure(scene, truth, seed=None):
+def measure(scene, truth, seed=None) -> dict:
     """Measured records for one seed: name -> {'t', channel arrays}."""
     t, insts, sims = truth
     sensor = SensorModel.from_scene(scene)
@@ -202,7 +202,7 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     return out
 
 
-def estimate_records(scene, insts, records, corrections=CORRECTIONS):
+def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     """The ``estimate`` JSON object (see module docstring) from measured records.
 
     ``corrections`` — the subset of :data:`CORRECTIONS` to apply (all by default); a study of
@@ -394,7 +394,7 @@ def _foucault_method(result, pend):
     return entry
 
 
-def seed_sweep(job):
+def seed_sweep(job) -> list:
     """Estimates of one scene over many sensor seeds, simulating the truth once.
 
     ``job`` = (scene name or path, overrides, seeds) — one picklable argument, so a sweep can be

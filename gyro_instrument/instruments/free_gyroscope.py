@@ -87,6 +87,7 @@ cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -99,13 +100,13 @@ from gyro_instrument.instruments.base import Column, Instrument, Simulation, wit
 # ----------------------------------------------------------------------------- geometry
 
 
-def axis_from_alt_az(altitude_rad, azimuth_rad):
+def axis_from_alt_az(altitude_rad, azimuth_rad) -> np.ndarray:
     """Unit ENU vector at ``altitude_rad`` above the horizon, compass ``azimuth_rad``."""
     ca = math.cos(altitude_rad)
     return np.array([ca * math.sin(azimuth_rad), ca * math.cos(azimuth_rad), math.sin(altitude_rad)])
 
 
-def equatorial_basis(site):
+def equatorial_basis(site) -> tuple:
     """ENU unit vectors (m, w, ê): m toward the local meridian's equator point (hour angle 0),
     w toward the west (hour angle +90°), ê the north part of Earth's axis."""
     g = site.latitude_rad
@@ -113,7 +114,7 @@ def equatorial_basis(site):
             site.earth_axis_north_enu())
 
 
-def body_frame(k0):
+def body_frame(k0) -> np.ndarray:
     """A rotation matrix (columns b1, b2, k0) whose third column is the unit axis ``k0``."""
     ref = np.eye(3)[int(np.argmin(np.abs(k0)))]
     b1 = ref - np.dot(ref, k0) * k0
@@ -121,7 +122,7 @@ def body_frame(k0):
     return np.column_stack([b1, np.cross(k0, b1), k0])
 
 
-def angle_between(a, b):
+def angle_between(a, b) -> float:
     """Angle between two vectors, rad, accurate at 0 and π (atan2 of |a×b| and a·b)."""
     return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
 
@@ -178,7 +179,7 @@ class FreeGyroscope(Instrument):
         Column("spin_rate", "rad/s", "ρ: spin of the body about its axis relative to the Earth"),
     )
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
         self.mu = self.inertia_ratio
         self.A = self.transverse_inertia_kg_m2
@@ -193,12 +194,12 @@ class FreeGyroscope(Instrument):
         self.theta0 = angle_between(self.k0, self.e_axis)
 
     # ---------------------------------------------------------------- constants of motion
-    def model_rate(self):
+    def model_rate(self) -> float:
         """n used by the model: the active ``frame_rate`` effects' rate (``earth_rotation``: the
         site's Earth rate), else 0 (:meth:`Instrument.model_earth_rate`)."""
         return self.model_earth_rate()
 
-    def motion_constants(self, n=None):
+    def motion_constants(self, n=None) -> dict:
         """Exact constants of the torque-free motion (inertial frame = ENU at release).
 
         Parameters
@@ -225,7 +226,7 @@ class FreeGyroscope(Instrument):
                 "sigma": (1.0 - self.mu) * omega3, "beta": beta}
 
     # ---------------------------------------------------------------- predictions
-    def predictions(self):
+    def predictions(self) -> dict:
         """Quet's predictions (eqs. 16, 19, 22, 47, 48, 50) beside the exact closed-form values.
 
         Returns
@@ -282,7 +283,7 @@ class FreeGyroscope(Instrument):
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
                               f"rad/s)"))
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         """Scales for effect-size estimates. There is no restoring torque; the free-precession
         (nutation) rate |L|/A stands in for ``restoring_rate_rad_s`` (inf if the body is at rest
         in a non-rotating world), and ``amplitude_rad`` is the nutation radius β."""
@@ -293,7 +294,7 @@ class FreeGyroscope(Instrument):
                 "restoring_rate_rad_s": lam, "amplitude_rad": k["beta"], "duration_s": duration_s}
 
     # ---------------------------------------------------------------- solution paths
-    def analytic_state(self, tau):
+    def analytic_state(self, tau) -> np.ndarray:
         """Closed-form state at times ``tau`` (s since release), as rows of
         [q (body → inertial, scalar first, 4), ω in body axes (3)], shape (7, m)."""
         k = self.motion_constants()
@@ -309,7 +310,7 @@ class FreeGyroscope(Instrument):
                        np.full_like(tau, wb0[2])])
         return np.vstack([q.T, wb])
 
-    def rhs(self):
+    def rhs(self) -> Callable:
         """Right-hand side for y = [q (4), ω_body (3)] in the inertial frame (Euler's equations
         for A = A, C = μA, and q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|)."""
         a = 1.0 - self.mu
@@ -328,7 +329,7 @@ class FreeGyroscope(Instrument):
                 0.0])
         return f
 
-    def columns_from_state(self, tau, y):
+    def columns_from_state(self, tau, y) -> tuple:
         """Columns and diagnostics from states ``y`` (7, m) at times ``tau`` since release.
 
         Returns
@@ -365,7 +366,7 @@ class FreeGyroscope(Instrument):
                  "quaternion_norm": np.linalg.norm(q, axis=1)}
         return columns, extra
 
-    def simulate(self, t, model=None, rtol=None):
+    def simulate(self, t, model=None, rtol=None) -> Simulation:
         """Release at ``t[0]`` and sample at ``t`` (s).
 
         Parameters

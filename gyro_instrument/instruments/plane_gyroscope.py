@@ -25,6 +25,7 @@ the axis about the cone axis, from the half-plane toward Earth's north axis.
 """
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -38,7 +39,7 @@ from gyro_instrument.instruments.base import Column, DirectingModel, Instrument,
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 
 
-def plane_normal_enu(plane, normal_enu, site):
+def plane_normal_enu(plane, normal_enu, site) -> np.ndarray:
     """Normal of the named directing plane in ENU.
 
     ``horizontal``: up (u counter-clockwise from north seen from above); ``meridian``: east;
@@ -53,7 +54,7 @@ def plane_normal_enu(plane, normal_enu, site):
     return np.asarray(normal_enu, dtype=float)
 
 
-def swing_duration_small_s(mu, earth_rate, spin, sin_omega, sin_eps=1.0):
+def swing_duration_small_s(mu, earth_rate, spin, sin_omega, sin_eps=1.0) -> float:
     """One-swing duration of small oscillations, T = π √(sin ε / (μ n ρ0 sin ω)) (eq. 9 and
     the cone variant); ``inf`` when there is no restoring torque (items 1–4)."""
     k = mu * earth_rate * spin * sin_omega
@@ -94,11 +95,11 @@ class PlaneGyroscope(Instrument):
                Column("spin_rate", "rad/s", "ρ: relative spin of the rotor about its axis"))
 
     @classmethod
-    def check_params(cls, prefix, p):
+    def check_params(cls, prefix, p) -> None:
         if p["plane"] == "custom" and p["normal_enu"] is None:
             raise SceneError(f"{prefix}.normal_enu", None, "is required when plane = custom (3 numbers, ENU)")
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
         self.normal = plane_normal_enu(self.plane, self.normal_enu, site)
         self.frame, self.sin_omega = plane_frame(self.normal, site)
@@ -116,7 +117,7 @@ class PlaneGyroscope(Instrument):
         return swing_duration_small_s(self.mu, n, self.spin_rate_rad_s, self.sin_omega,
                                       math.sin(self.eps) if self.is_cone else 1.0)
 
-    def predictions(self):
+    def predictions(self) -> dict:
         """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients, for
         the model as simulated: without ``earth_rotation`` n = 0, there is no directing torque
         μ n ρ0 sin ω and the durations are infinite (``null`` in JSON); without
@@ -137,7 +138,7 @@ class PlaneGyroscope(Instrument):
             self.missing_effect_note(
             "finite_amplitude", "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
 
-    def directing_model(self):
+    def directing_model(self) -> DirectingModel | None:
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with
         gain = μ (μ / sin ε on a cone) and sin ω from the plane normal (ENU) and the latitude."""
         gain = self.mu / (math.sin(self.eps) if self.is_cone else 1.0)
@@ -149,7 +150,7 @@ class PlaneGyroscope(Instrument):
                               null_reason="a directing plane perpendicular to Earth's axis (horizontal at a pole) "
                                           "has no restoring torque (Quet sec. 4 §1 item 4)")
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         n = self.site.earth_rate_rad_s
         T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
         return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.spin_rate_rad_s) or None,
@@ -157,7 +158,7 @@ class PlaneGyroscope(Instrument):
                 "amplitude_rad": abs(self.u0), "duration_s": duration_s}
 
     # ---------------------------------------------------------------- models
-    def reduced_rhs_scalar(self):
+    def reduced_rhs_scalar(self) -> Callable:
         """Right-hand side of the reduced model on floats, ``f(t, u, u̇, ρ) -> (u̇, ü, ρ̇)``; only
         listed effects::
 
@@ -186,7 +187,7 @@ class PlaneGyroscope(Instrument):
                 return ud, -(a * rho + b * cos(u)) * u - damp * ud, pr * sin(u) * ud - decay * rho
         return rhs
 
-    def reduced_rhs(self):
+    def reduced_rhs(self) -> Callable:
         """Right-hand side of the reduced model for y = [u, u̇, ρ] (array form of
         :meth:`reduced_rhs_scalar`, eqs. 2–3); only listed effects."""
         f = self.reduced_rhs_scalar()
@@ -196,7 +197,7 @@ class PlaneGyroscope(Instrument):
             return np.array(f(t, u, ud, rho))
         return rhs
 
-    def build_chain(self):
+    def build_chain(self) -> HingeChain:
         """The same instrument as a hinge chain: swing hinge about the normal (massless frame),
         an optional fixed tilt to the cone, then the rotor's spin hinge."""
         links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)))]
@@ -213,7 +214,7 @@ class PlaneGyroscope(Instrument):
     #: active effect's terms, is integrated instead, as for a cone.
     REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"})
 
-    def simulate(self, t, model=None):
+    def simulate(self, t, model=None) -> Simulation:
         """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model
         (scalar DOP853) or the hinge chain — always the chain on a cone or with an active effect
         outside :data:`REDUCED_EFFECTS` (``extra["model"]`` says which ran)."""

@@ -54,7 +54,7 @@ class EllipsoidSurface:
         ge = math.sqrt(rho * rho_prime)
         return cls((math.sqrt(rho * ge), math.sqrt(rho_prime * ge), ge), ge - gamma, delta_rad)
 
-    def height(self, nx, ny, nz):
+    def height(self, nx, ny, nz) -> np.ndarray | float:
         """h(n): height of G above the plane, m, for the upward vertical n in body axes."""
         return np.sqrt(self.sxx * nx * nx + 2.0 * self.sxy * nx * ny + self.syy * ny * ny
                        + self.szz * nz * nz) - self.cz * nz
