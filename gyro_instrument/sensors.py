@@ -33,14 +33,14 @@ class SensorModel:
     dropout_fraction: float = 0.0
 
     @classmethod
-    def from_scene(cls, scene):
+    def from_scene(cls, scene) -> "SensorModel":
         return cls(**dict(scene.sensor)) if scene.sensor else cls()
 
-    def effective_sigma_rad(self):
+    def effective_sigma_rad(self) -> float:
         """Noise standard deviation including quantization, √(σ² + q²/12)."""
         return float(np.sqrt(self.noise_rad ** 2 + self.quantization_rad ** 2 / 12.0))
 
-    def measure_angle(self, values, rng):
+    def measure_angle(self, values, rng) -> np.ndarray:
         """Noisy, quantized angle samples (rad)."""
         y = np.asarray(values, dtype=float) + rng.normal(0.0, self.noise_rad, np.shape(values)) \
             if self.noise_rad else np.array(values, dtype=float)
@@ -48,7 +48,7 @@ class SensorModel:
             y = np.round(y / self.quantization_rad) * self.quantization_rad
         return self._drop(y, rng)
 
-    def measure_rate(self, values, rng):
+    def measure_rate(self, values, rng) -> np.ndarray:
         """Noisy spin-rate samples (rad/s)."""
         y = np.array(values, dtype=float)
         if self.spin_noise_rad_s:
@@ -62,7 +62,7 @@ class SensorModel:
         return y
 
 
-def scene_rng(seed, stream):
+def scene_rng(seed, stream) -> np.random.Generator:
     """Independent, reproducible generator per (seed, stream name)."""
     key = [int(seed)] + [ord(c) for c in stream]
     return np.random.default_rng(np.random.SeedSequence(key))

@@ -13,8 +13,9 @@ import math
 import numpy as np
 import pytest
 
+from gyro_instrument.core.quaternion import quat_to_matrix, rotate_about
 from gyro_instrument.core.site import Site
-from gyro_instrument.instruments.free_gyroscope import FreeGyroscope, quat_to_matrix, rotate_about
+from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 
 ROT = ("earth_rotation",)
 PARIS = 48.85

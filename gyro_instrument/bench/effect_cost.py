@@ -61,7 +61,7 @@ NOISE_FREE = ("sensor.noise_rad=0", "sensor.quantization_rad=0", "sensor.spin_no
               "sensor.dropout_fraction=0")
 
 
-def effect_cost_rows(scenes=None, duration_s=None, executor=None, overrides=()):
+def effect_cost_rows(scenes=None, duration_s=None, executor=None, overrides=()) -> list:
     """Effect-cost rows (see the module docstring) for several scenes.
 
     Parameters
@@ -99,7 +99,7 @@ def effect_cost_rows(scenes=None, duration_s=None, executor=None, overrides=()):
     return [row for rows in results for row in rows]
 
 
-def write_effect_cost_csv(path, rows):
+def write_effect_cost_csv(path, rows) -> None:
     """Write rows to ``path`` (``effect_cost.csv``) with :data:`HEADER`; None is written empty."""
     from gyro_instrument.core.files import replaced_atomically
     with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
@@ -109,7 +109,7 @@ def write_effect_cost_csv(path, rows):
 
 
 # ----------------------------------------------------------------------------- worker
-def scene_effect_cost(job):
+def scene_effect_cost(job) -> list:
     """Rows for one scene. ``job`` = (scene name or path, overrides): one picklable argument."""
     name, overrides = job
     label = str(name)

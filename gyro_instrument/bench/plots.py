@@ -26,7 +26,7 @@ import os
 LOG_FLOOR = 1e-16
 
 
-def write_plots(out_dir):
+def write_plots(out_dir) -> list:
     """Write the PNGs for the CSVs found in ``out_dir``.
 
     Returns
@@ -57,7 +57,7 @@ def write_plots(out_dir):
     return written
 
 
-def matplotlib_available():
+def matplotlib_available() -> bool:
     """True when matplotlib can be imported."""
     return _pyplot() is not None
 
@@ -72,7 +72,7 @@ def _pyplot():
     return plt
 
 
-def read_csv(path):
+def read_csv(path) -> list:
     """Rows of a CSV as dicts; numeric cells become float, empty cells None, other text stays text."""
     with open(path, newline="") as fh:
         return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(fh)]

@@ -42,7 +42,7 @@ def _pendulum(duration_s, rate_hz, **params):
     return build_instruments(scene)["pendulum"], sample_times(scene), scene
 
 
-def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, progress=print):
+def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, progress=print) -> list:
     """Rows (instrument, tier, setting, cpu_s, nfev, error_rad): the 67 m Foucault pendulum
     released at 2°, output at ``rate_hz``; error = swing-plane azimuth at the last sample against
     DOP853 at rtol 1e-13 on the full equations (the tight reference). Tiers: Binet's closed form
@@ -88,7 +88,7 @@ def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, 
     return rows
 
 
-def gyroscope_work_precision(duration_s, rtols, progress=print):
+def gyroscope_work_precision(duration_s, rtols, progress=print) -> list:
     """Rows (instrument, tier, setting, cpu_s, nfev, error_rad) for quet_paris's horizontal
     directing-plane gyroscope: error = axis angle u at the last sample against the hinge chain
     (exact equations, Kane's method) at rtol 1e-13. Tiers: Quet's closed form (eq. 9 with the
@@ -131,7 +131,7 @@ OTHER_INSTRUMENTS = (
 )
 
 
-def other_work_precision(duration_s, rtols, progress=print):
+def other_work_precision(duration_s, rtols, progress=print) -> list:
     """Rows (instrument, tier, setting, cpu_s, nfev, error_rad) for :data:`OTHER_INSTRUMENTS`:
     largest end-of-run difference of the angle columns against the exact equations at rtol 1e-13
     (``model: numerical`` for the free gyroscope)."""
@@ -158,7 +158,7 @@ def other_work_precision(duration_s, rtols, progress=print):
     return rows
 
 
-def plane_gyroscope_closed_form(g, t):
+def plane_gyroscope_closed_form(g, t) -> np.ndarray:
     """Axis angle u(t) of Quet's reduced equation in closed form: with the small-swing duration T0
     of eq. (9), u obeys the plane pendulum's law ü = −(π/T0)² sin u, whose release from rest at u0
     is u = 2 arcsin(k sn(K(m) − π t/T0 | m)), k = sin(u0/2), m = k² (Jacobi's sn)."""
@@ -171,7 +171,7 @@ def plane_gyroscope_closed_form(g, t):
     return 2.0 * np.arcsin(k * sn)
 
 
-def work_precision(quick=False, progress=print):
+def work_precision(quick=False, progress=print) -> list:
     """All work-precision rows (see :func:`foucault_work_precision`, :func:`gyroscope_work_precision`)."""
     day = 86164.0989                           # a sidereal day (2π / n)
     if quick:
@@ -188,7 +188,7 @@ def work_precision(quick=False, progress=print):
     return fr + gr
 
 
-def matched_error_ratio(rows, fast_row):
+def matched_error_ratio(rows, fast_row) -> float | None:
     """CPU of DOP853 on the full equations at the fast path's error (log-log interpolation of
     its work-precision line; at its most accurate point if the fast path is more accurate
     still, which understates the ratio) divided by the fast path's CPU."""
@@ -207,7 +207,7 @@ def matched_error_ratio(rows, fast_row):
     return cpu / fast_row[3]
 
 
-def targets(wp_rows, quick=False, progress=print):
+def targets(wp_rows, quick=False, progress=print) -> list:
     """Rows (target, measured, unit, goal, met) of issue 5's speed targets, measured in this run."""
     rows = []
     fast = [r for r in wp_rows if r[1].startswith("full equations, parareal") and r[2].startswith("48 steps")]
@@ -240,7 +240,7 @@ def targets(wp_rows, quick=False, progress=print):
     return rows
 
 
-def suite_real_time_factor(duration_s=None, rate_hz=100.0):
+def suite_real_time_factor(duration_s=None, rate_hz=100.0) -> tuple:
     """Real-time factor of ``gyro-instrument run quet_paris`` at ``rate_hz`` with a recording,
     in a subprocess kept on loopback (discovery range LOCALHOST and, as root, a loopback-only
     network namespace), after checking that the recording holds every published message.
@@ -327,7 +327,7 @@ FLOOR_SCENE_EFFECTS = "effects={earth_rotation: {}, centrifugal: {}, finite_ampl
 GYRO_PAIR, PENDULUM_ALONE = "gyroscope pair (item 9, eq. 10)", "Foucault pendulum alone (asin k/n)"
 
 
-def systematic_floor_rows(minutes):
+def systematic_floor_rows(minutes) -> list:
     """:data:`FLOOR_HEADER` rows for one observation time: the noise-free bias of the estimates on
     the floor scene with every correction applied (``left_out`` = ``none``: the estimator's own
     floor with all three effects present) and with each correction of
@@ -363,7 +363,7 @@ def systematic_floor_rows(minutes):
     return rows
 
 
-def observation_time(minutes_list, n_seeds, executor=None, scene="quet_paris", overrides=()):
+def observation_time(minutes_list, n_seeds, executor=None, scene="quet_paris", overrides=()) -> tuple:
     """Rows :data:`OBS_HEADER` (rms over seeds of the fit, its reported σ, the Cramér–Rao bound
     and Quet's counting, for the latitude and eq. (10)'s Earth rate; the noise-free error is the
     estimator's own systematic floor) and :data:`FLOOR_HEADER` rows from
@@ -402,7 +402,7 @@ SITE_HEADER = ("latitude_deg", "rms_error_deg", "mean_sigma_deg", "crlb_deg", "r
                "crlb_earth_rate_rad_s")
 
 
-def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None):
+def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None) -> list:
     """Rows :data:`SITE_HEADER`: quet_paris moved to each latitude (10 min per configuration),
     rms errors over seeds against the reported σ and the Cramér–Rao bound — one
     ``seed_sweep`` job per site through the executor (any ``concurrent.futures`` executor)."""
@@ -431,7 +431,7 @@ PLANNER_HEADER = ("scene", "target", "value", "planned_observation_s", "planned_
                   "achieved_over_target")
 
 
-def default_targets(scene, overrides=()):
+def default_targets(scene, overrides=()) -> list:
     """Targets whose plans land near the scene's own duration_s: its latitude and Earth-rate bounds there,
     rounded to two significant digits (SceneError when the scene has no Earth-rate instrument)."""
     from gyro_instrument.estimators.planner import ARCSEC_RAD, Planner, SensorSpec, instrument_models
@@ -449,7 +449,7 @@ def default_targets(scene, overrides=()):
     return out
 
 
-def planner_accuracy(cases, n_seeds, executor=None, progress=print):
+def planner_accuracy(cases, n_seeds, executor=None, progress=print) -> list:
     """Rows :data:`PLANNER_HEADER`: for each (scene, overrides, target strings) the planned
     observation time and bound (:func:`gyro_instrument.estimators.planner.plan`) and the rms achieved
     over ``n_seeds`` seeded runs at that time (``verify_plan``, through the executor)."""
@@ -482,7 +482,7 @@ def _planner_lines(pl):
     return lines
 
 
-def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print):
+def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print) -> str:
     """``bench --scene``: the observation-time study (with its systematic floors, the scene's own
     effects) and the planner's accuracy on any scene; CSVs, plot and summary.md. Returns the text."""
     os.makedirs(out_dir, exist_ok=True)
@@ -537,7 +537,7 @@ def _obs_lines(ot, floors, name, floor_scene):
     return lines
 
 
-def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), executor=None):
+def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), executor=None) -> str:
     """Run every study, write CSVs, PNGs (with matplotlib) and summary.md; return the summary text.
     With ``scene``: only the observation-time study and the planner's accuracy on that scene
     (:func:`run_scene_bench`).
@@ -613,7 +613,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     return _write_summary(out_dir, lines, pngs)
 
 
-def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0):
+def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:
     """Wall time of ``gyro-instrument plot`` on a day of pendulum data: the 67 m Foucault pendulum
     of ``foucault_pantheon`` from Binet's closed form over ``hours`` at ``rate_hz`` (1.7 million
     samples for a day at 20 Hz), written as Parquet, then every view drawn from the file (read,

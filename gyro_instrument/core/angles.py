@@ -5,7 +5,7 @@ import numpy as np
 TWO_PI = 2.0 * np.pi
 
 
-def unwrap(angle):
+def unwrap(angle) -> np.ndarray:
     """Continuous angle from one wrapped to (−π, π]: removes the 2π jumps between samples.
 
     Same result as ``numpy.unwrap`` for sampled motion (steps below π between samples), in

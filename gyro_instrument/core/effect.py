@@ -34,7 +34,10 @@ so a result does not depend on the order a scene lists its effects.
 effect out would change the result, for ``gyro-instrument describe``.
 """
 
+from collections.abc import Callable
 from typing import ClassVar
+
+import numpy as np
 
 from gyro_instrument.core.params import validate_params
 
@@ -50,7 +53,7 @@ FRAME_RATE = "frame_rate"
 MECHANICS = frozenset((POINT_MASS, RIGID_BODY, DAMPING, SPIN, RESTORING_LAW, CARRIER_INERTIA, FRAME_RATE))
 
 
-def supporting_effects(registry, kinds):
+def supporting_effects(registry, kinds) -> frozenset:
     """Names of the effects of ``registry`` (name -> Effect subclass) that contribute to one of
     ``kinds`` (a set of :data:`MECHANICS`): frozenset of str."""
     kinds = frozenset(kinds)
@@ -60,7 +63,7 @@ def supporting_effects(registry, kinds):
 class Effect:
     """Base class of all physical effects.
 
-    Subclasses set ``name``, ``summary``, ``PARAMS`` (a tuple of :class:`Param`), ``MECHANICS``
+    Subclasses set ``name``, ``summary``, ``PARAMS`` (a tuple of :class:`~gyro_instrument.core.params.Param`), ``MECHANICS``
     (the kinds they contribute to, a subset of :data:`MECHANICS`), implement
     :meth:`relative_size` and the hook of each declared kind. A hook's default contributes
     nothing.
@@ -71,12 +74,12 @@ class Effect:
     PARAMS: ClassVar[tuple] = ()
     MECHANICS: ClassVar[frozenset] = frozenset()
 
-    def __init__(self, field_prefix="effects", **params):
+    def __init__(self, field_prefix="effects", **params) -> None:
         self.params = validate_params(f"{field_prefix}.{self.name}", self.PARAMS, params)
         for key, value in self.params.items():
             setattr(self, key, value)
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         """Estimated relative size of the effect for an instrument.
 
         Parameters
@@ -94,7 +97,7 @@ class Effect:
         raise NotImplementedError
 
     # ------------------------------------------------------------------ terms, one hook per kind
-    def point_mass_term(self, omega_enu):
+    def point_mass_term(self, omega_enu) -> Callable | None:
         """``point_mass``: a function ``f(dx, dy, dz, vx, vy, vz) -> (ax, ay, az)`` giving this
         effect's acceleration (m/s²) of a point in the Earth-fixed frame rotating at ``omega_enu``
         (rad/s, ENU, constant), from the point's displacement (m) from its rest point (where local
@@ -104,34 +107,34 @@ class Effect:
         None: no contribution."""
         return None
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b):
+    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
         """``rigid_body``: this effect's part of the inertia torque I α_abs + ω_abs × I ω_abs of a
         body turning about a fixed point in axes rotating at the constant ``omega_b`` (body axes,
         rad/s); ``inertia`` (3, 3) kg m² and ``w_rel`` (3,) rad/s the body's angular velocity
         relative to the Earth, body axes. Returns an ndarray (3,), N m, added to I α + w × I w."""
         raise NotImplementedError(f"{self.name} declares no rigid_body term")
 
-    def damping_torque(self, inertia, rate):
+    def damping_torque(self, inertia, rate) -> float:
         """``damping``: torque (N m) on a swinging hinge of swinging inertia ``inertia`` (kg m²)
         turning at ``rate`` (rad/s) relative to its carrier."""
         raise NotImplementedError(f"{self.name} declares no damping term")
 
-    def spin_torque(self, inertia, spin_rate):
+    def spin_torque(self, inertia, spin_rate) -> float:
         """``spin``: torque (N m) on a rotor's spin hinge, axial moment ``inertia`` (kg m²),
         spinning at ``spin_rate`` (rad/s) relative to its carrier."""
         raise NotImplementedError(f"{self.name} declares no spin term")
 
-    def restoring_law(self):
+    def restoring_law(self) -> Callable:
         """``restoring_law``: the function g(angle) replacing the angle in a restoring torque
         (``math.sin``-like, accepting floats and arrays)."""
         raise NotImplementedError(f"{self.name} declares no restoring law")
 
-    def carrier_inertia(self, inertia):
+    def carrier_inertia(self, inertia) -> float | np.ndarray:
         """``carrier_inertia``: the inertia (kg m², scalar or tensor) a carrier of given
         ``inertia`` contributes to the motion."""
         raise NotImplementedError(f"{self.name} declares no carrier inertia")
 
-    def frame_rate_rad_s(self, site):
+    def frame_rate_rad_s(self, site) -> float:
         """``frame_rate``: the rotation rate (rad/s) this effect gives the Earth-fixed frame at
         ``site``."""
         raise NotImplementedError(f"{self.name} declares no frame rate")

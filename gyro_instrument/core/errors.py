@@ -18,7 +18,7 @@ class SceneError(ValueError):
         Human-readable description of the valid range or choices.
     """
 
-    def __init__(self, field, value, valid):
+    def __init__(self, field, value, valid) -> None:
         self.field = field
         self.value = value
         self.valid = valid

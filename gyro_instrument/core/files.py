@@ -8,10 +8,11 @@ or the previous complete file).
 
 import contextlib
 import os
+from collections.abc import Iterator
 
 
 @contextlib.contextmanager
-def replaced_atomically(path):
+def replaced_atomically(path) -> Iterator:
     """Yield ``<path>.partial``; on success rename it onto ``path`` (``os.replace``, atomic on
     POSIX within one directory), on any exception remove it and re-raise.
 

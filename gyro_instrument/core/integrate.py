@@ -2,11 +2,13 @@
 
 ``integrate`` runs any right-hand side through ``scipy.integrate.solve_ivp`` (dense output
 evaluated at the requested sample times), counts right-hand-side evaluations itself and
-measures wall and CPU time, and returns a :class:`Trajectory`.
+measures wall and CPU time, and returns a :class:`Trajectory`. ``method="DOP853-scalar"`` runs
+the same DOP853 on a small state held in Python floats (:mod:`gyro_instrument.core.dop853`).
 """
 
 import contextvars
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -49,7 +51,7 @@ _REPORTER = contextvars.ContextVar("gyro_instrument_progress", default=None)
 
 
 @contextmanager
-def reporting(callback, every_s=0.5):
+def reporting(callback, every_s=0.5) -> Iterator:
     """Within the block, long integrations call ``callback(fraction_done)`` (0 to 1) at most
     every ``every_s`` seconds of wall time (the CLI draws a progress line from it)."""
     token = _REPORTER.set((callback, float(every_s), [time.perf_counter()]))
@@ -59,7 +61,7 @@ def reporting(callback, every_s=0.5):
         _REPORTER.reset(token)
 
 
-def report(fraction):
+def report(fraction) -> None:
     """Tell the active :func:`reporting` block (if any) how far a run has got; rate-limited."""
     rep = _REPORTER.get()
     if rep is not None:
@@ -86,19 +88,26 @@ class _Counted:
         return self.f(t, y)
 
 
-def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf):
+#: ``integrate``'s method for :func:`gyro_instrument.core.dop853.integrate_dop853_scalar`.
+SCALAR_DOP853 = "DOP853-scalar"
+
+
+def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> Trajectory:
     """Integrate ``dy/dt = rhs(t, y)`` from ``t_eval[0]`` and sample at ``t_eval``.
 
     Parameters
     ----------
     rhs : callable
-        ``rhs(t, y) -> dy/dt`` with ``y`` a 1-D array.
+        ``rhs(t, y) -> dy/dt`` with ``y`` a 1-D array; for ``method="DOP853-scalar"``
+        ``rhs(t, *y) -> tuple`` of floats.
     y0 : array_like
         Initial state at ``t_eval[0]``.
     t_eval : array_like
         Increasing sample times in seconds (at least one).
     method : str
-        Any ``solve_ivp`` method name (default DOP853, Hairer's 8(5,3) pair).
+        Any ``solve_ivp`` method name (default DOP853, Hairer's 8(5,3) pair), or
+        ``"DOP853-scalar"``: the same method, steps and dense output on Python floats, for a
+        small state and increasing ``t_eval`` (no ``max_step``, no progress reports).
     rtol, atol : float
         Tolerances passed to the solver.
     max_step : float
@@ -113,6 +122,11 @@ def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step
     IntegrationError
         If the solver fails or the state becomes non-finite.
     """
+    if method == SCALAR_DOP853:
+        if max_step != np.inf:
+            raise IntegrationError(f"method {SCALAR_DOP853} takes no max_step (got {max_step!r})")
+        from gyro_instrument.core.dop853 import integrate_dop853_scalar   # it imports Trajectory from here
+        return integrate_dop853_scalar(rhs, y0, t_eval, rtol=rtol, atol=atol)
     t_eval = np.asarray(t_eval, dtype=float)
     y0 = np.asarray(y0, dtype=float)
     if t_eval.ndim != 1 or t_eval.size == 0:

@@ -34,17 +34,17 @@ CHANNELS = {}
 DEFAULT_CHANNELS = 8
 
 
-def sample_count(scene):
+def sample_count(scene) -> int:
     """Samples per instrument, ``floor(duration_s · sample_rate_hz) + 1`` (as ``sample_times_ns``)."""
     return int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
 
 
-def channel_count(scene):
+def channel_count(scene) -> int:
     """``time`` plus the output columns of every instrument of the scene."""
     return 1 + sum(CHANNELS.get(spec[0], DEFAULT_CHANNELS) for spec in scene.instruments.values())
 
 
-def available_bytes():
+def available_bytes() -> int | None:
     """Memory available to this process now, bytes, or None when unknown: the smaller of
     /proc/meminfo's MemAvailable (or ``SC_AVPHYS_PAGES`` × ``SC_PAGE_SIZE``) and the cgroup v2
     limit less its current use."""
@@ -73,13 +73,13 @@ def available_bytes():
     return max(min(found), 0) if found else None
 
 
-def needed_bytes(scene, n=None):
+def needed_bytes(scene, n=None) -> float:
     """Estimated peak bytes of a run of ``scene`` (``n`` samples per instrument, default from the scene)."""
     n = sample_count(scene) if n is None else n
     return n * channel_count(scene) * 8 * PEAK_FACTOR
 
 
-def check_memory(scene, n=None, available=None):
+def check_memory(scene, n=None, available=None) -> None:
     """Refuse a run whose estimated peak exceeds the memory available.
 
     Parameters

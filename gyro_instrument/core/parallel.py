@@ -42,7 +42,7 @@ class _InterruptiblePool(ProcessPoolExecutor):
         super().shutdown(wait=wait, cancel_futures=cancel_futures)
 
 
-def process_executor(max_workers=None):
+def process_executor(max_workers=None) -> ProcessPoolExecutor:
     """A spawn-context ``ProcessPoolExecutor`` whose workers use one BLAS thread each and ignore
     SIGINT (the parent handles Ctrl-C and stops them)."""
     for var in _BLAS_VARS:

@@ -18,8 +18,9 @@ REQUIRED = object()
 @dataclass(frozen=True)
 class Param:
     """One parameter: ``name`` carries its unit (``length_m``), ``kind`` is one of
-    ``float``, ``int``, ``bool``, ``str``, ``vec3``; ``low``/``high`` bound numbers (``open_low``
-    and ``open_high`` make a bound strict); ``choices`` restricts strings."""
+    ``float``, ``int``, ``bool``, ``str``, ``vec3`` (and ``pair``, :class:`PairParam`);
+    ``low``/``high`` bound numbers (``open_low`` and ``open_high`` make a bound strict);
+    ``choices`` restricts strings."""
 
     name: str
     kind: str = "float"
@@ -31,7 +32,7 @@ class Param:
     choices: tuple = ()
     doc: str = ""
 
-    def describe_range(self):
+    def describe_range(self) -> str:
         """Human-readable valid range, as quoted in error messages and docs."""
         if self.kind == "bool":
             return "must be true or false"
@@ -46,7 +47,7 @@ class Param:
             return f"must be {what}"
         return f"must be {what} in {lo}{_fmt(self.low)}, {_fmt(self.high)}{hi}"
 
-    def check(self, field, value):
+    def check(self, field, value) -> object:
         """Return the validated, converted value or raise :class:`SceneError`."""
         if self.kind == "bool":
             if isinstance(value, bool):
@@ -77,6 +78,20 @@ class Param:
         if too_low or too_high:
             raise SceneError(field, value, self.describe_range())
         return value
+
+
+class PairParam(Param):
+    """A parameter holding two finite positive numbers (``kind = "pair"``), e.g. ρ, ρ'."""
+
+    def describe_range(self) -> str:
+        return "must be a list of 2 finite numbers > 0"
+
+    def check(self, field, value) -> tuple:
+        if (not isinstance(value, (list, tuple)) or len(value) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+                or not all(math.isfinite(float(v)) and float(v) > 0.0 for v in value)):
+            raise SceneError(field, value, self.describe_range())
+        return tuple(float(v) for v in value)
 
 
 def _is_number(v):
@@ -152,7 +167,7 @@ def _canonical_rates(prefix, by_name, raw):
     return out
 
 
-def validate_params(prefix, params, raw):
+def validate_params(prefix, params, raw) -> dict:
     """Validate ``raw`` (a mapping) against ``params`` (a sequence of :class:`Param`).
 
     Unknown keys are refused with a close-match suggestion; missing required keys are
@@ -189,7 +204,7 @@ def validate_params(prefix, params, raw):
     return out
 
 
-def unknown_key_hint(key, known, what="key"):
+def unknown_key_hint(key, known, what="key") -> str:
     """Message for an unknown name, with the closest known one when one is near.
 
     ``what`` names the kind of name (``key``, ``instrument``, ``effect``, ``instrument type``):

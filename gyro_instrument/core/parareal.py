@@ -24,18 +24,20 @@ points (position, velocity and acceleration known at both ends).
 import math
 
 import numpy as np
-from scipy.integrate._ivp import dop853_coefficients as _dop
+from scipy.integrate import DOP853
 
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.integrate import report
 
-_S = _dop.N_STAGES                 # 12 stages of the 8th-order formula
-_A = _dop.A[:_S, :_S]
-_B = _dop.B
-_C = _dop.C[:_S]
+# The 8th-order formula of the DOP853 tableau, from scipy's public class (the same arrays as the
+# private ``scipy.integrate._ivp.dop853_coefficients`` module's A[:12, :12], B, C[:12]).
+_S = DOP853.n_stages               # 12 stages of the 8th-order formula
+_A = DOP853.A
+_B = DOP853.B
+_C = DOP853.C
 
 
-def rk8_batch(rhs, y0, h, m, keep=False):
+def rk8_batch(rhs, y0, h, m, keep=False) -> tuple:
     """Integrate ``m`` fixed steps of size ``h`` for every column of ``y0`` (shape (d, B)).
 
     ``rhs(t, y)`` must accept ``y`` of shape (d, B) and return the same shape; the systems are
@@ -63,7 +65,7 @@ def rk8_batch(rhs, y0, h, m, keep=False):
 
 
 def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_stride=32, align=None,
-             max_iter=8, progress=None):
+             max_iter=8, progress=None) -> tuple:
     """Segment starts ``U`` (shape (n + 1, d)) of the whole run, converged by Newton-type parareal.
 
     The coarse propagator over segment ``j`` is the linearisation of the fine one about the
@@ -159,7 +161,7 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     raise IntegrationError(f"parareal did not converge in {max_iter} iterations (changes {changes})")
 
 
-def dense_output(grid, segment_s, t, npos, chunk=16384):
+def dense_output(grid, segment_s, t, npos, chunk=16384) -> np.ndarray:
     """States at times ``t`` (seconds from the start of segment 0) from a pass's grid
     (:func:`parareal`): quintic Hermite interpolation of the first ``npos`` components
     (positions) from their values, velocities (the next ``npos`` components) and accelerations

@@ -2,7 +2,7 @@
 
 A scene names the site, the instruments and the list of effects; nothing else is simulated.
 The core knows no instrument: the caller passes the instrument and effect registries (the
-``instruments`` package does, in :func:`gyro_instrument.instruments.load_scene`).
+``scenes`` package does, in :func:`gyro_instrument.scenes.load_scene`).
 
 Layout::
 
@@ -23,9 +23,11 @@ format, generated from the parameter specifications, is msg_docs/scene.md.
 
 import math
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+import numpy as np
 import yaml
 
 from gyro_instrument.core.errors import SceneError
@@ -55,7 +57,7 @@ SECTIONS = ("site", "effects", "instruments", "sensor", "estimator")
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene. Build it with :func:`load_scene`; it is immutable."""
+    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable."""
 
     name: str
     description: str
@@ -71,7 +73,7 @@ class Scene:
     raw: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
 
-def read_yaml(path):
+def read_yaml(path) -> dict:
     """Read a scene file; a missing, unreadable, empty or non-mapping file is a SceneError."""
     if not os.path.exists(path):
         raise SceneError("scene", path, "file not found; give a shipped scene name or an existing YAML path")
@@ -90,7 +92,7 @@ def read_yaml(path):
     return data
 
 
-def parse_override(text):
+def parse_override(text) -> tuple:
     """Split ``key.path=value`` into (['key', 'path'], value parsed as YAML)."""
     if "=" not in text:
         raise SceneError("--set", text, "must look like key.path=value, e.g. site.latitude_deg=-33.87")
@@ -111,7 +113,7 @@ def parse_override(text):
     return key.split("."), parsed
 
 
-def apply_overrides(data, overrides, effect_names=()):
+def apply_overrides(data, overrides, effect_names=()) -> dict:
     """Return a copy of ``data`` with each ``key.path=value`` override applied, in order.
 
     A value sets the key, creating the mappings on its way. ``null`` removes:
@@ -243,7 +245,7 @@ def _remove(data, path, effect_names):
 
 
 def build_scene(data, instrument_registry, effect_registry, sensor_params=(), estimator_params=(),
-                source=""):
+                source="") -> Scene:
     """Validate a raw scene mapping and build a frozen :class:`Scene`.
 
     Parameters
@@ -270,8 +272,23 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         raise SceneError("site", None, "is required (a mapping with latitude_deg)")
     site_raw = validate_params("site", SITE_PARAMS, data["site"])
     site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"])
+    effects_raw, effects = _build_effects(data.get("effects"), effect_registry)
+    instruments = _build_instruments(data.get("instruments"), instrument_registry, effect_registry, effects)
+    _check_effects_used(effects_raw, effects, instruments, instrument_registry)
+    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
+    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
+                 if estimator_params or data.get("estimator") else {})
+    return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
+                 sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
+                 effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
+                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
+                 source=source, raw=MappingProxyType(data))
 
-    effects_raw = data.get("effects") or {}
+
+def _build_effects(effects_raw, effect_registry):
+    """The ``effects`` section (a list of names or a mapping name: {params}) as (raw mapping,
+    name -> Effect instance)."""
+    effects_raw = effects_raw or {}
     if isinstance(effects_raw, list):
         if not all(isinstance(e, str) for e in effects_raw):
             raise SceneError("effects", effects_raw, "must be a list of effect names or a mapping name: {params}")
@@ -287,13 +304,15 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         if not isinstance(params, dict):
             raise SceneError(f"effects.{name}", params, "must be a mapping of parameters (or {})")
         effects[name] = effect_registry[name](**params)
+    return effects_raw, effects
 
-    inst_raw = data.get("instruments")
+
+def _build_instruments(inst_raw, instrument_registry, effect_registry, effects):
+    """The ``instruments`` section as name -> (type name, validated params, effect names)."""
     if not isinstance(inst_raw, dict) or not inst_raw:
         raise SceneError("instruments", inst_raw, "must be a non-empty mapping of name: {type: ..., ...}; a scene "
                                                   "needs at least one instrument")
     instruments = {}
-    used = set()
     for iname, spec in inst_raw.items():
         prefix = f"instruments.{iname}"
         if not isinstance(iname, str) or not iname.replace("_", "").isalnum():
@@ -307,58 +326,85 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
         if not isinstance(itype, str) or itype not in instrument_registry:
             raise SceneError(f"{prefix}.type", itype, unknown_key_hint(itype, instrument_registry, "instrument type"))
         cls = instrument_registry[itype]
-        names = spec.pop("effects", None)
-        if names is None:
-            names = [e for e in effects if e in cls.SUPPORTED_EFFECTS]
-        else:
-            if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
-                raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
-            for e in names:
-                if e not in effect_registry:
-                    raise SceneError(f"{prefix}.effects", e, unknown_key_hint(e, effect_registry, "effect"))
-                if e not in effects:
-                    raise SceneError(f"{prefix}.effects", e,
-                                     f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
-                if e not in cls.SUPPORTED_EFFECTS:
-                    raise SceneError(f"{prefix}.effects", e,
-                                     f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
-        used.update(names)
+        names = _instrument_effects(prefix, itype, cls, spec.pop("effects", None), effect_registry, effects)
         params = validate_params(prefix, cls.PARAMS, spec)
         cls.check_params(prefix, params)
         cls.check_effects(prefix, params, tuple(names))
         instruments[iname] = (itype, MappingProxyType(params), tuple(names))
+    return instruments
+
+
+def _instrument_effects(prefix, itype, cls, names, effect_registry, effects):
+    """An instrument's ``effects:`` list, checked against the registry, the scene's effects and the
+    type's ``SUPPORTED_EFFECTS``; absent, every scene effect the type supports."""
+    if names is None:
+        return [e for e in effects if e in cls.SUPPORTED_EFFECTS]
+    if not isinstance(names, list) or not all(isinstance(e, str) for e in names):
+        raise SceneError(f"{prefix}.effects", names, "must be a list of effect names")
+    for e in names:
+        if e not in effect_registry:
+            raise SceneError(f"{prefix}.effects", e, unknown_key_hint(e, effect_registry, "effect"))
+        if e not in effects:
+            raise SceneError(f"{prefix}.effects", e,
+                             f"must be listed in the scene's effects ({', '.join(effects) or 'none'})")
+        if e not in cls.SUPPORTED_EFFECTS:
+            raise SceneError(f"{prefix}.effects", e,
+                             f"is not supported by {itype}; supported: {', '.join(sorted(cls.SUPPORTED_EFFECTS))}")
+    return names
+
+
+def _check_effects_used(effects_raw, effects, instruments, instrument_registry):
+    """Refuse a scene effect that no instrument of the scene simulates."""
+    used = set()
+    for _itype, _params, names in instruments.values():
+        used.update(names)
     for e in effects:
         if e not in used:
             supporters = sorted(t for t, c in instrument_registry.items() if e in c.SUPPORTED_EFFECTS)
             raise SceneError(f"effects.{e}", effects_raw[e] or {},
                              f"is not supported by any instrument in this scene; instruments that support it: "
                              f"{', '.join(supporters) or 'none'} (remove it with --set effects.{e}=null)")
-    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
-    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
-                 if estimator_params or data.get("estimator") else {})
-    return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
-                 sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
-                 effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
-                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
-                 source=source, raw=MappingProxyType(data))
 
 
 #: Sim time starts here (time 0 means "no time yet" to ROS): 1e9 s, 2001-09-09T01:46:40Z.
 EPOCH_NS = 1_000_000_000 * 1_000_000_000
 
 
-def sample_times_ns(scene):
+def sample_times_ns(scene) -> np.ndarray:
     """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N.
 
     Raises SceneError (on ``duration_s``) when the run would not fit in the memory available
     (:func:`gyro_instrument.core.memory.check_memory`)."""
-    import numpy as np
     from gyro_instrument.core.memory import check_memory
     n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
     check_memory(scene, n)    # SceneError on duration_s before allocating a run that cannot fit
     return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
 
 
-def sample_times(scene):
+def sample_times(scene) -> np.ndarray:
     """Sample times in seconds, ``sample_times_ns / 1e9`` (the same floats a ROS stamp gives back)."""
     return sample_times_ns(scene) / 1e9
+
+
+#: Default streaming window (s of simulated time per block of :func:`sample_blocks`).
+DEFAULT_WINDOW_S = 10.0
+
+
+def sample_blocks_ns(scene, window_s=DEFAULT_WINDOW_S) -> Iterator[np.ndarray]:
+    """The stamps of :func:`sample_times_ns` in consecutive blocks of ``window_s`` seconds of
+    simulated time (the last block shorter), generated block by block: memory is one block,
+    whatever the duration. Raises SceneError on ``window_s`` when it is not a positive finite
+    number."""
+    if not (isinstance(window_s, (int, float)) and math.isfinite(window_s) and window_s > 0):
+        raise SceneError("window_s", window_s, "must be a positive finite number of seconds")
+    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
+    per = max(1, int(math.floor(window_s * scene.sample_rate_hz + 1e-9)))
+    step = 1e9 / scene.sample_rate_hz
+    for i in range(0, n, per):
+        yield np.round(np.arange(i, min(n, i + per)) * step).astype(np.int64)
+
+
+def sample_blocks(scene, window_s=DEFAULT_WINDOW_S) -> Iterator[np.ndarray]:
+    """:func:`sample_blocks_ns` in seconds (``stamps / 1e9``, the floats of :func:`sample_times`)."""
+    for b in sample_blocks_ns(scene, window_s):
+        yield b / 1e9

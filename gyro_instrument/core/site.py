@@ -20,7 +20,7 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 
 #: Earth's rotation rate relative to the stars (IERS Conventions 2010 / GRS80: 7.292115e-5 rad/s),
-#: 2π / 86164.0989 s (the stellar day). physics_notes writes 2π / 86164.0905 s, which is the mean
+#: 2π / 86164.0989 s (the stellar day). The often-quoted 2π / 86164.0905 s uses the mean
 #: sidereal day (relative to the precessing equinox) and gives 7.2921159e-5: 1.2e-7 higher.
 SIDEREAL_RATE_RAD_S = 7.2921150e-5
 
@@ -33,7 +33,7 @@ QUET_NED_TO_ENU = np.array([[0.0, 1.0, 0.0],
                             [0.0, 0.0, -1.0]])
 
 
-def normal_gravity_m_s2(latitude_rad):
+def normal_gravity_m_s2(latitude_rad) -> float:
     """Normal gravity on the WGS-84 ellipsoid (Somigliana's closed form).
 
     Parameters
@@ -87,49 +87,49 @@ class Site:
         object.__setattr__(self, "gravity_m_s2", g)
 
     @classmethod
-    def from_degrees(cls, latitude_deg, earth_rate_rad_s=SIDEREAL_RATE_RAD_S, gravity_m_s2=None):
+    def from_degrees(cls, latitude_deg, earth_rate_rad_s=SIDEREAL_RATE_RAD_S, gravity_m_s2=None) -> "Site":
         """Build a site from a latitude in degrees (the CLI/parameter edge)."""
         return cls(np.radians(latitude_deg), earth_rate_rad_s, gravity_m_s2)
 
     @property
-    def latitude_deg(self):
+    def latitude_deg(self) -> float:
         """Latitude in degrees (for display only)."""
         return float(np.degrees(self.latitude_rad))
 
     @property
-    def k_vertical_rad_s(self):
+    def k_vertical_rad_s(self) -> float:
         """k = n sin γ: vertical Earth-rate component (Quet sec. 2 §I), Foucault rate."""
         return self.earth_rate_rad_s * np.sin(self.latitude_rad)
 
     @property
-    def k_horizontal_rad_s(self):
+    def k_horizontal_rad_s(self) -> float:
         """k' = n cos γ: northward horizontal Earth-rate component (Quet sec. 2 §I)."""
         return self.earth_rate_rad_s * np.cos(self.latitude_rad)
 
-    def earth_rate_enu(self):
+    def earth_rate_enu(self) -> np.ndarray:
         """Earth-rate vector in ENU, n (0, cos γ, sin γ) (REP-145)."""
         return self.earth_rate_rad_s * np.array([0.0, np.cos(self.latitude_rad), np.sin(self.latitude_rad)])
 
-    def earth_axis_north_enu(self):
+    def earth_axis_north_enu(self) -> np.ndarray:
         """Unit vector along the north part of Earth's axis, in ENU."""
         return np.array([0.0, np.cos(self.latitude_rad), np.sin(self.latitude_rad)])
 
-    def earth_rate_quet(self):
+    def earth_rate_quet(self) -> np.ndarray:
         """Earth-rate vector in Quet's pendulum axes (N, E, D): (n cos γ, 0, −n sin γ) (eq. 17)."""
         return enu_to_quet(self.earth_rate_enu())
 
 
-def quet_to_enu(v):
+def quet_to_enu(v) -> np.ndarray:
     """Convert a vector (or an array of row vectors) from Quet's N-E-D axes to ENU."""
     return np.asarray(v, dtype=float) @ QUET_NED_TO_ENU.T
 
 
-def enu_to_quet(v):
+def enu_to_quet(v) -> np.ndarray:
     """Convert a vector (or an array of row vectors) from ENU to Quet's N-E-D axes."""
     return np.asarray(v, dtype=float) @ QUET_NED_TO_ENU
 
 
-def compass_azimuth_from_enu(east, north):
+def compass_azimuth_from_enu(east, north) -> np.ndarray | float:
     """Compass azimuth (0 at north, clockwise, radians in (−π, π]) of a horizontal ENU vector.
 
     This is Quet's ψ (sec. 2 §I). The ROS yaw of the same vector is π/2 − azimuth.
@@ -137,7 +137,7 @@ def compass_azimuth_from_enu(east, north):
     return np.arctan2(east, north)
 
 
-def plane_frame(normal_enu, site):
+def plane_frame(normal_enu, site) -> tuple:
     """Quet's axes for a directing plane (sec. 4 §1): ``oz`` the normal, ``ox`` toward the
     projection of the north part of Earth's axis on the plane, ``oy = oz × ox``.
 

@@ -7,7 +7,7 @@ products in the same order (``a1 b2 − a2 b1``, …), so results are bit-identi
 import numpy as np
 
 
-def cross3(a, b):
+def cross3(a, b) -> np.ndarray:
     """a × b for two 3-vectors (sequences or arrays of shape (3,)); returns an ndarray (3,)."""
     a0, a1, a2 = a
     b0, b1, b2 = b

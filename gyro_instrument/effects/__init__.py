@@ -17,7 +17,7 @@ from gyro_instrument.effects.spin_decay import SpinDecay
 REGISTRY = {}
 
 
-def register(cls):
+def register(cls) -> type:
     """Add an :class:`~gyro_instrument.core.effect.Effect` subclass to :data:`REGISTRY` under its
     ``name`` (usable as a class decorator; returns ``cls``). Every instrument whose ``MECHANICS``
     meet the effect's then supports it.
@@ -41,12 +41,12 @@ def register(cls):
     return cls
 
 
-def unregister(name):
+def unregister(name) -> None:
     """Remove the effect ``name`` from :data:`REGISTRY` (for tests that register their own)."""
     REGISTRY.pop(name, None)
 
 
-def canonical_order(effects):
+def canonical_order(effects) -> dict:
     """``effects`` (name -> Effect) as a dict in :data:`REGISTRY` order: the order in which
     instruments sum terms, so results do not depend on the order a scene lists its effects."""
     order = {name: i for i, name in enumerate(REGISTRY)}

@@ -4,6 +4,8 @@ Quet mentions the pendulum in air as a separate memoir (end of sec. 4); here the
 acceleration is −(2/τ) v − c_q |v| v, so small linear-drag swings decay as e^(−t/τ).
 """
 
+from collections.abc import Callable
+
 import numpy as np
 
 from gyro_instrument.core.effect import POINT_MASS, Effect
@@ -21,14 +23,14 @@ class AirDrag(Effect):
               Param("quadratic_per_m", default=0.0, low=0.0,
                     doc="quadratic drag coefficient c_q (acceleration = c_q |v|^2), 1/m"))
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
 
-    def acceleration(self, v):
+    def acceleration(self, v) -> np.ndarray:
         """Drag acceleration −(2/τ) v − c_q |v| v (m/s²) for a velocity ``v`` (3,) relative to the air."""
         return -(2.0 / self.time_constant_s) * v - self.quadratic_per_m * np.linalg.norm(v) * v
 
-    def point_mass_term(self, omega_enu):
+    def point_mass_term(self, omega_enu) -> Callable:
         """:meth:`acceleration` of the velocity relative to the Earth (still air); one state at a time."""
         acceleration = self.acceleration
 

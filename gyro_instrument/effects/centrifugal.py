@@ -8,6 +8,9 @@ For the directing-plane gyroscope this is the term (μ − 1) n² sin² ω cos u
 eqs. (1)–(3) of sec. 4 §1 drop; its relative size is n / (μ ρ0).
 """
 
+from collections.abc import Callable
+
+import numpy as np
 
 from gyro_instrument.core.effect import POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
@@ -20,14 +23,14 @@ class Centrifugal(Effect):
     summary = "centrifugal gradient, second order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY})
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         n = scales["earth_rate_rad_s"]
         if scales.get("gyro_rate_rad_s"):
             return n / scales["gyro_rate_rad_s"], "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
         w0 = scales["restoring_rate_rad_s"]
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
 
-    def point_mass_term(self, omega_enu):
+    def point_mass_term(self, omega_enu) -> Callable:
         """−Ω × (Ω × δr) over the displacement δr from the rest point, written |Ω|² δr − (Ω·δr) Ω
         (:func:`centrifugal_gradient_acceleration`, component form)."""
         ox, oy, oz = omega_enu
@@ -38,16 +41,16 @@ class Centrifugal(Effect):
             return o2 * dx - od * ox, o2 * dy - od * oy, o2 * dz - od * oz
         return gradient
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b):
+    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
         """The inertia torque's part quadratic in Ω (:func:`rigid_body_inertia_torque_quadratic`)."""
         return rigid_body_inertia_torque_quadratic(inertia, omega_b)
 
 
-def centrifugal_gradient_acceleration(omega, dr):
+def centrifugal_gradient_acceleration(omega, dr) -> np.ndarray:
     """−Ω × (Ω × δr): change of the centrifugal acceleration over the displacement δr."""
     return -cross3(omega, cross3(omega, dr))
 
 
-def rigid_body_inertia_torque_quadratic(inertia, omega_b):
+def rigid_body_inertia_torque_quadratic(inertia, omega_b) -> np.ndarray:
     """Part of the inertia torque quadratic in Ω: Ω × I Ω (body axes)."""
     return cross3(omega_b, inertia @ omega_b)

@@ -8,6 +8,9 @@ acceleration is ẇ + Ω × w, so the inertia torque I α + ω × I ω splits in
 the part linear in Ω given here, and the O(Ω²) part of :mod:`.centrifugal`.
 """
 
+from collections.abc import Callable
+
+import numpy as np
 
 from gyro_instrument.core.effect import FRAME_RATE, POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
@@ -20,13 +23,13 @@ class EarthRotation(Effect):
     summary = "Coriolis / gyroscopic coupling, first order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY, FRAME_RATE})
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         if scales.get("gyro_rate_rad_s"):
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
         n = scales["earth_rate_rad_s"]
         return n * scales["duration_s"], "n * duration (swing-plane turn over the run, rad, at most)"
 
-    def point_mass_term(self, omega_enu):
+    def point_mass_term(self, omega_enu) -> Callable:
         """Coriolis acceleration −2 Ω × v (:func:`coriolis_acceleration`, component form)."""
         ox, oy, oz = omega_enu
 
@@ -34,21 +37,21 @@ class EarthRotation(Effect):
             return -2.0 * (oy * vz - oz * vy), -2.0 * (oz * vx - ox * vz), -2.0 * (ox * vy - oy * vx)
         return coriolis
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b):
+    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
         """The inertia torque's part linear in Ω (:func:`rigid_body_inertia_torque_linear`)."""
         return rigid_body_inertia_torque_linear(inertia, w_rel, omega_b)
 
-    def frame_rate_rad_s(self, site):
+    def frame_rate_rad_s(self, site) -> float:
         """The site's Earth rate n (the frame turns; without this effect n = 0 in the model)."""
         return site.earth_rate_rad_s
 
 
-def coriolis_acceleration(omega, v):
+def coriolis_acceleration(omega, v) -> np.ndarray:
     """Coriolis acceleration −2 Ω × v (Quet sec. 1 eq. 16), all vectors in one frame; ndarray (3,)."""
     return -2.0 * cross3(omega, v)
 
 
-def rigid_body_inertia_torque_linear(inertia, w_rel, omega_b):
+def rigid_body_inertia_torque_linear(inertia, w_rel, omega_b) -> np.ndarray:
     """Part of the inertia torque linear in Ω: I(Ω×w) + w×IΩ + Ω×Iw (body axes)."""
     return inertia @ cross3(omega_b, w_rel) + cross3(w_rel, inertia @ omega_b) \
         + cross3(omega_b, inertia @ w_rel)

@@ -7,6 +7,7 @@ duration grows as (2/π) K(sin(a/2)) ≈ 1 + a²/16 (pendulum law; sec. 2 eq. 42
 """
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -22,16 +23,16 @@ class FiniteAmplitude(Effect):
     summary = "exact trigonometry (sin u) instead of the small-angle model (u)"
     MECHANICS = frozenset({RESTORING_LAW})
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         a = scales.get("amplitude_rad", 0.0)
         return a * a / 16.0, "a^2 / 16 (relative period change, sec. 2 eq. 42)"
 
-    def restoring_law(self):
+    def restoring_law(self) -> Callable:
         """``numpy.sin``: the exact restoring law (its absence means the small-angle law, u)."""
         return np.sin
 
 
-def finite_amplitude_factor(amplitude_rad):
+def finite_amplitude_factor(amplitude_rad) -> float | np.ndarray:
     """(2/π) K(sin(a/2)): swing duration at amplitude a over the small-amplitude one (pendulum law,
     Quet sec. 4 §1 item 6; ≈ 1 + a²/16). Elementwise for an array."""
     if np.ndim(amplitude_rad):

@@ -7,6 +7,8 @@ perpendicular the swinging inertia is A + C1 + A2, which Quet writes A + 2A1 + A
 rings (C1 = 2A1) (sec. 4 §IV).
 """
 
+import numpy as np
+
 from gyro_instrument.core.effect import CARRIER_INERTIA, Effect
 
 
@@ -17,10 +19,10 @@ class RingInertia(Effect):
     summary = "inertia of the gimbal rings (A1, C1, A2)"
     MECHANICS = frozenset({CARRIER_INERTIA})
 
-    def relative_size(self, scales):
+    def relative_size(self, scales) -> tuple:
         r = scales.get("ring_inertia_ratio", 0.0)
         return r / 2.0, "(C1 + A2) / (2 A): relative change of the locked-ring period"
 
-    def carrier_inertia(self, inertia):
+    def carrier_inertia(self, inertia) -> float | np.ndarray:
         """The ring's own moment, unchanged: the ring takes part in the motion (absent: massless)."""
         return inertia

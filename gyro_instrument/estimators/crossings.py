@@ -7,7 +7,7 @@ equilibrium, HALF the period) and the apsides of a pendulum (maximum deflection)
 import numpy as np
 
 
-def zero_crossings(t, u, ud=None):
+def zero_crossings(t, u, ud=None) -> np.ndarray:
     """Times where ``u`` crosses zero.
 
     With the derivative ``ud`` the root is found on the cubic Hermite interpolant between
@@ -53,7 +53,7 @@ def zero_crossings(t, u, ud=None):
     return np.asarray(out)
 
 
-def local_maxima(t, y):
+def local_maxima(t, y) -> tuple:
     """Refined times and values of the local maxima of ``y`` (parabola through 3 samples)."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -66,7 +66,7 @@ def local_maxima(t, y):
     return t[i] + s * h, y1 - 0.25 * (y0 - y2) * s
 
 
-def mean_interval(times):
+def mean_interval(times) -> tuple:
     """Least-squares slope of event time versus event index (the mean interval) and its
     standard error; robust to a constant offset in the event times."""
     times = np.asarray(times, dtype=float)

@@ -17,8 +17,8 @@ measures them. Method:
    Released from rest this removes exactly Quet's (3/8) θ0 sin θ0 cos(θ0/2) lag (to O(θ0⁴)).
 
 The horizontal Earth-rate component n cos γ leaves a swing-direction-dependent residual of
-~2e-5 k for north–south swings (physics_notes), not corrected here; it is far below the noise
-of any record shorter than days.
+~2e-5 k for north–south swings (the k' = n cos γ terms of Quet sec. 2 eq. 21), not corrected
+here; it is far below the noise of any record shorter than days.
 
 Cramér–Rao bound for the rate of a plane swinging with amplitude α (rad) in white noise σ on each
 component, N samples over T_obs: var(k̂) ≥ 24 σ² / (α² N T_obs²) (the information
@@ -50,7 +50,7 @@ class FoucaultEstimate:
     notes: list = field(default_factory=list)
 
 
-def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
+def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True) -> FoucaultEstimate:
     """Estimate the Foucault rate from deflection samples; see module docstring.
 
     Raises
@@ -58,18 +58,7 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
     EstimationError
         When the record holds fewer than 3 periods or the swing has no measurable plane.
     """
-    t = np.asarray(t, dtype=float)
-    e = np.asarray(theta_e, dtype=float)
-    nn = np.asarray(theta_n, dtype=float)
-    ok = np.isfinite(t) & np.isfinite(e) & np.isfinite(nn)
-    notes = []
-    if not ok.all():
-        notes.append(f"{int((~ok).sum())} samples with NaN dropped")
-    t, e, nn = t[ok], e[ok], nn[ok]
-    order = np.argsort(t, kind="stable")
-    t, e, nn = t[order], e[order], nn[order]
-    keep = np.concatenate([[True], np.diff(t) > 0]) if t.size else np.array([], bool)
-    t, e, nn = t[keep], e[keep], nn[keep]
+    t, e, nn, notes = _clean_deflections(t, theta_e, theta_n)
     if t.size < 20:
         raise EstimationError(f"too few valid pendulum samples ({t.size})")
     main = e if np.var(e) >= np.var(nn) else nn
@@ -82,6 +71,45 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
     n_win = int((t[-1] - t[0]) // period)
     if n_win < 3:
         raise EstimationError(f"record holds {n_win} swing periods; need at least 3 to fit a precession")
+    psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win)
+    if len(psi) < 3:
+        raise EstimationError("fewer than 3 complete swing periods with samples")
+    m, sig_m = _plane_rate(psi, tc)
+    Hm = float(np.average(H, weights=w))
+    H_se = float(np.std(H, ddof=1) / math.sqrt(len(H))) if len(H) > 1 else 0.0
+    r2m = float(np.average(r2, weights=w))
+    alpha = float(np.mean(amp))
+    if correct_ellipse:
+        k = (m - 0.375 * Hm) / (1.0 - 0.375 * r2m)
+        sig_k = math.hypot(sig_m, 0.375 * H_se) / (1.0 - 0.375 * r2m)
+    else:
+        k, sig_k = m, sig_m
+    sigma_noise = fit.residual_rms
+    span = float(t[-1] - t[0])
+    crlb = math.sqrt(24.0 * sigma_noise ** 2 / (alpha ** 2 * t.size * span ** 2)) if alpha > 0 else math.inf
+    return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes)
+
+
+def _clean_deflections(t, theta_e, theta_n):
+    """Drop samples with a NaN, sort by time, drop duplicated stamps: (t, east, north, notes)."""
+    t = np.asarray(t, dtype=float)
+    e = np.asarray(theta_e, dtype=float)
+    nn = np.asarray(theta_n, dtype=float)
+    ok = np.isfinite(t) & np.isfinite(e) & np.isfinite(nn)
+    notes = []
+    if not ok.all():
+        notes.append(f"{int((~ok).sum())} samples with NaN dropped")
+    t, e, nn = t[ok], e[ok], nn[ok]
+    order = np.argsort(t, kind="stable")
+    t, e, nn = t[order], e[order], nn[order]
+    keep = np.concatenate([[True], np.diff(t) > 0]) if t.size else np.array([], bool)
+    return t[keep], e[keep], nn[keep], notes
+
+
+def _swing_windows(t, e, nn, period, n_win):
+    """Per swing period (windows of 8 samples or more): the swing-plane azimuth ψ, the window's
+    centre time, the areal velocity H, the mean squared deflection r², the major and minor
+    semi-axes of the swing ellipse (second moments) and the sample count (lists)."""
     psi, tc, H, r2, amp, minor, w = [], [], [], [], [], [], []
     edges = t[0] + period * np.arange(n_win + 1)
     idx = np.searchsorted(t, edges)
@@ -99,8 +127,11 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
         H.append(np.sum(en[:-1] * np.diff(ee) - ee[:-1] * np.diff(en)) / (t[b - 1] - t[a]))
         r2.append(mee + mnn)
         w.append(b - a)
-    if len(psi) < 3:
-        raise EstimationError("fewer than 3 complete swing periods with samples")
+    return psi, tc, H, r2, amp, minor, w
+
+
+def _plane_rate(psi, tc):
+    """Least-squares rate of the (unwrapped, modulo π) swing-plane azimuth and its standard error."""
     psi = np.unwrap(2.0 * np.asarray(psi)) / 2.0
     tc = np.asarray(tc)
     A = np.vstack([tc - tc.mean(), np.ones_like(tc)]).T
@@ -108,17 +139,4 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True):
     m = float(coef[0])
     resid = psi - A @ coef
     s2 = float(resid @ resid) / max(len(psi) - 2, 1)
-    sig_m = math.sqrt(s2 / np.sum((tc - tc.mean()) ** 2))
-    Hm = float(np.average(H, weights=w))
-    H_se = float(np.std(H, ddof=1) / math.sqrt(len(H))) if len(H) > 1 else 0.0
-    r2m = float(np.average(r2, weights=w))
-    alpha = float(np.mean(amp))
-    if correct_ellipse:
-        k = (m - 0.375 * Hm) / (1.0 - 0.375 * r2m)
-        sig_k = math.hypot(sig_m, 0.375 * H_se) / (1.0 - 0.375 * r2m)
-    else:
-        k, sig_k = m, sig_m
-    sigma_noise = fit.residual_rms
-    span = float(t[-1] - t[0])
-    crlb = math.sqrt(24.0 * sigma_noise ** 2 / (alpha ** 2 * t.size * span ** 2)) if alpha > 0 else math.inf
-    return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes)
+    return m, math.sqrt(s2 / np.sum((tc - tc.mean()) ** 2))

@@ -63,7 +63,7 @@ class RateMeasurement:
     gain_known: bool = True
     crlb_sigma: float = math.nan
 
-    def shape(self, gamma):
+    def shape(self, gamma) -> np.ndarray | float:
         """s(γ): sin γ for a pendulum, sin ω(γ) for a gyroscope (γ scalar or array, rad)."""
         gamma = np.asarray(gamma, dtype=float)
         if self.kind == "pendulum":
@@ -73,7 +73,7 @@ class RateMeasurement:
         c = (ny * np.cos(gamma) + nz * np.sin(gamma)) / norm
         return np.sqrt(np.maximum(1.0 - c * c, 0.0))
 
-    def sign_sensitive(self):
+    def sign_sensitive(self) -> bool:
         """True when s(γ) ≠ s(−γ) somewhere: the measurement can tell the hemispheres apart."""
         s, m = self.shape(GRID), self.shape(-GRID)
         return float(np.max(np.abs(s - m))) > 1e-9 * max(float(np.max(np.abs(s))), 1e-300)
@@ -173,7 +173,7 @@ class LatitudeResult:
     reason: str = None
 
 
-def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None):
+def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None) -> LatitudeResult:
     """Latitude and Earth rate from :class:`RateMeasurement` objects (profile likelihood).
 
     Parameters
@@ -357,40 +357,10 @@ def _solve(meas, use_crlb=False, hemisphere=None, domain=None):
         sigma = None
         sigma_reason = (f"the 3-sigma region reaches {where}: the likelihood is not locally Gaussian there, so "
                         "no sigma; see the 1- and 3-sigma intervals")
-    # other local minima in the domain not excluded at 3 sigma
-    others = []
-    if side == HEMISPHERE_UNDETERMINED and not absolute:
-        g_o, c_o, _ = _mode(f, vals, GRID, ~mask | (np.abs(GRID) < 1e-15))
-        others.append((g_o, c_o - c_min))
-    inside = np.nonzero(mask)[0]
-    for j in inside[1:-1]:
-        if vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1] and not (lo3 <= GRID[j] <= hi3) \
-                and vals[j] - c_min < HEMISPHERE_DCHI2:
-            g_j, c_j, _ = _mode(f, vals, GRID, (np.arange(GRID.size) >= j - 1) & (np.arange(GRID.size) <= j + 1))
-            others.append((g_j, c_j - c_min))
-    _, theta = _chi2(g_hat, meas, use_crlb)
-    n_hat = float(theta[0])
-    # σ(n) at fixed γ̂ plus the γ uncertainty propagated through n̂(γ)
+    others = _other_modes(f, vals, mask, c_min, (lo3, hi3), side == HEMISPHERE_UNDETERMINED and not absolute)
+    n_hat, sig_n, (gp, gm) = _earth_rate(meas, g_hat, sigma, (g_lo, g_hi), use_crlb)
+    share = _information_share(meas, n_hat, gp, gm, use_crlb)
     has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
-    info_n = sum(float(m.shape(g_hat)) ** 2 / (m.crlb_sigma if use_crlb else m.sigma) ** 2
-                 for m in meas if not (m.kind == "gyro" and not m.gain_known))
-    sig_n_fixed = 1.0 / math.sqrt(info_n) if info_n > 0 else math.inf
-    dg = 1e-7
-    gp, gm = min(g_hat + dg, HALF_PI), max(g_hat - dg, -HALF_PI)
-    if sigma is not None:
-        dn_dg = (_chi2(gp, meas, use_crlb)[1][0] - _chi2(gm, meas, use_crlb)[1][0]) / (gp - gm)
-        spread = dn_dg * sigma
-    else:
-        spread = 0.5 * abs(_chi2(g_hi, meas, use_crlb)[1][0] - _chi2(g_lo, meas, use_crlb)[1][0])
-    sig_n = math.sqrt(sig_n_fixed ** 2 + spread ** 2)
-    # information share on γ (n held at n̂)
-    info = {}
-    for m in meas:
-        sig = m.crlb_sigma if use_crlb else m.sigma
-        ds = float(m.shape(gp) - m.shape(gm)) / (gp - gm)
-        info[m.name] = (n_hat * ds / sig) ** 2
-    total = sum(info.values()) or 1.0
-    share = {k: v / total for k, v in info.items()}
     dof = len(meas) - (2 + (1 if has_gain else 0))
     res = LatitudeResult(g_hat, g_lo, g_hi, sigma, n_hat, sig_n, c_min, dof, share,
                          hemisphere=side, hemisphere_basis=basis, latitude_is_absolute=absolute,
@@ -406,6 +376,60 @@ def _solve(meas, use_crlb=False, hemisphere=None, domain=None):
     return res
 
 
-def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_horizontal=1.0):
+def _other_modes(f, vals, mask, c_min, interval_3sigma, mirror):
+    """Other local minima of χ²(γ) not excluded at 3 sigma, as (γ, Δχ²): the best mode outside the
+    domain when the hemisphere is undetermined (``mirror``), and any inside it beyond the 3-sigma
+    interval within :data:`HEMISPHERE_DCHI2`."""
+    lo3, hi3 = interval_3sigma
+    others = []
+    if mirror:
+        g_o, c_o, _ = _mode(f, vals, GRID, ~mask | (np.abs(GRID) < 1e-15))
+        others.append((g_o, c_o - c_min))
+    inside = np.nonzero(mask)[0]
+    for j in inside[1:-1]:
+        if vals[j] <= vals[j - 1] and vals[j] <= vals[j + 1] and not (lo3 <= GRID[j] <= hi3) \
+                and vals[j] - c_min < HEMISPHERE_DCHI2:
+            g_j, c_j, _ = _mode(f, vals, GRID, (np.arange(GRID.size) >= j - 1) & (np.arange(GRID.size) <= j + 1))
+            others.append((g_j, c_j - c_min))
+    return others
+
+
+def _earth_rate(meas, g_hat, sigma, interval, use_crlb):
+    """n̂ at γ̂ and its standard error: σ(n) at fixed γ̂ plus the γ uncertainty propagated through
+    n̂(γ) (by the derivative when γ has a sigma, else half the spread over the 1-sigma interval).
+
+    Returns
+    -------
+    tuple
+        (n̂, σ(n), (γ̂ + dγ, γ̂ − dγ) the points of the derivative, clipped to the poles).
+    """
+    g_lo, g_hi = interval
+    _, theta = _chi2(g_hat, meas, use_crlb)
+    n_hat = float(theta[0])
+    info_n = sum(float(m.shape(g_hat)) ** 2 / (m.crlb_sigma if use_crlb else m.sigma) ** 2
+                 for m in meas if not (m.kind == "gyro" and not m.gain_known))
+    sig_n_fixed = 1.0 / math.sqrt(info_n) if info_n > 0 else math.inf
+    dg = 1e-7
+    gp, gm = min(g_hat + dg, HALF_PI), max(g_hat - dg, -HALF_PI)
+    if sigma is not None:
+        dn_dg = (_chi2(gp, meas, use_crlb)[1][0] - _chi2(gm, meas, use_crlb)[1][0]) / (gp - gm)
+        spread = dn_dg * sigma
+    else:
+        spread = 0.5 * abs(_chi2(g_hi, meas, use_crlb)[1][0] - _chi2(g_lo, meas, use_crlb)[1][0])
+    return n_hat, math.sqrt(sig_n_fixed ** 2 + spread ** 2), (gp, gm)
+
+
+def _information_share(meas, n_hat, gp, gm, use_crlb):
+    """Each measurement's share of the information on γ (n held at n̂): name -> fraction."""
+    info = {}
+    for m in meas:
+        sig = m.crlb_sigma if use_crlb else m.sigma
+        ds = float(m.shape(gp) - m.shape(gm)) / (gp - gm)
+        info[m.name] = (n_hat * ds / sig) ** 2
+    total = sum(info.values()) or 1.0
+    return {k: v / total for k, v in info.items()}
+
+
+def item9_cos_latitude(T_meridian_s, T_horizontal_s, spin_meridian=1.0, spin_horizontal=1.0) -> float:
     """Quet item 9: cos γ = (T_m / T_h)² · ρ_m / ρ_h (small-amplitude one-swing durations)."""
     return (T_meridian_s / T_horizontal_s) ** 2 * spin_meridian / spin_horizontal

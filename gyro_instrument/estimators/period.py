@@ -4,7 +4,7 @@
 frequency ω the amplitudes enter linearly and are solved in closed form, so only ω is searched
 (bracketed around an FFT peak, refined by Brent's method), then the full covariance comes from
 the Jacobian of all parameters. On clean sinusoids in white noise it reaches the Cramér–Rao bound
-var(ω̂) ≥ 24 σ² / (A² Δt² N (N² − 1)) (physics_notes, 'Estimation'). Extensions for real records:
+var(ω̂) ≥ 24 σ² / (A² Δt² N (N² − 1)) (Rife & Boorstyn 1974, single-tone estimation). Extensions for real records:
 
 * NaN samples and gaps are dropped (uneven sampling is fine for least squares);
 * ``damping=True`` adds an exponential envelope e^(−λt) (fitted by ``least_squares``);
@@ -59,15 +59,15 @@ class OscillationFit:
     notes: list = field(default_factory=list)
 
     @property
-    def swing_duration_s(self):
+    def swing_duration_s(self) -> float:
         return math.pi / self.omega_rad_s
 
     @property
-    def swing_duration_sigma_s(self):
+    def swing_duration_sigma_s(self) -> float:
         return math.pi * self.omega_sigma_rad_s / self.omega_rad_s ** 2
 
     @property
-    def crlb_swing_duration_s(self):
+    def crlb_swing_duration_s(self) -> float:
         return math.pi * self.crlb_omega_rad_s / self.omega_rad_s ** 2
 
 
@@ -80,7 +80,7 @@ class EstimationError(ValueError):
     """The record cannot give the requested quantity (too short, no oscillation, ...)."""
 
 
-def crlb_omega(sigma, amplitude, dt, n):
+def crlb_omega(sigma, amplitude, dt, n) -> float:
     """Cramér–Rao bound on σ(ω̂) for a sinusoid of amplitude A in white noise σ, N samples Δt apart:
     √(24 σ² / (A² Δt² N (N² − 1)))."""
     if n < 3 or amplitude <= 0:
@@ -96,7 +96,7 @@ def _design(tau, omega, harmonics, env):
     return np.column_stack(cols)
 
 
-def fft_guess(t, y, min_cycles=1.0):
+def fft_guess(t, y, min_cycles=1.0) -> float:
     """Angular frequency of the strongest FFT peak (zero-padded, resampled if uneven)."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -117,31 +117,14 @@ def fft_guess(t, y, min_cycles=1.0):
     return 2.0 * math.pi * k / (n * dt)
 
 
-def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=None, envelope=None,
-                    t_ref=None):
-    """Least-squares fit of an oscillation; see the module docstring.
-
-    Parameters
-    ----------
-    t, y : array_like
-        Sample times (s) and values; non-finite samples are ignored.
-    omega_guess : float, optional
-        Starting angular frequency (rad/s); default from the FFT peak.
-    harmonics : tuple of int
-        Harmonic numbers of the model (1 = fundamental; (1, 3) for anharmonic swings).
-    damping : bool
-        Fit an exponential envelope e^(−λ (t − t_ref)).
-    warp, envelope : array_like, optional
-        Warped time τ(t) (s) and a known amplitude envelope, sampled like ``t``.
+def _clean_record(t, y, warp, envelope):
+    """Drop non-finite samples (of any of the arrays), sort by time, drop duplicated time stamps.
 
     Returns
     -------
-    OscillationFit
-
-    Raises
-    ------
-    EstimationError
-        If fewer than two cycles or too few samples remain.
+    tuple
+        (t, y, warp, envelope, notes): the cleaned arrays (``warp``/``envelope`` None when not
+        given) and one note per kind of change.
     """
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -171,6 +154,143 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
             t, y = t[keep], y[keep]
             warp = warp[keep] if warp is not None else None
             envelope = envelope[keep] if envelope is not None else None
+    return t, y, warp, envelope, notes
+
+
+class _OscillationModel:
+    """The model fitted by :func:`fit_oscillation` on (warped) times ``tau``: a constant plus, for
+    each harmonic h, env·e^(−λτ)(a_h cos hωτ + b_h sin hωτ); parameters (ω, [λ], C, a_h, b_h, ...)."""
+
+    def __init__(self, tau, y, env, harmonics, damping):
+        self.tau, self.y, self.env = tau, y, env
+        self.harmonics, self.damping = harmonics, damping
+        self.base = 3 if damping else 2          # index of a_1 in the parameters
+
+    def rss(self, omega):
+        """Residual sum of squares at ω with the linear parameters solved (variable projection)."""
+        X = _design(self.tau, omega, self.harmonics, self.env)
+        coef, *_ = np.linalg.lstsq(X, self.y, rcond=None)
+        r = self.y - X @ coef
+        return float(r @ r)
+
+    def values(self, params):
+        """The model at every sample."""
+        tau, damping = self.tau, self.damping
+        w, lm = params[0], (params[1] if damping else 0.0)
+        e = self.env * np.exp(-lm * tau) if damping else self.env
+        out = np.full_like(tau, params[2 if damping else 1])
+        base = self.base
+        for i, h in enumerate(self.harmonics):
+            a, b = params[base + 2 * i], params[base + 2 * i + 1]
+            out = out + e * (a * np.cos(h * w * tau) + b * np.sin(h * w * tau))
+        return out
+
+    def jac(self, params):
+        """Analytic Jacobian of the model (columns: ω, [λ], C, a_h, b_h ...)."""
+        tau, damping = self.tau, self.damping
+        w, lm = params[0], (params[1] if damping else 0.0)
+        e = self.env * np.exp(-lm * tau) if damping else self.env
+        base = self.base
+        cols_w = np.zeros_like(tau)
+        osc = np.zeros_like(tau)
+        hcols = []
+        for i, h in enumerate(self.harmonics):
+            a, b = params[base + 2 * i], params[base + 2 * i + 1]
+            c, s_ = np.cos(h * w * tau), np.sin(h * w * tau)
+            cols_w += e * h * tau * (-a * s_ + b * c)
+            osc += e * (a * c + b * s_)
+            hcols += [e * c, e * s_]
+        cols = [cols_w] + ([-tau * osc] if damping else []) + [np.ones_like(tau)] + hcols
+        return np.column_stack(cols)
+
+    def polish(self, omega0):
+        """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved."""
+        X0 = _design(self.tau, omega0, self.harmonics, self.env)
+        c0, *_ = np.linalg.lstsq(X0, self.y, rcond=None)
+        q0 = [omega0] + ([0.0] if self.damping else []) + list(c0)
+        return least_squares(lambda q: self.values(q) - self.y, q0, jac=self.jac, method="lm", x_scale="jac",
+                             xtol=1e-15, ftol=1e-15)
+
+
+def _search(model, omega_guess, bin_w):
+    """The least-squares solution (``scipy.optimize.OptimizeResult``) near the FFT guess.
+
+    Fast path: the zero-padded, parabola-refined FFT peak is within a small fraction of a bin
+    (``bin_w`` = 2π / span), inside the basin of the least-squares minimum; accept when the solution
+    stays within half a bin. Fallback: bracket ±1.5 bins on a 9-point grid, Brent to 1e-3 of a bin,
+    then polish; keep the better of the two.
+    """
+    sol = model.polish(omega_guess)
+    if not (sol.success and abs(sol.x[0] - omega_guess) < 0.5 * bin_w):
+        lo, hi = max(omega_guess - 1.5 * bin_w, 0.1 * omega_guess), omega_guess + 1.5 * bin_w
+        grid = np.linspace(lo, hi, 9)
+        best = grid[int(np.argmin([model.rss(w) for w in grid]))]
+        step = grid[1] - grid[0]
+        res = minimize_scalar(model.rss, bounds=(best - step, best + step), method="bounded",
+                              options={"xatol": 1e-3 * step})
+        sol2 = model.polish(float(res.x))
+        if not sol.success or 2 * sol2.cost <= 2 * sol.cost:
+            sol = sol2
+    return sol
+
+
+def _fit_result(sol, model, n_samples, span, warped, notes):
+    """:class:`OscillationFit` from the least-squares solution: standard error of ω from the
+    Jacobian, peak amplitude of the fitted waveform, Cramér–Rao bound for the fitted noise."""
+    p = sol.x
+    omega = float(p[0])
+    lam = float(p[1]) if model.damping else 0.0
+    r = sol.fun
+    dof = max(n_samples - len(p), 1)
+    s2 = float(r @ r) / dof
+    J = sol.jac
+    try:
+        cov = np.linalg.inv(J.T @ J) * s2
+        sig_omega = float(math.sqrt(max(cov[0, 0], 0.0)))
+    except np.linalg.LinAlgError:
+        sig_omega = math.inf
+    base = model.base
+    amp = float(math.hypot(p[base], p[base + 1]))
+    # Peak amplitude from the fitted waveform itself: harmonics may be in antiphase (a pendulum-law
+    # swing has A3 < 0 relative to the peak: a = A1 − |A3| + ...), so their sizes do not simply add.
+    phase = np.linspace(0.0, 2 * math.pi, 4097)
+    wave = sum(p[base + 2 * i] * np.cos(h * phase) + p[base + 2 * i + 1] * np.sin(h * phase)
+               for i, h in enumerate(model.harmonics))
+    amp_peak = float(0.5 * (np.max(wave) - np.min(wave)))
+    dt = span / max(n_samples - 1, 1)
+    crlb = crlb_omega(math.sqrt(s2), amp, dt, n_samples)
+    method = "sine_fit" + ("+damping" if model.damping else "") + ("+warp" if warped else "") + \
+             ("+harmonics" if len(model.harmonics) > 1 else "")
+    return OscillationFit(omega, sig_omega, amp_peak, math.sqrt(s2), crlb, int(n_samples), span, lam, method, notes)
+
+
+def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=None, envelope=None,
+                    t_ref=None) -> OscillationFit:
+    """Least-squares fit of an oscillation; see the module docstring.
+
+    Parameters
+    ----------
+    t, y : array_like
+        Sample times (s) and values; non-finite samples are ignored.
+    omega_guess : float, optional
+        Starting angular frequency (rad/s); default from the FFT peak.
+    harmonics : tuple of int
+        Harmonic numbers of the model (1 = fundamental; (1, 3) for anharmonic swings).
+    damping : bool
+        Fit an exponential envelope e^(−λ (t − t_ref)).
+    warp, envelope : array_like, optional
+        Warped time τ(t) (s) and a known amplitude envelope, sampled like ``t``.
+
+    Returns
+    -------
+    OscillationFit
+
+    Raises
+    ------
+    EstimationError
+        If fewer than two cycles or too few samples remain.
+    """
+    t, y, warp, envelope, notes = _clean_record(t, y, warp, envelope)
     p_lin = 1 + 2 * len(harmonics)
     if t.size < p_lin + 4:
         raise EstimationError(f"too few valid samples ({t.size}) to fit an oscillation")
@@ -182,90 +302,9 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         omega_guess = fft_guess(tau + t_ref, y)
     if omega_guess * span / (2 * math.pi) < 2.0:
         raise EstimationError(f"record holds {omega_guess * span / (2 * math.pi):.2f} cycles; need at least 2")
-
-    def rss(omega):
-        X = _design(tau, omega, harmonics, env)
-        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-        r = y - X @ coef
-        return float(r @ r)
-
-    def model(params):
-        w, lm = params[0], (params[1] if damping else 0.0)
-        e = env * np.exp(-lm * tau) if damping else env
-        out = np.full_like(tau, params[2 if damping else 1])
-        base = 3 if damping else 2
-        for i, h in enumerate(harmonics):
-            a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            out = out + e * (a * np.cos(h * w * tau) + b * np.sin(h * w * tau))
-        return out
-
-    def jac(params):
-        """Analytic Jacobian of the model (columns: ω, [λ], C, a_h, b_h ...)."""
-        w, lm = params[0], (params[1] if damping else 0.0)
-        e = env * np.exp(-lm * tau) if damping else env
-        base = 3 if damping else 2
-        cols_w = np.zeros_like(tau)
-        osc = np.zeros_like(tau)
-        hcols = []
-        for i, h in enumerate(harmonics):
-            a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            c, s_ = np.cos(h * w * tau), np.sin(h * w * tau)
-            cols_w += e * h * tau * (-a * s_ + b * c)
-            osc += e * (a * c + b * s_)
-            hcols += [e * c, e * s_]
-        cols = [cols_w] + ([-tau * osc] if damping else []) + [np.ones_like(tau)] + hcols
-        return np.column_stack(cols)
-
-    def polish(omega0):
-        """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved."""
-        X0 = _design(tau, omega0, harmonics, env)
-        c0, *_ = np.linalg.lstsq(X0, y, rcond=None)
-        q0 = [omega0] + ([0.0] if damping else []) + list(c0)
-        return least_squares(lambda q: model(q) - y, q0, jac=jac, method="lm", x_scale="jac",
-                             xtol=1e-15, ftol=1e-15)
-
-    bin_w = 2 * math.pi / span
-    lam = 0.0
-    # Fast path: the zero-padded, parabola-refined FFT peak is within a small fraction of a bin, inside
-    # the basin of the least-squares minimum; accept when the solution stays within half a bin.
-    sol = polish(omega_guess)
-    if not (sol.success and abs(sol.x[0] - omega_guess) < 0.5 * bin_w):
-        # Fallback: bracket ±1.5 bins on a 9-point grid, Brent to 1e-3 of a bin, then polish.
-        lo, hi = max(omega_guess - 1.5 * bin_w, 0.1 * omega_guess), omega_guess + 1.5 * bin_w
-        grid = np.linspace(lo, hi, 9)
-        best = grid[int(np.argmin([rss(w) for w in grid]))]
-        step = grid[1] - grid[0]
-        res = minimize_scalar(rss, bounds=(best - step, best + step), method="bounded",
-                              options={"xatol": 1e-3 * step})
-        sol2 = polish(float(res.x))
-        if not sol.success or 2 * sol2.cost <= 2 * sol.cost:
-            sol = sol2
-    p = sol.x
-    omega = float(p[0])
-    if damping:
-        lam = float(p[1])
-    r = sol.fun
-    dof = max(t.size - len(p), 1)
-    s2 = float(r @ r) / dof
-    J = sol.jac
-    try:
-        cov = np.linalg.inv(J.T @ J) * s2
-        sig_omega = float(math.sqrt(max(cov[0, 0], 0.0)))
-    except np.linalg.LinAlgError:
-        sig_omega = math.inf
-    base = 3 if damping else 2
-    amp = float(math.hypot(p[base], p[base + 1]))
-    # Peak amplitude from the fitted waveform itself: harmonics may be in antiphase (a pendulum-law
-    # swing has A3 < 0 relative to the peak: a = A1 − |A3| + ...), so their sizes do not simply add.
-    phase = np.linspace(0.0, 2 * math.pi, 4097)
-    wave = sum(p[base + 2 * i] * np.cos(h * phase) + p[base + 2 * i + 1] * np.sin(h * phase)
-               for i, h in enumerate(harmonics))
-    amp_peak = float(0.5 * (np.max(wave) - np.min(wave)))
-    dt = span / max(t.size - 1, 1)
-    crlb = crlb_omega(math.sqrt(s2), amp, dt, t.size)
-    method = "sine_fit" + ("+damping" if damping else "") + ("+warp" if warp is not None else "") + \
-             ("+harmonics" if len(harmonics) > 1 else "")
-    return OscillationFit(omega, sig_omega, amp_peak, math.sqrt(s2), crlb, int(t.size), span, lam, method, notes)
+    model = _OscillationModel(tau, y, env, harmonics, damping)
+    sol = _search(model, omega_guess, 2 * math.pi / span)
+    return _fit_result(sol, model, t.size, span, warp is not None, notes)
 
 
 @dataclass
@@ -279,7 +318,7 @@ class CountResult:
     method: str = "counting"
 
 
-def count_oscillations(t, y):
+def count_oscillations(t, y) -> CountResult:
     """Quet's literal method: count whole swings (passages through equilibrium) in the record.
 
     T = T_obs / N with N the number of zero crossings of the (mean-removed) signal; an observer

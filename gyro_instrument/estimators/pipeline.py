@@ -31,21 +31,21 @@ from gyro_instrument.sensors import SensorModel, scene_rng
 CORRECTIONS = frozenset(("finite_amplitude", "spin_decay", "ellipse_precession"))
 
 
-def estimable(inst):
+def estimable(inst) -> bool:
     """True for instruments that measure an Earth rate: pendulums (``IS_PENDULUM``: k = n sin γ) and
     gyroscopes with a directing line (``directing_model()``: K = gain n ρ s(γ)). Free gyroscopes and
     Puiseux's body do not."""
     return inst.IS_PENDULUM or inst.directing_model() is not None
 
 
-def simulate_truth(scene):
+def simulate_truth(scene) -> tuple:
     """(t, instruments, sims): the noiseless simulation of every instrument."""
     t = sample_times(scene)
     insts = build_instruments(scene)
     return t, insts, {name: inst.simulate(t) for name, inst in insts.items()}
 
 
-def measure(scene, truth, seed=None):
+def measure(scene, truth, seed=None) -> dict:
     """Measured records for one seed: name -> {'t', channel arrays}."""
     t, insts, sims = truth
     sensor = SensorModel.from_scene(scene)
@@ -67,6 +67,95 @@ def measure(scene, truth, seed=None):
     return records
 
 
+def _spin_warp(t, spin, spin_ok, rho_mean):
+    """Time warp and adiabatic envelope from the measured spin history, or Nones when the spin did not
+    change measurably.
+
+    The spin is smoothed by a quadratic in log|ρ| (exact for the viscous bearing's e^(-t/τ), and for
+    any slow law over a run shorter than its time scale: a quadratic in ρ itself is 0.5 % off over
+    one τ); τ = ∫ √(ρ/ρ̄) dt and the envelope (ρ/ρ̄)^(−1/4).
+
+    Returns
+    -------
+    tuple
+        (warp, envelope, ratio ρ/ρ̄, note) — all None when no correction applies.
+    """
+    sgn = 1.0 if rho_mean >= 0 else -1.0
+    same_sign = spin[spin_ok] * sgn > 0
+    if same_sign.all():
+        coef = np.polyfit(t[spin_ok], np.log(spin[spin_ok] * sgn), 2)
+        smooth = sgn * np.exp(np.polyval(coef, t))
+    else:
+        coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
+        smooth = np.polyval(coef, t)
+    change = abs(smooth[-1] - smooth[0])
+    noise = np.std(spin[spin_ok] - smooth[spin_ok])
+    if change > max(10 * noise / math.sqrt(spin_ok.sum()), 1e-9 * abs(rho_mean)) and change > 1e-6 * abs(rho_mean):
+        ratio = np.clip(smooth / rho_mean, 1e-6, None)
+        warp = np.concatenate([[0.0], np.cumsum(0.5 * (np.sqrt(ratio[1:]) + np.sqrt(ratio[:-1])) * np.diff(t))])
+        env = ratio ** -0.25
+        return warp, env, ratio, f"spin changed by {change / abs(rho_mean):.3g} relative: fitted in spin-warped time"
+    return None, None, None, None
+
+
+def _fit_swing(t, y, warp, env, ratio, corrections):
+    """The sine fit (fundamental and third harmonic) of a gyroscope's swing, refitted once in a
+    time also warped by the finite-amplitude law when the spin changed; raises EstimationError.
+
+    Returns
+    -------
+    tuple
+        (fit, warp actually used).
+    """
+    fit = fit_oscillation(t, y, harmonics=(1, 3), warp=warp, envelope=env)
+    if warp is not None and "finite_amplitude" in corrections:
+        # the swing lengthens as its amplitude grows (a ∝ ρ^-1/4): the instantaneous rate is
+        # ω_small(ρ(t)) / F(a(t)), so warp by F(a_ref)/F(a(t)) too and refit once
+        a_t = abs(fit.amplitude) * env
+        rate = np.sqrt(ratio) * finite_amplitude_factor(abs(fit.amplitude)) / finite_amplitude_factor(a_t)
+        warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
+        fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
+    return fit, warp
+
+
+def _with_damping(t, y, fit, warp, env, notes):
+    """The fit refitted with an exponential envelope when that lowers the residual significantly."""
+    try:
+        dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), damping=True, warp=warp,
+                               envelope=env)
+        if fit.residual_rms ** 2 - dfit.residual_rms ** 2 > 10.0 * fit.residual_rms ** 2 / fit.n_samples:
+            notes.append(f"damping fitted: {dfit.damping_per_s:.3g} 1/s")
+            return dfit
+    except EstimationError:
+        pass
+    return fit
+
+
+def _counting(t, y, F):
+    """Quet's counting baseline for the estimate JSON (its swing reduced to small amplitude by F)."""
+    try:
+        c = count_oscillations(t, y)
+        return {"swing_duration_s": c.swing_duration_s, "swing_duration_sigma_s": c.swing_duration_sigma_s,
+                "swings": c.swings, "small_amplitude_swing_duration_s": c.swing_duration_s / F}
+    except EstimationError as exc:
+        return {"swing_duration_s": None, "reason": str(exc)}
+
+
+def _gyro_measurement(inst, model, T0, sig_T0, crlb_T0, rho_mean, out):
+    """The rate measurement y = K / (gain ρ̄) = n s(γ) (eq. 9, K = (π/T0)²), with the O(n²) centrifugal
+    term of the exact equation removed when the model has one (recorded in ``out``)."""
+    K = (math.pi / T0) ** 2
+    y_val = K / (model.gain * rho_mean)
+    c2 = model.second_order
+    if c2:
+        # invert y = y0 (1 + c2 y0/ρ) for y0 = n s(γ): the O(n²) centrifugal term of the exact equation
+        y_val = 2.0 * y_val / (1.0 + math.sqrt(1.0 + 4.0 * c2 * y_val / rho_mean))
+        out["second_order_correction"] = K / (model.gain * rho_mean) / y_val - 1.0
+    rel = 2 * sig_T0 / T0
+    return RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model.normal_enu),
+                           True, y_val * 2 * crlb_T0 / T0)
+
+
 def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
     """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline."""
     t, y = rec["t"], rec["angle"]
@@ -79,51 +168,21 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
         return out | {"swing_duration_s": None, "reason": "no valid spin samples"}
     rho_mean = float(np.mean(spin[spin_ok]))
     out["mean_spin_rad_s"] = rho_mean
-    warp = env = None
+    warp = env = ratio = None
     notes = []
     if spin_ok.sum() > 10 and "spin_decay" in corrections:
-        # spin decay: use the measured spin history (time warp and adiabatic envelope), smoothed
-        # by a quadratic in log|ρ| (exact for the viscous bearing's e^(-t/τ), and for any slow law
-        # over a run shorter than its time scale: a quadratic in ρ itself is 0.5 % off over one τ)
-        sgn = 1.0 if rho_mean >= 0 else -1.0
-        same_sign = spin[spin_ok] * sgn > 0
-        if same_sign.all():
-            coef = np.polyfit(t[spin_ok], np.log(spin[spin_ok] * sgn), 2)
-            smooth = sgn * np.exp(np.polyval(coef, t))
-        else:
-            coef = np.polyfit(t[spin_ok], spin[spin_ok], 2)
-            smooth = np.polyval(coef, t)
-        change = abs(smooth[-1] - smooth[0])
-        noise = np.std(spin[spin_ok] - smooth[spin_ok])
-        if change > max(10 * noise / math.sqrt(spin_ok.sum()), 1e-9 * abs(rho_mean)) and change > 1e-6 * abs(rho_mean):
-            ratio = np.clip(smooth / rho_mean, 1e-6, None)
-            warp = np.concatenate([[0.0], np.cumsum(0.5 * (np.sqrt(ratio[1:]) + np.sqrt(ratio[:-1])) * np.diff(t))])
-            env = ratio ** -0.25
-            notes.append(f"spin changed by {change / abs(rho_mean):.3g} relative: fitted in spin-warped time")
+        warp, env, ratio, note = _spin_warp(t, spin, spin_ok, rho_mean)
+        if note:
+            notes.append(note)
     try:
-        fit = fit_oscillation(t, y, harmonics=(1, 3), warp=warp, envelope=env)
-        if warp is not None and "finite_amplitude" in corrections:
-            # the swing lengthens as its amplitude grows (a ∝ ρ^-1/4): the instantaneous rate is
-            # ω_small(ρ(t)) / F(a(t)), so warp by F(a_ref)/F(a(t)) too and refit once
-            a_t = abs(fit.amplitude) * env
-            rate = np.sqrt(ratio) * finite_amplitude_factor(abs(fit.amplitude)) / finite_amplitude_factor(a_t)
-            warp = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))])
-            fit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), warp=warp, envelope=env)
+        fit, warp = _fit_swing(t, y, warp, env, ratio, corrections)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model.null_reason}"}
     snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
     if snr < DETECTION_SNR:
         return out | {"swing_duration_s": None,
                       "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model.null_reason}"}
-    # damping: refit with an envelope when it lowers the residual significantly
-    try:
-        dfit = fit_oscillation(t, y, omega_guess=fit.omega_rad_s, harmonics=(1, 3), damping=True, warp=warp,
-                               envelope=env)
-        if fit.residual_rms ** 2 - dfit.residual_rms ** 2 > 10.0 * fit.residual_rms ** 2 / fit.n_samples:
-            notes.append(f"damping fitted: {dfit.damping_per_s:.3g} 1/s")
-            fit = dfit
-    except EstimationError:
-        pass
+    fit = _with_damping(t, y, fit, warp, env, notes)
     a = fit.amplitude
     if fit.damping_per_s:
         tau = (t - np.mean(t))
@@ -138,26 +197,12 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
                 "crlb_swing_duration_s": crlb_T0 * F, "amplitude_rad": a, "finite_amplitude_factor": F,
                 "period_s": 2 * T, "noise_rad": fit.residual_rms, "fit_method": fit.method,
                 "samples": fit.n_samples, "notes": notes + fit.notes})
-    try:
-        c = count_oscillations(t, y)
-        out["counting"] = {"swing_duration_s": c.swing_duration_s, "swing_duration_sigma_s": c.swing_duration_sigma_s,
-                           "swings": c.swings, "small_amplitude_swing_duration_s": c.swing_duration_s / F}
-    except EstimationError as exc:
-        out["counting"] = {"swing_duration_s": None, "reason": str(exc)}
-    K = (math.pi / T0) ** 2
-    y_val = K / (model.gain * rho_mean)
-    c2 = model.second_order
-    if c2:
-        # invert y = y0 (1 + c2 y0/ρ) for y0 = n s(γ): the O(n²) centrifugal term of the exact equation
-        y_val = 2.0 * y_val / (1.0 + math.sqrt(1.0 + 4.0 * c2 * y_val / rho_mean))
-        out["second_order_correction"] = K / (model.gain * rho_mean) / y_val - 1.0
-    rel = 2 * sig_T0 / T0
-    out["_measurement"] = RateMeasurement(inst.name, "gyro", y_val, y_val * rel, tuple(model.normal_enu),
-                                          True, y_val * 2 * crlb_T0 / T0)
+    out["counting"] = _counting(t, y, F)
+    out["_measurement"] = _gyro_measurement(inst, model, T0, sig_T0, crlb_T0, rho_mean, out)
     return out
 
 
-def estimate_records(scene, insts, records, corrections=CORRECTIONS):
+def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     """The ``estimate`` JSON object (see module docstring) from measured records.
 
     ``corrections`` — the subset of :data:`CORRECTIONS` to apply (all by default); a study of
@@ -256,44 +301,7 @@ def _classic_methods(result, gyros, pend):
     hor = [g for g in gyros.values() if g[0].directing_model().label == "horizontal"]
     mer = [g for g in gyros.values() if g[0].directing_model().label == "meridian"]
     if hor and mer:
-        (ih, eh, mh), (im, em, mm) = hor[0], mer[0]
-        # cos γ = y_h / y_m with y = K/(gain ρ): Quet's (T_m/T_h)² ρ_m/ρ_h, with the finite-amplitude
-        # and (gimbal) ring-inertia corrections carried by T0 and the gains.
-        c = mh.value / mm.value
-        rel = math.hypot(mh.sigma / mh.value, mm.sigma / mm.value)
-        entry = {"cos_latitude": c, "cos_latitude_sigma": c * rel}
-        if c + c * rel >= 1.0 and c <= 1.0 + 3 * c * rel:
-            entry.update({"latitude_deg": None,
-                          "reason": f"cos(latitude) = {c:.9f} is within 1 sigma ({c * rel:.2g}) of 1: near the "
-                                    "equator item 9 cannot resolve the latitude (cos is flat, "
-                                    "d(latitude) = d(cos)/sin(latitude) diverges)"
-                                    + ("; the pendulum carries the latitude" if pend is not None else "")})
-        elif 0.0 < c <= 1.0:
-            lat = math.degrees(math.acos(c))
-            # cos is even: the sign comes from the combination's hemisphere (measured by a pendulum, or
-            # the user's estimator.hemisphere); otherwise item 9 reports |latitude|
-            hemi = result.get("hemisphere")
-            sign = {"north": 1.0, "south": -1.0}.get(hemi, 1.0)
-            entry["hemisphere"] = hemi if hemi in ("north", "south") else HEMISPHERE_UNDETERMINED
-            entry["latitude_is_absolute"] = hemi not in ("north", "south")
-            s = math.sqrt(max(1 - c * c, 0.0))
-            lo = math.degrees(math.acos(min(c + c * rel, 1.0)))
-            hi = math.degrees(math.acos(max(c - c * rel, 0.0)))
-            entry.update({"latitude_deg": sign * lat, "latitude_sigma_deg": 0.5 * (hi - lo),
-                          "linear_sigma_deg": (math.degrees(c * rel / s) if s > 0 else None)})
-        else:
-            entry.update({"latitude_deg": None, "reason": f"(T_m/T_h)^2 rho_m/rho_h = {c:.9g} is outside (0, 1]"})
-        # uncorrected (printed T at unequal amplitudes, no spin ratio) for comparison
-        entry["uncorrected_cos_latitude"] = (em["swing_duration_s"] / eh["swing_duration_s"]) ** 2
-        ch, cm = eh.get("counting", {}), em.get("counting", {})
-        if ch.get("swing_duration_s") and cm.get("swing_duration_s"):
-            gain_ratio = im.directing_model().gain / ih.directing_model().gain
-            cc = item9_cos_latitude(cm["small_amplitude_swing_duration_s"], ch["small_amplitude_swing_duration_s"],
-                                    em["mean_spin_rad_s"], eh["mean_spin_rad_s"]) * gain_ratio
-            methods["item9_counting"] = {"cos_latitude": cc,
-                                         "latitude_deg": math.degrees(math.acos(cc)) if 0 < cc <= 1 else None,
-                                         "swings": [ch["swings"], cm["swings"]]}
-        methods["item9"] = entry
+        _item9(result, hor[0], mer[0], pend)
     elif hor or mer:
         methods["item9"] = {"latitude_deg": None, "reason": "item 9 needs both a horizontal and a meridian "
                             "configuration with a measured oscillation"}
@@ -305,37 +313,88 @@ def _classic_methods(result, gyros, pend):
                                  "formula": "n = pi^2 / (mu rho0 T_m^2) (eq. 10; item 8's printed pi/(mu rho0 T^2) is a misprint)",
                                  "gain": model.gain}
     if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
-        k, sk = pend[1]["foucault_rate_rad_s"], pend[1]["foucault_rate_sigma_rad_s"]
-        entry = {"foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk}
-        n_ref = methods.get("item8_eq10", {}).get("earth_rate_rad_s")
-        if n_ref is None:
-            n_ref = result["truth"]["earth_rate_rad_s"]
-            entry["note"] = "latitude from k / n with the nominal sidereal n (no meridian gyroscope)"
-        x = k / n_ref
-        if abs(x) <= 1.0 + 3 * sk / n_ref:
-            xc = max(min(x, 1.0), -1.0)
-            lo = math.degrees(math.asin(max(xc - sk / n_ref, -1.0)))
-            hi = math.degrees(math.asin(min(xc + sk / n_ref, 1.0)))
-            entry.update({"latitude_deg": math.degrees(math.asin(xc)), "latitude_sigma_deg": 0.5 * (hi - lo)})
-        else:
-            entry.update({"latitude_deg": None, "reason": f"k/n = {x:.6g} exceeds 1 by more than 3 sigma"})
-        lat9 = methods.get("item9", {}).get("latitude_deg")
-        if abs(k) < 3 * sk:
-            entry["earth_rate_rad_s"] = None
-            entry["reason_earth_rate"] = ("the pendulum does not precess measurably here (|k| < 3 sigma_k, as at "
-                                          "the equator): n = k / sin(latitude) is undetermined")
-        elif lat9 is None:
-            entry["earth_rate_rad_s"] = None
-            entry["reason_earth_rate"] = "n = k / sin(latitude) needs the latitude from item 9, which is null here"
-        else:
-            s = math.sin(math.radians(lat9))
-            entry["earth_rate_rad_s"] = k / s
-            entry["earth_rate_sigma_rad_s"] = sk / abs(s)
-            entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
-        methods["foucault"] = entry
+        methods["foucault"] = _foucault_method(result, pend)
 
 
-def seed_sweep(job):
+def _item9(result, hor, mer, pend):
+    """Quet's item 9, cos γ = (T_m/T_h)² ρ_m/ρ_h, from the first horizontal and meridian gyroscopes
+    (``methods["item9"]``, and ``methods["item9_counting"]`` from the counted swings)."""
+    methods = result["methods"]
+    (ih, eh, mh), (im, em, mm) = hor, mer
+    # cos γ = y_h / y_m with y = K/(gain ρ): Quet's (T_m/T_h)² ρ_m/ρ_h, with the finite-amplitude
+    # and (gimbal) ring-inertia corrections carried by T0 and the gains.
+    c = mh.value / mm.value
+    rel = math.hypot(mh.sigma / mh.value, mm.sigma / mm.value)
+    entry = {"cos_latitude": c, "cos_latitude_sigma": c * rel}
+    if c + c * rel >= 1.0 and c <= 1.0 + 3 * c * rel:
+        entry.update({"latitude_deg": None,
+                      "reason": f"cos(latitude) = {c:.9f} is within 1 sigma ({c * rel:.2g}) of 1: near the "
+                                "equator item 9 cannot resolve the latitude (cos is flat, "
+                                "d(latitude) = d(cos)/sin(latitude) diverges)"
+                                + ("; the pendulum carries the latitude" if pend is not None else "")})
+    elif 0.0 < c <= 1.0:
+        lat = math.degrees(math.acos(c))
+        # cos is even: the sign comes from the combination's hemisphere (measured by a pendulum, or
+        # the user's estimator.hemisphere); otherwise item 9 reports |latitude|
+        hemi = result.get("hemisphere")
+        sign = {"north": 1.0, "south": -1.0}.get(hemi, 1.0)
+        entry["hemisphere"] = hemi if hemi in ("north", "south") else HEMISPHERE_UNDETERMINED
+        entry["latitude_is_absolute"] = hemi not in ("north", "south")
+        s = math.sqrt(max(1 - c * c, 0.0))
+        lo = math.degrees(math.acos(min(c + c * rel, 1.0)))
+        hi = math.degrees(math.acos(max(c - c * rel, 0.0)))
+        entry.update({"latitude_deg": sign * lat, "latitude_sigma_deg": 0.5 * (hi - lo),
+                      "linear_sigma_deg": (math.degrees(c * rel / s) if s > 0 else None)})
+    else:
+        entry.update({"latitude_deg": None, "reason": f"(T_m/T_h)^2 rho_m/rho_h = {c:.9g} is outside (0, 1]"})
+    # uncorrected (printed T at unequal amplitudes, no spin ratio) for comparison
+    entry["uncorrected_cos_latitude"] = (em["swing_duration_s"] / eh["swing_duration_s"]) ** 2
+    ch, cm = eh.get("counting", {}), em.get("counting", {})
+    if ch.get("swing_duration_s") and cm.get("swing_duration_s"):
+        gain_ratio = im.directing_model().gain / ih.directing_model().gain
+        cc = item9_cos_latitude(cm["small_amplitude_swing_duration_s"], ch["small_amplitude_swing_duration_s"],
+                                em["mean_spin_rad_s"], eh["mean_spin_rad_s"]) * gain_ratio
+        methods["item9_counting"] = {"cos_latitude": cc,
+                                     "latitude_deg": math.degrees(math.acos(cc)) if 0 < cc <= 1 else None,
+                                     "swings": [ch["swings"], cm["swings"]]}
+    methods["item9"] = entry
+
+
+def _foucault_method(result, pend):
+    """The pendulum alone: latitude from k / n (n from eq. (10) when a meridian gyroscope gave it,
+    else the nominal sidereal rate) and n = k / sin(latitude from item 9)."""
+    methods = result["methods"]
+    k, sk = pend[1]["foucault_rate_rad_s"], pend[1]["foucault_rate_sigma_rad_s"]
+    entry = {"foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk}
+    n_ref = methods.get("item8_eq10", {}).get("earth_rate_rad_s")
+    if n_ref is None:
+        n_ref = result["truth"]["earth_rate_rad_s"]
+        entry["note"] = "latitude from k / n with the nominal sidereal n (no meridian gyroscope)"
+    x = k / n_ref
+    if abs(x) <= 1.0 + 3 * sk / n_ref:
+        xc = max(min(x, 1.0), -1.0)
+        lo = math.degrees(math.asin(max(xc - sk / n_ref, -1.0)))
+        hi = math.degrees(math.asin(min(xc + sk / n_ref, 1.0)))
+        entry.update({"latitude_deg": math.degrees(math.asin(xc)), "latitude_sigma_deg": 0.5 * (hi - lo)})
+    else:
+        entry.update({"latitude_deg": None, "reason": f"k/n = {x:.6g} exceeds 1 by more than 3 sigma"})
+    lat9 = methods.get("item9", {}).get("latitude_deg")
+    if abs(k) < 3 * sk:
+        entry["earth_rate_rad_s"] = None
+        entry["reason_earth_rate"] = ("the pendulum does not precess measurably here (|k| < 3 sigma_k, as at "
+                                      "the equator): n = k / sin(latitude) is undetermined")
+    elif lat9 is None:
+        entry["earth_rate_rad_s"] = None
+        entry["reason_earth_rate"] = "n = k / sin(latitude) needs the latitude from item 9, which is null here"
+    else:
+        s = math.sin(math.radians(lat9))
+        entry["earth_rate_rad_s"] = k / s
+        entry["earth_rate_sigma_rad_s"] = sk / abs(s)
+        entry["earth_rate_formula"] = "n = k / sin(latitude from item 9): needs no inertia ratio"
+    return entry
+
+
+def seed_sweep(job) -> list:
     """Estimates of one scene over many sensor seeds, simulating the truth once.
 
     ``job`` = (scene name or path, overrides, seeds) — one picklable argument, so a sweep can be

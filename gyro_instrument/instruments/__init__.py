@@ -16,7 +16,7 @@ from gyro_instrument.instruments.puiseux import PuiseuxBody
 REGISTRY = {}
 
 
-def register(cls):
+def register(cls) -> type:
     """Add an :class:`~.base.Instrument` subclass to :data:`REGISTRY` under its ``type_name``
     (usable as a class decorator; returns ``cls``).
 
@@ -49,13 +49,13 @@ def register(cls):
     return cls
 
 
-def unregister(type_name):
+def unregister(type_name) -> None:
     """Remove the instrument type ``type_name`` from :data:`REGISTRY` (for tests that register their own)."""
     REGISTRY.pop(type_name, None)
     CHANNELS.pop(type_name, None)
 
 
-def simulator_kinds():
+def simulator_kinds() -> dict:
     """ROS simulator node name -> tuple of the instrument types it hosts (``SIMULATOR_NODE``), in
     registry order."""
     out = {}

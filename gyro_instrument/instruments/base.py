@@ -24,13 +24,14 @@ Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports
 """
 
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.effect import CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, supporting_effects
+from gyro_instrument.core.effect import CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, supporting_effects
 from gyro_instrument.core.integrate import Trajectory
 from gyro_instrument.effects import canonical_order
 
@@ -41,7 +42,7 @@ from gyro_instrument.effects import canonical_order
 MAX_PERIODS = 1.0e9
 
 
-def check_period_count(field, value, period_s, duration_s):
+def check_period_count(field, value, period_s, duration_s) -> None:
     """Refuse a parameter whose period makes a run impossible, before integrating.
 
     Raises
@@ -185,9 +186,11 @@ class Instrument:
     SIMULATOR_NODE: ClassVar[str] = ""
     #: True when :meth:`axis_direction_enu` gives the rotor axis (published as ``<name>/axis_direction``)
     SHOWS_AXIS: ClassVar[bool] = False
+    #: True when :meth:`stream` is overridden to integrate window by window in bounded memory
+    STREAMS: ClassVar[bool] = False
 
     @classmethod
-    def check_params(cls, prefix, params):
+    def check_params(cls, prefix, params) -> None:
         """Check the validated parameters together (each was range-checked alone).
 
         Parameters
@@ -204,12 +207,12 @@ class Instrument:
         """
 
     @classmethod
-    def check_effects(cls, prefix, params, effect_names):
+    def check_effects(cls, prefix, params, effect_names) -> None:
         """Check the parameters against the instrument's effect list (tuple of names, all in
         ``SUPPORTED_EFFECTS``), e.g. an integrator that needs an effect. Raises SceneError; the
         default accepts everything."""
 
-    def directing_model(self):
+    def directing_model(self) -> "DirectingModel | None":
         """The :class:`DirectingModel` of a gyroscope with a directing line, or None (the default:
         the instrument measures no Earth rate through a swing duration)."""
         return None
@@ -220,12 +223,12 @@ class Instrument:
         (``SHOWS_AXIS`` False)."""
         return None
 
-    def pendulum_length_m(self):
+    def pendulum_length_m(self) -> float:
         """For a pendulum (``IS_PENDULUM``): the length l (m) whose ratio to the bob's east and north
         displacements is the measured deflection. Raises NotImplementedError otherwise."""
         raise NotImplementedError(f"{self.type_name} is not a pendulum")
 
-    def measured_angles(self, columns):
+    def measured_angles(self, columns) -> dict:
         """True values of the ``MEASURED_CHANNELS`` from simulated ``columns``: dict name -> array
         (rad), in ``MEASURED_CHANNELS`` order. The default reads the columns of the same names; for a
         pendulum, ``x_east / l`` and ``y_north / l`` (l = :meth:`pendulum_length_m`)."""
@@ -235,7 +238,7 @@ class Instrument:
             return {east: columns["x_east"] / length, north: columns["y_north"] / length}
         return {c: columns[c] for c in self.MEASURED_CHANNELS}
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         """``effects`` maps name -> Effect for the effects active on this instrument only (kept in
         the registry's order, the order their terms are summed)."""
         self.name = name
@@ -245,25 +248,25 @@ class Instrument:
         for key, value in self.params.items():
             setattr(self, key, value)
 
-    def has(self, effect_name):
+    def has(self, effect_name) -> bool:
         """True when the effect is listed for this instrument (and so is evaluated)."""
         return effect_name in self.effects
 
-    def effect(self, effect_name):
+    def effect(self, effect_name) -> Effect | None:
         """The active Effect object, or None."""
         return self.effects.get(effect_name)
 
-    def effects_of(self, kind):
+    def effects_of(self, kind) -> list:
         """The active effects contributing to the mechanics ``kind`` (list, summing order)."""
         return [e for e in self.effects.values() if kind in e.MECHANICS]
 
-    def restoring_law(self):
+    def restoring_law(self) -> Callable | None:
         """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
         ``finite_amplitude``), or None: the small-angle law g(u) = u."""
         laws = [e.restoring_law() for e in self.effects_of(RESTORING_LAW)]
         return laws[-1] if laws else None
 
-    def carrier_inertia(self, inertia):
+    def carrier_inertia(self, inertia) -> float | np.ndarray:
         """What a carrier (gimbal ring) of moment ``inertia`` (kg m²) contributes to the motion: the
         sum over the active ``carrier_inertia`` effects, 0.0 (massless) without one."""
         total = 0.0
@@ -271,15 +274,50 @@ class Instrument:
             total = total + e.carrier_inertia(inertia)
         return total
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         """Characteristic scales for effect-size estimates (see ``Effect.relative_size``)."""
         raise NotImplementedError
 
-    def simulate(self, t, **options):
+    def simulate(self, t, **options) -> Simulation:
         """Integrate and return a :class:`Simulation` sampled at times ``t`` (s)."""
         raise NotImplementedError
 
-    def predictions(self):
+    def stream(self, blocks, **options) -> Iterator[Simulation]:
+        """Integrate block by block: yield one :class:`Simulation` per block of sample times.
+
+        Parameters
+        ----------
+        blocks : iterable of ndarray
+            Consecutive, increasing 1-D arrays of sample times (s); together they are the ``t`` of
+            the equivalent one-shot :meth:`simulate` (e.g. :func:`gyro_instrument.core.scene.sample_blocks`).
+        **options
+            As for :meth:`simulate`.
+
+        Yields
+        ------
+        Simulation
+            ``t`` is the block, ``columns`` the channels at those times; the state carries over to
+            the next block, so the concatenated blocks equal ``simulate(concatenate(blocks))``.
+
+        This default materialises every block and runs one :meth:`simulate` (correct, memory
+        proportional to the run); an instrument that streams (``STREAMS`` True) overrides it so
+        memory stays bounded by one block and the first block is yielded before the rest is
+        integrated.
+        """
+        blocks = [np.asarray(b, dtype=float) for b in blocks]
+        if not blocks:
+            return
+        sim = self.simulate(np.concatenate(blocks), **options)
+        n = sim.t.size
+        i = 0
+        for b in blocks:
+            j = i + b.size
+            cut = {k: (v[i:j] if isinstance(v, np.ndarray) and v.shape[:1] == (n,) else v)
+                   for k, v in sim.extra.items()}
+            yield Simulation(b, {k: v[i:j] for k, v in sim.columns.items()}, sim.trajectory, cut)
+            i = j
+
+    def predictions(self) -> dict:
         """The papers' analytic predictions for this instrument's configuration (dict).
 
         Predictions describe the model as simulated: an effect the instrument does not list is
@@ -289,7 +327,7 @@ class Instrument:
         """
         return {}
 
-    def model_earth_rate(self):
+    def model_earth_rate(self) -> float:
         """n as simulated (rad/s): the sum of the active ``frame_rate`` effects' rates (the site's
         Earth rate with ``earth_rotation``), 0 without one."""
         total = 0.0
@@ -297,14 +335,14 @@ class Instrument:
             total = total + e.frame_rate_rad_s(self.site)
         return total
 
-    def missing_effect_note(self, effect_name, consequence):
+    def missing_effect_note(self, effect_name, consequence) -> str | None:
         """``"<effect> not simulated: <consequence>"`` when a supported effect is not listed, else None."""
         if effect_name in self.SUPPORTED_EFFECTS and not self.has(effect_name):
             return f"{effect_name} not simulated: {consequence}"
         return None
 
 
-def with_notes(predictions, *notes):
+def with_notes(predictions, *notes) -> dict:
     """``predictions`` with a ``notes`` list of the non-None notes (no key when there are none)."""
     notes = [n for n in notes if n]
     if notes:

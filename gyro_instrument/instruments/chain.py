@@ -25,6 +25,7 @@ effect's torque, a link declared a rotor's spin hinge (``spin_inertia``) each ``
 torque — the instrument declares its hinges, the chain turns effects into torques in one place.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,7 +34,7 @@ from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN
 from gyro_instrument.core.vector import cross3
 
 
-def axis_rotation(axis, angle):
+def axis_rotation(axis, angle) -> np.ndarray:
     """Rotation matrix about a unit ``axis`` by ``angle`` (right-hand rule), Rodrigues' formula."""
     a = np.asarray(axis, dtype=float)
     c, s = np.cos(angle), np.sin(angle)
@@ -97,7 +98,7 @@ class HingeChain:
         terms the declared hinges (:func:`effect_hinge_torques`).
     """
 
-    def __init__(self, links, base_rotation, omega_enu, gravity_enu, effects=()):
+    def __init__(self, links, base_rotation, omega_enu, gravity_enu, effects=()) -> None:
         self.links = list(links)
         self.nl = len(self.links)
         self.free = [k for k, L in enumerate(self.links) if not L.locked]
@@ -112,7 +113,7 @@ class HingeChain:
         self.axes = [np.asarray(L.axis, dtype=float) / np.linalg.norm(L.axis) for L in self.links]
         self.gravity_on = any(L.mass_kg != 0.0 and np.any(L.com_m) for L in self.links)
 
-    def full_coordinates(self, qf, qdf):
+    def full_coordinates(self, qf, qdf) -> tuple:
         """Expand free coordinates to all links (locked ones at their locked angle)."""
         q = np.array([L.locked_angle for L in self.links], dtype=float)
         qd = np.zeros(self.nl)
@@ -120,7 +121,7 @@ class HingeChain:
         qd[self.free] = qdf
         return q, qd
 
-    def orientations(self, q):
+    def orientations(self, q) -> list:
         """Rotation matrices B_k (body k axes -> base axes) for all links."""
         B, out = np.eye(3), []
         for k, L in enumerate(self.links):
@@ -128,7 +129,7 @@ class HingeChain:
             out.append(B)
         return out
 
-    def kinematics(self, q, qd):
+    def kinematics(self, q, qd) -> tuple:
         """Relative angular velocities w_k, velocity-product accelerations a0_k (q̈ = 0),
         the rotation matrices R_k and the partial angular velocities P[k][j]."""
         nl = self.nl
@@ -155,7 +156,7 @@ class HingeChain:
             w_prev, a_prev = wk, ak
         return w, a0, B, P
 
-    def accelerations(self, qf, qdf):
+    def accelerations(self, qf, qdf) -> np.ndarray:
         """q̈ of the free coordinates."""
         q, qd = self.full_coordinates(qf, qdf)
         w, a0, B, P = self.kinematics(q, qd)
@@ -190,12 +191,12 @@ class HingeChain:
             return rhs / M[0, 0]
         return np.linalg.solve(M, rhs)
 
-    def rhs(self, t, y):
+    def rhs(self, t, y) -> np.ndarray:
         """State derivative for y = [q_free, q̇_free]."""
         nf = self.nf
         return np.concatenate([y[nf:], self.accelerations(y[:nf], y[nf:])])
 
-    def energy_relative(self, qf, qdf):
+    def energy_relative(self, qf, qdf) -> float:
         """Relative kinetic energy ½ Σ w_kᵀ I_k w_k plus gravity potential (J)."""
         q, qd = self.full_coordinates(qf, qdf)
         w, _, B, _ = self.kinematics(q, qd)
@@ -206,14 +207,14 @@ class HingeChain:
                 e -= L.mass_kg * np.dot(B[k] @ L.com_m, self.gravity_base)
         return e
 
-    def axis_in_enu(self, qf, link, axis_body):
+    def axis_in_enu(self, qf, link, axis_body) -> np.ndarray:
         """Direction of a body-fixed vector of ``link`` in ENU for free coordinates qf."""
         q, _ = self.full_coordinates(qf, np.zeros(self.nf))
         B = self.orientations(q)[link]
         return self.base @ (B @ np.asarray(axis_body, dtype=float))
 
 
-def effect_hinge_torques(links, effects):
+def effect_hinge_torques(links, effects) -> Callable | None:
     """Hinge torques from the effects' ``damping`` and ``spin`` terms, or None when none acts.
 
     Each link with a ``swing_inertia`` J gets Σ ``damping_torque(J, q̇)`` over the ``damping``

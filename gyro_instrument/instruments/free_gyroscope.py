@@ -87,88 +87,26 @@ cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from gyro_instrument.core.effect import FRAME_RATE
 from gyro_instrument.core.integrate import Trajectory, integrate
 from gyro_instrument.core.params import Param
+from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
-
-# ----------------------------------------------------------------------------- quaternions
-
-
-def quat_mul(a, b):
-    """Hamilton product a ⊗ b of quaternions (scalar first), broadcasting over leading axes."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
-                     aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw], axis=-1)
-
-
-def quat_from_rotvec(axis_unit, angle):
-    """Quaternions of rotations by ``angle`` (array, rad) about one unit ``axis_unit``."""
-    half = 0.5 * np.asarray(angle, dtype=float)
-    s = np.sin(half)
-    return np.concatenate([np.cos(half)[..., None], s[..., None] * np.asarray(axis_unit, dtype=float)], axis=-1)
-
-
-def quat_to_matrix(q):
-    """Rotation matrices (..., 3, 3) of (not necessarily unit) quaternions (..., 4)."""
-    q = np.asarray(q, dtype=float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
-
-
-def quat_from_matrix(R):
-    """Unit quaternion (scalar first) of one rotation matrix (Shepperd's method)."""
-    R = np.asarray(R, dtype=float)
-    tr = np.trace(R)
-    cands = [tr, R[0, 0], R[1, 1], R[2, 2]]
-    i = int(np.argmax(cands))
-    if i == 0:
-        w = 0.5 * math.sqrt(1.0 + tr)
-        q = [w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)]
-    elif i == 1:
-        x = 0.5 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
-        q = [(R[2, 1] - R[1, 2]) / (4 * x), x, (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)]
-    elif i == 2:
-        y = 0.5 * math.sqrt(1.0 - R[0, 0] + R[1, 1] - R[2, 2])
-        q = [(R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), y, (R[1, 2] + R[2, 1]) / (4 * y)]
-    else:
-        z = 0.5 * math.sqrt(1.0 - R[0, 0] - R[1, 1] + R[2, 2])
-        q = [(R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z), z]
-    q = np.array(q)
-    return q / np.linalg.norm(q) * (1.0 if q[0] >= 0 else -1.0)
-
-
-def rotate_about(v, axis_unit, angle):
-    """Rotate vectors ``v`` (..., 3) about a unit axis by ``angle`` (broadcast), Rodrigues'
-    formula with 1 − cos φ written 2 sin²(φ/2) (no cancellation at small angles)."""
-    v = np.asarray(v, dtype=float)
-    a = np.asarray(axis_unit, dtype=float)
-    ang = np.asarray(angle, dtype=float)[..., None]
-    return (v * np.cos(ang) + np.cross(a, v) * np.sin(ang)
-            + a * (v @ a)[..., None] * (2.0 * np.sin(0.5 * ang) ** 2))
-
 
 # ----------------------------------------------------------------------------- geometry
 
 
-def axis_from_alt_az(altitude_rad, azimuth_rad):
+def axis_from_alt_az(altitude_rad, azimuth_rad) -> np.ndarray:
     """Unit ENU vector at ``altitude_rad`` above the horizon, compass ``azimuth_rad``."""
     ca = math.cos(altitude_rad)
     return np.array([ca * math.sin(azimuth_rad), ca * math.cos(azimuth_rad), math.sin(altitude_rad)])
 
 
-def equatorial_basis(site):
+def equatorial_basis(site) -> tuple:
     """ENU unit vectors (m, w, ê): m toward the local meridian's equator point (hour angle 0),
     w toward the west (hour angle +90°), ê the north part of Earth's axis."""
     g = site.latitude_rad
@@ -176,7 +114,7 @@ def equatorial_basis(site):
             site.earth_axis_north_enu())
 
 
-def body_frame(k0):
+def body_frame(k0) -> np.ndarray:
     """A rotation matrix (columns b1, b2, k0) whose third column is the unit axis ``k0``."""
     ref = np.eye(3)[int(np.argmin(np.abs(k0)))]
     b1 = ref - np.dot(ref, k0) * k0
@@ -184,7 +122,7 @@ def body_frame(k0):
     return np.column_stack([b1, np.cross(k0, b1), k0])
 
 
-def angle_between(a, b):
+def angle_between(a, b) -> float:
     """Angle between two vectors, rad, accurate at 0 and π (atan2 of |a×b| and a·b)."""
     return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
 
@@ -248,7 +186,7 @@ class FreeGyroscope(Instrument):
         Column("spin_rate", "rad/s", "ρ: spin of the body about its axis relative to the Earth"),
     )
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
         self.mu = self.inertia_ratio
         self.A = self.transverse_inertia_kg_m2
@@ -263,12 +201,12 @@ class FreeGyroscope(Instrument):
         self.theta0 = angle_between(self.k0, self.e_axis)
 
     # ---------------------------------------------------------------- constants of motion
-    def model_rate(self):
+    def model_rate(self) -> float:
         """n used by the model: the active ``frame_rate`` effects' rate (``earth_rotation``: the
         site's Earth rate), else 0 (:meth:`Instrument.model_earth_rate`)."""
         return self.model_earth_rate()
 
-    def motion_constants(self, n=None):
+    def motion_constants(self, n=None) -> dict:
         """Exact constants of the torque-free motion (inertial frame = ENU at release).
 
         Parameters
@@ -295,7 +233,7 @@ class FreeGyroscope(Instrument):
                 "sigma": (1.0 - self.mu) * omega3, "beta": beta}
 
     # ---------------------------------------------------------------- predictions
-    def predictions(self):
+    def predictions(self) -> dict:
         """Quet's predictions (eqs. 16, 19, 22, 47, 48, 50) beside the exact closed-form values.
 
         Returns
@@ -352,7 +290,7 @@ class FreeGyroscope(Instrument):
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
                               f"rad/s)"))
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         """Scales for effect-size estimates. There is no restoring torque; the free-precession
         (nutation) rate |L|/A stands in for ``restoring_rate_rad_s`` (inf if the body is at rest
         in a non-rotating world), and ``amplitude_rad`` is the nutation radius β."""
@@ -363,7 +301,7 @@ class FreeGyroscope(Instrument):
                 "restoring_rate_rad_s": lam, "amplitude_rad": k["beta"], "duration_s": duration_s}
 
     # ---------------------------------------------------------------- solution paths
-    def analytic_state(self, tau):
+    def analytic_state(self, tau) -> np.ndarray:
         """Closed-form state at times ``tau`` (s since release), as rows of
         [q (body → inertial, scalar first, 4), ω in body axes (3)], shape (7, m)."""
         k = self.motion_constants()
@@ -379,7 +317,7 @@ class FreeGyroscope(Instrument):
                        np.full_like(tau, wb0[2])])
         return np.vstack([q.T, wb])
 
-    def rhs(self):
+    def rhs(self) -> Callable:
         """Right-hand side for y = [q (4), ω_body (3)] in the inertial frame (Euler's equations
         for A = A, C = μA, and q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|)."""
         a = 1.0 - self.mu
@@ -398,7 +336,7 @@ class FreeGyroscope(Instrument):
                 0.0])
         return f
 
-    def columns_from_state(self, tau, y):
+    def columns_from_state(self, tau, y) -> tuple:
         """Columns and diagnostics from states ``y`` (7, m) at times ``tau`` since release.
 
         Returns
@@ -435,7 +373,7 @@ class FreeGyroscope(Instrument):
                  "quaternion_norm": np.linalg.norm(q, axis=1)}
         return columns, extra
 
-    def simulate(self, t, model=None, rtol=None):
+    def simulate(self, t, model=None, rtol=None) -> Simulation:
         """Release at ``t[0]`` and sample at ``t`` (s).
 
         Parameters

@@ -27,6 +27,7 @@ pendulum of length λ = A / (M l) when μ = C/A is small and ρ0 ≈ 0 (eq. 57).
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 from scipy.special import ellipk
@@ -54,7 +55,7 @@ PENDULUM_MEASURED = ("deflection_east", "deflection_north")
 PENDULUM_JOINTS = PENDULUM_MEASURED + ("deflection", "azimuth")
 
 
-def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
+def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0) -> float:
     """Exact time from maximum deflection α to minimum deflection β of a spherical pendulum.
 
     Quet's eq. (42) gives the series (π/2)√(l/g)(1 + (α² + β²)/16); the exact value, from the
@@ -76,22 +77,22 @@ def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
     return math.sqrt(2.0 * length_m / gravity_m_s2) * float(ellipk(m)) / math.sqrt(z3 - z1)
 
 
-def quarter_period_series_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0):
+def quarter_period_series_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0) -> float:
     """Quet's series (42): T = (π/2) √(l/g) (1 + (α² + β²)/16) (a quarter period)."""
     return 0.5 * math.pi * math.sqrt(length_m / gravity_m_s2) * (1.0 + (alpha_rad ** 2 + beta_rad ** 2) / 16.0)
 
 
-def apsidal_rate_from_rest_rad_s(k_rad_s, theta0_rad):
+def apsidal_rate_from_rest_rad_s(k_rad_s, theta0_rad) -> float:
     """Apsides' rate for a release from rest at θ0: k (1 − (3/8) θ0 sin θ0 cos(θ0/2)) (sec. 2 §III)."""
     return k_rad_s * (1.0 - 0.375 * theta0_rad * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0))
 
 
-def min_deflection_from_rest_rad(length_m, gravity_m_s2, k_rad_s, theta0_rad):
+def min_deflection_from_rest_rad(length_m, gravity_m_s2, k_rad_s, theta0_rad) -> float:
     """Minimum deflection after a release from rest, β = √(l/g) k sin θ0 cos(θ0/2) (sec. 2 §II)."""
     return math.sqrt(length_m / gravity_m_s2) * k_rad_s * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0)
 
 
-def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity=False):
+def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity=False) -> tuple:
     """Exact solution of the linear model with the vertical Earth-rate component only.
 
     ẍ = −ω0² x + 2k ẏ, ÿ = −ω0² y − 2k ẋ (ENU, k = n sin γ) has, with z = x + i y,
@@ -116,7 +117,7 @@ def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity
     return z.real, z.imag, zd.real, zd.imag
 
 
-def pendulum_columns(pos, vel, omega0_sq):
+def pendulum_columns(pos, vel, omega0_sq) -> dict:
     """Derived columns from bob positions/velocities (arrays (3, m), ENU)."""
     x, y, z = pos
     vx, vy = vel[0], vel[1]
@@ -165,7 +166,7 @@ class SphericalPendulum(Instrument):
     SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
-    def check_effects(cls, prefix, p, effects):
+    def check_effects(cls, prefix, p, effects) -> None:
         from gyro_instrument.core.errors import SceneError
         if p["integrator"] == "parareal":
             if "finite_amplitude" not in effects:
@@ -179,18 +180,18 @@ class SphericalPendulum(Instrument):
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs a release from rest at a deflection "
                                  "in (0, 90) degrees (its period and precession come from that release)")
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
         self.l = self.length_m
         self.g = site.gravity_m_s2
         self.theta0 = math.radians(self.initial_deflection_deg)
         self.psi0 = math.radians(self.initial_azimuth_deg)
 
-    def pendulum_length_m(self):
+    def pendulum_length_m(self) -> float:
         """The rod length l, m."""
         return self.l
 
-    def initial_state(self):
+    def initial_state(self) -> tuple:
         """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
         st, ct = math.sin(self.theta0), math.cos(self.theta0)
         sp, cp = math.sin(self.psi0), math.cos(self.psi0)
@@ -202,7 +203,7 @@ class SphericalPendulum(Instrument):
         v = self.radial_speed_m_s * e_rad + self.transverse_speed_m_s * e_az
         return r, v
 
-    def predictions(self):
+    def predictions(self) -> dict:
         """Sec. 2 for the model as simulated: k = n sin γ (0 without ``earth_rotation``); with
         ``finite_amplitude`` the exact quarter period (42), β and the apsidal rate of §II–III;
         without it the linear model's Binet ellipse (quarter period π/(2Ω), Ω = √(g/l + k²),
@@ -233,18 +234,18 @@ class SphericalPendulum(Instrument):
             "finite_amplitude", "small-angle (linear) model: Binet's ellipse, quarter period π/(2√(g/l + k²)), "
                                 "apsides turning at k"))
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
                 "restoring_rate_rad_s": math.sqrt(self.g / self.l), "amplitude_rad": self.theta0,
                 "duration_s": duration_s}
 
-    def point_mass_terms(self):
+    def point_mass_terms(self) -> list:
         """The active effects' ``point_mass`` terms f(δr, v) -> a (ENU, rotating frame), summing order."""
         om = self.site.earth_rate_enu()
         terms = (e.point_mass_term(om) for e in self.effects_of(POINT_MASS))
         return [f for f in terms if f is not None]
 
-    def rhs_exact(self):
+    def rhs_exact(self) -> Callable:
         """Cartesian constrained right-hand side for y = [r, v] (ENU): gravity, the tension and the
         sum of the active effects' point-mass accelerations at δr = r − r_rest (module docstring).
         Accepts a batch of states (y of shape (6, m)) when every term does."""
@@ -271,7 +272,7 @@ class SphericalPendulum(Instrument):
             return np.array([vx, vy, vz, fx - lam * x, fy - lam * yy, fz - lam * z])
         return rhs
 
-    def rhs_linear(self):
+    def rhs_linear(self) -> Callable:
         """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x plus the
         horizontal part of the active effects' point-mass accelerations, taken on the horizontal
         plane (δr = (x, y, 0), v = (vx, vy, 0): Coriolis from the vertical Earth-rate part, ...)."""
@@ -288,7 +289,7 @@ class SphericalPendulum(Instrument):
             return np.array([vx, vy, ax, ay])
         return rhs
 
-    def simulate(self, t, **options):
+    def simulate(self, t, **options) -> Simulation:
         t = np.asarray(t, dtype=float)
         r0, v0 = self.initial_state()
         w0sq = self.g / self.l
@@ -346,7 +347,7 @@ class SphericalPendulum(Instrument):
         turn = math.atan2(r0[0] * y1[1] - r0[1] * y1[0], r0[0] * y1[0] + r0[1] * y1[1])
         return period, turn, sol.nfev, sol
 
-    def comparison_solution(self, t):
+    def comparison_solution(self, t) -> tuple:
         """Quet's comparison pendulum (sec. 2): the first swing of the full model (DOP853, rtol
         1e-12), repeated every period and turned about the vertical by its apsidal angle each time
         — the non-rotating motion turned by k t, with the swing's exact period and turn. Exact
@@ -444,7 +445,7 @@ class CompoundPendulum(Instrument):
     SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
-    def check_params(cls, prefix, p):
+    def check_params(cls, prefix, p) -> None:
         from gyro_instrument.core.errors import SceneError
         ml = p["mass_kg"] * p["com_distance_m"]
         if not (ml > 0.0 and math.isfinite(p["transverse_inertia_kg_m2"] / ml)):
@@ -456,7 +457,7 @@ class CompoundPendulum(Instrument):
             raise SceneError(f"{prefix}.transverse_inertia_kg_m2", p["transverse_inertia_kg_m2"],
                              f"must be >= M l^2 = {ml2:g} (parallel-axis theorem)")
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
         self.A = self.transverse_inertia_kg_m2
         self.C = self.axial_inertia_kg_m2
@@ -466,11 +467,11 @@ class CompoundPendulum(Instrument):
         self.theta0 = math.radians(self.initial_deflection_deg)
         self.psi0 = math.radians(self.initial_azimuth_deg)
 
-    def pendulum_length_m(self):
+    def pendulum_length_m(self) -> float:
         """The pivot–centre-of-mass distance l, m (the deflections are those of the centre of mass)."""
         return self.lc
 
-    def predictions(self):
+    def predictions(self) -> dict:
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
         ``earth_rotation``), the quarter period of the simple pendulum of length λ."""
         k_site = self.site.k_vertical_rad_s
@@ -482,12 +483,12 @@ class CompoundPendulum(Instrument):
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
                 "restoring_rate_rad_s": math.sqrt(self.site.gravity_m_s2 / self.equivalent_length_m),
                 "amplitude_rad": self.theta0, "duration_s": duration_s}
 
-    def build_chain(self):
+    def build_chain(self) -> HingeChain:
         links = [Link("cardan_east", np.array([1.0, 0.0, 0.0]), np.zeros((3, 3))),
                  Link("cardan_north", np.array([0.0, 1.0, 0.0]), np.zeros((3, 3))),
                  Link("body", np.array([0.0, 0.0, -1.0]), np.diag([self.A, self.A, self.C]),
@@ -496,7 +497,7 @@ class CompoundPendulum(Instrument):
         return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
                           np.array([0.0, 0.0, -self.site.gravity_m_s2]), self.effects.values())
 
-    def simulate(self, t, **options):
+    def simulate(self, t, **options) -> Simulation:
         t = np.asarray(t, dtype=float)
         check_period_count(f"instruments.{self.name}.transverse_inertia_kg_m2", self.A,
                            2.0 * math.pi * math.sqrt(self.equivalent_length_m / self.site.gravity_m_s2),

@@ -16,7 +16,7 @@ from functools import lru_cache
 SEPARATOR = "=" * 80
 
 
-def share_dirs():
+def share_dirs() -> list:
     """Prefixes to search: ``AMENT_PREFIX_PATH`` entries, then this interpreter's prefix."""
     dirs = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
     for p in (sys.prefix, os.environ.get("VIRTUAL_ENV", "")):
@@ -35,7 +35,7 @@ def _find(pkg, name, ext):
 
 
 @lru_cache(maxsize=None)
-def msg_text(type_name):
+def msg_text(type_name) -> str:
     """The ``.msg`` text of ``pkg/msg/Type``."""
     pkg, _, name = type_name.split("/")
     with open(_find(pkg, name, "msg"), encoding="utf-8") as fh:
@@ -67,7 +67,7 @@ def _msg_text_any(name):
 
 
 @lru_cache(maxsize=None)
-def concatenated_definition(type_name):
+def concatenated_definition(type_name) -> str:
     """rosbag2's schema text for ``pkg/msg/Type``, exactly as ``get_full_text`` builds it: the root
     text, then depth-first over each type's dependencies in sorted order, each once:
     ``"\\n" + "=" * 80 + "\\nMSG: " + name + "\\n" + text``."""
@@ -88,7 +88,7 @@ def concatenated_definition(type_name):
 
 
 @lru_cache(maxsize=None)
-def type_hash(type_name):
+def type_hash(type_name) -> str:
     """RIHS01 type hash from the installed ``.json`` type description."""
     pkg, _, name = type_name.split("/")
     with open(_find(pkg, name, "json"), encoding="utf-8") as fh:

@@ -45,7 +45,7 @@ def _rate(t, y):
     return np.gradient(y, t) if y.size > 1 else np.zeros_like(y)
 
 
-def joint_streams(scene, kinds=None, seed=None, truth=None):
+def joint_streams(scene, kinds=None, seed=None, truth=None) -> tuple:
     """Simulate, measure and lay out every instrument of ``scene`` (of the given types).
 
     Returns
@@ -86,7 +86,7 @@ def joint_streams(scene, kinds=None, seed=None, truth=None):
     return t_ns, streams
 
 
-def records_from_joints(insts, samples):
+def records_from_joints(insts, samples) -> dict:
     """Estimator records from joint samples.
 
     Parameters

@@ -20,6 +20,7 @@ import copy
 import json
 import os
 import time
+from collections.abc import Iterator
 
 from mcap.data_stream import RecordBuilder
 from mcap.writer import CompressionType, Writer
@@ -30,7 +31,7 @@ from gyro_instrument.recording.definitions import concatenated_definition, type_
 _INF = "    sec: 9223372036\n    nsec: 854775807\n"
 
 
-def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False):
+def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False) -> str:
     """rosbag2 (jazzy, metadata version 9) encoding of one offered QoS profile, as a YAML list."""
     return ("- history: {h}\n  depth: {d}\n  reliability: {r}\n  durability: {du}\n  deadline:\n{inf}"
             "  lifespan:\n{inf}  liveliness: 1\n  liveliness_lease_duration:\n{inf}"
@@ -101,7 +102,7 @@ class BagWriter:
         Longest wall time between commits: at most this much recording is lost on SIGKILL.
     """
 
-    def __init__(self, path, chunk_size=256 * 1024, compression="zstd", commit_period_s=0.5):
+    def __init__(self, path, chunk_size=256 * 1024, compression="zstd", commit_period_s=0.5) -> None:
         self.path = path
         self._fh = _TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
@@ -119,7 +120,7 @@ class BagWriter:
         self.commits = 0
         self._commit()
 
-    def add_topic(self, topic, type_name, qos=None):
+    def add_topic(self, topic, type_name, qos=None) -> int:
         """Register a topic of type ``pkg/msg/Type`` (idempotent); returns the channel id."""
         if topic in self._channels:
             return self._channels[topic]
@@ -133,7 +134,7 @@ class BagWriter:
         self.counts[topic] = 0
         return cid
 
-    def write(self, topic, log_time_ns, data, publish_time_ns=None):
+    def write(self, topic, log_time_ns, data, publish_time_ns=None) -> None:
         """Append one CDR message on a registered topic."""
         cid = self._channels[topic]
         data = bytes(data)
@@ -145,12 +146,12 @@ class BagWriter:
         if self._bytes >= self.chunk_size or time.monotonic() - self._last_commit >= self.commit_period_s:
             self.commit()
 
-    def add_metadata(self, name, data):
+    def add_metadata(self, name, data) -> None:
         """A metadata record (str -> str mapping), committed to disk at once."""
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
         self.commit()
 
-    def commit(self):
+    def commit(self) -> None:
         """Close the chunk in progress and make the file on disk a complete MCAP holding it."""
         self._w.flush()
         self._commit()
@@ -179,7 +180,7 @@ class BagWriter:
         w.finish()
         return bytes(sink.buf)
 
-    def close(self, state="complete", **fields):
+    def close(self, state="complete", **fields) -> None:
         """Finish the file: final status record (``state``, ``messages`` and any ``fields``, e.g. the
         per-topic counts of an ``incomplete`` recording), summary, indexes, footer."""
         if not self.closed:
@@ -209,7 +210,7 @@ class _Sink:
         pass
 
 
-def recording_state(path, scan=None):
+def recording_state(path, scan=None) -> str | None:
     """The recorder's last status: ``complete``, ``recording`` (cut short after its last commit),
     ``no summary`` (an unindexed prefix, e.g. from an older writer), or None (no status record:
     a file written by another tool or before status records).
@@ -222,7 +223,7 @@ def recording_state(path, scan=None):
     return (scan or scan_bag(path)).state
 
 
-def iter_records(path, topics=None, scan=None):
+def iter_records(path, topics=None, scan=None) -> Iterator:
     """Yield (schema, channel, message) of every intact message in log-time order (ties in file
     order), every chunk's CRC checked: a damaged chunk is skipped and the intact chunks after it are
     read (:func:`~gyro_instrument.recording.bag_scan.scan_bag` says what was lost); a file cut
@@ -236,13 +237,13 @@ def iter_records(path, topics=None, scan=None):
     yield from (scan or scan_bag(path)).records(topics)
 
 
-def read_messages(path, topics=None, scan=None):
+def read_messages(path, topics=None, scan=None) -> Iterator:
     """Yield (topic, type_name, log_time_ns, cdr_bytes); see :func:`iter_records`."""
     for schema, channel, message in iter_records(path, topics, scan):
         yield channel.topic, schema.name if schema else "", message.log_time, message.data
 
 
-def read_metadata(path, name="gyro_instrument", scan=None):
+def read_metadata(path, name="gyro_instrument", scan=None) -> dict | None:
     """The first intact metadata record of that name as a dict, or None (also from a file cut short).
 
     Raises
@@ -253,7 +254,7 @@ def read_metadata(path, name="gyro_instrument", scan=None):
     return (scan or scan_bag(path)).metadata_record(name)
 
 
-def damage_record(scan, epoch_ns):
+def damage_record(scan, epoch_ns) -> dict:
     """The ``gyro_instrument_damage`` metadata a recovered file carries: every lost span (this
     file's and any a previous recovery recorded) as JSON, the notes, and the status the original had."""
     notes = list(scan.recorded_notes) + list(scan.notes)
@@ -263,7 +264,7 @@ def damage_record(scan, epoch_ns):
             "status": str(scan.recorded_status or scan.state), "source": os.path.basename(scan.path)}
 
 
-def recover(damaged, out, scan=None, epoch_ns=None):
+def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
     """Rewrite a recording that is cut short (no summary/footer) or damaged (chunks failing their
     CRC, a broken summary) into a complete, indexed MCAP holding only what is intact: the schemas
     and channels, every message of every chunk whose CRC checks, and the metadata. Damaged bytes

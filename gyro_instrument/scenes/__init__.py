@@ -12,7 +12,7 @@ from importlib import resources
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import Param
-from gyro_instrument.core.scene import apply_overrides, build_scene, read_yaml
+from gyro_instrument.core.scene import Scene, apply_overrides, build_scene, read_yaml
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS
 
@@ -37,13 +37,13 @@ ESTIMATOR_PARAMS = (
 )
 
 
-def shipped_scene_names():
+def shipped_scene_names() -> list:
     """Names of the scenes installed with the package."""
     root = resources.files(__name__)
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".yaml"))
 
 
-def scene_path(name_or_path):
+def scene_path(name_or_path) -> str:
     """Resolve a shipped scene name or a path to a file path."""
     text = str(name_or_path)
     if os.path.exists(text) or text.endswith((".yaml", ".yml")) or os.sep in text:
@@ -56,19 +56,19 @@ def scene_path(name_or_path):
                                     f"{', '.join(shipped_scene_names())}")
 
 
-def load_scene(name_or_path, overrides=()):
+def load_scene(name_or_path, overrides=()) -> Scene:
     """Load, override and validate a scene (see module docstring). Raises SceneError."""
     path = scene_path(name_or_path)
     data = apply_overrides(read_yaml(path), overrides, effect_names=tuple(EFFECTS))
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=path)
 
 
-def scene_from_data(data, source="recorded"):
+def scene_from_data(data, source="recorded") -> Scene:
     """Validate an already-read scene mapping (e.g. the one stored in a bag)."""
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=source)
 
 
-def build_instruments(scene):
+def build_instruments(scene) -> dict:
     """Instrument objects of a scene: name -> instrument, each with only its listed effects."""
     out = {}
     for name, (itype, params, effect_names) in scene.instruments.items():
@@ -81,7 +81,7 @@ def build_instruments(scene):
 NO_EARTH_ROTATION = "earth_rotation is not simulated"
 
 
-def scene_notes(scene):
+def scene_notes(scene) -> list:
     """What the scene leaves out that a reader would assume is there, one sentence each.
 
     ``describe`` (text and ``scene_notes`` in JSON), ``simulate`` (stderr) and ``estimate`` (text

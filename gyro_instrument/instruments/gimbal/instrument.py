@@ -49,32 +49,7 @@ Configurations
 θ = 90°, outer ring free: §IV, periods T, T', T'''), ``outer_fixed`` (outer ring held at
 ``outer_fixed_angle_deg``, inner ring free: §IV, period T'').
 
-Periods (every "T" is one swing, HALF the period, π/√K)
--------------------------------------------------------
-Locked rings: the swinging inertia about ``PP'`` is A (rotor) + C1 (inner ring, whose figure
-axis ``oD`` is then along ``PP'``) + A2. Quet's eq. (14) writes A + 2A1 + A2, which is exact
-for thin rings only (C1 = 2A1): eq. (11) gives u² = b sin²θ + γ = A + C1 + A2 at θ = 90°, so
-the printed (14) has silently put C1 = 2A1. Outer ring fixed: the swinging inertia about
-``NN'`` is A + A1 (exact for any ring). Hence::
-
-    T   = π √((A + C1 + A2) / (C n ρ0 sin ω))      (Quet: A + 2A1 + A2)
-    T'  = π √((A + C1 + A2) / (C n ρ0 cos γ))      PP' vertical, sin ω = cos γ
-    T'' = π √((A + A1) / (C n ρ0))                  outer ring fixed across the meridian
-    T'''= π √((A + C1 + A2) / (C n ρ0))            PP' horizontal east–west, sin ω = 1
-
-With both ``earth_rotation`` and ``centrifugal`` the chain is the exact rigid-body motion;
-the small-oscillation constant then gains O(n²) terms (derived from the Routhian, see
-:func:`locked_swing_constant` and :func:`outer_fixed_swing_constant`) whose relative size is
-~ n / (μ ρ0) ≈ 1e-7.
-
-Invariants (used by the tests)
-------------------------------
-(13) d(ρ − k cos θ + k' sin θ sin ψ) = 0 is exact: it is the constancy of the rotor's absolute
-spin ρ + Ω·oQ (axisymmetric rotor, frictionless bearing). (12, first) a θ̇² + u² ψ̇² + Cρ²
-= const is twice the relative kinetic energy; it drops the O(n²) centrifugal potential, the
-exact (Jacobi) integral being T_rel − ½ Σ Ωᵀ I Ω. With ``PP'`` along Earth's axis (§V, k' = 0)
-the second of (12) integrates to u²ψ̇ + Cρ cos θ − k(b − C) sin²θ = const (§V eq. 2), the
-absolute angular momentum about ``PP'`` (exact).
+The periods T, T', T'', T''' and Quet's integrals are in :mod:`.theory`.
 
 Conventions of this module: ``vertical`` is ``PP'`` up (ω = 90° + γ, k = −n sin γ; Quet's
 §IV T'' derivation takes ``oz`` down, k = n sin γ — the same periods); ``north_south`` points
@@ -93,6 +68,9 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link
+from gyro_instrument.instruments.gimbal.theory import (axial_momentum, free_mass_matrix, locked_swing_constant,
+                                                       outer_fixed_swing_constant, quet_energy, quet_swing_durations_s,
+                                                       spin_invariant, swing_duration_s, swing_inertias_kg_m2)
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
@@ -117,7 +95,7 @@ MAX_MASS_MATRIX_CONDITION = 1.0e12
 MIN_INERTIA_RATIO = 1.0e-12
 
 
-def outer_axis_direction_enu(outer_axis, outer_axis_enu, site):
+def outer_axis_direction_enu(outer_axis, outer_axis_enu, site) -> np.ndarray:
     """Unit vector along ``PP'`` (Quet's ``oz``) in ENU.
 
     Parameters
@@ -146,85 +124,7 @@ def outer_axis_direction_enu(outer_axis, outer_axis_enu, site):
     return v / np.linalg.norm(v)
 
 
-def swing_duration_s(inertia_kg_m2, axial_inertia_kg_m2, earth_rate_component_rad_s, spin_rad_s):
-    """One swing (half period) of small oscillations, T = π √(J / (C n ρ0 sin ω)).
-
-    Quet 1853 sec. 4 §IV (T, T', T'', T''' differ only in J and in the Earth-rate component
-    n sin ω). Returns ``inf`` when there is no restoring torque about the reference line.
-
-    Parameters
-    ----------
-    inertia_kg_m2 : float
-        Swinging inertia J, kg m².
-    axial_inertia_kg_m2 : float
-        Rotor's axial moment C, kg m².
-    earth_rate_component_rad_s : float
-        Component of the Earth rate along the equilibrium line (n sin ω, n cos γ, n, ...), rad/s.
-    spin_rad_s : float
-        Relative spin ρ0, rad/s.
-    """
-    K = axial_inertia_kg_m2 * earth_rate_component_rad_s * spin_rad_s / inertia_kg_m2
-    return math.pi / math.sqrt(K) if K > 0.0 else math.inf
-
-
-def locked_swing_constant(A, C, C1, A2, C2, k_prime, rho_eq):
-    """Exact small-oscillation constant K (v'' = −K v) of the locked gimbal, s⁻².
-
-    Routhian of the rigid assembly turning about ``PP'`` with the rotor's absolute spin
-    s = ρ + k' cos v conserved (v = ``outer_angle``); inner ring locked at θ = 90°, so ``oQ``
-    lies along the outer ring's figure axis and ``oD`` along ``PP'``::
-
-        K = [C ρ_eq k' + (C + C2 − A − A2) k'²] / (A + C1 + A2)
-
-    The first term is Quet's eq. (14) (thick-ring inertia); the second is the O(n²) term
-    that eq. (14) drops (with massless rings it is the directing-plane (μ − 1) n² sin² ω).
-
-    Parameters
-    ----------
-    A, C : float
-        Rotor's transverse and axial moments, kg m².
-    C1 : float
-        Inner ring's moment about its figure axis ``oD``, kg m².
-    A2, C2 : float
-        Outer ring's moments about a diameter (``PP'``, ``NN'``) and about its figure axis.
-    k_prime : float
-        n sin ω, rad/s.
-    rho_eq : float
-        Relative spin at the equilibrium line, rad/s.
-    """
-    return (C * rho_eq * k_prime + (C + C2 - A - A2) * k_prime ** 2) / (A + C1 + A2)
-
-
-def outer_fixed_swing_constant(A, C, A1, C1, m_rate, rho_eq):
-    """Exact small-oscillation constant K of the inner swing with the outer ring fixed, s⁻².
-
-    The rotor and inner ring turn about ``NN'`` (a principal axis of both), ``oQ`` in the
-    plane perpendicular to ``NN'``; m_rate = n·|projection of Earth's axis on that plane|::
-
-        K = [C ρ_eq m + (C + A1 − A − C1) m²] / (A + A1)
-
-    First term: Quet's T'' (sec. 4 §IV, with m = n); second: the dropped O(n²) term.
-    """
-    return (C * rho_eq * m_rate + (C + A1 - A - C1) * m_rate ** 2) / (A + A1)
-
-
-def free_mass_matrix(A, C, A1, C1, A2, theta):
-    """Mass matrix of the free gimbal in (ψ, θ, φ), kg m² (from eq. 12, first; equal to
-    :meth:`GimbalGyroscope.mass_matrix` to rounding)::
-
-        [[u² + C cos²θ, 0, C cos θ], [0, a, 0], [C cos θ, 0, C]],  a = A + A1,
-        u² = (A + C1 − A1) sin²θ + A1 + A2 = (A + C1) sin²θ + A1 cos²θ + A2.
-
-    det M = a C u², so with A, C > 0 it is singular exactly when A2 = 0, A1 = 0 and sin θ = 0:
-    massless rings (``ring_inertia`` absent, or both diametral moments 0) with the rotor axis
-    along ``PP'`` (gimbal lock, inner_angle = ±90°). It does not depend on ψ, φ or C2.
-    """
-    c, s2 = math.cos(theta), math.sin(theta) ** 2
-    u2 = (A + C1) * s2 + A1 * c * c + A2
-    return np.array([[u2 + C * c * c, 0.0, C * c], [0.0, A + A1, 0.0], [C * c, 0.0, C]])
-
-
-def scaled_condition(M):
+def scaled_condition(M) -> float:
     """Condition number (2-norm) of D^-1/2 M D^-1/2, D = diag M; inf when singular."""
     d = np.sqrt(np.diag(M))
     if not np.all(d > 0.0):
@@ -232,36 +132,6 @@ def scaled_condition(M):
     with np.errstate(all="ignore"):
         cond = float(np.linalg.cond(M / np.outer(d, d)))
     return cond if math.isfinite(cond) else math.inf
-
-
-def spin_invariant(rho, theta, psi, k, k_prime):
-    """Quet's eq. (13): ρ − k cos θ + k' sin θ sin ψ (rad/s), constant without bearing torque.
-
-    It is ρ + Ω·oQ, the rotor's absolute spin, with Ω = (k', 0, −k) and
-    oQ = (sin θ sin ψ, −sin θ cos ψ, cos θ) in Quet's axes.
-    """
-    return rho - k * np.cos(theta) + k_prime * np.sin(theta) * np.sin(psi)
-
-
-def quet_energy(theta, theta_dot, psi_dot, rho, A, C, A1, C1, A2):
-    """Quet's eq. (12, first): a θ̇² + u² ψ̇² + C ρ² (J, twice the relative kinetic energy).
-
-    a = A + A1, b = A + C1 − A1, γ = A1 + A2, u² = b sin²θ + γ (eq. 11).
-    """
-    a = A + A1
-    u2 = (A + C1 - A1) * np.sin(theta) ** 2 + A1 + A2
-    return a * theta_dot ** 2 + u2 * psi_dot ** 2 + C * rho ** 2
-
-
-def axial_momentum(theta, psi_dot, rho, k, A, C, A1, C1, A2):
-    """§V eq. (2, second): u² ψ̇ + C ρ cos θ − k (b − C) sin² θ, kg m²/s.
-
-    The absolute angular momentum about ``PP'`` less a constant; conserved when ``PP'`` is
-    parallel to Earth's axis (k' = 0). b = A + C1 − A1.
-    """
-    b = A + C1 - A1
-    u2 = b * np.sin(theta) ** 2 + A1 + A2
-    return u2 * psi_dot + C * rho * np.cos(theta) - k * (b - C) * np.sin(theta) ** 2
 
 
 class GimbalGyroscope(Instrument):
@@ -329,7 +199,7 @@ class GimbalGyroscope(Instrument):
     )
 
     @classmethod
-    def check_params(cls, prefix, p):
+    def check_params(cls, prefix, p) -> None:
         """Refuse a missing custom axis, non-physical ring moments, a numerically massless rotor axis
         (inertia_ratio below :data:`MIN_INERTIA_RATIO`) and initial values for a held ring; raises
         SceneError."""
@@ -366,7 +236,7 @@ class GimbalGyroscope(Instrument):
                                  "must be 0 when configuration = outer_fixed (outer ring held)")
 
     @classmethod
-    def check_effects(cls, prefix, p, effects):
+    def check_effects(cls, prefix, p, effects) -> None:
         """Refuse a free gimbal released at (or too near) gimbal lock with massless rings.
 
         Raises
@@ -409,7 +279,7 @@ class GimbalGyroscope(Instrument):
                          f"away from +-90, or give the rings inertia (list ring_inertia with "
                          f"inner_ring_diametral_inertia_kg_m2 or outer_ring_diametral_inertia_kg_m2 > 0)")
 
-    def __init__(self, name, site, params, effects):
+    def __init__(self, name, site, params, effects) -> None:
         full = {prm.name: prm.default for prm in self.PARAMS}
         full.update(params)
         super().__init__(name, site, full, effects)
@@ -451,7 +321,7 @@ class GimbalGyroscope(Instrument):
         self.outer_rate0 = math.radians(self.initial_outer_rate_deg_s)
         self.inner_rate0 = math.radians(self.initial_inner_rate_deg_s)
 
-    def directing_model(self):
+    def directing_model(self) -> DirectingModel | None:
         """What an estimator may know: K = (π/T0)² = gain · n ρ · s(γ) for the configured swing, or
         None for free rings (no single directing line).
 
@@ -477,22 +347,22 @@ class GimbalGyroscope(Instrument):
 
     # ---------------------------------------------------------------- geometry helpers
     @property
-    def psi0(self):
+    def psi0(self) -> float:
         """Initial ψ (Quet), rad."""
         return self.outer0 + math.pi / 2
 
     @property
-    def theta0(self):
+    def theta0(self) -> float:
         """Initial θ (Quet), rad."""
         return self.inner0 + self.theta_ref
 
-    def swing_plane_rate_rad_s(self):
+    def swing_plane_rate_rad_s(self) -> float:
         """n times the projection of Earth's axis on the plane of the inner swing (outer_fixed):
         m = n √(cos² ω + sin² ω cos² α); n for Quet's α = 0, whatever PP'."""
         return self.site.earth_rate_rad_s * math.hypot(self.cos_omega, self.sin_omega * math.cos(self.alpha_fixed))
 
     # ---------------------------------------------------------------- predictions
-    def predictions(self):
+    def predictions(self) -> dict:
         """Quet sec. 4 §IV periods in the printed thin-ring form and the thick-ring form.
 
         All durations are one swing (HALF the period), T = π/√K, in seconds, evaluated with the
@@ -523,7 +393,7 @@ class GimbalGyroscope(Instrument):
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", "no directing torque C n ρ0 sin ω (sec. 4 §IV): T, T', T'', T''' are null" + with_it))
 
-    def _predictions(self, rotating):
+    def _predictions(self, rotating) -> dict:
         """The predictions with the site's Earth rate (``rotating``) or with n = 0."""
         f = 1.0 if rotating else 0.0
         n = self.site.earth_rate_rad_s * f
@@ -531,17 +401,12 @@ class GimbalGyroscope(Instrument):
         A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
         rho0 = self.spin_rate_rad_s
         cos_g = math.cos(self.site.latitude_rad)
-        J_quet = A + 2.0 * A1 + A2
-        J_thick = A + C1 + A2
-        J_fixed = A + A1
+        J_quet, J_thick, J_fixed = swing_inertias_kg_m2(A, A1, C1, A2)
         out = {"configuration": self.configuration, "sin_omega": self.sin_omega, "cos_omega": self.cos_omega,
                "k_rad_s": k, "k_prime_rad_s": k_prime,
                "inertia_locked_quet_kg_m2": J_quet, "inertia_locked_kg_m2": J_thick,
                "inertia_outer_fixed_kg_m2": J_fixed}
-        for key, rate in (("T", k_prime), ("T_prime", n * cos_g), ("T_third", n)):
-            out[f"{key}_quet_s"] = swing_duration_s(J_quet, C, rate, rho0)
-            out[f"{key}_thick_s"] = swing_duration_s(J_thick, C, rate, rho0)
-        out["T_second_quet_s"] = out["T_second_thick_s"] = swing_duration_s(J_fixed, C, n, rho0)
+        out.update(quet_swing_durations_s(J_quet, J_thick, J_fixed, C, rho0, n, k_prime, cos_g))
         theta0, psi0 = self.theta0, self.psi0
         out["conserved_spin_rad_s"] = float(spin_invariant(rho0, theta0, psi0, k, k_prime))
         out["inner_reference_rad"] = self.theta_ref
@@ -573,7 +438,7 @@ class GimbalGyroscope(Instrument):
                                          if rho0 != 0.0 and s0 != 0.0 else math.inf)
         return out
 
-    def scales(self, duration_s):
+    def scales(self, duration_s) -> dict:
         """Characteristic scales for ``Effect.relative_size``: swing and gyroscopic rates, ring ratio
         (those of the rotating Earth, whether or not ``earth_rotation`` is listed)."""
         pred = self._predictions(True)
@@ -593,11 +458,12 @@ class GimbalGyroscope(Instrument):
                 "ring_inertia_ratio": ring_ratio, "amplitude_rad": amp, "duration_s": duration_s}
 
     # ---------------------------------------------------------------- model
-    def swing_inertias(self):
+    def swing_inertias(self) -> tuple:
         """(J_outer, J_inner): A + C1 + A2 about PP' (rings perpendicular) and A + A1 about NN', kg m²."""
-        return self.A + self.C1 + self.A2, self.A + self.A1
+        _, J_thick, J_fixed = swing_inertias_kg_m2(self.A, self.A1, self.C1, self.A2)
+        return J_thick, J_fixed
 
-    def build_chain(self):
+    def build_chain(self) -> HingeChain:
         """Hinge chain outer ring (about oz) → inner ring (about NN') → rotor (about oQ).
 
         ``pivot_damping`` puts −(2/τ) J q̇ on the outer and inner hinges with the constant swing
@@ -617,14 +483,14 @@ class GimbalGyroscope(Instrument):
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
         return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
 
-    def initial_state(self, chain):
+    def initial_state(self, chain) -> np.ndarray:
         """y0 = [q_free, q̇_free] at release: ψ0, θ0, φ0 = 0, ψ̇0, θ̇0, φ̇0 = ρ0 − ψ̇0 cos θ0."""
         q = np.array([self.psi0, self.theta0, 0.0])
         qd = np.array([self.outer_rate0, self.inner_rate0,
                        self.spin_rate_rad_s - self.outer_rate0 * math.cos(self.theta0)])
         return np.concatenate([q[chain.free], qd[chain.free]])
 
-    def simulate(self, t):
+    def simulate(self, t) -> Simulation:
         """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
 
         Parameters
@@ -656,7 +522,7 @@ class GimbalGyroscope(Instrument):
         return Simulation(traj.t, cols, traj,
                           extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
 
-    def mass_matrix(self, chain, qf):
+    def mass_matrix(self, chain, qf) -> np.ndarray:
         """Mass matrix M(q) of the free coordinates (Kane: M_ab = Σ_k P_kaᵀ I_k P_kb), kg m².
 
         For the free configuration, from eq. (12, first), M = [[u² + C cos²θ, 0, C cos θ],
@@ -674,7 +540,7 @@ class GimbalGyroscope(Instrument):
         return M
 
     # ---------------------------------------------------------------- invariants
-    def invariants(self, sim):
+    def invariants(self, sim) -> dict:
         """Quet's integrals along a simulation (arrays over the samples).
 
         Returns

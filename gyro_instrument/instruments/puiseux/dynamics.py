@@ -1,0 +1,144 @@
+"""The exact rigid body on a smooth horizontal plane (Puiseux 1852, eqs. 1-6; no approximation).
+
+Notation as in :mod:`gyro_instrument.instruments.puiseux`; the surface is an
+:class:`~gyro_instrument.instruments.puiseux.surface.EllipsoidSurface`.
+
+Exact model (what ``simulate`` integrates)
+------------------------------------------
+Frictionless plane: the only horizontal force is zero, so the horizontal motion of G is
+uniform (eqs. 1, 2) and decouples; it is taken as zero. G's height is fixed by the contact:
+z = h(n), where h is the support function of the body's surface seen from G (the height of G
+above the plane when the upward vertical in body axes is n). For an ellipsoid S = diag(α², β²,
+γ²) whose centre sits at c = (0, 0, c_z) in body axes (c_z = 0 for sec. I)::
+
+    h(n) = √(nᵀ S n) − c·n,     ∇h = S n/√(nᵀSn) − c = −x_P,
+
+x_P the contact point in body axes (h is extended to all n as a degree-1 homogeneous function,
+so ∇h is the contact point with its sign changed; its Hessian H = S/s − (Sn)(Sn)ᵀ/s³, s = √(nᵀSn)).
+With the body angular velocity w, ṅ = n × w, so ż = ∇h·ṅ = k·w with k = ∇h × n. Lagrangian
+
+    L = ½ M (k·w)² + ½ wᵀ I w − M g h(n).
+
+The Euler-Poincaré equations for the rotation (equivalently Newton-Euler with the normal force
+N at x_P: I ẇ + w × I w = N x_P × n, M z̈ = N − M g, z̈ = k̇·w + k·ẇ) give::
+
+    (I + M k kᵀ) ẇ = −w × I w − M (g + k̇·w) k,      k̇ = (H ṅ) × n + ∇h × ṅ,
+    N = M (g + k̇·w + k·ẇ),
+
+solved in closed form with the Sherman-Morrison formula. The orientation is a quaternion q
+(scalar first, body to world), q̇ = ½ q ⊗ (0, w); the right-hand side uses q/|q| so the exact flow
+keeps |q| = 1 and the integrated |q| − 1 measures the integration error. No Euler angle appears,
+so there is no singularity at θ = 0 (where Puiseux's ψ, φ are undefined).
+
+Invariants (used by the tests): the energy E = ½ M (k·w)² + ½ wᵀ I w + M g h(n); the vertical
+component of the angular momentum about G, n·(I w) (the normal force is vertical, so its moment
+about G is horizontal, and gravity acts at G: no vertical torque about G, even though G
+accelerates vertically, since dL_G/dt = Σ moments about G holds for the centre of mass); and for
+a body of revolution (α = β, A = B) the spin r itself (eq. 6: the contact point lies in the
+plane of n and the axis, so the torque has no component along Gz).
+
+The normal force N must stay positive: a negative N means the body would leave the plane,
+which this model does not describe (``extra['min_normal_force_N']``).
+"""
+
+import math
+
+import numpy as np
+
+
+def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
+    """Shared core of the right-hand side and of the diagnostics (scalar or array ``y``).
+
+    ``y`` = [q_w, q_x, q_y, q_z, w_x, w_y, w_z] (quaternion body -> world, body rate); ``surf`` an
+    :class:`~gyro_instrument.instruments.puiseux.surface.EllipsoidSurface`; ``sqrt`` is ``math.sqrt``
+    for one state and ``numpy.sqrt`` for a history (shape (7, m)).
+
+    Returns q̇ (4), ẇ (3), the normal force N (N), h (m), ż (m/s) and n (3).
+    """
+    qw, qx, qy, qz, wx, wy, wz = y
+    A, B, C = inertia
+    sxx, sxy, syy, szz, cz = surf.sxx, surf.sxy, surf.syy, surf.szz, surf.cz
+    nq = qw * qw + qx * qx + qy * qy + qz * qz
+    # upward vertical in body axes: third row of R(q/|q|) (body -> world)
+    nx = 2.0 * (qx * qz - qw * qy) / nq
+    ny = 2.0 * (qy * qz + qw * qx) / nq
+    nz = (qw * qw - qx * qx - qy * qy + qz * qz) / nq
+    # n' = n x w (n fixed in space, seen from the body)
+    ndx = ny * wz - nz * wy
+    ndy = nz * wx - nx * wz
+    ndz = nx * wy - ny * wx
+    # gradient of h: S n / s - c
+    sx = sxx * nx + sxy * ny
+    sy = sxy * nx + syy * ny
+    sz = szz * nz
+    s = sqrt(nx * sx + ny * sy + nz * sz)
+    gx, gy, gz = sx / s, sy / s, sz / s - cz
+    h = s - cz * nz
+    # Hessian times n': S n'/s - S n (S n . n')/s^3
+    tx = sxx * ndx + sxy * ndy
+    ty = sxy * ndx + syy * ndy
+    tz = szz * ndz
+    f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
+    hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
+    # k = grad h x n (z' = k.w) and its rate
+    kx = gy * nz - gz * ny
+    ky = gz * nx - gx * nz
+    kz = gx * ny - gy * nx
+    kdx = hy * nz - hz * ny + gy * ndz - gz * ndy
+    kdy = hz * nx - hx * nz + gz * ndx - gx * ndz
+    kdz = hx * ny - hy * nx + gx * ndy - gy * ndx
+    # right-hand side: -w x I w - M (g + k'.w) k
+    Lx, Ly, Lz = A * wx, B * wy, C * wz
+    coef = M * (g + kdx * wx + kdy * wy + kdz * wz)
+    bx = -(wy * Lz - wz * Ly) - coef * kx
+    by = -(wz * Lx - wx * Lz) - coef * ky
+    bz = -(wx * Ly - wy * Lx) - coef * kz
+    # (I + M k k^T)^-1 b by Sherman-Morrison
+    ux, uy, uz = bx / A, by / B, bz / C
+    vx, vy, vz = kx / A, ky / B, kz / C
+    fac = M * (kx * ux + ky * uy + kz * uz) / (1.0 + M * (kx * vx + ky * vy + kz * vz))
+    wdx, wdy, wdz = ux - fac * vx, uy - fac * vy, uz - fac * vz
+    N = M * (g + kdx * wx + kdy * wy + kdz * wz + kx * wdx + ky * wdy + kz * wdz)
+    zdot = kx * wx + ky * wy + kz * wz
+    # q' = 1/2 q (x) (0, w)
+    qdot = (-0.5 * (qx * wx + qy * wy + qz * wz),
+            0.5 * (qw * wx + qy * wz - qz * wy),
+            0.5 * (qw * wy + qz * wx - qx * wz),
+            0.5 * (qw * wz + qx * wy - qy * wx))
+    return qdot, (wdx, wdy, wdz), N, h, zdot, (nx, ny, nz)
+
+
+def reduced_rates(n, w, surf, inertia, M, g) -> np.ndarray:
+    """ṅ and ẇ for the vertical n and the rate w in body axes (the autonomous reduced system).
+
+    The right-hand side of w depends on the orientation only through n, so (n, w) obey a closed
+    6-dimensional system; its linearisation about n = (0, 0, 1), w = (0, 0, r) is eq. (14).
+
+    Parameters
+    ----------
+    n : array (3,)
+        Upward vertical in body axes (unit).
+    w : array (3,)
+        Body angular velocity, rad/s.
+    surf : EllipsoidSurface
+    inertia : sequence of 3 float
+        A, B, C, kg m².
+    M, g : float
+        Mass (kg) and gravity (m/s²).
+
+    Returns
+    -------
+    ndarray (6,)
+        (ṅ, ẇ).
+    """
+    n = np.asarray(n, dtype=float)
+    n = n / np.linalg.norm(n)
+    # a quaternion whose third rotation-matrix row is n (rotation of e_z onto n, inverted)
+    axis = np.cross(n, [0.0, 0.0, 1.0])
+    sa = np.linalg.norm(axis)
+    ang = math.atan2(sa, n[2])
+    axis = axis / sa if sa > 0.0 else np.array([1.0, 0.0, 0.0])
+    q = np.concatenate([[math.cos(ang / 2)], math.sin(ang / 2) * axis])
+    qdot, wdot, *_, nn = contact_dynamics(np.concatenate([q, w]), surf, inertia, M, g, math.sqrt)
+    nn = np.array(nn)
+    return np.concatenate([np.cross(nn, w), wdot])
