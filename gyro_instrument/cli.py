@@ -30,7 +30,10 @@ from contextlib import contextmanager
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
-from gyro_instrument.core.files import replaced_atomically
+from gyro_instrument.core.files import (check_output, check_output_dir, check_writable, replaced_atomically,  # noqa: F401
+                                        same_file, scene_inputs)
+from gyro_instrument.core.jsonable import to_jsonable
+from gyro_instrument.recording.replay import damage_line, read_span_s, replay_bag  # noqa: F401  (re-exported)
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
@@ -64,6 +67,18 @@ def add_scene_arguments(parser, positional=True):
                         help="simulated time per instrument, s (default: the scene's duration_s)")
 
 
+def add_scene_option(parser, scene_help, set_help="override a value of the --scene scene (as for 'estimate')",
+                     dest="scene_option", topics_help=None):
+    """``--scene SCENE`` and ``--set KEY=VALUE`` for a subcommand whose main input is a file or a bag
+    (replay, plot, bench), and with ``topics_help`` the ``--topic INSTRUMENT=/TOPIC`` remaps of a
+    foreign bag (:func:`gyro_instrument.recording.foreign.parse_topic_remaps`)."""
+    parser.add_argument("--scene", dest=dest, default=None, metavar="SCENE", help=scene_help)
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=set_help)
+    if topics_help:
+        parser.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
+                            help=topics_help)
+
+
 def scene_arg(args):
     """The scene named by the positional SCENE or ``--scene`` (None when neither is given).
 
@@ -92,94 +107,6 @@ def print_scene_notes(scene, stream=None):
     from gyro_instrument.scenes import scene_notes
     for note in scene_notes(scene):
         print(f"gyro-instrument: note: {note}", file=stream or sys.stderr)
-
-
-def check_writable(path, field="--out"):
-    """Refuse an output path that cannot be written, before any simulation starts.
-
-    Raises
-    ------
-    SceneError
-        ``path`` is a directory, its directory is missing, or it is not writable.
-    """
-    directory = os.path.dirname(os.path.abspath(path)) or "."
-    if os.path.isdir(path):
-        raise SceneError(field, path, "is a directory; give a file path")
-    if not os.path.isdir(directory):
-        raise SceneError(field, path, f"directory {directory} does not exist")
-    if not os.access(directory, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
-        raise SceneError(field, path, "is not writable")
-
-
-def same_file(a, b):
-    """True when paths ``a`` and ``b`` name the same file (inode when both exist, else realpath)."""
-    try:
-        if os.path.exists(a) and os.path.exists(b):
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return os.path.realpath(a) == os.path.realpath(b)
-
-
-def check_output(path, field="--out", inputs=(), overwrite=False, also=()):
-    """Refuse an output path before anything is simulated, read or written: it must be writable,
-    never one of the command's ``inputs`` (compared by inode/realpath, whatever ``overwrite`` says),
-    and not an existing file unless ``overwrite``. ``also``: other paths the command writes on the
-    way (e.g. ``<out>.partial``), which must not be inputs either.
-
-    Raises
-    ------
-    SceneError
-        One line naming ``field``, the path and why.
-    """
-    check_writable(path, field)
-    for inp in inputs:
-        for p in (path, *also):
-            if inp and same_file(p, inp):
-                what = "is" if p == path else f"writes {p}, which is"
-                raise SceneError(field, path, f"{what} the input {inp}; write elsewhere (--overwrite never "
-                                              f"replaces an input)")
-    if os.path.lexists(path) and not overwrite:
-        raise SceneError(field, path, "exists; pass --overwrite to replace it, or give a new path")
-
-
-def scene_inputs(scene_arg):
-    """The files a scene argument reads (a YAML path; none for a shipped scene name)."""
-    return (scene_arg,) if os.path.isfile(scene_arg) else ()
-
-
-def check_output_dir(path, field="--out"):
-    """Create the output directory ``path`` (and its parents) or refuse it before any work.
-
-    Raises
-    ------
-    SceneError
-        When ``path`` is a file, cannot be created, or is not writable.
-    """
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise SceneError(field, path, "exists and is not a directory")
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as exc:
-        raise SceneError(field, path, f"cannot be created as a directory ({exc.strerror})") from None
-    if not os.access(path, os.W_OK | os.X_OK):
-        raise SceneError(field, path, "is not writable")
-
-
-def to_jsonable(x):
-    """Floats for JSON: non-finite values become None (never NaN or Infinity); a complex number
-    becomes ``{"real": ..., "imag": ...}`` (a real one its real part)."""
-    if isinstance(x, dict):
-        return {k: to_jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [to_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, (complex, np.complexfloating)):   # e.g. the roots of an unstable motion's eq.
-        return x.real if x.imag == 0 else {"real": to_jsonable(x.real), "imag": to_jsonable(x.imag)}
-    return x
 
 
 #: Period conventions printed beside every period (physics_notes, 'What a printed T means').
@@ -393,31 +320,6 @@ def print_estimate(r, stream=None):
           + "\n")
 
 
-def _span_s(v, end):
-    if v is None:
-        return end
-    txt = f"{v:.3f}".rstrip("0")
-    return f"{txt}0 s" if txt.endswith(".") else f"{txt} s"
-
-
-def damage_line(d):
-    """One line for a lost stretch of a bag (a ``damaged`` entry of the replay JSON)."""
-    reason = d.get("reason") or "damaged"
-    where = f" at byte {d['offset']}" if d.get("offset") is not None else ""
-    what = (f"chunk{where} failed its CRC" if reason.startswith("chunk CRC mismatch")
-            else f"{reason}{where}")
-    if d.get("file"):
-        what = f"{d['file']}: {what}"
-    if d.get("before_recovery"):
-        what = f"before recovery: {what}"
-    if d.get("lost_from_s") is None and d.get("lost_to_s") is None and d.get("span_from") is None:
-        return f"{what}: no message in it"
-    span = f"lost {_span_s(d.get('lost_from_s'), 'the start')} to {_span_s(d.get('lost_to_s'), 'the end')}"
-    if d.get("span_from") == "neighbouring messages":
-        span += " (between the intact messages around it)"
-    return f"{what}: {span}"
-
-
 def print_damage(r, w):
     """The bag's lost stretches and the reader's notes (replay, estimate --data); nothing for a
     live estimate."""
@@ -549,15 +451,11 @@ def build_parser():
                                "or a rosbag2 bag directory (metadata.yaml + .mcap files, split or not)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate', with "
                                                        "'damaged' and 'replay_notes' when the bag lost data")
-    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
-                   help="the scene of a bag recorded by another tool (no gyro_instrument record; or to use instead "
+    add_scene_option(p, "the scene of a bag recorded by another tool (no gyro_instrument record; or to use instead "
                         "of the bag's record): the instruments' topics are found by the documented names and types "
                         "(/<instrument>/joint_states, sensor_msgs/msg/JointState, joints as in msg_docs/topics.md); "
-                        "the JSON gains 'topics' (matched, unmatched with the reason, unused)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a value of the --scene scene (as for 'estimate')")
-    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
-                   help="read this instrument's JointState from another topic (repeatable)")
+                        "the JSON gains 'topics' (matched, unmatched with the reason, unused)",
+                     topics_help="read this instrument's JointState from another topic (repeatable)")
     p = sub.add_parser("plot", help="draw the standard views of a table or a bag to PNG: angles over time, the "
                                     "swing-plane azimuth with the k = n sin(latitude) line, the bob's path seen "
                                     "from above, the fit residuals (needs matplotlib: pip install "
@@ -568,13 +466,10 @@ def build_parser():
                         "<file name>_plots beside the current directory); PNGs already there are refused unless "
                         "--overwrite")
     p.add_argument("--overwrite", action="store_true", help="replace the view PNGs already in --out")
-    p.add_argument("--scene", dest="scene_option", default=None, metavar="SCENE",
-                   help="the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
-                        "k line's latitude). A bag written by this package carries its own")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a value of the --scene scene")
-    p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
-                   help="a foreign bag's topic for an instrument (as for replay)")
+    add_scene_option(p, "the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
+                        "k line's latitude). A bag written by this package carries its own",
+                     set_help="override a value of the --scene scene",
+                     topics_help="a foreign bag's topic for an instrument (as for replay)")
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -582,11 +477,9 @@ def build_parser():
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")
-    p.add_argument("--scene", default=None, metavar="SCENE",
-                   help="run only the observation-time study (error versus observation time, systematic floors "
-                        "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a value of the --scene (as for 'estimate')")
+    add_scene_option(p, "run only the observation-time study (error versus observation time, systematic floors "
+                        "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)",
+                     set_help="override a value of the --scene (as for 'estimate')", dest="scene")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run the sweeps (observation time, site sweep, effect cost) on the Dask cluster whose "
                         "scheduler is at ADDRESS (tcp://HOST:8786; its workers need gyro_instrument installed) "
@@ -814,58 +707,3 @@ def plan_command(args):
     else:
         print_plan(d)
     return 0
-
-
-def replay_bag(path, scene=None, overrides=(), topics=()):
-    """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
-    JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
-    out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
-    ``path``: an ``.mcap`` or a rosbag2 bag directory. With ``scene`` (and its ``overrides``) or
-    ``topics`` remaps, a bag recorded by another tool: see
-    :func:`gyro_instrument.recording.foreign.replay_foreign`.
-
-    For a cut recording it adds ``observation_read_s`` (the span of joint stamps decoded, the shortest
-    over the instruments), ``recording_cut`` (why it falls short of the scene's ``duration_s``);
-    ``replay_notes`` says what the reader noticed.
-
-    Raises
-    ------
-    SceneError
-        ``path`` is missing or not a bag, or holds no scene metadata record and no ``scene`` is given.
-    """
-    if scene is not None or topics or overrides:
-        from gyro_instrument.recording.foreign import replay_foreign
-        return replay_foreign(path, scene, list(overrides), list(topics))
-    from gyro_instrument.estimators.pipeline import estimable, estimate_records
-    from gyro_instrument.recording.bag_samples import samples_from_bag
-    from gyro_instrument.recording.joints import records_from_joints
-    from gyro_instrument.scenes import build_instruments, scene_from_data
-    meta, samples, notes, damaged = samples_from_bag(path)
-    read_s = read_span_s(samples)
-    if meta is None or "scene_yaml" not in meta:
-        lost = " (damaged stretches: it may have been lost)" if damaged else ""
-        raise SceneError("bag", path, "has no gyro_instrument metadata record (scene); record it with "
-                                      f"'gyro-instrument run --bag' or the recorder node, or give the scene with "
-                                      f"--scene SCENE{lost}")
-    scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
-    insts = build_instruments(scene)
-    # in the scene's instrument order, whatever order the bag's topics first appear in
-    samples = {n: samples[n] for n in insts if n in samples and estimable(insts[n]) and len(samples[n][0]) >= 3}
-    result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
-    result = to_jsonable(result)
-    if damaged:
-        result["damaged"] = to_jsonable(damaged)
-    if read_s < scene.duration_s - 0.5 / scene.sample_rate_hz:
-        result["observation_read_s"] = read_s
-        result["recording_cut"] = "; ".join(notes) or "the joint samples stop before the scene's duration_s"
-    if notes:
-        result["replay_notes"] = notes
-    return result
-
-
-def read_span_s(samples):
-    """Shortest span of joint stamps actually decoded from a bag, over its instruments, s (0 when
-    none): the observation a replay really had (``samples`` as from ``samples_from_bag``)."""
-    spans = [(int(t[-1]) - int(t[0])) / 1e9 for t, _, _ in samples.values() if len(t)]
-    return min(spans) if spans else 0.0
-

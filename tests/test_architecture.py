@@ -1,6 +1,9 @@
 """Dependencies point one way (shared/architecture.md), checked by reading imports with ast:
 
-core ← effects ← instruments/scenes ← sensors, estimators ← recording, bench, cli ← ros
+core ← effects ← instruments/scenes ← sensors, estimators ← recording, bench, views ← cli ← ros
+
+(the CLI is a front end: nothing below it reads its helpers; output checks live in core.files,
+replay in recording.replay)
 
 and rclpy or ROS message packages are imported only under gyro_instrument/ros/.
 """
@@ -12,7 +15,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "gyro_instrument"
 LAYER = {"core": 0, "effects": 1, "instruments": 2, "scenes": 2, "sensors": 3, "estimators": 3,
-         "recording": 4, "bench": 4, "cli": 4, "ros": 5}
+         "recording": 4, "bench": 4, "views": 4, "cli": 5, "ros": 6}
 ROS_MODULES = ("rclpy", "std_msgs", "sensor_msgs", "geometry_msgs", "builtin_interfaces", "rosgraph_msgs",
                "diagnostic_msgs", "rcl_interfaces", "rosidl_runtime_py", "visualization_msgs")
 

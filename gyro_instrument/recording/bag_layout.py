@@ -80,7 +80,7 @@ def check_bag_output(path, fmt, field="--bag", inputs=(), overwrite=False, max_b
     SceneError
         One line naming ``field``, the path and why.
     """
-    from gyro_instrument.cli import check_output, same_file
+    from gyro_instrument.core.files import check_output, same_file
     if max_bag_size and (max_bag_size < 0 or not float(max_bag_size).is_integer()):
         raise SceneError("--max-bag-size", max_bag_size, "must be a whole number of bytes >= 0 (0: no limit)")
     if max_bag_duration_s and not max_bag_duration_s > 0:

@@ -183,7 +183,7 @@ def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()):
         of the scene found in the bag (one line listing what was expected and why it did not match).
     """
     import json
-    from gyro_instrument.cli import to_jsonable
+    from gyro_instrument.core.jsonable import to_jsonable
     from gyro_instrument.estimators.pipeline import estimate_records
     from gyro_instrument.recording.bag_layout import scan_path
     from gyro_instrument.recording.joints import records_from_joints
