@@ -421,6 +421,15 @@ def build_parser():
         description="Gyrocompass and Foucault pendulum on the rotating Earth (Quet 1853, Puiseux 1852).")
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("scenes", help="list the shipped scenes")
+    _add_scene_commands(sub)
+    _add_bag_commands(sub)
+    _add_study_commands(sub)
+    _add_recover_command(sub)
+    return parser
+
+
+def _add_scene_commands(sub):
+    """describe, simulate, estimate: a scene in, a description, a table or an estimate out."""
     p = sub.add_parser("describe", help="list a scene's instruments, active effects and the estimated size of "
                                         "every effect each instrument supports")
     add_scene_arguments(p)
@@ -444,6 +453,10 @@ def build_parser():
                         "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
                         "Missing values, NaN, irregular and out-of-order times are accepted and noted")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
+
+
+def _add_bag_commands(sub):
+    """replay, plot: a recorded bag or a table in."""
     p = sub.add_parser("replay", help="run the estimator over a recorded bag without DDS; reproduces the "
                                       "live 'run' estimate to the last digit. Every chunk's CRC is checked: a "
                                       "damaged chunk is left out and the log-time span it held is reported")
@@ -470,6 +483,10 @@ def build_parser():
                         "k line's latitude). A bag written by this package carries its own",
                      set_help="override a value of the --scene scene",
                      topics_help="a foreign bag's topic for an instrument (as for replay)")
+
+
+def _add_study_commands(sub):
+    """bench, plan: studies over many runs."""
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
                                      "latitude and Earth-rate error versus observation time with the systematic "
                                      "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
@@ -508,6 +525,10 @@ def build_parser():
                         "print the achieved rms next to the target")
     p.add_argument("--seeds", type=int, default=100, help="seeds for --verify (default 100)")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/plan.md)")
+
+
+def _add_recover_command(sub):
+    """recover: a damaged or cut bag rewritten."""
     p = sub.add_parser("recover", help="rewrite a recording truncated inside its data (no footer: disk "
                                        "full, copied mid-write) or damaged (chunks failing their CRC, a broken "
                                        "summary) into a complete, indexed MCAP of its intact records; the lost "
@@ -519,7 +540,6 @@ def build_parser():
                    help="where to write the recovered file: never the input; an existing file is refused "
                         "unless --overwrite")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file (never the input)")
-    return parser
 
 
 def main(argv=None):
@@ -586,108 +606,131 @@ def _ignore_sigint():
     return None
 
 
-def run_command(args):
-    if args.command == "scenes":
-        from gyro_instrument.scenes import shipped_scene_names
-        print("\n".join(shipped_scene_names()))
-        return 0
-    if args.command == "describe":
-        d = describe(scene_from_args(args))
-        if args.json:
-            print(json.dumps(d, indent=2))
-        else:
-            print_description(d)
-        return 0
-    if args.command == "simulate":
-        from gyro_instrument.estimators.data_io import write_table
-        check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
-        scene = scene_from_args(args)
-        print_scene_notes(scene)
-        progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
-        t, columns, sims = simulate_scene(scene, progress)
-        write_table(args.out, t, columns)
-        if progress:
-            nfev = sum(s.trajectory.nfev for s in sims.values())
-            wall = sum(s.trajectory.wall_time_s for s in sims.values())
-            progress(f"wrote {args.out}: {t.size} rows x {len(columns) + 1} columns "
-                     f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
-        return 0
-    if args.command == "estimate":
-        from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
-        from gyro_instrument.scenes import scene_notes
-        if scene_arg(args) is None:
-            raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
-        scene = scene_from_args(args)
-        if args.data:
-            from gyro_instrument.estimators.data_io import estimate_data
-            result = to_jsonable(estimate_data(scene, args.data))
-        else:
-            with terminal_progress("simulating"):
-                truth = simulate_truth(scene)
-            result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
-        result["seed"] = scene.seed
-        result["scene_notes"] = scene_notes(scene)
-        without_rotation_reason(result, scene)
-        if args.json:
-            print(json.dumps(result, indent=2))
-        else:
-            print_estimate(result)
-        return 0
-    if args.command == "bench":
-        from gyro_instrument.bench.studies import run_bench
-        if args.overrides and args.scene is None:
-            raise SceneError("--set", args.overrides[0], "applies to a --scene; give --scene SCENE")
-        if args.scene is not None:
-            from gyro_instrument.scenes import load_scene
-            load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
-        progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
-        if args.scheduler:
-            from gyro_instrument.core.parallel import dask_executor
-            with dask_executor(args.scheduler) as ex:      # no scheduler: exit 2 before --out is made
-                check_output_dir(args.out)
-                progress(f"sweeps on the Dask scheduler {args.scheduler}")
-                print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides,
-                                executor=ex))
-        else:
+def run_command(args) -> int:
+    """Run the parsed subcommand ``args.command``; its exit status."""
+    return COMMANDS[args.command](args)
+
+
+def scenes_command(args) -> int:
+    """``gyro-instrument scenes``: the shipped scene names, one per line."""
+    from gyro_instrument.scenes import shipped_scene_names
+    print("\n".join(shipped_scene_names()))
+    return 0
+
+
+def describe_command(args) -> int:
+    """``gyro-instrument describe``: instruments, active effects, predictions (text or ``--json``)."""
+    d = describe(scene_from_args(args))
+    if args.json:
+        print(json.dumps(d, indent=2))
+    else:
+        print_description(d)
+    return 0
+
+
+def simulate_command(args) -> int:
+    """``gyro-instrument simulate``: every instrument channel to CSV or Parquet (``--out``)."""
+    from gyro_instrument.estimators.data_io import write_table
+    check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    scene = scene_from_args(args)
+    print_scene_notes(scene)
+    progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    t, columns, sims = simulate_scene(scene, progress)
+    write_table(args.out, t, columns)
+    if progress:
+        nfev = sum(s.trajectory.nfev for s in sims.values())
+        wall = sum(s.trajectory.wall_time_s for s in sims.values())
+        progress(f"wrote {args.out}: {t.size} rows x {len(columns) + 1} columns "
+                 f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
+    return 0
+
+
+def estimate_command(args) -> int:
+    """``gyro-instrument estimate``: simulate through the sensors (or read ``--data``) and estimate."""
+    from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+    from gyro_instrument.scenes import scene_notes
+    if scene_arg(args) is None:
+        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
+    scene = scene_from_args(args)
+    if args.data:
+        from gyro_instrument.estimators.data_io import estimate_data
+        result = to_jsonable(estimate_data(scene, args.data))
+    else:
+        with terminal_progress("simulating"):
+            truth = simulate_truth(scene)
+        result = to_jsonable(estimate_records(scene, truth[1], measure(scene, truth)))
+    result["seed"] = scene.seed
+    result["scene_notes"] = scene_notes(scene)
+    without_rotation_reason(result, scene)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print_estimate(result)
+    return 0
+
+
+def bench_command(args) -> int:
+    """``gyro-instrument bench``: the studies of :mod:`gyro_instrument.bench.studies` into ``--out``."""
+    from gyro_instrument.bench.studies import run_bench
+    if args.overrides and args.scene is None:
+        raise SceneError("--set", args.overrides[0], "applies to a --scene; give --scene SCENE")
+    if args.scene is not None:
+        from gyro_instrument.scenes import load_scene
+        load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
+    progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    if args.scheduler:
+        from gyro_instrument.core.parallel import dask_executor
+        with dask_executor(args.scheduler) as ex:      # no scheduler: exit 2 before --out is made
             check_output_dir(args.out)
-            print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides))
-        return 0
-    if args.command == "plan":
-        return plan_command(args)
-    if args.command == "recover":
-        from gyro_instrument.core.scene import EPOCH_NS
-        from gyro_instrument.recording.bag_layout import bag_files, bag_inputs, scan_path
-        from gyro_instrument.recording.mcap_io import recover
-        bag_files(args.bag, "bag")
-        check_output(args.out, "--out", bag_inputs(args.bag), args.overwrite)
-        scan = scan_path(args.bag)
-        n, scan = recover(args.bag, args.out, scan)
-        print(f"recovered {n} messages from {args.bag} into {args.out}")
-        for d in scan.damage_dicts(EPOCH_NS):
-            print(f"  damaged: {damage_line(d)}")
-        for note in scan.notes:
-            print(f"  note: {note}")
-        if scan.truncated:
-            print("  note: the input was cut short (no summary): read up to its last complete record")
-        return 0
-    if args.command == "plot":
-        import time
-        from gyro_instrument.views import plot_file
-        out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
-        t0 = time.perf_counter()
-        pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
-        for note in notes:
-            print(f"gyro-instrument: note: {note}", file=sys.stderr)
-        print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
-        return 0
-    if args.command == "replay":
-        result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
-        if args.json:
-            print(json.dumps(result, indent=2))
-        else:
-            print_estimate(result)
-        return 0
-    raise AssertionError(args.command)
+            progress(f"sweeps on the Dask scheduler {args.scheduler}")
+            print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides,
+                            executor=ex))
+    else:
+        check_output_dir(args.out)
+        print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides))
+    return 0
+
+
+def recover_command(args) -> int:
+    """``gyro-instrument recover``: rewrite a damaged or cut bag's intact records (``--out``)."""
+    from gyro_instrument.core.scene import EPOCH_NS
+    from gyro_instrument.recording.bag_layout import bag_files, bag_inputs, scan_path
+    from gyro_instrument.recording.mcap_io import recover
+    bag_files(args.bag, "bag")
+    check_output(args.out, "--out", bag_inputs(args.bag), args.overwrite)
+    scan = scan_path(args.bag)
+    n, scan = recover(args.bag, args.out, scan)
+    print(f"recovered {n} messages from {args.bag} into {args.out}")
+    for d in scan.damage_dicts(EPOCH_NS):
+        print(f"  damaged: {damage_line(d)}")
+    for note in scan.notes:
+        print(f"  note: {note}")
+    if scan.truncated:
+        print("  note: the input was cut short (no summary): read up to its last complete record")
+    return 0
+
+
+def plot_command(args) -> int:
+    """``gyro-instrument plot``: the standard views of a table or a bag to PNG."""
+    import time
+    from gyro_instrument.views import plot_file
+    out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
+    t0 = time.perf_counter()
+    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
+    for note in notes:
+        print(f"gyro-instrument: note: {note}", file=sys.stderr)
+    print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
+    return 0
+
+
+def replay_command(args) -> int:
+    """``gyro-instrument replay``: the estimate from a recorded bag (:func:`replay_bag`)."""
+    result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print_estimate(result)
+    return 0
 
 
 def plan_command(args):
@@ -707,3 +750,17 @@ def plan_command(args):
     else:
         print_plan(d)
     return 0
+
+
+#: Subcommand name -> its function (``args`` in, exit status out).
+COMMANDS = {
+    "scenes": scenes_command,
+    "describe": describe_command,
+    "simulate": simulate_command,
+    "estimate": estimate_command,
+    "bench": bench_command,
+    "plan": plan_command,
+    "recover": recover_command,
+    "plot": plot_command,
+    "replay": replay_command,
+}
