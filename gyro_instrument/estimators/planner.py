@@ -163,7 +163,7 @@ def instrument_models(scene):
         meas = RateMeasurement(name, "gyro", 0.0, 1.0, tuple(model.normal_enu))
         value = n * float(meas.shape(site.latitude_rad))
         models.append(InstrumentModel(name, "gyro", w, value, tuple(model.normal_enu), tuple(float(c) for c in coef),
-                                      spin=float(getattr(inst, "spin_rate_rad_s", 0.0) or 0.0), label=model.label))
+                                      spin=model.spin_rate_rad_s, label=model.label))
     return models, skipped
 
 

@@ -93,6 +93,9 @@ class DirectingModel:
     second_order : float
         c2 of the exact equation's O(n²) term, K/(gain ρ) = y (1 + c2 y/ρ), y = n s(γ); (μ − 1)/μ for
         the directing plane (sec. 4 §1, the term eqs. (1)–(3) drop), 0 when not derived.
+    spin_rate_rad_s : float
+        ρ0, the rotor's relative spin at release (rad/s): K is proportional to it, so the
+        planner's bound includes the spin-rate sensor's error; 0 when not stated.
     """
 
     gain: float
@@ -101,6 +104,7 @@ class DirectingModel:
     angle_channel: str
     null_reason: str
     second_order: float = 0.0
+    spin_rate_rad_s: float = 0.0
 
 
 @dataclass

@@ -156,7 +156,7 @@ class PlaneGyroscope(Instrument):
         # with y0 = n sin ω and c2 = (μ − 1)/μ. Derived for the plane only (ε = 90°).
         c2 = 0.0 if self.is_cone else (self.mu - 1.0) / self.mu
         return DirectingModel(gain=gain, second_order=c2, normal_enu=tuple(float(v) for v in self.normal),
-                              label=self.plane, angle_channel="angle",
+                              label=self.plane, angle_channel="angle", spin_rate_rad_s=float(self.spin_rate_rad_s),
                               null_reason="a directing plane perpendicular to Earth's axis (horizontal at a pole) "
                                           "has no restoring torque (Quet sec. 4 §1 item 4)")
 

@@ -343,6 +343,7 @@ class GimbalGyroscope(Instrument):
         else:
             return None
         return DirectingModel(gain=gain, normal_enu=tuple(float(v) for v in normal), label=label, angle_channel=chan,
+                              spin_rate_rad_s=float(self.spin_rate_rad_s),
                               null_reason="the swing plane is perpendicular to Earth's axis here: no restoring torque")
 
     # ---------------------------------------------------------------- geometry helpers
