@@ -51,8 +51,19 @@ def samples_from_bag(path, scan=None):
     from gyro_instrument.core.scene import EPOCH_NS
     scan = scan or scan_path(path)
     meta = scan.metadata_record("gyro_instrument")
-    data, notes = {}, list(scan.notes)
-    notes += [f"before recovery: {n}" for n in scan.recorded_notes]
+    notes = list(scan.notes) + [f"before recovery: {n}" for n in scan.recorded_notes]
+    out, count, undecodable = joint_samples(scan, EPOCH_NS)
+    if undecodable:
+        notes.append(f"{undecodable} joint messages did not decode and were left out")
+    notes += status_notes(scan, count)
+    return meta, out, notes, scan.damage_dicts(EPOCH_NS)
+
+
+def joint_samples(scan, epoch_ns) -> tuple:
+    """Every ``[/<namespace>]/<instrument>/joint_states`` JointState of the intact records of ``scan``:
+    ({instrument: (t_ns from ``epoch_ns``, position (m, j), velocity (m, j))}, messages read,
+    messages that did not decode)."""
+    data = {}
     decode = MessageDecoder()
     count = undecodable = 0
     for schema, channel, message in scan.records():
@@ -61,7 +72,7 @@ def samples_from_bag(path, scan=None):
             continue
         try:
             msg = decode(schema, channel, message.data)
-            stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - EPOCH_NS
+            stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - epoch_ns
             pos, vel = list(msg.position), list(msg.velocity)
         except Exception:  # an intact record holding a message that does not decode
             undecodable += 1
@@ -73,8 +84,15 @@ def samples_from_bag(path, scan=None):
         ps.append(pos)
         vs.append(vel)
         count += 1
-    if undecodable:
-        notes.append(f"{undecodable} joint messages did not decode and were left out")
+    out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
+           for n, v in data.items()}
+    return out, count, undecodable
+
+
+def status_notes(scan, count) -> list:
+    """What the recording's status record says about how complete it is (list of str), ``count``
+    being the joint messages read."""
+    notes = []
     state = scan.state
     if state == "no summary":
         notes.append(f"bag has no summary (recording interrupted): read {count} joint messages up to the last "
@@ -89,6 +107,4 @@ def samples_from_bag(path, scan=None):
         notes.append(f"recording {state}: read {count} joint messages")
     if scan.recorded_status not in (None, "complete", state):
         notes.append(f"before recovery the recording's status was '{scan.recorded_status}'")
-    out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
-           for n, v in data.items()}
-    return meta, out, notes, scan.damage_dicts(EPOCH_NS)
+    return notes

@@ -90,13 +90,25 @@ def foreign_samples(scan, insts, remaps=None):
         ``matched``, ``unmatched``, ``unused`` (see the module docstring).
     notes : list of str
     """
-    from gyro_instrument.recording.bag_samples import MessageDecoder
-    remaps = remaps or {}
     by_topic = {}
     for ch in scan.channels.values():
         sc = scan.schemas.get(ch.schema_id)
         by_topic.setdefault(ch.topic, set()).add(sc.name if sc else "")
-    wanted, report, notes = {}, {"matched": {}, "unmatched": {}, "unused": {}}, []
+    report = {"matched": {}, "unmatched": {}, "unused": {}}
+    wanted = _match_topics(insts, remaps or {}, by_topic, report)
+    rows, undecodable = _read_rows(scan, wanted, report)
+    notes = [f"{undecodable} joint messages did not decode and were left out"] if undecodable else []
+    samples = _arrays(wanted, rows, report, notes)
+    used = set(report["matched"].values())
+    report["unused"] = {tp: ", ".join(sorted(ty)) for tp, ty in sorted(by_topic.items()) if tp not in used}
+    return samples, report, notes
+
+
+def _match_topics(insts, remaps, by_topic, report):
+    """topic -> (instrument name, instrument, required joints) for every instrument whose topic
+    (``remaps`` or the documented ``/<name>/joint_states``) is in the bag as a JointState; the others
+    go to ``report["unmatched"]`` with the reason."""
+    wanted = {}
     for name, inst in insts.items():
         joints = _required_joints(inst)
         if joints is None:
@@ -110,6 +122,14 @@ def foreign_samples(scan, insts, remaps=None):
             report["unmatched"][name] = f"topic {topic} has type {', '.join(sorted(types))}, expected {JOINT_STATE}"
         else:
             wanted[topic] = (name, inst, joints)
+    return wanted
+
+
+def _read_rows(scan, wanted, report):
+    """Decode the wanted topics' intact JointState records: ({name: (stamps, log times, positions,
+    velocities)} as lists in ``Instrument.JOINTS`` order, NaN for joints not recorded; the number of
+    messages that did not decode). A topic lacking a required joint goes to ``report["unmatched"]``."""
+    from gyro_instrument.recording.bag_samples import MessageDecoder
     decode = MessageDecoder()
     rows = {name: ([], [], [], []) for name, _, _ in wanted.values()}     # stamps, log times, pos, vel
     columns, undecodable = {}, 0
@@ -142,8 +162,12 @@ def foreign_samples(scan, insts, remaps=None):
         ls.append(message.log_time)
         ps.append([pos[c] if c is not None and c < len(pos) else np.nan for c in cols])
         vs.append([vel[c] if c is not None and c < len(vel) else np.nan for c in cols])
-    if undecodable:
-        notes.append(f"{undecodable} joint messages did not decode and were left out")
+    return rows, undecodable
+
+
+def _arrays(wanted, rows, report, notes):
+    """The matched instruments' samples as arrays, sorted by stamp, times from the first sample of
+    any instrument (log times when every stamp is 0); fewer than 3 messages is unmatched."""
     samples = {}
     for topic, (name, inst, _) in wanted.items():
         if name in report["unmatched"]:
@@ -158,8 +182,6 @@ def foreign_samples(scan, insts, remaps=None):
             notes.append(f"{name}: every header stamp is 0: the log times are used")
         samples[name] = (t, np.array(ps, dtype=float), np.array(vs, dtype=float))
         report["matched"][name] = topic
-    used = set(report["matched"].values())
-    report["unused"] = {tp: ", ".join(sorted(ty)) for tp, ty in sorted(by_topic.items()) if tp not in used}
     if samples:
         t0 = min(int(v[0].min()) for v in samples.values())
         if t0 != EPOCH_NS:
@@ -169,7 +191,7 @@ def foreign_samples(scan, insts, remaps=None):
             if np.any(np.diff(order) < 0):
                 notes.append(f"{name}: messages out of stamp order: sorted")
             samples[name] = (t[order] - t0, p[order], v[order])
-    return samples, report, notes
+    return samples
 
 
 def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()):
