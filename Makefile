@@ -21,7 +21,7 @@ demo: $(STAMP)
 	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(VENV)/bin/gyro-instrument run quet_paris --bag out/quet_paris.mcap --overwrite
 
 test: $(STAMP)
-	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra
+	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra --durations=25
 
 clean:
 	rm -rf $(VENV) build install log out .pytest_cache

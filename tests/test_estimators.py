@@ -97,12 +97,21 @@ def test_too_short_or_flat_record_is_refused_clearly():
         fit_oscillation(t[:3], sine(t[:3]))
 
 
-@pytest.mark.parametrize("lat", [48.8462, -33.9, 5.0, 70.0, 85.0])
-def test_latitude_uncertainty_is_calibrated_over_200_seeds(lat):
-    # Issue 3 acceptance: default run within 3σ; σ within 1.5× the Cramér–Rao bound; over 200
-    # seeded runs the rms error within 1.3× the reported σ (sampling spread of an rms from 200
-    # draws ≈ 5 %), for the latitude and the Earth rate.
-    chunks = [("quet_paris", [f"site.latitude_deg={lat}"], range(i, 200, 2)) for i in range(2)]
+# Seeds per latitude: 200 at Paris and at -33.9 (the issue-3 acceptance: an rms from 200 draws has a
+# relative sampling spread of 1/sqrt(400) = 5 %, so the 1.3 bound is 6 spreads); 60 at 5, 70 and 85 deg in
+# the default run (spread 1/sqrt(120) = 9 %: the same 1.3 bound is still 3.3 spreads; measured
+# 2026-11-30: rms/sigma = 0.969, 1.038, 0.975 with 60 seeds against 1.000, 1.002, 1.021 with 200), the
+# 200-seed runs there in `pytest -m slow` (the whole suite must stay under 15 min on 2 cores).
+CALIBRATION_CASES = [(48.8462, 200), (-33.9, 200), (5.0, 60), (70.0, 60), (85.0, 60)] + [
+    pytest.param(lat, 200, marks=pytest.mark.slow, id=f"{lat}-200-slow") for lat in (5.0, 70.0, 85.0)]
+
+
+@pytest.mark.parametrize("lat,seeds", CALIBRATION_CASES)
+def test_latitude_uncertainty_is_calibrated_over_seeds(lat, seeds):
+    # Issue 3 acceptance: default run within 3σ; σ within 1.5× the Cramér–Rao bound; over the
+    # seeded runs the rms error within 1.3× the reported σ (see CALIBRATION_CASES for the sampling
+    # spread), for the latitude and the Earth rate.
+    chunks = [("quet_paris", [f"site.latitude_deg={lat}"], range(i, seeds, 2)) for i in range(2)]
     with process_executor(2) as ex:
         results = [r for part in ex.map(seed_sweep, chunks) for r in part]
     rows = np.array([(r["latitude_deg"] - lat, r["latitude_sigma_deg"], r["crlb"]["latitude_deg"],

@@ -26,15 +26,23 @@ def sweep(scene, overrides, seeds=200):
         return [r for part in ex.map(seed_sweep, chunks) for r in part]
 
 
-@pytest.mark.parametrize("scene,lat", [("quet_gyroscopes", 60.0), ("quet_gyroscopes", -33.87),
-                                       ("gimbal_paris", 48.8462), ("gimbal_paris", -48.8462)])
-def test_cos_latitude_instruments_report_abs_latitude_calibrated_over_200_seeds(scene, lat):
+# 200 seeds for one site per instrument set, 100 for its mirror in the other hemisphere in the
+# default run (rms/σ measured 2026-11-30 at 100 seeds: 1.006 and 1.026; the [0.8, 1.2] band is 2.8
+# sampling spreads of 1/sqrt(200) = 7 % there), 200 in `pytest -m slow` (the suite's 15-min budget).
+COS_CASES = [("quet_gyroscopes", 60.0, 200), ("quet_gyroscopes", -33.87, 100), ("gimbal_paris", 48.8462, 200),
+             ("gimbal_paris", -48.8462, 100)] + [
+    pytest.param(sc, lat, 200, marks=pytest.mark.slow, id=f"{sc}-{lat}-200-slow")
+    for sc, lat in (("quet_gyroscopes", -33.87), ("gimbal_paris", -48.8462))]
+
+
+@pytest.mark.parametrize("scene,lat,seeds", COS_CASES)
+def test_cos_latitude_instruments_report_abs_latitude_calibrated(scene, lat, seeds):
     # Acceptance of issue 11: rms error / reported σ in [0.8, 1.2] (an rms from 200 draws has a
-    # relative sampling spread of 1/√400 = 5 %: the band is 4 spreads) and every σ within
-    # [0.95, 1.1] of its Cramér–Rao bound (σ and the bound come from the same mode and differ only
-    # by the fitted versus the bound's period σ). The truth they are compared with is |γ|.
-    results = sweep(scene, [f"site.latitude_deg={lat}"])
-    assert len(results) == 200
+    # relative sampling spread of 1/√400 = 5 %: the band is 4 spreads; see COS_CASES for 100) and
+    # every σ within [0.95, 1.1] of its Cramér–Rao bound (σ and the bound come from the same mode and
+    # differ only by the fitted versus the bound's period σ). The truth they are compared with is |γ|.
+    results = sweep(scene, [f"site.latitude_deg={lat}"], seeds)
+    assert len(results) == seeds
     for r in results:
         assert r["hemisphere"] == HEMISPHERE_UNDETERMINED and r["latitude_is_absolute"] is True
         assert r["methods"]["item9"]["latitude_is_absolute"] is True
