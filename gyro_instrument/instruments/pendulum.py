@@ -415,6 +415,31 @@ def _swing_frames(U, w0sq):
     return R
 
 
+def relative_spin_rad_s(qb, qda, qds) -> np.ndarray:
+    """Quet's ρ (sec. 3 §VI): the body's spin about its figure axis relative to the Earth, rad/s.
+
+    The figure axis e points from the pivot to the centre of mass; the spin is right-handed
+    about e (the ``spin_rate_rad_s`` parameter is ρ0). The body's angular velocity relative to
+    the Earth is the east hinge's rate q̇a along east, the north hinge's q̇b along the hinge's
+    north axis (perpendicular to e) and the spin hinge's q̇s along e; in the body's axes east is
+    (cos qb, 0, sin qb) and e = (0, 0, −1), so ρ = q̇s − q̇a sin qb.
+
+    Eq. (53), d(ρ − K cos θ + K' sin θ sin ψ) = 0, integrated in (55): ρ + Ω·e is constant (the
+    body's absolute spin; no torque acts about the figure axis of a body of revolution).
+
+    Parameters
+    ----------
+    qb, qda, qds : ndarray (m,)
+        North-hinge angle (rad), east-hinge rate and spin-hinge rate (rad/s) of the chain.
+
+    Returns
+    -------
+    ndarray (m,)
+        ρ, rad/s.
+    """
+    return qds - qda * np.sin(qb)
+
+
 class CompoundPendulum(Instrument):
     """Compound pendulum (Quet sec. 3 §VI): a body of revolution hung from a point of its axis.
 
@@ -438,7 +463,9 @@ class CompoundPendulum(Instrument):
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN})
-    COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "relative spin about the figure axis"),)
+    COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "ρ: spin about the figure axis (pivot to centre of "
+                                                             "mass, right-handed) relative to the Earth; ρ + Ω·e "
+                                                             "is constant (sec. 3 §VI eq. 55)"),)
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
     IS_PENDULUM = True
@@ -517,8 +544,5 @@ class CompoundPendulum(Instrument):
                               -np.sin(qb) * qdb * np.sin(qa) + np.cos(qb) * np.cos(qa) * qda,
                               np.sin(qb) * qdb * np.cos(qa) + np.cos(qb) * np.sin(qa) * qda])
         cols = pendulum_columns(pos, vel, self.site.gravity_m_s2 / self.equivalent_length_m)
-        # Relative spin about the figure axis: the body's hinge rate plus the Cardan frame's
-        # rotation component along the axis (only the north hinge's axis after the east one
-        # has no component along the body axis; the east hinge's does: −sin b).
-        cols["spin_rate"] = qds + qda * np.sin(qb) * 1.0
+        cols["spin_rate"] = relative_spin_rad_s(qb, qda, qds)
         return Simulation(t, cols, traj, extra={"chain": chain})
