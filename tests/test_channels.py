@@ -364,6 +364,48 @@ def test_gimbal_small_swings_closed_form_sec4_IV(build, configuration):
     assert np.ptp(spin_invariant(c["spin_rate"], theta, psi, g.k, g.k_prime)) < 1e-12 * g.spin_rate_rad_s
 
 
+# ----------------------------------------------------------------------------- predictions: magnitudes
+
+#: Prediction keys holding a magnitude (≥ 0 whatever the site's hemisphere or the spin's sense).
+MAGNITUDE_WORDS = ("period", "duration", "deflection", "diameter", "length", "full_turn", "inertia", "departure",
+                   "theta0", "sin_omega")
+
+
+def magnitudes(pred):
+    """(key, value) of the predictions whose name says they are magnitudes (a relative error is signed)."""
+    return [(k, v) for k, v in pred.items() if any(w in k for w in MAGNITUDE_WORDS) and "error" not in k
+            and isinstance(v, (int, float)) and not isinstance(v, bool)]
+
+
+@pytest.mark.parametrize("site", [SOUTH, NORTH, Site.from_degrees(-89.0)], ids=["south", "north", "south_pole"])
+@pytest.mark.parametrize("type_name", sorted(set(REGISTRY) - ELSEWHERE))
+def test_predictions_report_magnitudes_unsigned(build, type_name, site):
+    # Issue 17 item 4: a magnitude (a deflection, a period or duration, a diameter, a length, an
+    # angle from an axis) is reported ≥ 0 at every site and for either sense of spin; a sense of
+    # rotation is a separate entry (precession_sense) or the sign of a rate component (k, ρ). Every
+    # instrument type (Puiseux's body: tests/test_puiseux*.py), at its defaults with the exact
+    # model, at −33.87°, 48.85° and −89°, with the spin as given and reversed, and each gimbal
+    # configuration.
+    cls = REGISTRY[type_name]
+    names = {p.name for p in cls.PARAMS}
+    effects = tuple(e for e in ("earth_rotation", "centrifugal", "finite_amplitude") if e in cls.SUPPORTED_EFFECTS)
+    variants = [{}]
+    if "spin_rate_rad_s" in names:
+        variants.append({"spin_rate_rad_s": -60.0})
+    if "configuration" in names:
+        variants += [{"configuration": c} for c in ("free", "locked", "outer_fixed")]
+    for kw in variants:
+        pred = build(cls, site, effects, **kw).predictions()
+        found = magnitudes(pred)
+        assert found, f"{type_name}: no magnitude to check in {sorted(pred)}"
+        negative = [(k, v) for k, v in found if v < 0.0]
+        assert not negative, f"{type_name} {kw} at {site.latitude_deg:g}°: magnitudes reported signed: {negative}"
+        if cls.IS_PENDULUM:
+            k = site.k_vertical_rad_s
+            assert pred["precession_sense"] == ("clockwise seen from above" if k > 0 else
+                                                "counterclockwise seen from above")
+
+
 # ----------------------------------------------------------------------------- the meta-test
 
 def test_every_channel_is_checked():
