@@ -581,13 +581,19 @@ class CompoundPendulum(Instrument):
     def predictions(self) -> dict:
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
         ``earth_rotation``; signed, positive clockwise seen from above, as ``precession_sense``
-        says in words), the quarter period of the simple pendulum of length λ."""
+        says in words), the quarter period of the simple pendulum of length λ, and
+        ``absolute_spin_rad_s`` = ρ0 + Ω·e0, the constant of eq. (55) (ρ + Ω·e, e the figure axis
+        from the pivot to the centre of mass, Ω the Earth rate as simulated), rad/s."""
         k_site = self.site.k_vertical_rad_s
         k = k_site if self.has("earth_rotation") else 0.0
         lam = self.equivalent_length_m
         g = self.site.gravity_m_s2
+        e0 = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
+                       -math.cos(self.theta0)])
+        om = self.site.earth_rate_enu() if self.has("earth_rotation") else np.zeros(3)
         out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k, "precession_sense": precession_sense(k),
-               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0)}
+               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0),
+               "absolute_spin_rad_s": self.spin_rate_rad_s + float(om @ e0)}
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
