@@ -6,9 +6,33 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyro_instrument.core.params import REQUIRED, alias_note  # noqa: E402
+from gyro_instrument.core.errors import SceneError  # noqa: E402
+from gyro_instrument.core.params import REQUIRED, alias_note, validate_params  # noqa: E402
+from gyro_instrument.core.site import Site  # noqa: E402
 from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
+
+
+#: Where the "beyond the paper" statements are computed: the papers' site (Quet's Paris) with the
+#: exact model (every one of these effects an instrument supports) and the instrument's defaults.
+EXAMPLE_LATITUDE_DEG = 48.85
+EXACT_EFFECTS = ("earth_rotation", "centrifugal", "finite_amplitude")
+
+
+def beyond_the_paper(cls):
+    """The ``beyond_the_paper`` prediction (str or None) of an instrument type at its default
+    parameters, at :data:`EXAMPLE_LATITUDE_DEG` with the :data:`EXACT_EFFECTS` it supports."""
+    if any(p.default is REQUIRED for p in cls.PARAMS):
+        return None
+    params = validate_params("example", cls.PARAMS, {})
+    effects = {e: EFFECTS[e]() for e in EXACT_EFFECTS if e in cls.SUPPORTED_EFFECTS}
+    try:
+        cls.check_params("example", params)
+        cls.check_effects("example", params, tuple(effects))
+    except SceneError:          # its defaults alone are not a configuration (e.g. a body without a shape)
+        return None
+    inst = cls("example", Site.from_degrees(EXAMPLE_LATITUDE_DEG), params, effects)
+    return inst.predictions().get("beyond_the_paper")
 
 
 def render():
@@ -34,6 +58,11 @@ def render():
         out += ["", "| channel | unit | meaning |", "|---|---|---|"]
         out += [f"| `{c.name}` | {c.unit} | {c.doc} |" for c in cls.COLUMNS]
         out.append("")
+        beyond = beyond_the_paper(cls)
+        if beyond:
+            out += [f"Beyond the paper (prediction `beyond_the_paper` of `describe`; here computed for the defaults "
+                    f"at {EXAMPLE_LATITUDE_DEG}° with {', '.join(e for e in EXACT_EFFECTS if e in cls.SUPPORTED_EFFECTS)}; "
+                    f"`describe` computes it for the scene's configuration): {beyond}.", ""]
     out += ["## Effects", "", "Each effect contributes terms to the kinds of mechanics it names (gyro_instrument/core/effect.py);",
             "an instrument supports the effects whose kinds it sums (docs/extending.md).", "",
             "| effect | parameters | contributes to | what it adds |", "|---|---|---|---|"]

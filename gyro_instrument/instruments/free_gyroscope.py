@@ -127,6 +127,36 @@ def angle_between(a, b) -> float:
     return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
 
 
+def axis_relative_to_earth(k0, e_axis, n, mu, rho0, tau) -> np.ndarray:
+    """Exact direction of the figure axis relative to the Earth at times ``tau`` after release.
+
+    The torque-free closed form of the module docstring: ω0 = ρ0 k0 + n ê, ω3 = ω0·k0,
+    Λ = ω0 + (μ − 1) ω3 k0; the axis turns about Λ at |Λ| in the inertial frame and the Earth
+    turns at n about ê: k(τ) = Rot(ê, −nτ) Rot(Λ̂, |Λ|τ) k0.
+
+    Parameters
+    ----------
+    k0, e_axis : array (3,)
+        Unit initial axis and north part of Earth's axis (ENU).
+    n, mu, rho0 : float
+        Earth rate (rad/s), μ = C/A, relative spin at release (rad/s).
+    tau : array (m,)
+        Seconds since release.
+
+    Returns
+    -------
+    ndarray (m, 3)
+        Unit axis in ENU.
+    """
+    omega0 = rho0 * k0 + n * e_axis
+    Lam = omega0 + (mu - 1.0) * float(np.dot(omega0, k0)) * k0
+    lam = float(np.linalg.norm(Lam))
+    tau = np.atleast_1d(np.asarray(tau, dtype=float))
+    k_in = rotate_about(np.broadcast_to(k0, (tau.size, 3)), Lam / lam, lam * tau) if lam > 0.0 else \
+        np.broadcast_to(k0, (tau.size, 3))
+    return rotate_about(k_in, e_axis, -n * tau)
+
+
 # ----------------------------------------------------------------------------- instrument
 
 
@@ -253,7 +283,11 @@ class FreeGyroscope(Instrument):
             ``initial_cos_theta_acceleration_rad_s2``: d²(cos θ)/dt² at release, exact,
             n sin²θ0 [μ ρ0 + (μ − 1) n cos θ0] (Quet's eq. 9 keeps only n μ ρ0 sin²θ0);
             ``relative_equilibrium_exact``: True when the zero-spin body stays at rest relative
-            to the Earth exactly (μ = 1, axis along or across Earth's axis, or n = 0).
+            to the Earth exactly (μ = 1, axis along or across Earth's axis, or n = 0);
+            with n ≠ 0, what the paper could not know (:meth:`_zero_spin_departure`):
+            ``zero_spin_departure_1h_rad`` (≥ 0, exact), ``zero_spin_departure_1h_leading_rad``,
+            ``initial_cos_theta_acceleration_quet_relative_error`` and ``beyond_the_paper`` (str).
+            Rates are signed (the hour angle grows at +n: westward); magnitudes are ≥ 0.
         """
         n = self.model_rate()
         mu, rho0, th = self.mu, self.rho0, self.theta0
@@ -285,10 +319,54 @@ class FreeGyroscope(Instrument):
             "initial_cos_theta_acceleration_rad_s2": n * s * s * (mu * rho0 + (mu - 1.0) * n * c),
             "relative_equilibrium_exact": bool(n == 0.0 or mu == 1.0 or s < 1e-15 or abs(c) < 1e-15),
         }
+        if n != 0.0:
+            out.update(self._zero_spin_departure(n))
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
                               f"rad/s)"))
+
+    #: The horizon over which the zero-spin departure from relative equilibrium is stated, s.
+    ZERO_SPIN_HORIZON_S = 3600.0
+
+    def _zero_spin_departure(self, n) -> dict:
+        """What sec. 4 §II item 1 could not know, for this axis, μ and site: released with zero spin
+        the body stays in relative equilibrium only when Ω is a principal axis (μ = 1, the axis
+        along or across Earth's axis). Otherwise the centrifugal torque (C − A) n² sin θ0 cos θ0,
+        which Quet's relative vis viva (eq. 2) drops, turns the axis; it leaves its place by
+        ``zero_spin_departure_1h_rad`` in the first hour (exact closed form,
+        :func:`axis_relative_to_earth` with ρ0 = 0), ½ |μ − 1| n² sin θ0 |cos θ0| t² to leading order
+        (``zero_spin_departure_1h_leading_rad``). With the configured spin the same term changes the
+        initial acceleration of cos θ by the relative amount (μ − 1) n cos θ0 / (μ ρ0)
+        (``initial_cos_theta_acceleration_quet_relative_error``: Quet's eq. 9 over the exact value − 1).
+        """
+        T = self.ZERO_SPIN_HORIZON_S
+        k1 = axis_relative_to_earth(self.k0, self.e_axis, n, self.mu, 0.0, [T])[0]
+        exact = angle_between(self.k0, k1)
+        s, c = math.sin(self.theta0), math.cos(self.theta0)
+        lead = 0.5 * abs(self.mu - 1.0) * n * n * s * abs(c) * T * T
+        quet_acc = n * s * s * self.mu * self.rho0
+        full_acc = n * s * s * (self.mu * self.rho0 + (self.mu - 1.0) * n * c)
+        acc_err = quet_acc / full_acc - 1.0 if full_acc != 0.0 else (0.0 if quet_acc == 0.0 else math.inf)
+        worst = 0.25 * abs(self.mu - 1.0) * n * n * T * T          # θ0 = 45°, leading order
+        if exact < 1e-12:
+            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.mu:g} "
+                    f"Ω is a principal axis and a zero-spin release stays put (departure after 1 h below 1e-12 rad: "
+                    f"round-off)")
+        else:
+            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.mu:g} "
+                    f"a zero-spin release leaves its place by {math.degrees(exact):.4g}° in the first hour (leading "
+                    f"order ½|μ − 1| n² sin θ0 |cos θ0| t² = {math.degrees(lead):.4g}°)")
+        text = (f"sec. 4 §II item 1: released with zero spin the body stays in relative equilibrium (Quet); exact "
+                f"only for μ = 1 or an axis along or across Earth's axis, because the relative vis viva (eq. 2) drops "
+                f"the centrifugal torque (C − A) n² sin θ0 cos θ0: {here}")
+        if self.mu != 1.0:
+            text += f"; with this μ an axis at 45° from Earth's axis would leave by {math.degrees(worst):.4g}° in the first hour"
+        if self.rho0 != 0.0 and acc_err != 0.0:
+            text += (f"; with ρ0 = {self.rho0:g} rad/s the same term makes Quet's eq. (9) initial acceleration of "
+                     f"cos θ off by {acc_err:+.3g} relative")
+        return {"zero_spin_departure_1h_rad": exact, "zero_spin_departure_1h_leading_rad": lead,
+                "initial_cos_theta_acceleration_quet_relative_error": acc_err, "beyond_the_paper": text}
 
     def scales(self, duration_s) -> dict:
         """Scales for effect-size estimates. There is no restoring torque; the free-precession

@@ -92,6 +92,50 @@ def min_deflection_from_rest_rad(length_m, gravity_m_s2, k_rad_s, theta0_rad) ->
     return math.sqrt(length_m / gravity_m_s2) * k_rad_s * math.sin(theta0_rad) * math.cos(theta0_rad / 2.0)
 
 
+def min_deflection_with_horizontal_rate_rad(length_m, gravity_m_s2, k_rad_s, k_horizontal_rad_s, theta0_rad,
+                                            azimuth0_rad) -> float:
+    """Minimum deflection after a release from rest with the horizontal Earth rate too, rad (≥ 0).
+
+    Quet's β (sec. 2 §II, :func:`min_deflection_from_rest_rad`) keeps only the vertical Earth
+    rate k. The horizontal part k' = n cos γ (northward, ENU) adds −2k' ż to the eastward
+    acceleration, a torque 2k' y ż about the vertical, so the area integral (27) becomes
+    h + k ρ_h² − 2k' ∫ y ż dt = const (h = x ẏ − y ẋ, ENU). Along the swing from rest at θ0 and
+    compass azimuth ψ0 to the bottom, y = l sin θ cos ψ0 and z = −l cos θ give
+    2k' ∫ y ż dt = −k' l² cos ψ0 (θ0 − sin θ0 cos θ0); at the apsis h = l sin β √(2gl(cos β − cos θ0)),
+    so to first order in β (~1e-5)::
+
+        β = √(l/g) |k sin²θ0 − k' cos ψ0 (θ0 − sin θ0 cos θ0)| / (2 sin(θ0/2))
+
+    which is Quet's β for an east–west release (cos ψ0 = 0) and differs from it by
+    −(k'/k) cos ψ0 (θ0 − sin θ0 cos θ0)/sin²θ0 ≈ −(2/3)(k'/k) θ0 cos ψ0 otherwise (−2.0 % for a
+    2° release toward north at Paris, +3.5 % at −33.87°). The half-swings after the first keep the
+    same change (the torque's integral returns to it at every passage). The simulated minimum
+    agrees to ~1e-6 relative (tests/test_pendulum.py). Valid at the equator (k = 0) too.
+
+    Parameters
+    ----------
+    length_m, gravity_m_s2 : float
+        l (m), g (m/s²).
+    k_rad_s, k_horizontal_rad_s : float
+        Vertical (n sin γ) and northward horizontal (n cos γ) Earth-rate components, rad/s.
+    theta0_rad, azimuth0_rad : float
+        Release deflection θ0 in (0, π) and compass azimuth ψ0 (0 north, clockwise), rad.
+    """
+    s, c = math.sin(theta0_rad), math.cos(theta0_rad)
+    area = k_rad_s * s * s - k_horizontal_rad_s * math.cos(azimuth0_rad) * (theta0_rad - s * c)
+    return math.sqrt(length_m / gravity_m_s2) * abs(area) / (2.0 * math.sin(theta0_rad / 2.0))
+
+
+def precession_sense(rate_rad_s) -> str:
+    """The sense of a rotation about the upward vertical at ``rate_rad_s`` (positive: clockwise seen
+    from above, compass azimuth increasing — the swing plane's sense in the north, Quet sec. 2)."""
+    if rate_rad_s > 0.0:
+        return "clockwise seen from above"
+    if rate_rad_s < 0.0:
+        return "counterclockwise seen from above"
+    return "none"
+
+
 def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity=False) -> tuple:
     """Exact solution of the linear model with the vertical Earth-rate component only.
 
@@ -207,32 +251,68 @@ class SphericalPendulum(Instrument):
         """Sec. 2 for the model as simulated: k = n sin γ (0 without ``earth_rotation``); with
         ``finite_amplitude`` the exact quarter period (42), β and the apsidal rate of §II–III;
         without it the linear model's Binet ellipse (quarter period π/(2Ω), Ω = √(g/l + k²),
-        β = asin(sin θ0 · k/Ω), apsides turning at k). ``quarter_period_series_s`` is Quet's
-        series (42) in every case."""
+        β = asin(sin θ0 · |k|/Ω), apsides turning at k). ``quarter_period_series_s`` is Quet's
+        series (42) in every case.
+
+        Rates (``foucault_rate_*``, ``apsidal_rate_*``) are signed components about the upward
+        vertical, positive clockwise seen from above (k > 0 in the north); ``precession_sense`` says
+        it in words. Magnitudes (β, periods, ``full_turn_h``) are ≥ 0 at every site.
+
+        Beyond the paper (``finite_amplitude`` and ``earth_rotation``, release from rest):
+        ``min_deflection_from_rest_exact_rad`` adds the horizontal Earth rate's term that §II's β
+        drops (:func:`min_deflection_with_horizontal_rate_rad`), ``min_deflection_quet_relative_error``
+        is β/that − 1 (0 for an east–west release), and ``beyond_the_paper`` (str) says so in words.
+        """
         k_site = self.site.k_vertical_rad_s
-        k = k_site if self.has("earth_rotation") else 0.0
+        rotating = self.has("earth_rotation")
+        k = k_site if rotating else 0.0
         if self.has("finite_amplitude"):
-            beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
+            beta = abs(min_deflection_from_rest_rad(self.l, self.g, k, self.theta0))
             quarter = quarter_period_s(self.l, self.g, self.theta0, beta)
             apsidal = apsidal_rate_from_rest_rad_s(k, self.theta0)
         else:
             W = math.sqrt(self.g / self.l + k * k)
-            beta = math.asin(min(1.0, math.sin(self.theta0) * abs(k) / W)) * (1.0 if k >= 0 else -1.0)
+            beta = math.asin(min(1.0, math.sin(self.theta0) * abs(k) / W))
             quarter = 0.5 * math.pi / W
             apsidal = k
         out = {"foucault_rate_rad_s": k,
                "foucault_rate_deg_h": math.degrees(k) * 3600.0,
+               "precession_sense": precession_sense(k),
                "full_turn_h": (2 * math.pi / abs(k) / 3600.0) if k else math.inf,
                "quarter_period_s": quarter,
                "quarter_period_series_s": quarter_period_series_s(self.l, self.g, self.theta0, beta),
                "min_deflection_from_rest_rad": beta,
                "apsidal_rate_from_rest_rad_s": apsidal}
+        if self.has("finite_amplitude") and rotating and 0.0 < self.theta0 < math.pi:
+            out.update(self._horizontal_rate_beta(beta))
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s "
                               f"= {math.degrees(k_site) * 3600.0:.4g} deg/h)"),
             self.missing_effect_note(
             "finite_amplitude", "small-angle (linear) model: Binet's ellipse, quarter period π/(2√(g/l + k²)), "
                                 "apsides turning at k"))
+
+    def _horizontal_rate_beta(self, beta) -> dict:
+        """What sec. 2 §II could not include: the horizontal Earth rate's share of the minimum
+        deflection (:func:`min_deflection_with_horizontal_rate_rad`), for this release."""
+        k_h = self.site.earth_rate_enu()[1]
+        exact = min_deflection_with_horizontal_rate_rad(self.l, self.g, self.site.k_vertical_rad_s, k_h,
+                                                        self.theta0, self.psi0)
+        err = beta / exact - 1.0 if exact > 0.0 else math.inf
+        north = min_deflection_with_horizontal_rate_rad(self.l, self.g, self.site.k_vertical_rad_s, k_h,
+                                                        self.theta0, 0.0)
+        err_north = beta / north - 1.0 if north > 0.0 else math.inf
+        from_rest = self.radial_speed_m_s == 0.0 and self.transverse_speed_m_s == 0.0
+        def off(e):
+            return "equal to it" if abs(e) < 1e-12 else f"{100.0 * abs(e):.3g} % {'above' if e > 0 else 'below'} it"
+        text = (f"sec. 2 §II's minimum deflection β = √(l/g) k sin θ0 cos(θ0/2) keeps only the vertical Earth "
+                f"rate; the horizontal rate n cos γ = {k_h:.6g} rad/s acting on the bob's vertical velocity changes "
+                f"the area integral by −n cos γ l² cos ψ0 (θ0 − sin θ0 cos θ0): for this release (azimuth "
+                f"{math.degrees(self.psi0):g}°) the minimum deflection is {exact:.6g} rad and β = {beta:.6g} rad "
+                f"is {off(err)} (for a release toward north here: {off(err_north)})"
+                + ("" if from_rest else "; both are for a release from rest, not this launch"))
+        return {"min_deflection_from_rest_exact_rad": exact, "min_deflection_quet_relative_error": err,
+                "beyond_the_paper": text}
 
     def scales(self, duration_s) -> dict:
         return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
@@ -415,6 +495,31 @@ def _swing_frames(U, w0sq):
     return R
 
 
+def relative_spin_rad_s(qb, qda, qds) -> np.ndarray:
+    """Quet's ρ (sec. 3 §VI): the body's spin about its figure axis relative to the Earth, rad/s.
+
+    The figure axis e points from the pivot to the centre of mass; the spin is right-handed
+    about e (the ``spin_rate_rad_s`` parameter is ρ0). The body's angular velocity relative to
+    the Earth is the east hinge's rate q̇a along east, the north hinge's q̇b along the hinge's
+    north axis (perpendicular to e) and the spin hinge's q̇s along e; in the body's axes east is
+    (cos qb, 0, sin qb) and e = (0, 0, −1), so ρ = q̇s − q̇a sin qb.
+
+    Eq. (53), d(ρ − K cos θ + K' sin θ sin ψ) = 0, integrated in (55): ρ + Ω·e is constant (the
+    body's absolute spin; no torque acts about the figure axis of a body of revolution).
+
+    Parameters
+    ----------
+    qb, qda, qds : ndarray (m,)
+        North-hinge angle (rad), east-hinge rate and spin-hinge rate (rad/s) of the chain.
+
+    Returns
+    -------
+    ndarray (m,)
+        ρ, rad/s.
+    """
+    return qds - qda * np.sin(qb)
+
+
 class CompoundPendulum(Instrument):
     """Compound pendulum (Quet sec. 3 §VI): a body of revolution hung from a point of its axis.
 
@@ -438,7 +543,9 @@ class CompoundPendulum(Instrument):
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
     )
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN})
-    COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "relative spin about the figure axis"),)
+    COLUMNS = PENDULUM_COLUMNS + (Column("spin_rate", "rad/s", "ρ: spin about the figure axis (pivot to centre of "
+                                                             "mass, right-handed) relative to the Earth; ρ + Ω·e "
+                                                             "is constant (sec. 3 §VI eq. 55)"),)
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
     IS_PENDULUM = True
@@ -473,13 +580,20 @@ class CompoundPendulum(Instrument):
 
     def predictions(self) -> dict:
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
-        ``earth_rotation``), the quarter period of the simple pendulum of length λ."""
+        ``earth_rotation``; signed, positive clockwise seen from above, as ``precession_sense``
+        says in words), the quarter period of the simple pendulum of length λ, and
+        ``absolute_spin_rad_s`` = ρ0 + Ω·e0, the constant of eq. (55) (ρ + Ω·e, e the figure axis
+        from the pivot to the centre of mass, Ω the Earth rate as simulated), rad/s."""
         k_site = self.site.k_vertical_rad_s
         k = k_site if self.has("earth_rotation") else 0.0
         lam = self.equivalent_length_m
         g = self.site.gravity_m_s2
-        out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k,
-               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0)}
+        e0 = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
+                       -math.cos(self.theta0)])
+        om = self.site.earth_rate_enu() if self.has("earth_rotation") else np.zeros(3)
+        out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k, "precession_sense": precession_sense(k),
+               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0),
+               "absolute_spin_rad_s": self.spin_rate_rad_s + float(om @ e0)}
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
@@ -517,8 +631,5 @@ class CompoundPendulum(Instrument):
                               -np.sin(qb) * qdb * np.sin(qa) + np.cos(qb) * np.cos(qa) * qda,
                               np.sin(qb) * qdb * np.cos(qa) + np.cos(qb) * np.sin(qa) * qda])
         cols = pendulum_columns(pos, vel, self.site.gravity_m_s2 / self.equivalent_length_m)
-        # Relative spin about the figure axis: the body's hinge rate plus the Cardan frame's
-        # rotation component along the axis (only the north hinge's axis after the east one
-        # has no component along the body axis; the east hinge's does: −sin b).
-        cols["spin_rate"] = qds + qda * np.sin(qb) * 1.0
+        cols["spin_rate"] = relative_spin_rad_s(qb, qda, qds)
         return Simulation(t, cols, traj, extra={"chain": chain})
