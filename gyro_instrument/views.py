@@ -62,82 +62,97 @@ def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE"):
     SceneError
         Unreadable input, a bag without a scene record and no ``--scene``, nothing to draw.
     """
-    from gyro_instrument.estimators.data_io import TIME_COLUMN, read_table
-    from gyro_instrument.instruments import REGISTRY
-    from gyro_instrument.scenes import build_instruments, load_scene
+    from gyro_instrument.scenes import load_scene
     scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
-    notes = []
-    series = {}
     if not os.path.isdir(path) and not str(path).lower().endswith(".mcap"):
-        cols = read_table(path, field)
-        t = cols[TIME_COLUMN]
-        insts = build_instruments(scene) if scene else {}
-        names = list(dict.fromkeys(c.split(".", 1)[0] for c in cols if "." in c))
-        angle_names = {c for cls in REGISTRY.values() if not cls.IS_PENDULUM for c in cls.MEASURED_CHANNELS} \
-            | {"deflection"}
-        for name in names:
-            ch = {c.split(".", 1)[1]: cols[c] for c in cols if c.startswith(f"{name}.")}
-            inst = insts.get(name)
-            typ = inst.type_name if inst else None
-            s = {"type": typ, "t": t, "angles": {}}
-            if {"x_east", "y_north"} <= set(ch) or {"deflection_east", "deflection_north"} <= set(ch):
-                s["type"] = typ or "pendulum"
-                if {"x_east", "y_north"} <= set(ch):
-                    s["east"], s["north"], s["path_unit"] = ch["x_east"], ch["y_north"], "m"
-                    l = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
-                    if l:
-                        s["angles"] = {"deflection east (x/l)": ch["x_east"] / l,
-                                       "deflection north (y/l)": ch["y_north"] / l}
-                    else:
-                        s["angles"] = {"x east / 1 m": ch["x_east"], "y north / 1 m": ch["y_north"]}
-                else:
-                    s["east"], s["north"] = ch["deflection_east"], ch["deflection_north"]
-                    l = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
-                    if l:
-                        s["east"], s["north"], s["path_unit"] = s["east"] * l, s["north"] * l, "m"
-                    else:
-                        s["path_unit"] = "rad"
-                    s["angles"] = {"deflection east": ch["deflection_east"], "deflection north": ch["deflection_north"]}
-            else:
-                s["angles"] = {c: v for c, v in ch.items() if c in angle_names}
-            if s["angles"]:
-                series[name] = s
+        series, notes = _table_series(path, field, scene), []
     else:
-        from gyro_instrument.recording.bag_layout import scan_path
-        from gyro_instrument.recording.joints import records_from_joints
-        scan = scan_path(path)
-        if scene is None and not topics:
-            import json
-            from gyro_instrument.recording.bag_samples import samples_from_bag
-            from gyro_instrument.scenes import scene_from_data
-            meta, samples, more, _ = samples_from_bag(path, scan)
-            if meta is None or "scene_yaml" not in meta:
-                raise SceneError("bag", path, "has no gyro_instrument metadata record (scene): give the scene "
-                                              "with --scene SCENE")
-            scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
-            insts = build_instruments(scene)
-            samples = {n: v for n, v in samples.items() if n in insts and len(v[0]) >= 3}
-        else:
-            from gyro_instrument.recording.foreign import foreign_samples, parse_topic_remaps
-            if scene is None:
-                raise SceneError("--topic", topics[0], "needs --scene")
-            insts = build_instruments(scene)
-            samples, report, more = foreign_samples(scan, insts, parse_topic_remaps(topics, insts))
-            more += [f"{n} not matched: {r}" for n, r in report["unmatched"].items()]
-        notes += more
-        records = records_from_joints(insts, samples)
-        for name, rec in records.items():
-            inst = insts[name]
-            s = {"type": inst.type_name, "t": rec["t"], "angles": {}}
-            if inst.IS_PENDULUM:
-                l = inst.pendulum_length_m()
-                s["angles"] = {"deflection east": rec["deflection_east"], "deflection north": rec["deflection_north"]}
-                s["east"], s["north"], s["path_unit"] = rec["deflection_east"] * l, rec["deflection_north"] * l, "m"
-            else:
-                s["angles"] = {c: rec[c] for c in inst.MEASURED_CHANNELS if c in rec}
-            series[name] = s
+        series, scene, notes = _bag_series(path, scene, topics)
     if not series:
         raise SceneError(field, path, "holds no angle or pendulum channel to draw (columns as in msg_docs/csv.md)")
+    return series, scene, notes
+
+
+def _table_series(path, field, scene):
+    """:func:`load_series` for a CSV or Parquet table (instrument types from ``scene`` when given)."""
+    from gyro_instrument.estimators.data_io import TIME_COLUMN, read_table
+    from gyro_instrument.instruments import REGISTRY
+    from gyro_instrument.scenes import build_instruments
+    series = {}
+    cols = read_table(path, field)
+    t = cols[TIME_COLUMN]
+    insts = build_instruments(scene) if scene else {}
+    names = list(dict.fromkeys(c.split(".", 1)[0] for c in cols if "." in c))
+    angle_names = {c for cls in REGISTRY.values() if not cls.IS_PENDULUM for c in cls.MEASURED_CHANNELS} \
+        | {"deflection"}
+    for name in names:
+        ch = {c.split(".", 1)[1]: cols[c] for c in cols if c.startswith(f"{name}.")}
+        inst = insts.get(name)
+        typ = inst.type_name if inst else None
+        s = {"type": typ, "t": t, "angles": {}}
+        if {"x_east", "y_north"} <= set(ch) or {"deflection_east", "deflection_north"} <= set(ch):
+            s["type"] = typ or "pendulum"
+            if {"x_east", "y_north"} <= set(ch):
+                s["east"], s["north"], s["path_unit"] = ch["x_east"], ch["y_north"], "m"
+                l = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
+                if l:
+                    s["angles"] = {"deflection east (x/l)": ch["x_east"] / l,
+                                   "deflection north (y/l)": ch["y_north"] / l}
+                else:
+                    s["angles"] = {"x east / 1 m": ch["x_east"], "y north / 1 m": ch["y_north"]}
+            else:
+                s["east"], s["north"] = ch["deflection_east"], ch["deflection_north"]
+                l = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
+                if l:
+                    s["east"], s["north"], s["path_unit"] = s["east"] * l, s["north"] * l, "m"
+                else:
+                    s["path_unit"] = "rad"
+                s["angles"] = {"deflection east": ch["deflection_east"], "deflection north": ch["deflection_north"]}
+        else:
+            s["angles"] = {c: v for c, v in ch.items() if c in angle_names}
+        if s["angles"]:
+            series[name] = s
+    return series
+
+
+def _bag_series(path, scene, topics):
+    """:func:`load_series` for a bag: its own scene record, or ``scene`` and ``topics`` for a
+    foreign bag. Returns (series, scene, notes)."""
+    from gyro_instrument.scenes import build_instruments
+    notes, series = [], {}
+    from gyro_instrument.recording.bag_layout import scan_path
+    from gyro_instrument.recording.joints import records_from_joints
+    scan = scan_path(path)
+    if scene is None and not topics:
+        import json
+        from gyro_instrument.recording.bag_samples import samples_from_bag
+        from gyro_instrument.scenes import scene_from_data
+        meta, samples, more, _ = samples_from_bag(path, scan)
+        if meta is None or "scene_yaml" not in meta:
+            raise SceneError("bag", path, "has no gyro_instrument metadata record (scene): give the scene "
+                                          "with --scene SCENE")
+        scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
+        insts = build_instruments(scene)
+        samples = {n: v for n, v in samples.items() if n in insts and len(v[0]) >= 3}
+    else:
+        from gyro_instrument.recording.foreign import foreign_samples, parse_topic_remaps
+        if scene is None:
+            raise SceneError("--topic", topics[0], "needs --scene")
+        insts = build_instruments(scene)
+        samples, report, more = foreign_samples(scan, insts, parse_topic_remaps(topics, insts))
+        more += [f"{n} not matched: {r}" for n, r in report["unmatched"].items()]
+    notes += more
+    records = records_from_joints(insts, samples)
+    for name, rec in records.items():
+        inst = insts[name]
+        s = {"type": inst.type_name, "t": rec["t"], "angles": {}}
+        if inst.IS_PENDULUM:
+            l = inst.pendulum_length_m()
+            s["angles"] = {"deflection east": rec["deflection_east"], "deflection north": rec["deflection_north"]}
+            s["east"], s["north"], s["path_unit"] = rec["deflection_east"] * l, rec["deflection_north"] * l, "m"
+        else:
+            s["angles"] = {c: rec[c] for c in inst.MEASURED_CHANNELS if c in rec}
+        series[name] = s
     return series, scene, notes
 
 
@@ -240,7 +255,7 @@ def draw_views(series, scene, out_dir, title=""):
     names = list(series)
     pend = [n for n in names if "east" in series[n]]
     all_t = np.concatenate([np.asarray(series[n]["t"], float) for n in names])
-    scale, tlabel = _time_axis(all_t[np.isfinite(all_t)])
+    axis = _time_axis(all_t[np.isfinite(all_t)])
 
     def save(fig, view):
         fig.tight_layout()
@@ -249,7 +264,28 @@ def draw_views(series, scene, out_dir, title=""):
         plt.close(fig)
         written.append(p)
 
-    # angles over time
+    save(_angles_figure(plt, series, names, axis, title), "angles")
+    residual_rows = []
+    if pend:
+        fig, residual_rows = _swing_azimuth_figure(plt, series, pend, scene, axis)
+        save(fig, "swing_azimuth")
+        save(_bob_path_figure(plt, series, pend), "bob_path")
+    for n in names:
+        if "east" in series[n]:
+            continue
+        s = series[n]
+        for label, y in s["angles"].items():
+            r = oscillation_residuals(np.asarray(s["t"], float), np.asarray(y, float))
+            if r is not None:
+                residual_rows.append((n, f"{label} less the fitted oscillation (deg)", r[0], np.degrees(r[1])))
+    if residual_rows:
+        save(_residuals_figure(plt, residual_rows, axis), "residuals")
+    return written
+
+
+def _angles_figure(plt, series, names, axis, title):
+    """The ``angles`` view: every measured angle over time, one panel per instrument (deg)."""
+    scale, tlabel = axis
     fig, axes = plt.subplots(len(names), 1, figsize=(9, 2.6 * len(names)), squeeze=False)
     for ax, n in zip(axes[:, 0], names):
         s = series[n]
@@ -260,64 +296,68 @@ def draw_views(series, scene, out_dir, title=""):
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel(tlabel)
     fig.suptitle(f"angles over time {title}".strip(), fontsize=10)
-    save(fig, "angles")
+    return fig
+
+
+def _swing_azimuth_figure(plt, series, pend, scene, axis):
+    """The ``swing_azimuth`` view: the swing plane's azimuth per swing with the k = n sin γ line
+    (the scene's, or fitted); returns (figure, residual rows of the azimuth less the line)."""
+    scale, tlabel = axis
     residual_rows = []
-    if pend:
-        k_info = _k_line(scene)
-        fig, axes = plt.subplots(len(pend), 1, figsize=(9, 3.2 * len(pend)), squeeze=False)
-        for ax, n in zip(axes[:, 0], pend):
-            s = series[n]
-            tc, az, period = swing_azimuth(np.asarray(s["t"], float), np.asarray(s["east"], float),
-                                           np.asarray(s["north"], float))
-            if tc.size < 2:
-                ax.text(0.5, 0.5, "no swing measured", ha="center", transform=ax.transAxes)
-                continue
-            if k_info is not None:
-                k, lat, nrate = k_info
-                label = f"k = n sin γ = {k:.4e} rad/s (γ = {lat:.4f}°)"
-            else:
-                k = float(np.polyfit(tc, az, 1)[0])
-                x = max(-1.0, min(1.0, k / SIDEREAL_RATE_RAD_S))
-                label = f"fitted k = {k:.4e} rad/s (γ = asin(k/n) = {math.degrees(math.asin(x)):.3f}°, sidereal n)"
-            az0 = float(np.mean(az - k * tc))
-            ax.plot(tc / scale, np.degrees(az), ".", ms=2, label="swing-plane azimuth (per swing)")
-            ax.plot(tc / scale, np.degrees(az0 + k * tc), "-", lw=1, label=label)
-            ax.set_ylabel("compass azimuth (deg, unwrapped)")
-            ax.set_title(f"{n}: swing plane, period {period:.4f} s", fontsize=9)
-            ax.legend(fontsize=7, loc="best")
-            residual_rows.append((n, "azimuth less the k line (deg)", tc, np.degrees(az - az0 - k * tc)))
-        axes[-1, 0].set_xlabel(tlabel)
-        save(fig, "swing_azimuth")
-        fig, axes = plt.subplots(1, len(pend), figsize=(4.5 * len(pend), 4.5), squeeze=False)
-        for ax, n in zip(axes[0, :], pend):
-            s = series[n]
-            e, nn = _finite(np.asarray(s["east"], float), np.asarray(s["north"], float))
-            step = max(1, e.size // 60000)
-            ax.plot(e[::step], nn[::step], lw=0.2)
-            ax.set_aspect("equal", adjustable="datalim")
-            unit = s["path_unit"]
-            ax.set_xlabel(f"east ({unit})")
-            ax.set_ylabel(f"north ({unit})")
-            ax.set_title(f"{n}: bob seen from above", fontsize=9)
-        save(fig, "bob_path")
-    for n in names:
-        if "east" in series[n]:
-            continue
+    k_info = _k_line(scene)
+    fig, axes = plt.subplots(len(pend), 1, figsize=(9, 3.2 * len(pend)), squeeze=False)
+    for ax, n in zip(axes[:, 0], pend):
         s = series[n]
-        for label, y in s["angles"].items():
-            r = oscillation_residuals(np.asarray(s["t"], float), np.asarray(y, float))
-            if r is not None:
-                residual_rows.append((n, f"{label} less the fitted oscillation (deg)", r[0], np.degrees(r[1])))
-    if residual_rows:
-        fig, axes = plt.subplots(len(residual_rows), 1, figsize=(9, 2.4 * len(residual_rows)), squeeze=False)
-        for ax, (n, label, tt, rr) in zip(axes[:, 0], residual_rows):
-            _band(ax, tt, rr, scale, label)
-            rms = float(np.sqrt(np.mean(rr ** 2))) if rr.size else float("nan")
-            ax.set_title(f"{n}: {label}, rms {rms:.3g}", fontsize=9)
-            ax.set_ylabel("deg")
-        axes[-1, 0].set_xlabel(tlabel)
-        save(fig, "residuals")
-    return written
+        tc, az, period = swing_azimuth(np.asarray(s["t"], float), np.asarray(s["east"], float),
+                                       np.asarray(s["north"], float))
+        if tc.size < 2:
+            ax.text(0.5, 0.5, "no swing measured", ha="center", transform=ax.transAxes)
+            continue
+        if k_info is not None:
+            k, lat, nrate = k_info
+            label = f"k = n sin γ = {k:.4e} rad/s (γ = {lat:.4f}°)"
+        else:
+            k = float(np.polyfit(tc, az, 1)[0])
+            x = max(-1.0, min(1.0, k / SIDEREAL_RATE_RAD_S))
+            label = f"fitted k = {k:.4e} rad/s (γ = asin(k/n) = {math.degrees(math.asin(x)):.3f}°, sidereal n)"
+        az0 = float(np.mean(az - k * tc))
+        ax.plot(tc / scale, np.degrees(az), ".", ms=2, label="swing-plane azimuth (per swing)")
+        ax.plot(tc / scale, np.degrees(az0 + k * tc), "-", lw=1, label=label)
+        ax.set_ylabel("compass azimuth (deg, unwrapped)")
+        ax.set_title(f"{n}: swing plane, period {period:.4f} s", fontsize=9)
+        ax.legend(fontsize=7, loc="best")
+        residual_rows.append((n, "azimuth less the k line (deg)", tc, np.degrees(az - az0 - k * tc)))
+    axes[-1, 0].set_xlabel(tlabel)
+    return fig, residual_rows
+
+
+def _bob_path_figure(plt, series, pend):
+    """The ``bob_path`` view: each pendulum's bob seen from above (at most ~60000 points drawn)."""
+    fig, axes = plt.subplots(1, len(pend), figsize=(4.5 * len(pend), 4.5), squeeze=False)
+    for ax, n in zip(axes[0, :], pend):
+        s = series[n]
+        e, nn = _finite(np.asarray(s["east"], float), np.asarray(s["north"], float))
+        step = max(1, e.size // 60000)
+        ax.plot(e[::step], nn[::step], lw=0.2)
+        ax.set_aspect("equal", adjustable="datalim")
+        unit = s["path_unit"]
+        ax.set_xlabel(f"east ({unit})")
+        ax.set_ylabel(f"north ({unit})")
+        ax.set_title(f"{n}: bob seen from above", fontsize=9)
+    return fig
+
+
+def _residuals_figure(plt, residual_rows, axis):
+    """The ``residuals`` view: one panel per (instrument, label, t, residual in deg) row, with its rms."""
+    scale, tlabel = axis
+    fig, axes = plt.subplots(len(residual_rows), 1, figsize=(9, 2.4 * len(residual_rows)), squeeze=False)
+    for ax, (n, label, tt, rr) in zip(axes[:, 0], residual_rows):
+        _band(ax, tt, rr, scale, label)
+        rms = float(np.sqrt(np.mean(rr ** 2))) if rr.size else float("nan")
+        ax.set_title(f"{n}: {label}, rms {rms:.3g}", fontsize=9)
+        ax.set_ylabel("deg")
+    axes[-1, 0].set_xlabel(tlabel)
+    return fig
 
 
 def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False):
