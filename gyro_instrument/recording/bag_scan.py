@@ -312,7 +312,10 @@ class _Scanner:
             return ci.chunk_length == 9 + length
         return _framed(self.buf, pos + 9 + length, limit) and pos + 9 + length < limit
 
-    def read_data(self):
+    def read_data(self) -> None:
+        """Walk the data section record by record into ``self.scan`` (schemas, channels, messages,
+        metadata), resynchronising after framing damage and noting every lost span in ``raw_damage``;
+        stops at the data-end record, the footer, or the end of a file cut short (``truncated``)."""
         buf, scan = self.buf, self.scan
         limit = self.size
         if self.scan.summary_ok:
@@ -337,65 +340,80 @@ class _Scanner:
             op = buf[pos]
             (length,) = struct.unpack_from("<Q", buf, pos + 1)
             end = pos + 9 + length
-            body = buf[pos + 9:end]
             if op == Opcode.CHUNK:
-                try:
-                    records, consumed = self._chunk(pos, length)
-                except Exception as exc:
-                    reason = ("chunk CRC mismatch" if isinstance(exc, CRCValidationError)
-                              else f"chunk undecodable ({exc.__class__.__name__})")
-                    if self._record_ok_at_end(pos, length, limit):
-                        self.raw_damage.append((pos, end, reason, "span"))
-                        pos = end
-                    else:
-                        nxt = self.resync(pos, limit)
-                        self.raw_damage.append((pos, nxt, reason + "; record length untrustworthy", "span"))
-                        if nxt is None:
-                            return
-                        pos = nxt
-                    continue
-                for i, rec in enumerate(records):
-                    if isinstance(rec, Schema):
-                        scan.schemas[rec.id] = rec
-                    elif isinstance(rec, Channel):
-                        scan.channels[rec.id] = rec
-                    elif isinstance(rec, Message):
-                        scan.messages.append((rec.log_time, pos, i, rec))
-                if consumed != length and not _framed(buf, end, limit):
-                    end = pos + 9 + consumed       # a flipped length on an intact chunk
-            elif op == Opcode.DATA_END:
-                try:
-                    de = DataEnd.read(_stream(body))
-                    if de.data_section_crc and zlib.crc32(buf[:pos]) != de.data_section_crc:
-                        scan.notes.append("data section failed its CRC (data-end record)"
-                                          + ("" if self.raw_damage else ": the damage is outside every chunk's "
-                                             "contents (record headers, metadata or indexes); every chunk checked"))
-                except Exception:
-                    pass
-                scan.data_end = True
+                pos = self._read_chunk(pos, length, end, limit)
+                if pos is None:
+                    return
+                continue
+            if op == Opcode.DATA_END:
+                self._data_end(pos, buf[pos + 9:end])
                 return
-            elif op == Opcode.FOOTER:
+            if op == Opcode.FOOTER:
                 return
-            else:
-                try:
-                    st = _stream(body)
-                    if op == Opcode.HEADER:
-                        scan.header = Header.read(st)
-                    elif op == Opcode.SCHEMA:
-                        s = Schema.read(st)
-                        scan.schemas[s.id] = s
-                    elif op == Opcode.CHANNEL:
-                        c = Channel.read(st)
-                        scan.channels[c.id] = c
-                    elif op == Opcode.MESSAGE:
-                        scan.messages.append((None, pos, 0, Message.read(st, length)))
-                    elif op == Opcode.METADATA:
-                        scan.metadata.append(Metadata.read(st))
-                except Exception as exc:
-                    self.raw_damage.append((pos, end, f"{Opcode(op).name.lower()} record unreadable "
-                                                      f"({exc.__class__.__name__})", "record"))
+            self._read_record(op, pos, buf[pos + 9:end], length, end)
             pos = end
         scan.truncated = scan.truncated or (self.footer is None and not scan.data_end)
+
+    def _read_chunk(self, pos, length, end, limit):
+        """Read the chunk record at ``pos`` (CRC checked) into the scan; returns where the next record
+        starts, or None when a damaged chunk's length cannot be trusted and no record follows."""
+        scan = self.scan
+        try:
+            records, consumed = self._chunk(pos, length)
+        except Exception as exc:
+            reason = ("chunk CRC mismatch" if isinstance(exc, CRCValidationError)
+                      else f"chunk undecodable ({exc.__class__.__name__})")
+            if self._record_ok_at_end(pos, length, limit):
+                self.raw_damage.append((pos, end, reason, "span"))
+                return end
+            nxt = self.resync(pos, limit)
+            self.raw_damage.append((pos, nxt, reason + "; record length untrustworthy", "span"))
+            return nxt
+        for i, rec in enumerate(records):
+            if isinstance(rec, Schema):
+                scan.schemas[rec.id] = rec
+            elif isinstance(rec, Channel):
+                scan.channels[rec.id] = rec
+            elif isinstance(rec, Message):
+                scan.messages.append((rec.log_time, pos, i, rec))
+        if consumed != length and not _framed(self.buf, end, limit):
+            end = pos + 9 + consumed       # a flipped length on an intact chunk
+        return end
+
+    def _data_end(self, pos, body):
+        """The data-end record: check the data section's CRC when it carries one."""
+        scan = self.scan
+        try:
+            de = DataEnd.read(_stream(body))
+            if de.data_section_crc and zlib.crc32(self.buf[:pos]) != de.data_section_crc:
+                scan.notes.append("data section failed its CRC (data-end record)"
+                                  + ("" if self.raw_damage else ": the damage is outside every chunk's "
+                                     "contents (record headers, metadata or indexes); every chunk checked"))
+        except Exception:
+            pass
+        scan.data_end = True
+
+    def _read_record(self, op, pos, body, length, end):
+        """A record outside chunks (header, schema, channel, message, metadata; others skipped); an
+        unreadable one is noted in ``raw_damage``."""
+        scan = self.scan
+        try:
+            st = _stream(body)
+            if op == Opcode.HEADER:
+                scan.header = Header.read(st)
+            elif op == Opcode.SCHEMA:
+                s = Schema.read(st)
+                scan.schemas[s.id] = s
+            elif op == Opcode.CHANNEL:
+                c = Channel.read(st)
+                scan.channels[c.id] = c
+            elif op == Opcode.MESSAGE:
+                scan.messages.append((None, pos, 0, Message.read(st, length)))
+            elif op == Opcode.METADATA:
+                scan.metadata.append(Metadata.read(st))
+        except Exception as exc:
+            self.raw_damage.append((pos, end, f"{Opcode(op).name.lower()} record unreadable "
+                                              f"({exc.__class__.__name__})", "record"))
 
     # ------------------------------------------------------------------ spans
     def spans(self):
