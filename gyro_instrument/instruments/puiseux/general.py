@@ -32,7 +32,11 @@ exactly Puiseux's equation (after eq. 25, expanded)::
     AB ω² − [BC(ϖ a1'² + ϖ' a1²) + AC(ϖ b1'² + ϖ' b1²) + AB(ϖ c1'² + ϖ' c1²)] ω
           + C ϖ ϖ' (A a1''² + B b1''² + C c1''²) = 0,
 
-so the two swings last π√(C/(Mgω')) and π√(C/(Mgω'')) (one swing: half a period).
+so the two swings last π√(C/(Mgω')) and π√(C/(Mgω'')) (one swing: half a period). Puiseux's
+proof that the roots are real writes the middle coefficient lϖ + l'ϖ' with
+l = BC a1'² + AC b1'² + AB c1'², l' = BC a1² + AC b1² + AB c1², so K = (lϖ − l'ϖ')² +
+4(BC a1a1' + AC b1b1' + AB c1c1')² ϖϖ'; the transcription defines l and l' the other way round
+against its own ω equation (the tests hold the equation, which the eigenproblem reproduces).
 
 The planes Π', Π''. A body point x (body axes, from G) rises by Z − Z1 = x·ε (G's height changes
 at second order only). In mode k, ε ∥ e_k (a fixed tangent direction: no gyroscopic term, the
