@@ -95,6 +95,7 @@ class PuiseuxBody(Instrument):
     )
     MECHANICS = frozenset()
     MEASURED_CHANNELS = ("tilt", "tilt_azimuth")
+    SHOWS_CONTACT_POINT = True
     JOINTS = ("tilt", "tilt_azimuth", "spin")
     SIMULATOR_NODE = "top_sim"
     COLUMNS = (
@@ -266,6 +267,11 @@ class PuiseuxBody(Instrument):
         out["energy_J"] = float(diag["energy_J"][0])
         out["angular_momentum_vertical_kg_m2_s"] = float(diag["angular_momentum_vertical_kg_m2_s"][0])
         return out
+
+    def contact_point_body(self, columns) -> np.ndarray:
+        """The ``contact_x``, ``contact_y``, ``contact_z`` columns side by side, shape (m, 3), m:
+        the contact point in the principal axes Gx, Gy, Gz from G (frame ``<name>_body``)."""
+        return np.column_stack([columns["contact_x"], columns["contact_y"], columns["contact_z"]])
 
     # ---------------------------------------------------------------- sec. III
     def modes(self):
