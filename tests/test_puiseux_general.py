@@ -270,6 +270,8 @@ def test_body_turns_about_the_vertical_without_bound():
     slope = np.linalg.lstsq(X, sim.columns["turn_angle"], rcond=None)[0][0]
     assert slope == pytest.approx(alpha, rel=2e-3)
     assert sim.columns["turn_angle"][-1] > 2 * math.pi            # more than a whole turn: no bound
+    # the spin_rate channel (u·w) averages to the same rate (measured 1.4e-5)
+    assert np.mean(sim.columns["spin_rate"]) == pytest.approx(alpha, rel=2e-3)
     # An independent reader: the azimuth of the horizontal projection of the body line A-xi
     # (counter-clockwise from east), unwrapped, has the same mean rate (it differs by periodic O(θ0)).
     R = quat_to_matrix(sim.extra["state"][:4].T)
@@ -396,3 +398,79 @@ def test_general_angles_apply_only_to_the_general_body():
         make(shape="curvature", curvature_radii_m=[0.3, 0.5], com_height_m=0.2, inertia_kg_m2=[0.02, 0.03, 0.025],
              axes_theta1_deg=10.0)
     assert err.value.field == "instruments.body.axes_theta1_deg" and "only to shape = general" in str(err.value)
+
+
+# ------------------------------------------------------------------ sec. I: the ellipsoid's contact point
+def section_I_path(body, t):
+    """Puiseux sec. I, eqs. (15)-(16) and the four equations for h', h'', ε', ε'' from the initial
+    a'', b'', p, q (after eq. 16), then the contact point x = −(α²/γ) a'', y = −(β²/γ) b''."""
+    A, B, _ = body.inertia
+    D, E, F, _ = body.coefficients()
+    P3 = A * F + B * E + D * D
+    disc = math.sqrt(P3 * P3 - 4 * A * B * E * F)
+    om = [math.sqrt((P3 - disc) / (2 * A * B)), math.sqrt((P3 + disc) / (2 * A * B))]
+    lam = [D * w / (A * w * w - E) for w in om]                    # λ = k/h
+    y0 = body.initial_state()
+    a0, b0, _ = body.diagnostics(y0[:, None])["n"][:, 0]
+    p0, q0, r = y0[4:]
+    # unknowns h' sin ε', h' cos ε', h'' sin ε'', h'' cos ε''
+    M = np.array([[1, 0, 1, 0], [0, lam[0], 0, lam[1]], [0, om[0], 0, om[1]],
+                  [om[0] * lam[0], 0, om[1] * lam[1], 0]])
+    X1, Y1, X2, Y2 = np.linalg.solve(M, [a0, b0, r * b0 - q0, r * a0 - p0])
+    a = X1 * np.cos(om[0] * t) + Y1 * np.sin(om[0] * t) + X2 * np.cos(om[1] * t) + Y2 * np.sin(om[1] * t)
+    b = (lam[0] * (Y1 * np.cos(om[0] * t) - X1 * np.sin(om[0] * t))
+         + lam[1] * (Y2 * np.cos(om[1] * t) - X2 * np.sin(om[1] * t)))
+    alpha, beta, gamma = body.semi_axes_m
+    return -alpha * alpha / gamma * a, -beta * beta / gamma * b
+
+
+@pytest.mark.parametrize("spin, retrograde", [(5.0, True), (12.0, False)])
+def test_ellipsoid_contact_point_stations_and_retrogradations(spin, retrograde):
+    # Sec. I end: x = −(α²/γ)[h' sin(ω't + ε') + h'' sin(ω''t + ε'')], y = −(β²/γ)[λ'h' cos(...) + ...];
+    # "le rayon vecteur AH pourra donc ne pas tourner toujours dans le même sens": stations and
+    # retrogradations as in the planets' motion. The oblate homogeneous ellipsoid (0.12, 0.10,
+    # 0.05 m) on its short axis, released from θ0 = 1e-3 rad: at 5 rad/s the radius vector stops
+    # and turns back (11 stations in 10 s by the formulas), at 12 rad/s it never does (its areal
+    # velocity stays between −8.4e-7 and −4.0e-8 m²/s: 5 % margin, far above the O(θ0) error).
+    # Path against the formulas: O(θ0) relative (measured 7.6e-4 / 9.3e-4), bound 5e-3 of its
+    # extent; station times: ~θ0/ω' = 4e-5 s (measured 7.3e-5 s), bound 1e-3 s.
+    body = make(semi_axes_m=[0.12, 0.10, 0.05], mass_kg=1.0, spin_rate_rad_s=spin,
+                initial_tilt_deg=math.degrees(THETA0), initial_tilt_azimuth_deg=30.0, rtol=1e-10)
+    t = np.linspace(0.0, 10.0, 4001)
+    sim = body.simulate(t)
+    x, y = sim.columns["contact_x"], sim.columns["contact_y"]
+    xp, yp = section_I_path(body, t)
+    extent = np.max(np.hypot(xp, yp))
+    assert np.max(np.hypot(x - xp, y - yp)) < 5e-3 * extent
+    ts_s, _, w_s = _stations(t, x, y)
+    ts_p, slope_p, w_p = _stations(t, xp, yp)
+    assert bool(np.max(w_s) > 0 > np.min(w_s)) is retrograde
+    assert bool(np.max(w_p) > 0 > np.min(w_p)) is retrograde
+    if retrograde:
+        assert len(ts_p) >= 10 and len(ts_s) == len(ts_p)
+        np.testing.assert_allclose(ts_s, ts_p, atol=1e-3)
+    # exact: the contact point is on the ellipsoid, below G by the com_height column (1e-12 m)
+    a, b, c = body.semi_axes_m
+    z = sim.columns["contact_z"]
+    assert np.max(np.abs(x * x / a ** 2 + y * y / b ** 2 + z * z / c ** 2 - 1.0)) < 1e-12
+    R = quat_to_matrix(sim.extra["state"][:4].T)
+    assert np.max(np.abs(np.einsum("mj,jm->m", R[:, 2, :], np.array([x, y, z])) + sim.columns["com_height"])) < 1e-12
+
+
+# ------------------------------------------------------------------ the other channels of the general body
+def test_axis_azimuth_and_spin_channels_follow_the_first_order_motion(oblique):
+    # tilt_azimuth: compass azimuth of the line GA; at first order GA is along e_z + Φ × e_z in ENU,
+    # Φ = P φ the rotation vector in the rest frame (= ENU). The horizontal projection
+    # tilt·(sin az, cos az) against (Φ_y, −Φ_x): O(θ0) relative (measured 3.2e-4), bound 3e-3 of θ0.
+    # spin_rate (the rate about GA, u·w) against the first-order d(u·φ)/dt: they differ by
+    # ½ u·(φ × φ̇) and the second-order motion, O(θ0² Ω'') ≈ 1e-5 rad/s (measured 6.9e-6): bound
+    # 3 θ0² Ω''. (Its mean, the turning rate, is held to 2e-3 in the slow-turning test.)
+    body, t, sim = oblique
+    c = sim.columns
+    lin = body.linear_prediction(t)
+    Phi = body.P @ lin["phi"]
+    horiz = c["tilt"] * np.array([np.sin(c["tilt_azimuth"]), np.cos(c["tilt_azimuth"])])
+    assert np.max(np.hypot(horiz[0] - Phi[1], horiz[1] + Phi[0])) < 3e-3 * THETA0
+    rate = np.gradient(lin["turn"], t)          # central differences: (Ω dt)²/6 ~ 4e-4 of the rate
+    bound = 3 * THETA0 ** 2 * body.predictions()["frequencies_rad_s"][1]
+    assert np.max(np.abs(c["spin_rate"] - rate)[2:-2]) < bound
