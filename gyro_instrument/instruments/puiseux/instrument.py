@@ -345,7 +345,7 @@ class PuiseuxBody(Instrument):
         u = self.P[2]
         tilt_amp, path = 0.0, 0.0
         for k, om in zip((1, 2), modes.frequencies_rad_s):
-            amp = math.hypot(q0[k], qd0[k] / om)
+            amp = math.hypot(q0[k], qd0[k] / om) if om > 0.0 else math.inf
             eps = np.cross(u, modes.rotations[:, k])
             tilt_amp += amp * float(np.linalg.norm(eps))
             path += amp * math.hypot(self.rho * (self.P[0] @ eps), self.rho_prime * (self.P[1] @ eps))
@@ -374,7 +374,8 @@ class PuiseuxBody(Instrument):
             "energy_J": float(diag["energy_J"][0]),
             "angular_momentum_vertical_kg_m2_s": lv,
         }
-        fast = float(np.linalg.norm(y0[4:])) / modes.frequencies_rad_s[0]
+        slow = modes.frequencies_rad_s[0]
+        fast = float(np.linalg.norm(y0[4:])) / slow if slow > 0.0 else math.inf
         if fast > 0.1 or tilt_amp > 0.1:
             out["notes"] = [f"not a small motion (|w0|/slower swing frequency = {fast:.3g}, tilt up to "
                             f"{tilt_amp:.3g} rad): Puiseux sec. III assumes small displacements and velocities; "
