@@ -474,3 +474,15 @@ def test_axis_azimuth_and_spin_channels_follow_the_first_order_motion(oblique):
     rate = np.gradient(lin["turn"], t)          # central differences: (Ω dt)²/6 ~ 4e-4 of the rate
     bound = 3 * THETA0 ** 2 * body.predictions()["frequencies_rad_s"][1]
     assert np.max(np.abs(c["spin_rate"] - rate)[2:-2]) < bound
+
+
+def test_shipped_scene_holds_what_its_comment_says():
+    # gyro_instrument/scenes/puiseux_general.yaml prints 0.472 s, 0.303 s, 0.126 rad/s
+    # counter-clockwise, planes not perpendicular: the 3 printed digits (the scene's site gravity).
+    from gyro_instrument.scenes import build_instruments, load_scene
+    (body,) = build_instruments(load_scene("puiseux_general")).values()
+    p = body.predictions()
+    assert [round(d, 3) for d in p["swing_durations_s"]] == [0.472, 0.303]
+    assert round(p["turning_rate_rad_s"], 3) == 0.126 and p["turning_sense"] == "counter-clockwise seen from above"
+    assert p["planes_perpendicular"] is False and p["verdict"] == "stable"
+    assert p["max_tilt_rad"] < 0.01 and "notes" not in p        # a small motion: Puiseux's hypotheses
