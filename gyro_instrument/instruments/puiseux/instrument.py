@@ -42,6 +42,20 @@ class PuiseuxBody(Instrument):
     leans toward that azimuth; it spins at r about Gz (positive counter-clockwise seen from
     above when upright), and the axis moves at the given tilt and azimuth rates. Earth rotation
     and friction are ignored (the paper's hypotheses); nothing is approximated.
+
+    ``shape: general`` (sec. III) is a body of any form whose line GA (centre of mass to the
+    contact point at rest) is not a principal axis: at rest its normal frame A-xi, A-eta, A-zeta
+    lies along ENU and its principal axes at Puiseux's angles (φ1, θ1, ψ1) from it (eq. 17);
+    the line GA plays the axis above (tilt, azimuth, spin about it). Its theory is
+    :mod:`.general`; its surface the osculating ellipsoid at A in any orientation
+    (:class:`~gyro_instrument.instruments.puiseux.surface.GeneralEllipsoidSurface`).
+
+    Raises
+    ------
+    SceneError
+        From :meth:`check_params`: a shape's missing or foreign fields, two spins, an inertia
+        that is not a rigid body's; for the general body also GA at or above a centre of
+        curvature (γ ≥ min(ρ, ρ'): no stable equilibrium, outside sec. III).
     """
 
     type_name = "puiseux_body"
@@ -214,7 +228,17 @@ class PuiseuxBody(Instrument):
 
     # ---------------------------------------------------------------- predictions
     def coefficients(self, r=None) -> tuple:
-        """D, E, F, G of eq. (14) at spin ``r`` (rad/s; default the initial spin)."""
+        """D, E, F, G of eq. (14) at spin ``r`` (rad/s; default the initial spin).
+
+        Raises
+        ------
+        ValueError
+            For the general body: eq. (14) needs a principal axis normal at A (sec. I-II); sec.
+            III has :meth:`modes` instead.
+        """
+        if self.general:
+            raise ValueError("eq. (14)'s D, E, F, G need a principal axis normal at the contact point "
+                             "(shape ellipsoid or curvature); the general body (sec. III) has modes()")
         A, B, C = self.inertia
         r = self.r0 if r is None else r
         if self.shape == "ellipsoid":
