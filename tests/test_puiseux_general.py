@@ -494,3 +494,16 @@ def test_shipped_scene_holds_what_its_comment_says():
     assert round(p["turning_rate_rad_s"], 3) == 0.126 and p["turning_sense"] == "counter-clockwise seen from above"
     assert p["planes_perpendicular"] is False and p["verdict"] == "stable"
     assert p["max_tilt_rad"] < 0.01 and "notes" not in p        # a small motion: Puiseux's hypotheses
+
+
+def test_double_root_leaves_the_planes_undefined():
+    # Equal moments and equal radii (a weighted ball): Puiseux's ω equation has a double root,
+    # Mg ω/C = Mg(ρ − γ)/A for both swings (K = 0: l = l', ϖ = ϖ', BC a1a1' + ... = A²ξ̂·η̂ = 0),
+    # so every plane through GA swings alike; the body is valid (not refused) and describe says so.
+    body = make(shape="general", inertia_kg_m2=[0.02, 0.02, 0.02], curvature_radii_m=[0.4, 0.4], com_height_m=0.1,
+                axes_phi1_deg=10.0, axes_theta1_deg=30.0, axes_psi1_deg=5.0, initial_tilt_deg=0.05)
+    p = body.predictions()
+    np.testing.assert_allclose(p["frequencies_rad_s"], [math.sqrt(1.0 * G * 0.3 / 0.02)] * 2, rtol=1e-12)
+    assert p["plane_angles_rad"] is None and p["angle_between_planes_rad"] is None
+    assert p["planes_perpendicular"] is True                       # Puiseux's factors: ρ = ρ'
+    assert any("double root" in n for n in p["notes"])

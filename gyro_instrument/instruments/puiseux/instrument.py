@@ -373,6 +373,14 @@ class PuiseuxBody(Instrument):
             eps = np.cross(u, modes.rotations[:, k])
             tilt_amp += amp * float(np.linalg.norm(eps))
             path += amp * math.hypot(self.rho * (self.P[0] @ eps), self.rho_prime * (self.P[1] @ eps))
+        notes = []
+        f1, f2 = modes.frequencies_rad_s
+        if abs(f2 - f1) <= 1e-9 * f2:
+            out_planes = None
+            notes.append("double root (omega' = omega''): every plane through GA swings with the same duration, "
+                         "so Puiseux's two planes are not defined (e.g. equal radii and equal moments)")
+        else:
+            out_planes = modes.plane_angles_rad
         out = {
             "section": "III",
             "verdict": "stable",
@@ -381,8 +389,8 @@ class PuiseuxBody(Instrument):
             "frequencies_rad_s": modes.frequencies_rad_s,
             "swing_durations_s": modes.swing_durations_s,
             "periods_s": tuple(2.0 * d for d in modes.swing_durations_s),
-            "plane_angles_rad": modes.plane_angles_rad,
-            "angle_between_planes_rad": modes.angle_between_planes_rad,
+            "plane_angles_rad": out_planes,
+            "angle_between_planes_rad": modes.angle_between_planes_rad if out_planes else None,
             "planes_perpendicular": bool(perpendicular),
             "perpendicularity": {"rho_minus_rho_prime_m": self.rho - self.rho_prime,
                                  "inertia_conjugacy_kg2_m4": conj},
@@ -401,9 +409,11 @@ class PuiseuxBody(Instrument):
         slow = modes.frequencies_rad_s[0]
         fast = float(np.linalg.norm(y0[4:])) / slow if slow > 0.0 else math.inf
         if fast > 0.1 or tilt_amp > 0.1:
-            out["notes"] = [f"not a small motion (|w0|/slower swing frequency = {fast:.3g}, tilt up to "
-                            f"{tilt_amp:.3g} rad): Puiseux sec. III assumes small displacements and velocities; "
-                            f"the simulation is exact, these predictions are first order"]
+            notes += [f"not a small motion (|w0|/slower swing frequency = {fast:.3g}, tilt up to "
+                      f"{tilt_amp:.3g} rad): Puiseux sec. III assumes small displacements and velocities; "
+                      f"the simulation is exact, these predictions are first order"]
+        if notes:
+            out["notes"] = notes
         return out
 
     def scales(self, duration_s) -> dict:
@@ -542,7 +552,8 @@ class PuiseuxBody(Instrument):
             ``contact_east``, ``contact_north``: R x_P on the plane from the vertical through G, m
             (G moves only vertically: eqs. 1-2 with no initial horizontal velocity);
             ``turn_angle``: the twist of the rotation from the rest orientation about the vertical,
-            2·atan2(q_z, q_w) of q ⊗ q_rest⁻¹ (swing-twist decomposition), unwrapped, rad.
+            2·atan2(q_z, q_w) of q ⊗ q_rest⁻¹ (swing-twist decomposition), unwrapped, rad (the
+            unwrapping needs less than a turn per sample: |r| / sample rate < 2π).
         """
         xp = self.contact_points_body(n)
         q = np.asarray(y[:4], dtype=float).T
