@@ -120,6 +120,72 @@ def test_modes_are_the_roots_of_puiseux_omega_equation(fa, fb, fc, phi1, theta1,
     np.testing.assert_allclose(V.T @ np.diag([A, B, C]) @ V, np.eye(3), atol=1e-9)
 
 
+def puiseux_P_Q_R_S(A, B, C, w, wp, phi1, theta1, psi1):
+    """Puiseux's D ... I and P, Q, R, S (sec. III, after eq. 22 and before eq. 24), transcribed."""
+    (a1, b1, c1), (a1p, b1p, c1p), _ = normal_frame(phi1, theta1, psi1)
+    sf, cf = math.sin(phi1), math.cos(phi1)
+    D, E = w * a1p * cf - wp * a1 * sf, w * a1p * sf + wp * a1 * cf
+    F, G_ = w * b1p * cf - wp * b1 * sf, w * b1p * sf + wp * b1 * cf
+    H, I = w * c1p * cf - wp * c1 * sf, w * c1p * sf + wp * c1 * cf
+    st, ct, sp, cp = math.sin(theta1), math.cos(theta1), math.sin(psi1), math.cos(psi1)
+    return (C * D * ct - A * H * sp * st, C * E * ct - A * I * sp * st,
+            B * H * cp * st - C * F * ct, B * I * cp * st - C * G_ * ct)
+
+
+@pytest.mark.parametrize("fa, fb, fc, phi1, theta1, psi1, kr, krp", [
+    (1.0, 1.5, 1.25, 20.0, 35.0, 50.0, 1.5, 2.5),        # BODY
+    (1.0, 1.5, 1.25, 0.0, 5.0, 60.0, 2.0, 3.0),
+    (0.6, 1.9, 1.4, -130.0, 70.0, 110.0, 1.3, 2.8),
+    (1.7, 0.9, 1.1, 75.0, 20.0, -35.0, 2.9, 1.4),
+    (1.2, 1.3, 0.7, 160.0, 55.0, 15.0, 2.2, 1.25),
+])
+def test_puiseux_lambda_algebra_gives_the_same_roots_planes_and_perpendicularity(fa, fb, fc, phi1, theta1, psi1,
+                                                                                    kr, krp):
+    # Puiseux's own route, transcribed: λ', λ'' roots of his quadratic (before Λ'), ω from eq. (25)
+    # (both of its forms), the planes Π', Π'' from their printed equations, and
+    # Λ' = Cϖϖ'(ϖ − ϖ')cos²θ1(Aa1''² + Bb1''² + Cc1''²)(BCa1a1' + ACb1b1' + ABc1c1'), against the
+    # eigenproblem of general.py, for bodies away from the singular cases of his parametrisation
+    # (ψ1 = 0 or 90° with φ1 = 0, ρ = ρ', cos θ1 = 0 make λ infinite or Λ' zero). Rounding: 1e-9
+    # relative (1e-7 on the planes' angles). The transcription's
+    # expansion of Λ' drops the term A(R cos ψ1 cos θ1 − S sin ψ1) from the bracket multiplying
+    # (PR + QS); with it, Λ' equals the factorised form, without it not (7.4× off for the BODY).
+    A, B, C = 0.02 * fa, 0.02 * fb, 0.02 * fc
+    if A + B < C or B + C < A or A + C < B:
+        return
+    gamma = 0.2
+    w, wp = gamma * (kr - 1), gamma * (krp - 1)
+    f1, t1, p1 = np.radians([phi1, theta1, psi1])
+    P, Q, R, S = puiseux_P_Q_R_S(A, B, C, w, wp, f1, t1, p1)
+    st_, ct, sp, cp = math.sin(t1), math.cos(t1), math.sin(p1), math.cos(p1)
+    qa = B * R * sp * ct + B * S * cp
+    qb = B * P * sp * ct + B * Q * cp + A * R * cp * ct - A * S * sp
+    qc = A * P * cp * ct - A * Q * sp
+    lams = np.roots([qa, qb, qc])
+    PF = normal_frame(f1, t1, p1)
+    modes = general_modes((A, B, C), 1.0, G, gamma * kr, gamma * krp, gamma, PF)
+    om1, om2 = modes.omega_m
+    if abs(om2 - om1) < 1e-2 * om2 or np.iscomplexobj(lams):
+        return
+    omegas = [(P + l * R) / (A * sp - l * B * cp) for l in lams]
+    omegas_b = [(Q + l * S) / ((A * cp + l * B * sp) * ct) for l in lams]
+    np.testing.assert_allclose(sorted(omegas), modes.omega_m, rtol=1e-9)
+    np.testing.assert_allclose(omegas_b, omegas, rtol=1e-9)
+    for l, om in zip(lams, omegas):
+        normal = np.array([Q * cp + P * sp * ct + l * (S * cp + R * sp * ct),
+                           -(Q * sp - P * cp * ct + l * (S * sp - R * cp * ct)), -(P * st_ + l * R * st_)])
+        assert abs(normal @ PF[2]) < 1e-9 * np.linalg.norm(normal)          # the plane holds GA
+        trace = (math.atan2(normal @ PF[1], normal @ PF[0]) + 0.5 * math.pi) % math.pi
+        k = int(np.argmin(np.abs(np.array(modes.omega_m) - om)))               # Π' goes with ω'
+        d = (trace - modes.plane_angles_rad[k] + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+        assert abs(d) < 1e-7
+    Lam = P * P + Q * Q + (P * R + Q * S) * lams.sum() + (R * R + S * S) * lams.prod()
+    (_, _, _), (_, _, _), (a1pp, b1pp, c1pp) = PF
+    factorised = (C * w * wp * (w - wp) * ct ** 2 * (A * a1pp ** 2 + B * b1pp ** 2 + C * c1pp ** 2)
+                  * inertia_conjugacy(A, B, C, PF))
+    scale = abs(qa) * (P * P + Q * Q + abs(P * R + Q * S) * abs(lams).sum() + (R * R + S * S) * abs(lams.prod()))
+    assert abs(Lam * qa - factorised) < 1e-9 * scale
+
+
 def test_gz_along_the_normal_is_section_II():
     # θ1 = 0: Gz is the normal, and the general body is sec. II's with δ = −(φ1 + ψ1) (Aξ is at
     # −(φ1 + ψ1) from Gx by eq. 17). At r = 0 the frequencies are the roots of sec. II's
