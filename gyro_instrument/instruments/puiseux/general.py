@@ -37,6 +37,10 @@ proof that the roots are real writes the middle coefficient lϖ + l'ϖ' with
 l = BC a1'² + AC b1'² + AB c1'², l' = BC a1² + AC b1² + AB c1², so K = (lϖ − l'ϖ')² +
 4(BC a1a1' + AC b1b1' + AB c1c1')² ϖϖ'; the transcription defines l and l' the other way round
 against its own ω equation (the tests hold the equation, which the eigenproblem reproduces).
+His route through P, Q, R, S and λ', λ'' (eq. 24-25, the planes' equations, Λ') gives the same
+roots and planes; the transcription's expansion of Λ' drops the term A(R cos ψ1 cos θ1 −
+S sin ψ1)(PR + QS), with which Λ' = Cϖϖ'(ϖ − ϖ')cos²θ1(Aa1''² + Bb1''² + Cc1''²)(BC a1a1' +
+AC b1b1' + AB c1c1') holds (tests/test_puiseux_general.py).
 
 The planes Π', Π''. A body point x (body axes, from G) rises by Z − Z1 = x·ε (G's height changes
 at second order only). In mode k, ε ∥ e_k (a fixed tangent direction: no gyroscopic term, the
