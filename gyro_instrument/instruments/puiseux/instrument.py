@@ -95,7 +95,8 @@ class PuiseuxBody(Instrument):
               doc="initial spin r about the body axis Gz (general: about the line GA), rad/s "
                   "(give this or spin_rate_turn_s)"),
         Param("spin_rate_turn_s", default=None, low=-1.0e4, high=1.0e4,
-              doc="initial spin r about the body axis Gz, turns/s (give this or spin_rate_rad_s)"),
+              doc="initial spin r about the body axis Gz (general: about the line GA), turns/s "
+                  "(give this or spin_rate_rad_s)"),
         Param("initial_tilt_deg", default=0.0, low=0.0, high=180.0, open_high=True,
               doc="initial angle theta0 between the body axis Gz (general: the line GA) and the upward "
                   "vertical, degrees"),
