@@ -573,3 +573,21 @@ def test_double_root_leaves_the_planes_undefined():
     assert p["plane_angles_rad"] is None and p["angle_between_planes_rad"] is None
     assert p["planes_perpendicular"] is True                       # Puiseux's factors: ρ = ρ'
     assert any("double root" in n for n in p["notes"])
+
+
+def test_magnitudes_are_unsigned_with_the_sense_apart():
+    # Issue 17 item 4 for Puiseux's body: magnitudes (critical spin, frequencies, periods, swing
+    # durations, turning rate, tilt and path bounds) are reported unsigned whatever the sense of the
+    # spin; the sense is its own entry (turning_sense) or the signed parameter echo spin_rate_rad_s.
+    for r in (-80.0, 80.0):
+        p = make(semi_axes_m=[0.10, 0.11, 0.20], spin_rate_rad_s=r, initial_tilt_deg=0.01).predictions()
+        assert p["critical_spin_rad_s"] > 0 and p["critical_spin_closed_form_rad_s"] > 0
+        assert min(p["frequencies_rad_s"]) > 0 and min(p["periods_s"]) > 0
+        assert p["spin_rate_rad_s"] == r
+    for r in (-0.1, 0.1):
+        p = general(spin_rate_rad_s=r).predictions()
+        for key in ("swing_durations_s", "periods_s", "frequencies_rad_s", "puiseux_omega_m"):
+            assert min(p[key]) > 0, key
+        for key in ("turning_rate_rad_s", "max_tilt_rad", "contact_path_max_distance_m", "angle_between_planes_rad"):
+            assert p[key] > 0, key
+        assert p["turning_sense"] == ("clockwise seen from above" if r < 0 else "counter-clockwise seen from above")
