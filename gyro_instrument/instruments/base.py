@@ -227,6 +227,15 @@ class Instrument:
         (``SHOWS_AXIS`` False)."""
         return None
 
+    #: True when :meth:`contact_point_body` gives where the body touches its support (published as
+    #: ``<name>/contact_point``, a PointStamped in the body frame ``<name>_body``, per sample)
+    SHOWS_CONTACT_POINT: ClassVar[bool] = False
+
+    def contact_point_body(self, columns):
+        """Contact points in the body's principal axes from its centre of mass, shape (m, 3), m, from
+        simulated ``columns`` (true values, not a measurement); None when ``SHOWS_CONTACT_POINT`` is False."""
+        return None
+
     def pendulum_length_m(self) -> float:
         """For a pendulum (``IS_PENDULUM``): the length l (m) whose ratio to the bob's east and north
         displacements is the measured deflection. Raises NotImplementedError otherwise."""

@@ -83,6 +83,8 @@ def joint_streams(scene, kinds=None, seed=None, truth=None) -> tuple:
             bob = None
         streams[name] = JointStream(name, inst.type_name, tuple(f"{name}/{j}" for j in names), pos, vel,
                                     np.zeros_like(pos), bob)
+        if inst.SHOWS_CONTACT_POINT:          # true (simulated) contact point, body frame, (m, 3)
+            streams[name].extra["contact_point_m"] = inst.contact_point_body(cols)
     return t_ns, streams
 
 

@@ -14,7 +14,7 @@ from gyro_instrument.ros.topics import ESTIMATOR_TOPICS
 _SUMMARIES = {
     "gyrocompass_sim": "Simulates the scene's gyroscopes (plane, gimbal, free) and publishes their joint states.",
     "pendulum_sim": "Simulates the scene's pendulums and publishes their joint states and bob positions.",
-    "top_sim": "Simulates the scene's Puiseux bodies and publishes their joint states.",
+    "top_sim": "Simulates the scene's Puiseux bodies and publishes their joint states and contact points.",
     "estimator": "Estimates latitude and Earth rate from the instruments' joint states.",
     "recorder": "Records the scene's topics to MCAP (rosbag2 layout, sim-time log times, completeness status).",
     "player": "Plays an MCAP bag back to DDS, driving clock; exits at the end (or loops).",
@@ -28,7 +28,8 @@ _TOPICS = {
     "pendulum_sim": _SIM_TOPICS[:1] + ["<pendulum>/bob_position (geometry_msgs/msg/PointStamped), per sample",
                                        "<pendulum>/swing_plane (sensor_msgs/msg/JointState: swing-plane azimuth, "
                                        "compass, rad), once per second of sim time"] + _SIM_TOPICS[1:],
-    "top_sim": _SIM_TOPICS[:1] + _SIM_TOPICS[2:],
+    "top_sim": _SIM_TOPICS[:1] + ["<body>/contact_point (geometry_msgs/msg/PointStamped, <body>_body: principal "
+                                  "axes from the centre of mass, m), per sample"] + _SIM_TOPICS[2:],
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()],
     "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
     "player": ["the bag's topics (relative names), clock"],

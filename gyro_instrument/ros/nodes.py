@@ -48,7 +48,8 @@ from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, TRAIL, axis_topic, visual_every,
-                                        bob_topic, joint_topic, markers_topic, scene_topics, swing_plane_topic)
+                                        bob_topic, contact_point_topic, joint_topic, markers_topic, scene_topics,
+                                        swing_plane_topic)
 from gyro_instrument.recording.visual import axis_directions, swing_plane_azimuth
 from gyro_instrument.scenes import build_instruments, load_scene
 
@@ -221,6 +222,10 @@ class SimulatorNode(SceneNode):
             if s.bob_enu_m is not None:
                 self.pubs[name + "/bob"] = self.create_publisher(m.PointStamped, bob_topic(name), self.pub_qos)
                 self.layouts[name + "/bob"] = m.point_stamped_layout(f"{name}_pivot")
+            if self.insts[name].SHOWS_CONTACT_POINT:
+                self.pubs[name + "/contact"] = self.create_publisher(m.PointStamped, contact_point_topic(name),
+                                                                     self.pub_qos)
+                self.layouts[name + "/contact"] = m.point_stamped_layout(f"{name}_body")
         self._prepare_visuals()
         self.clock_pub = self.create_publisher(m.Clock, CLOCK, self.pub_qos) if self.clock_owner else None
         self.index = 0
@@ -297,7 +302,7 @@ class SimulatorNode(SceneNode):
         return int(self.t_ns.size) if self.streams else 0
 
     def messages_per_step(self):
-        return sum(2 if s.bob_enu_m is not None else 1 for s in self.streams.values())
+        return sum(1 + (s.bob_enu_m is not None) + ("contact_point_m" in s.extra) for s in self.streams.values())
 
     def publishers(self):
         """This node's publishers, the clock first."""
@@ -324,6 +329,9 @@ class SimulatorNode(SceneNode):
                 t, s.position[i0:i1], s.velocity[i0:i1], s.effort[i0:i1])))
             if s.bob_enu_m is not None:
                 batches.append((self.pubs[name + "/bob"], self.layouts[name + "/bob"].encode(t, s.bob_enu_m[i0:i1])))
+            if name + "/contact" in self.pubs:
+                batches.append((self.pubs[name + "/contact"], self.layouts[name + "/contact"].encode(
+                    t, s.extra["contact_point_m"][i0:i1])))
             v = self.visual.get(name)
             if v is None:
                 continue

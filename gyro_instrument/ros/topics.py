@@ -34,6 +34,10 @@ def visual_every(sample_rate_hz):
     return max(int(round(VISUAL_PERIOD_S * sample_rate_hz)), 1)
 
 
+def contact_point_topic(instrument):
+    return f"{instrument}/contact_point"
+
+
 def swing_plane_topic(instrument):
     return f"{instrument}/swing_plane"
 
@@ -65,6 +69,8 @@ def scene_topics(insts):
         out[joint_topic(name)] = "sensor_msgs/msg/JointState"
         if inst.IS_PENDULUM:
             out[bob_topic(name)] = "geometry_msgs/msg/PointStamped"
+        if inst.SHOWS_CONTACT_POINT:
+            out[contact_point_topic(name)] = "geometry_msgs/msg/PointStamped"
         out.update(visual_topics(name, inst))
     out.update(ESTIMATOR_TOPICS)
     return out

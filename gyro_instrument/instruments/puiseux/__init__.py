@@ -4,7 +4,11 @@ A heavy rigid body rests on a perfectly polished (frictionless) horizontal plane
 axis Gz of its centre of mass G is normal to the surface at the contact point A, so the body is
 in equilibrium when Gz is vertical. It is spun at r about Gz and slightly tilted. Puiseux finds
 when Gz stays near the vertical (sec. I for an ellipsoid with G at its centre, sec. II for any
-body, through the principal curvature radii ρ, ρ' of the surface at A).
+body, through the principal curvature radii ρ, ρ' of the surface at A). Sec. III drops the
+principal axis: a body of any form, GA oblique to its principal axes, slightly displaced with
+small velocities — two planes through GA swing with their own durations and the body turns
+slowly about the vertical without bound. Sec. I also follows the contact point on the body
+("stations et rétrogradations"): a channel of every shape here.
 
 Earth rotation is ignored, as in the paper (``MECHANICS`` and so ``SUPPORTED_EFFECTS`` are
 empty): the simulated model is the exact nonlinear rigid body on the frictionless plane, with no
@@ -21,22 +25,28 @@ One module per job:
 
 * :mod:`.theory` — the small-tilt analytic results: eq. (14)/(15), the three stability
   inequalities, the critical spins (sec. I and II);
+* :mod:`.general` — sec. III: Puiseux's direction cosines (eq. 17), his ω equation, the planes
+  Π', Π'', their perpendicularity, the slow turn and the first-order motion;
 * :mod:`.surface` — the body's surface seen from G: the ellipsoid of sec. I and the osculating
-  ellipsoid that stands for any body given by its curvature radii (sec. II);
+  ellipsoid that stands for any body given by its curvature radii (sec. II, and in any
+  orientation for sec. III);
 * :mod:`.dynamics` — the exact rigid body on a frictionless plane (what ``simulate`` integrates);
 * :mod:`.instrument` — :class:`PuiseuxBody`, the instrument (parameters, predictions, simulate).
 """
 
-from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, reduced_rates
+from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general, reduced_rates
+from gyro_instrument.instruments.puiseux.general import (GeneralModes, general_modes, inertia_conjugacy,
+                                                         linear_rotation, normal_frame, puiseux_omega_quadratic)
 from gyro_instrument.instruments.puiseux.instrument import PuiseuxBody
-from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface
+from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface, GeneralEllipsoidSurface
 from gyro_instrument.instruments.puiseux.theory import (StabilityVerdict, classify_coefficients, classify_stability,
                                                         classify_stability_curvature, critical_spin_general_rad_s,
                                                         critical_spin_rad_s, curvature_coefficients,
                                                         ellipsoid_coefficients, homogeneous_inertia,
                                                         stable_spin_intervals_rad_s)
 
-__all__ = ["EllipsoidSurface", "PuiseuxBody", "StabilityVerdict", "classify_coefficients", "classify_stability",
-           "classify_stability_curvature", "contact_dynamics", "critical_spin_general_rad_s", "critical_spin_rad_s",
-           "curvature_coefficients", "ellipsoid_coefficients", "homogeneous_inertia", "reduced_rates",
-           "stable_spin_intervals_rad_s"]
+__all__ = ["EllipsoidSurface", "GeneralEllipsoidSurface", "GeneralModes", "PuiseuxBody", "StabilityVerdict",
+           "classify_coefficients", "classify_stability", "classify_stability_curvature", "contact_dynamics",
+           "contact_dynamics_general", "critical_spin_general_rad_s", "critical_spin_rad_s", "curvature_coefficients",
+           "ellipsoid_coefficients", "general_modes", "homogeneous_inertia", "inertia_conjugacy", "linear_rotation",
+           "normal_frame", "puiseux_omega_quadratic", "reduced_rates", "stable_spin_intervals_rad_s"]

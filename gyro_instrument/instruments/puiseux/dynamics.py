@@ -142,3 +142,57 @@ def reduced_rates(n, w, surf, inertia, M, g) -> np.ndarray:
     qdot, wdot, *_, nn = contact_dynamics(np.concatenate([q, w]), surf, inertia, M, g, math.sqrt)
     nn = np.array(nn)
     return np.concatenate([np.cross(nn, w), wdot])
+
+
+def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
+    """:func:`contact_dynamics` for a surface of any orientation and centre (Puiseux sec. III).
+
+    Same equations, with ``surf`` a
+    :class:`~gyro_instrument.instruments.puiseux.surface.GeneralEllipsoidSurface` (full S and
+    centre c in principal axes): h = √(nᵀSn) − c·n, ∇h = Sn/s − c, H ṅ = Sṅ/s − Sn (Sn·ṅ)/s³.
+    Kept apart so that the sec. I-II bodies keep their exact arithmetic. Returns the same tuple.
+    """
+    qw, qx, qy, qz, wx, wy, wz = y
+    A, B, C = inertia
+    sxx, sxy, sxz, syy, syz, szz = surf.sxx, surf.sxy, surf.sxz, surf.syy, surf.syz, surf.szz
+    cx, cy, cz = surf.cx, surf.cy, surf.cz
+    nq = qw * qw + qx * qx + qy * qy + qz * qz
+    nx = 2.0 * (qx * qz - qw * qy) / nq
+    ny = 2.0 * (qy * qz + qw * qx) / nq
+    nz = (qw * qw - qx * qx - qy * qy + qz * qz) / nq
+    ndx = ny * wz - nz * wy
+    ndy = nz * wx - nx * wz
+    ndz = nx * wy - ny * wx
+    sx = sxx * nx + sxy * ny + sxz * nz
+    sy = sxy * nx + syy * ny + syz * nz
+    sz = sxz * nx + syz * ny + szz * nz
+    s = sqrt(nx * sx + ny * sy + nz * sz)
+    gx, gy, gz = sx / s - cx, sy / s - cy, sz / s - cz
+    h = s - (cx * nx + cy * ny + cz * nz)
+    tx = sxx * ndx + sxy * ndy + sxz * ndz
+    ty = sxy * ndx + syy * ndy + syz * ndz
+    tz = sxz * ndx + syz * ndy + szz * ndz
+    f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
+    hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
+    kx = gy * nz - gz * ny
+    ky = gz * nx - gx * nz
+    kz = gx * ny - gy * nx
+    kdx = hy * nz - hz * ny + gy * ndz - gz * ndy
+    kdy = hz * nx - hx * nz + gz * ndx - gx * ndz
+    kdz = hx * ny - hy * nx + gx * ndy - gy * ndx
+    Lx, Ly, Lz = A * wx, B * wy, C * wz
+    coef = M * (g + kdx * wx + kdy * wy + kdz * wz)
+    bx = -(wy * Lz - wz * Ly) - coef * kx
+    by = -(wz * Lx - wx * Lz) - coef * ky
+    bz = -(wx * Ly - wy * Lx) - coef * kz
+    ux, uy, uz = bx / A, by / B, bz / C
+    vx, vy, vz = kx / A, ky / B, kz / C
+    fac = M * (kx * ux + ky * uy + kz * uz) / (1.0 + M * (kx * vx + ky * vy + kz * vz))
+    wdx, wdy, wdz = ux - fac * vx, uy - fac * vy, uz - fac * vz
+    N = M * (g + kdx * wx + kdy * wy + kdz * wz + kx * wdx + ky * wdy + kz * wdz)
+    zdot = kx * wx + ky * wy + kz * wz
+    qdot = (-0.5 * (qx * wx + qy * wy + qz * wz),
+            0.5 * (qw * wx + qy * wz - qz * wy),
+            0.5 * (qw * wy + qz * wx - qx * wz),
+            0.5 * (qw * wz + qx * wy - qy * wx))
+    return qdot, (wdx, wdy, wdz), N, h, zdot, (nx, ny, nz)

@@ -14,16 +14,22 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import PairParam, Param
-from gyro_instrument.core.quaternion import rotation_matrix
+from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Column, Instrument, Simulation
-from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
-from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface
+from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general
+from gyro_instrument.instruments.puiseux.general import (general_modes, inertia_conjugacy, linear_rotation,
+                                                         normal_frame)
+from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface, GeneralEllipsoidSurface
 from gyro_instrument.instruments.puiseux.theory import (classify_coefficients, critical_spin_general_rad_s,
                                                         critical_spin_rad_s, curvature_coefficients,
                                                         ellipsoid_coefficients, homogeneous_inertia)
 
 TWO_PI = 2.0 * math.pi
+#: parameters that apply only to some shapes
+GENERAL_ANGLES = ("axes_phi1_deg", "axes_theta1_deg", "axes_psi1_deg")
+SHAPE_KEYS = {"semi_axes_m": ("ellipsoid",), "curvature_radii_m": ("curvature", "general"),
+              "com_height_m": ("curvature", "general"), **{k: ("general",) for k in GENERAL_ANGLES}}
 
 
 class PuiseuxBody(Instrument):
@@ -36,14 +42,29 @@ class PuiseuxBody(Instrument):
     leans toward that azimuth; it spins at r about Gz (positive counter-clockwise seen from
     above when upright), and the axis moves at the given tilt and azimuth rates. Earth rotation
     and friction are ignored (the paper's hypotheses); nothing is approximated.
+
+    ``shape: general`` (sec. III) is a body of any form whose line GA (centre of mass to the
+    contact point at rest) is not a principal axis: at rest its normal frame A-xi, A-eta, A-zeta
+    lies along ENU and its principal axes at Puiseux's angles (φ1, θ1, ψ1) from it (eq. 17);
+    the line GA plays the axis above (tilt, azimuth, spin about it). Its theory is
+    :mod:`.general`; its surface the osculating ellipsoid at A in any orientation
+    (:class:`~gyro_instrument.instruments.puiseux.surface.GeneralEllipsoidSurface`).
+
+    Raises
+    ------
+    SceneError
+        From :meth:`check_params`: a shape's missing or foreign fields, two spins, an inertia
+        that is not a rigid body's; for the general body also GA at or above a centre of
+        curvature (γ ≥ min(ρ, ρ'): no stable equilibrium, outside sec. III).
     """
 
     type_name = "puiseux_body"
     summary = "heavy body spun on a smooth horizontal plane (Puiseux 1852), exact rigid-body model"
     PARAMS = (
-        Param("shape", kind="str", default="ellipsoid", choices=("ellipsoid", "curvature"),
-              doc="ellipsoid with G at its centre (sec. I) or any body by its curvature radii at "
-                  "the contact point (sec. II)"),
+        Param("shape", kind="str", default="ellipsoid", choices=("ellipsoid", "curvature", "general"),
+              doc="ellipsoid with G at its centre (sec. I); any body whose principal axis Gz is normal "
+                  "at the contact point, by its curvature radii there (sec. II); or any body at all, "
+                  "GA oblique to the principal axes, slightly displaced with small velocities (sec. III)"),
         Param("semi_axes_m", kind="vec3", default=None,
               doc="ellipsoid semi-axes alpha, beta, gamma along body x, y, z (z starts vertical), m"),
         Param("homogeneous", kind="bool", default=True,
@@ -53,18 +74,32 @@ class PuiseuxBody(Instrument):
               doc="principal moments A, B, C about body x, y, z through G, kg m^2"),
         Param("mass_kg", default=1.0, low=0.0, open_low=True, doc="mass M, kg"),
         PairParam("curvature_radii_m", kind="pair", default=None,
-                  doc="curvature: principal radii rho, rho' of the surface at the contact point "
-                      "(rho in the body x direction when curvature_angle_deg = 0), m"),
+                  doc="curvature, general: principal radii rho, rho' of the surface at the contact "
+                      "point A (curvature: rho in the body x direction when curvature_angle_deg = 0; "
+                      "general: rho along A-xi, rho' along A-eta), m"),
         Param("com_height_m", default=None, low=0.0, open_low=True,
-              doc="curvature: height gamma = GA of the centre of mass above the contact point at rest, m"),
+              doc="curvature, general: distance gamma = GA from the centre of mass to the contact point "
+                  "at rest, m (general: below both radii, Puiseux's stable equilibrium)"),
+        Param("axes_theta1_deg", default=None, low=0.0, high=180.0,
+              doc="general: Puiseux's theta1 (sec. III, eq. 17), the angle between the principal axis Gz "
+                  "and the normal A-zeta (along AG), degrees"),
+        Param("axes_phi1_deg", default=None, low=-360.0, high=360.0,
+              doc="general: Puiseux's phi1, the angle from A-xi (the principal section of radius rho) to "
+                  "the line of nodes of the planes A-xi-eta and Gxy, degrees"),
+        Param("axes_psi1_deg", default=None, low=-360.0, high=360.0,
+              doc="general: Puiseux's psi1, the angle from the principal axis Gx to that line of nodes, "
+                  "degrees"),
         Param("curvature_angle_deg", default=0.0, low=-90.0, high=90.0,
               doc="curvature: angle delta from body x to the principal direction of rho, degrees"),
         Param("spin_rate_rad_s", default=None, low=-1.0e5, high=1.0e5,
-              doc="initial spin r about the body axis Gz, rad/s (give this or spin_rate_turn_s)"),
+              doc="initial spin r about the body axis Gz (general: about the line GA), rad/s "
+                  "(give this or spin_rate_turn_s)"),
         Param("spin_rate_turn_s", default=None, low=-1.0e4, high=1.0e4,
-              doc="initial spin r about the body axis Gz, turns/s (give this or spin_rate_rad_s)"),
+              doc="initial spin r about the body axis Gz (general: about the line GA), turns/s "
+                  "(give this or spin_rate_rad_s)"),
         Param("initial_tilt_deg", default=0.0, low=0.0, high=180.0, open_high=True,
-              doc="initial angle theta0 between the body axis Gz and the upward vertical, degrees"),
+              doc="initial angle theta0 between the body axis Gz (general: the line GA) and the upward "
+                  "vertical, degrees"),
         Param("initial_tilt_azimuth_deg", default=0.0, low=-360.0, high=360.0,
               doc="compass azimuth toward which the axis leans, degrees (0 north, 90 east)"),
         Param("initial_tilt_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6,
@@ -75,6 +110,7 @@ class PuiseuxBody(Instrument):
     )
     MECHANICS = frozenset()
     MEASURED_CHANNELS = ("tilt", "tilt_azimuth")
+    SHOWS_CONTACT_POINT = True
     JOINTS = ("tilt", "tilt_azimuth", "spin")
     SIMULATOR_NODE = "top_sim"
     COLUMNS = (
@@ -84,6 +120,15 @@ class PuiseuxBody(Instrument):
         Column("com_height", "m", "height of the centre of mass above the plane, h(n)"),
         Column("vertical_body_x", "1", "a'' = theta sin psi: body-x component of the upward vertical (eq. 16)"),
         Column("vertical_body_y", "1", "b'' = theta cos psi: body-y component of the upward vertical (eq. 16)"),
+        Column("contact_x", "m", "contact point in the principal axes Gx, Gy, Gz from G: x (sec. I: x = -alpha^2 a''/gamma "
+                                 "at small tilts; its path about A shows stations and retrogradations)"),
+        Column("contact_y", "m", "contact point in principal axes: y"),
+        Column("contact_z", "m", "contact point in principal axes: z (-gamma at rest for ellipsoid and curvature)"),
+        Column("contact_east", "m", "contact point on the plane, east of the vertical through G (G moves only "
+                                    "vertically, eqs. 1-2)"),
+        Column("contact_north", "m", "contact point on the plane, north of the vertical through G"),
+        Column("turn_angle", "rad", "turn of the body about the vertical since release, counter-clockwise seen from "
+                                    "above, unwrapped (swing-twist; sec. III: alpha t + beta + periodic terms)"),
     )
 
     @classmethod
@@ -92,12 +137,9 @@ class PuiseuxBody(Instrument):
         if p["spin_rate_rad_s"] is not None and p["spin_rate_turn_s"] is not None:
             raise SceneError(f"{prefix}.spin_rate_turn_s", p["spin_rate_turn_s"],
                              "give either spin_rate_rad_s or spin_rate_turn_s, not both")
-        own = {"ellipsoid": ("semi_axes_m",), "curvature": ("curvature_radii_m", "com_height_m")}
-        for other, keys in own.items():
-            if other != p["shape"]:
-                for key in keys:
-                    if p[key] is not None:
-                        raise SceneError(f"{prefix}.{key}", p[key], f"applies only to shape = {other}")
+        for key, shapes in SHAPE_KEYS.items():
+            if p["shape"] not in shapes and p[key] is not None:
+                raise SceneError(f"{prefix}.{key}", p[key], f"applies only to shape = {' or '.join(shapes)}")
         if p["shape"] == "ellipsoid":
             if p["homogeneous"] and p["inertia_kg_m2"] is not None:
                 raise SceneError(f"{prefix}.inertia_kg_m2", list(p["inertia_kg_m2"]),
@@ -113,17 +155,37 @@ class PuiseuxBody(Instrument):
                 raise SceneError(f"{prefix}.inertia_kg_m2", None,
                                  "is required when homogeneous = false (A, B, C > 0, kg m^2)")
         else:
-            for key, what in (("curvature_radii_m", "2 numbers > 0, m"), ("com_height_m", "a number > 0, m"),
-                              ("inertia_kg_m2", "A, B, C > 0, kg m^2")):
+            required = [("curvature_radii_m", "2 numbers > 0, m"), ("com_height_m", "a number > 0, m"),
+                        ("inertia_kg_m2", "A, B, C > 0, kg m^2")]
+            if p["shape"] == "general":
+                required += [(k, "degrees") for k in GENERAL_ANGLES]
+            for key, what in required:
                 if p[key] is None:
-                    raise SceneError(f"{prefix}.{key}", None, f"is required when shape = curvature ({what})")
+                    raise SceneError(f"{prefix}.{key}", None, f"is required when shape = {p['shape']} ({what})")
+            if p["shape"] == "general":
+                cls._check_general(prefix, p)
         I = p["inertia_kg_m2"]
-        if I is not None and (p["shape"] == "curvature" or not p["homogeneous"]):
+        if I is not None and (p["shape"] != "ellipsoid" or not p["homogeneous"]):
             A, B, C = I
             if min(I) <= 0.0 or A + B < C or B + C < A or A + C < B:
                 raise SceneError(f"{prefix}.inertia_kg_m2", list(I),
                                  "must be 3 numbers > 0 obeying the triangle inequalities "
                                  "(A + B >= C, B + C >= A, C + A >= B) of a rigid body")
+
+    @classmethod
+    def _check_general(cls, prefix, p) -> None:
+        """Sec. III: GA below both radii (else no stable equilibrium: refused); no sec. II angle."""
+        if p["curvature_angle_deg"] != 0.0:
+            raise SceneError(f"{prefix}.curvature_angle_deg", p["curvature_angle_deg"],
+                             "applies only to shape = curvature (shape = general: the principal sections "
+                             "are A-xi, A-eta and axes_phi1_deg, axes_theta1_deg, axes_psi1_deg place the "
+                             "principal axes); leave it 0")
+        rho = min(p["curvature_radii_m"])
+        if not p["com_height_m"] < rho:
+            raise SceneError(f"{prefix}.com_height_m", p["com_height_m"],
+                             f"must be < {rho:g} m, the smaller curvature radius: Puiseux sec. III treats a "
+                             f"stable equilibrium, the centre of mass below both centres of curvature "
+                             f"(at or above one of them the body falls or has a zero-frequency swing)")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
@@ -137,12 +199,23 @@ class PuiseuxBody(Instrument):
             self.surface = EllipsoidSurface(self.semi_axes_m)
             self.inertia = (homogeneous_inertia(self.M, self.semi_axes_m) if self.homogeneous
                             else tuple(self.inertia_kg_m2))
-        else:
+        elif self.shape == "curvature":
             self.rho, self.rho_prime = self.curvature_radii_m
             self.gamma = float(self.com_height_m)
             self.delta = math.radians(self.curvature_angle_deg)
             self.surface = EllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.delta)
             self.inertia = tuple(self.inertia_kg_m2)
+        else:
+            self.rho, self.rho_prime = self.curvature_radii_m
+            self.gamma = float(self.com_height_m)
+            self.delta = None
+            self.P = normal_frame(*(math.radians(getattr(self, k)) for k in GENERAL_ANGLES))
+            self.surface = GeneralEllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.P)
+            self.inertia = tuple(self.inertia_kg_m2)
+        self.general = self.shape == "general"
+        self.dynamics = contact_dynamics_general if self.general else contact_dynamics
+        #: the body line GA (upward at rest) in body axes
+        self.u_body = self.P[2] if self.general else np.array([0.0, 0.0, 1.0])
         if self.spin_rate_rad_s is not None:
             self.r0 = float(self.spin_rate_rad_s)
         elif self.spin_rate_turn_s is not None:
@@ -156,7 +229,17 @@ class PuiseuxBody(Instrument):
 
     # ---------------------------------------------------------------- predictions
     def coefficients(self, r=None) -> tuple:
-        """D, E, F, G of eq. (14) at spin ``r`` (rad/s; default the initial spin)."""
+        """D, E, F, G of eq. (14) at spin ``r`` (rad/s; default the initial spin).
+
+        Raises
+        ------
+        ValueError
+            For the general body: eq. (14) needs a principal axis normal at A (sec. I-II); sec.
+            III has :meth:`modes` instead.
+        """
+        if self.general:
+            raise ValueError("eq. (14)'s D, E, F, G need a principal axis normal at the contact point "
+                             "(shape ellipsoid or curvature); the general body (sec. III) has modes()")
         A, B, C = self.inertia
         r = self.r0 if r is None else r
         if self.shape == "ellipsoid":
@@ -176,8 +259,11 @@ class PuiseuxBody(Instrument):
             ``stable_at_rest`` (γ < ρ and γ < ρ'), ``critical_spin_rad_s`` and
             ``critical_spin_turn_s`` (from the inequalities' polynomials in r²),
             ``critical_spin_closed_form_rad_s`` (homogeneous ellipsoid only), the curvature radii
-            and the initial invariants (energy, vertical angular momentum about G).
+            and the initial invariants (energy, vertical angular momentum about G). The general
+            body (sec. III) has its own: :meth:`general_predictions`.
         """
+        if self.general:
+            return self.general_predictions()
         A, B, C = self.inertia
         D, E, F, G = self.coefficients()
         v = classify_coefficients(A, B, D, E, F, G)
@@ -207,6 +293,130 @@ class PuiseuxBody(Instrument):
         out["angular_momentum_vertical_kg_m2_s"] = float(diag["angular_momentum_vertical_kg_m2_s"][0])
         return out
 
+    def contact_point_body(self, columns) -> np.ndarray:
+        """The ``contact_x``, ``contact_y``, ``contact_z`` columns side by side, shape (m, 3), m:
+        the contact point in the principal axes Gx, Gy, Gz from G (frame ``<name>_body``)."""
+        return np.column_stack([columns["contact_x"], columns["contact_y"], columns["contact_z"]])
+
+    # ---------------------------------------------------------------- sec. III
+    def modes(self):
+        """:class:`~gyro_instrument.instruments.puiseux.general.GeneralModes` of the general body."""
+        return general_modes(self.inertia, self.M, self.g, self.rho, self.rho_prime, self.gamma, self.P)
+
+    def linear_initial_conditions(self) -> tuple:
+        """φ(0), φ̇(0): rotation vector from the rest orientation and body rate, body axes (general body).
+
+        The initial tilt is the rotation by θ0 about the horizontal (−cos az, sin az, 0) (ENU), i.e.
+        Pᵀ θ0 (−cos az, sin az, 0) in body axes; the rate is the exact initial body rate (first order
+        in the small velocities, φ̇ = w).
+        """
+        tilt = self.theta0 * np.array([-math.cos(self.azimuth0), math.sin(self.azimuth0), 0.0])
+        return self.P.T @ tilt, self.initial_state()[4:]
+
+    def linear_prediction(self, t, modes=None) -> dict:
+        """First-order motion of the general body at times ``t`` (Puiseux 1852, sec. III).
+
+        Returns
+        -------
+        dict of ndarray
+            ``phi`` (3, m) rotation vector in body axes; ``tilt_vector`` ε = u × φ (3, m), so the
+            vertical is n = u + ε; ``tilt`` |ε| (rad); ``turn`` u·φ (rad: αt + β + periodic);
+            ``contact_xi``, ``contact_eta`` (m: −ρ ε_ξ, −ρ' ε_η, the contact point about A in the
+            tangent plane); ``contact_body`` (3, m: −γu + ξ ξ̂ + η η̂); ``contact_east``,
+            ``contact_north`` (m: −ϖ ε_ξ, −ϖ' ε_η on the plane, first order in the turn too).
+        """
+        modes = modes or self.modes()
+        phi = linear_rotation(modes, t, *self.linear_initial_conditions())
+        xi, eta, u = self.P
+        eps = np.cross(u, phi.T).T
+        ex, ee = xi @ eps, eta @ eps
+        cx, ce = -self.rho * ex, -self.rho_prime * ee
+        return {"phi": phi, "tilt_vector": eps, "tilt": np.linalg.norm(eps, axis=0), "turn": u @ phi,
+                "contact_xi": cx, "contact_eta": ce,
+                "contact_body": -self.gamma * u[:, None] + np.outer(xi, cx) + np.outer(eta, ce),
+                "contact_east": -(self.rho - self.gamma) * ex, "contact_north": -(self.rho_prime - self.gamma) * ee}
+
+    def general_predictions(self) -> dict:
+        """Puiseux 1852, sec. III, for this body and its initial state.
+
+        Returns
+        -------
+        dict
+            ``puiseux_omega_m`` (ω', ω'', roots of his equation after eq. 25), ``frequencies_rad_s``
+            (√(Mgω/C)), ``swing_durations_s`` (π√(C/(Mgω)): one swing of the vertical projections of
+            the points of Π', Π''), ``periods_s`` (twice those), ``plane_angles_rad`` (traces of Π',
+            Π'' on the tangent plane from A-xi toward A-eta, in [0, π)), ``angle_between_planes_rad``,
+            ``planes_perpendicular`` and ``perpendicularity`` (Puiseux's two factors ρ − ρ' and
+            BC a1a1' + AC b1b1' + AB c1c1'; perpendicular iff one vanishes), ``turning_rate_rad_s``
+            (|α|, α = L_v/(A a1''² + B b1''² + C c1''²), the unbounded turn about the vertical) with
+            ``turning_sense``, ``inertia_about_normal_kg_m2``, ``max_tilt_rad`` and
+            ``contact_path_max_distance_m`` (first-order bounds: the modes' amplitudes added, reached
+            when their phases meet), the initial invariants, ``verdict`` ("stable": unstable bodies
+            are refused) and ``notes`` when the velocities are not small.
+        """
+        modes = self.modes()
+        A, B, C = self.inertia
+        conj = inertia_conjugacy(A, B, C, self.P)
+        scale = abs(B * C) + abs(A * C) + abs(A * B)
+        perpendicular = abs(self.rho - self.rho_prime) <= 1e-12 * max(self.rho, self.rho_prime) \
+            or abs(conj) <= 1e-12 * scale
+        y0 = self.initial_state()
+        diag = self.diagnostics(y0[:, None])
+        lv = float(diag["angular_momentum_vertical_kg_m2_s"][0])
+        alpha = lv / modes.inertia_about_normal_kg_m2
+        phi0, phidot0 = self.linear_initial_conditions()
+        Vinv = np.linalg.inv(modes.rotations)
+        q0, qd0 = Vinv @ phi0, Vinv @ phidot0
+        u = self.P[2]
+        tilt_amp, path = 0.0, 0.0
+        for k, om in zip((1, 2), modes.frequencies_rad_s):
+            amp = math.hypot(q0[k], qd0[k] / om) if om > 0.0 else math.inf
+            eps = np.cross(u, modes.rotations[:, k])
+            tilt_amp += amp * float(np.linalg.norm(eps))
+            path += amp * math.hypot(self.rho * (self.P[0] @ eps), self.rho_prime * (self.P[1] @ eps))
+        notes = []
+        f1, f2 = modes.frequencies_rad_s
+        if abs(f2 - f1) <= 1e-9 * f2:
+            out_planes = None
+            notes.append("double root (omega' = omega''): every plane through GA swings with the same duration, "
+                         "so Puiseux's two planes are not defined (e.g. equal radii and equal moments)")
+        else:
+            out_planes = modes.plane_angles_rad
+        out = {
+            "section": "III",
+            "verdict": "stable",
+            "stable_at_rest": True,
+            "puiseux_omega_m": modes.omega_m,
+            "frequencies_rad_s": modes.frequencies_rad_s,
+            "swing_durations_s": modes.swing_durations_s,
+            "periods_s": tuple(2.0 * d for d in modes.swing_durations_s),
+            "plane_angles_rad": out_planes,
+            "angle_between_planes_rad": modes.angle_between_planes_rad if out_planes else None,
+            "planes_perpendicular": bool(perpendicular),
+            "perpendicularity": {"rho_minus_rho_prime_m": self.rho - self.rho_prime,
+                                 "inertia_conjugacy_kg2_m4": conj},
+            "inertia_about_normal_kg_m2": modes.inertia_about_normal_kg_m2,
+            "turning_rate_rad_s": abs(alpha),
+            "turning_sense": ("none" if alpha == 0.0 else
+                              "counter-clockwise seen from above" if alpha > 0 else "clockwise seen from above"),
+            "max_tilt_rad": tilt_amp,
+            "contact_path_max_distance_m": path,
+            "rho_m": self.rho,
+            "rho_prime_m": self.rho_prime,
+            "spin_rate_rad_s": self.r0,
+            "energy_J": float(diag["energy_J"][0]),
+            "angular_momentum_vertical_kg_m2_s": lv,
+        }
+        slow = modes.frequencies_rad_s[0]
+        fast = float(np.linalg.norm(y0[4:])) / slow if slow > 0.0 else math.inf
+        if fast > 0.1 or tilt_amp > 0.1:
+            notes += [f"not a small motion (|w0|/slower swing frequency = {fast:.3g}, tilt up to "
+                      f"{tilt_amp:.3g} rad): Puiseux sec. III assumes small displacements and velocities; "
+                      f"the simulation is exact, these predictions are first order"]
+        if notes:
+            out["notes"] = notes
+        return out
+
     def scales(self, duration_s) -> dict:
         """Characteristic scales: spin, small-tilt restoring rate at rest, amplitude, duration."""
         A, B, _ = self.inertia
@@ -217,7 +427,12 @@ class PuiseuxBody(Instrument):
 
     # ---------------------------------------------------------------- model
     def initial_state(self) -> np.ndarray:
-        """State [q_w, q_x, q_y, q_z, w_x, w_y, w_z] at t = 0 (quaternion body -> ENU, w in body axes)."""
+        """State [q_w, q_x, q_y, q_z, w_x, w_y, w_z] at t = 0 (quaternion body -> ENU, w in body axes).
+
+        At rest the body's axes lie along ENU (ellipsoid, curvature) or, for the general body, its
+        normal frame A-xi, A-eta, A-zeta does (so GA is vertical); then it is tilted and set moving as
+        the class docstring says, the line GA (= Gz but for the general body) playing the axis.
+        """
         th, az = self.theta0, self.azimuth0
         # axis u in ENU, leaning toward compass azimuth az: (sin az, cos az) horizontally
         e_th = np.array([math.cos(th) * math.sin(az), math.cos(th) * math.cos(az), -math.sin(th)])
@@ -229,12 +444,30 @@ class PuiseuxBody(Instrument):
         axis = np.array([-math.cos(az), math.sin(az), 0.0])
         q = np.concatenate([[math.cos(th / 2)], math.sin(th / 2) * axis])
         R = rotation_matrix(q)
+        if self.general:
+            R = R @ self.P                      # body -> normal frame (eq. 17) -> tilted ENU
+            q = quat_from_matrix(R)
         return np.concatenate([q, R.T @ w_world])
+
+    def rest_quaternion(self) -> np.ndarray:
+        """Orientation at rest (GA vertical, no turn), body -> ENU: identity but for the general body."""
+        return quat_from_matrix(self.P) if self.general else np.array([1.0, 0.0, 0.0, 0.0])
+
+    def contact_points_body(self, n) -> np.ndarray:
+        """Contact point x_P = −∇h(n) in body axes (from G), m, shape (3, m), for verticals n (3, m)."""
+        n = np.asarray(n, dtype=float)
+        if self.general:
+            return self.surface.contact_point(n)
+        sf = self.surface
+        sx, sy, sz = sf.sxx * n[0] + sf.sxy * n[1], sf.sxy * n[0] + sf.syy * n[1], sf.szz * n[2]
+        s = np.sqrt(n[0] * sx + n[1] * sy + n[2] * sz)
+        return -np.array([sx / s, sy / s, sz / s - sf.cz])
 
     def rhs(self) -> Callable:
         """Right-hand side f(t, y) of the exact model (:mod:`.dynamics`)."""
         surf, inertia, M, g = self.surface, self.inertia, self.M, self.g
         sqrt = math.sqrt
+        contact_dynamics = self.dynamics
 
         def f(t, y):
             qdot, wdot, *_ = contact_dynamics(y, surf, inertia, M, g, sqrt)
@@ -252,11 +485,13 @@ class PuiseuxBody(Instrument):
             ``angular_momentum_vertical_kg_m2_s`` (n·Iw), ``quaternion_norm``.
         """
         y = np.asarray(y, dtype=float)
-        _, _, N, h, zdot, n = contact_dynamics(y, self.surface, self.inertia, self.M, self.g, np.sqrt)
+        _, _, N, h, zdot, n = self.dynamics(y, self.surface, self.inertia, self.M, self.g, np.sqrt)
         q = y[:4]
         qn2 = np.sum(q * q, axis=0)
         qw, qx, qy, qz = q
         axis = np.array([2.0 * (qx * qz + qw * qy), 2.0 * (qy * qz - qw * qx), qw * qw - qx * qx - qy * qy + qz * qz]) / qn2
+        if self.general:                        # the line GA, not Gz
+            axis = np.einsum("mij,j->im", quat_to_matrix(q.T), self.u_body)
         A, B, C = self.inertia
         w = y[4:]
         rot = 0.5 * (A * w[0] ** 2 + B * w[1] ** 2 + C * w[2] ** 2)
@@ -282,14 +517,51 @@ class PuiseuxBody(Instrument):
                          rtol=self.rtol if rtol is None else rtol, atol=atol)
         d = self.diagnostics(traj.y)
         n, axis = d["n"], d["axis_enu"]
-        tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
+        if self.general:
+            u = self.u_body
+            tilt = np.arctan2(np.linalg.norm(np.cross(n.T, u), axis=1), u @ n)
+            spin = u @ traj.y[4:]
+        else:
+            tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
+            spin = traj.y[6].copy()
         columns = {"tilt": tilt,
                    "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
-                   "spin_rate": traj.y[6].copy(),
+                   "spin_rate": spin,
                    "com_height": d["com_height_m"],
                    "vertical_body_x": n[0], "vertical_body_y": n[1]}
+        columns.update(self.contact_columns(traj.y, n))
         extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
                                    "normal_force_N", "com_velocity_m_s")}
         extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
         extra["state"] = traj.y
         return Simulation(t, columns, traj, extra=extra)
+
+    def contact_columns(self, y, n) -> dict:
+        """The contact point and the turn about the vertical along a state history (sec. I and III).
+
+        Parameters
+        ----------
+        y : ndarray (7, m)
+            States.
+        n : ndarray (3, m)
+            Upward vertical in body axes.
+
+        Returns
+        -------
+        dict of ndarray (m,)
+            ``contact_x``, ``contact_y``, ``contact_z``: x_P = −∇h(n) in principal axes from G, m;
+            ``contact_east``, ``contact_north``: R x_P on the plane from the vertical through G, m
+            (G moves only vertically: eqs. 1-2 with no initial horizontal velocity);
+            ``turn_angle``: the twist of the rotation from the rest orientation about the vertical,
+            2·atan2(q_z, q_w) of q ⊗ q_rest⁻¹ (swing-twist decomposition), unwrapped, rad (the
+            unwrapping needs less than a turn per sample: |r| / sample rate < 2π).
+        """
+        xp = self.contact_points_body(n)
+        q = np.asarray(y[:4], dtype=float).T
+        R = quat_to_matrix(q)
+        world = np.einsum("mij,jm->im", R, xp)
+        rest = self.rest_quaternion()
+        rel = quat_mul(q, rest * np.array([1.0, -1.0, -1.0, -1.0]))
+        turn = 2.0 * np.unwrap(np.arctan2(rel[:, 3], rel[:, 0]))
+        return {"contact_x": xp[0], "contact_y": xp[1], "contact_z": xp[2],
+                "contact_east": world[0], "contact_north": world[1], "turn_angle": turn - turn[0]}

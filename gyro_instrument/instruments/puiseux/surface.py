@@ -65,3 +65,53 @@ class EllipsoidSurface:
         S = np.array([[self.sxx, self.sxy, 0.0], [self.sxy, self.syy, 0.0], [0.0, 0.0, self.szz]])
         Sn = S @ n
         return -(Sn / math.sqrt(n @ Sn) - np.array([0.0, 0.0, self.cz]))
+
+
+class GeneralEllipsoidSurface:
+    """Support function h(n) = √(nᵀ S n) − c·n of an ellipsoid of any orientation and centre c
+    (body axes, from G): the surface of Puiseux's general body (sec. III) in its principal axes.
+
+    Parameters
+    ----------
+    S : array (3, 3)
+        Symmetric positive definite: the ellipsoid is {x : (x − c)ᵀ S⁻¹ (x − c) = 1}, m².
+    centre_m : array (3,)
+        Centre c, m.
+    """
+
+    def __init__(self, S, centre_m) -> None:
+        S = np.asarray(S, dtype=float)
+        self.S = 0.5 * (S + S.T)
+        self.c = np.asarray(centre_m, dtype=float)
+        (self.sxx, self.sxy, self.sxz), (_, self.syy, self.syz), (_, _, self.szz) = self.S
+        self.cx, self.cy, self.cz = self.c
+
+    @classmethod
+    def osculating(cls, rho, rho_prime, gamma, P) -> "GeneralEllipsoidSurface":
+        """The ellipsoid with curvature radii ρ (along Aξ), ρ' (along Aη) at A and G at distance γ
+        from A along the normal, in principal axes (``P`` from
+        :func:`~gyro_instrument.instruments.puiseux.general.normal_frame`).
+
+        In the frame Aξηζ it is :meth:`EllipsoidSurface.osculating` (normal semi-axis
+        γ_e = √(ρρ'), tangent semi-axes √(ργ_e), √(ρ'γ_e), centre γ_e − γ above G along the
+        normal); S = Pᵀ diag(ργ_e, ρ'γ_e, γ_e²) P and c = (γ_e − γ) ζ̂ in principal axes.
+        """
+        P = np.asarray(P, dtype=float)
+        ge = math.sqrt(rho * rho_prime)
+        S = P.T @ np.diag([rho * ge, rho_prime * ge, ge * ge]) @ P
+        return cls(S, (ge - gamma) * P[2])
+
+    def height(self, nx, ny, nz) -> np.ndarray | float:
+        """h(n): height of G above the plane, m, for the upward vertical n in body axes."""
+        sx = self.sxx * nx + self.sxy * ny + self.sxz * nz
+        sy = self.sxy * nx + self.syy * ny + self.syz * nz
+        sz = self.sxz * nx + self.syz * ny + self.szz * nz
+        return np.sqrt(nx * sx + ny * sy + nz * sz) - (self.cx * nx + self.cy * ny + self.cz * nz)
+
+    def contact_point(self, n) -> np.ndarray:
+        """Contact point x_P = −∇h(n) in body axes, m (n of shape (3,) or (3, m))."""
+        n = np.asarray(n, dtype=float)
+        Sn = np.tensordot(self.S, n, axes=1)
+        s = np.sqrt(np.sum(n * Sn, axis=0))
+        c = self.c if n.ndim == 1 else self.c[:, None]
+        return -(Sn / s - c)
