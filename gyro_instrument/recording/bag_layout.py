@@ -232,6 +232,10 @@ class BagDirectoryWriter:
             self._carried.append((name, data))
         self._cur.add_metadata(name, data)
 
+    def pending(self):
+        """True when the current file holds messages written since its last commit."""
+        return self._cur.pending()
+
     def commit(self):
         self._cur.commit()
 

@@ -146,6 +146,10 @@ class BagWriter:
         if self._bytes >= self.chunk_size or time.monotonic() - self._last_commit >= self.commit_period_s:
             self.commit()
 
+    def pending(self) -> bool:
+        """True when messages were written since the last commit (a SIGKILL now would lose them)."""
+        return self._bytes > 0
+
     def add_metadata(self, name, data) -> None:
         """A metadata record (str -> str mapping), committed to disk at once."""
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
