@@ -110,7 +110,8 @@ def _command(core_cli, argv):
         return 3
     result = core_cli.to_jsonable(result)
     if args.stats:
-        print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded")}),
+        print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded",
+                                                "first_message_s", "blocks", "estimator_bytes")}),
               file=sys.stderr)
     if args.json:
         print(json.dumps(result, indent=2))
