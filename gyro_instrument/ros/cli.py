@@ -111,7 +111,8 @@ def _command(core_cli, argv):
     result = core_cli.to_jsonable(result)
     if args.stats:
         print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded",
-                                                "first_message_s", "blocks", "estimator_bytes")}),
+                                                "first_message_s", "blocks", "estimator_bytes",
+                                                "peak_rss_streaming_mb", "peak_rss_mb")}),
               file=sys.stderr)
     if args.json:
         print(json.dumps(result, indent=2))

@@ -16,6 +16,7 @@ file starts them) is :mod:`gyro_instrument.ros.launch`.
 
 import json
 import math
+import resource
 import signal
 import threading
 import time
@@ -215,7 +216,10 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     what it wrote (:meth:`RecorderNode.commit`), so a SIGKILL loses at most the last second of wall
     time. Memory: one block per simulator (plus what an instrument that does not stream yet holds,
     ``Instrument.STREAMS`` False), the estimator's kept samples (:class:`JointBuffer`, 8 (2 + k) bytes
-    per sample) and the bag writer's chunk index (one entry per chunk).
+    per sample) and the bag writer's chunk index (one entry per chunk); then the estimate's work
+    arrays over every kept sample (the fits; ~420 bytes per sample for one gyroscope). The stats
+    give the process's peak RSS before the estimate (``peak_rss_streaming_mb``) and at the end
+    (``peak_rss_mb``), in MB.
 
     ``namespace``: every node (and so every topic, ``clock`` included) in this namespace, so that
     suites in different namespaces run side by side. ``ros_args``: the arguments after
@@ -345,6 +349,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
                 progress(f"sample {min(i_next, n_samples)}/{n_samples}")
             i = i_next
         wall = time.perf_counter() - w0
+        # the process's peak so far: the streaming part of the run, before the estimate's work arrays
+        peak_streaming_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         base = rec.received() if rec else 0
         result = est.finalize()
         if rec:
@@ -359,7 +365,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
                  "published": {name: s.samples for s in sims for name in s.chosen},
                  "published_topics": published, "batch": batch, "first_message_s": first_message_s,
                  "blocks": {s.get_name(): s.blocks_pulled for s in sims}, "window_s": float(window_s),
-                 "estimator_bytes": sum(b.nbytes() for b in est.buffers.values())}
+                 "estimator_bytes": sum(b.nbytes() for b in est.buffers.values()),
+                 "peak_rss_streaming_mb": peak_streaming_mb,
+                 "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
         return result, stats
     finally:
         for n in nodes:
