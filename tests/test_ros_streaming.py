@@ -153,3 +153,21 @@ def test_check_window_names_the_field():
     for bad in (0.0, float("nan"), "10", True, 2e6):
         with pytest.raises(SceneError, match="window_s"):
             check_window(bad, field="window_s")
+
+
+def test_a_streaming_run_too_large_for_memory_is_refused_before_anything_starts(analytic, tmp_path, monkeypatch):
+    """With every instrument streaming, what scales with the run is the estimator's kept samples and
+    its final fits (ros/suite.py FIT_BYTES_PER_SAMPLE): 1e9 samples need ~7e11 bytes, refused on
+    duration_s with the numbers (1e7 s at 100 Hz, with 8 GB available); 1 h at 20 Hz (72 001 samples,
+    ~51 MB) is not."""
+    from gyro_instrument.core import memory
+    from gyro_instrument.ros.suite import check_run_memory
+    monkeypatch.setattr(memory, "available_bytes", lambda: 8 * 10 ** 9)
+    path = tmp_path / "streaming.yaml"
+    path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=1.0e7, rate_hz=100.0)))
+    scene = load_scene(str(path))
+    with pytest.raises(SceneError, match="duration_s") as e:
+        check_run_memory(scene)
+    assert "GB available" in str(e.value)
+    path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=3600.0)))
+    check_run_memory(load_scene(str(path)))
