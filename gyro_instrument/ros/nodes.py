@@ -1,14 +1,17 @@
 """Thin ROS 2 nodes over the core: parameters in, one core call, messages out.
 
-* :class:`SimulatorNode` (``gyrocompass_sim``, ``pendulum_sim``, ``top_sim``): one core call
-  (:func:`~gyro_instrument.recording.joints.joint_streams`: simulate, measure, lay out) then
-  publishes the samples as ``sensor_msgs/JointState`` (and the bob position); messages are
+* :class:`SimulatorNode` (``gyrocompass_sim``, ``pendulum_sim``, ``top_sim``): one core iterator
+  (:func:`~gyro_instrument.recording.joints.joint_blocks`: integrate, measure, lay out one window of
+  ``window_s`` simulated seconds at a time, over ``Instrument.stream``) whose blocks it publishes as
+  it gets them, integrating the next only when the samples due go past the current one, as
+  ``sensor_msgs/JointState`` (and the bob position); messages are
   serialized with numpy (:class:`~gyro_instrument.ros.messages.CdrLayout`), many samples at a
   time, and published as CDR bytes. Run alone (:meth:`SimulatorNode.start`) it waits for the
   subscribers the scene expects (``wait_for``), then either owns ``clock`` (``publish_clock``) and
   paces it, or follows the owner's clock, publishing each sample when sim time reaches it.
-* :class:`EstimatorNode`: collects joint samples (raw CDR, decoded in bulk) and calls the core
-  estimator; run alone it publishes once every expected sample has arrived.
+* :class:`EstimatorNode`: collects joint samples (raw CDR, decoded in bulk, at most 4096 kept as
+  bytes) into arrays of what it fits (:class:`JointBuffer`) and calls the core estimator; run alone
+  it publishes once every expected sample has arrived.
 * :class:`RecorderNode`: raw CDR to MCAP in rosbag2's layout, RELIABLE / KEEP_ALL, log time =
   sim time, written in log-time order; knows what the scene publishes and marks the file
   ``complete`` or ``incomplete`` with per-topic counts. An existing ``output`` file is refused

@@ -2,8 +2,9 @@
 and recorder as nodes of one context over DDS, stepped in lock-step so nothing is dropped.
 
 The first simulator owns ``clock`` (``/clock``; ``<namespace>/clock`` with a namespace) and the
-simulators step in the suite's loop, a batch of samples at a time: each simulator publishes the
-batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
+simulators step in the suite's loop, a batch of samples at a time, integrating a new block of
+``window_s`` simulated seconds when a batch needs it (the recorder commits first): each simulator
+publishes the batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
 :class:`LockStep` takes every message of the batch from the estimator's and the recorder's
 subscriptions, waiting on a wait set for any not yet delivered, and runs their callbacks sample
 by sample (sample i of every topic before sample i + 1), so the recorder writes the same ordered
