@@ -171,3 +171,34 @@ def test_a_streaming_run_too_large_for_memory_is_refused_before_anything_starts(
     assert "GB available" in str(e.value)
     path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=3600.0)))
     check_run_memory(load_scene(str(path)))
+
+
+def test_a_simulator_node_integrates_a_block_only_when_its_samples_are_due(analytic, tmp_path):
+    """The node run alone (``ros2 run``) and in the suite shares publish_steps: a block is integrated
+    when the samples asked for reach it, never ahead; the follower's sample index from a clock stamp
+    matches the stamps round(i · 1e9 / f)."""
+    import rclpy
+    from rclpy.parameter import Parameter
+    from gyro_instrument.core.scene import sample_times_ns
+    from gyro_instrument.ros.nodes import SimulatorNode
+    path = tmp_path / "streaming.yaml"
+    path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=60.0)))
+    context = rclpy.Context()
+    rclpy.init(context=context, args=[])
+    try:
+        node = SimulatorNode("gyrocompass_sim", ("analytic_compass",), context=context,
+                             parameter_overrides=[Parameter("scene", value=str(path)),
+                                                  Parameter("window_s", value=10.0)])
+        assert analytic.EVENTS == [] and node.samples == 1201       # nothing integrated at start-up
+        assert node.publish_steps(1) == 1 and [e[1] for e in analytic.EVENTS] == [0]
+        assert node.publish_steps(198) == 198 and len(analytic.EVENTS) == 1   # samples 0..198: block 0
+        assert node.publish_steps(1) == 1 and len(analytic.EVENTS) == 2       # sample 199 needs block 1
+        while node.publish_steps(150):
+            pass
+        assert node.index == 1201 and len(analytic.EVENTS) == 7
+        t = sample_times_ns(load_scene(str(path)))
+        for stamp in (0, 1, 49_999_999, 50_000_000, int(t[600]) + 1, int(t[-1]), int(t[-1]) + 10**9):
+            assert node.sample_index(stamp) == int(np.searchsorted(t, stamp, side="right"))
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
