@@ -96,14 +96,15 @@ def analytic(tmp_path):
 def test_run_publishes_and_commits_each_block_before_integrating_the_next(analytic, tmp_path):
     """The order of events, not wall times: when the integration of block i >= 1 starts, the bag on
     disk (a complete MCAP after every commit) already holds every sample published before the batch
-    that needed block i — the suite commits before it integrates. The estimate of the streamed run
-    equals the core's one-shot estimate of the same scene (same samples, same floats)."""
+    that needed block i — the suite commits before it integrates a block when the previous one took
+    at least ros/suite.py QUICK_S (0.25 s; here each takes 0.3 s: ``block_cost_s``). The estimate of
+    the streamed run equals the core's one-shot estimate of the same scene (same samples, same floats)."""
     from gyro_instrument.cli import to_jsonable
     from gyro_instrument.estimators.pipeline import estimable, estimate_records, measure, simulate_truth
     from gyro_instrument.recording.mcap_io import read_messages
     from gyro_instrument.ros.suite import BATCH, run_suite
     path = tmp_path / "streaming.yaml"
-    path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=60.0)))
+    path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=60.0, block_cost_s=0.3)))
     bag = tmp_path / "s.mcap"
     on_disk = {}
 

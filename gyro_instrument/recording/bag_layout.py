@@ -236,6 +236,10 @@ class BagDirectoryWriter:
         """True when the current file holds messages written since its last commit."""
         return self._cur.pending()
 
+    def since_commit_s(self):
+        """Wall time since the current file's last commit, s."""
+        return self._cur.since_commit_s()
+
     def commit(self):
         self._cur.commit()
 
