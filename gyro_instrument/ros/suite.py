@@ -221,12 +221,13 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     The simulators integrate one window of ``window_s`` simulated seconds at a time
     (:func:`~gyro_instrument.recording.joints.joint_blocks` over ``Instrument.stream``) and publish
     it before integrating the next, so the first message leaves after one window's integration
-    whatever the duration; before each integration (and before a paced sleep) the recorder commits
-    what it wrote (:meth:`RecorderNode.commit`), so a SIGKILL loses at most the last second of wall
-    time. Memory: one block per simulator (plus what an instrument that does not stream yet holds,
+    whatever the duration; before an integration (and before a paced sleep) the recorder commits
+    what it wrote (:meth:`RecorderNode.commit`; after a quick block, < :data:`QUICK_S`, only once its
+    last commit is that old), so a SIGKILL loses at most the last second of wall time. Memory: one
+    block per simulator (plus what an instrument that does not stream yet holds,
     ``Instrument.STREAMS`` False), the estimator's kept samples (:class:`JointBuffer`, 8 (2 + k) bytes
     per sample) and the bag writer's chunk index (one entry per chunk); then the estimate's work
-    arrays over every kept sample (the fits; ~420 bytes per sample for one gyroscope). The stats
+    arrays over every kept sample (the fits; ~440 bytes per sample for one gyroscope). The stats
     give the process's peak RSS before the estimate (``peak_rss_streaming_mb``) and at the end
     (``peak_rss_mb``), in MB.
 
