@@ -91,7 +91,9 @@ class MeasureStream:
     seed : int, optional
         The scene's seed by default.
 
-    Costs ``n`` discarded normals per noisy channel that is not the last draw (0.1 s for 3.5e6).
+    Costs ``n`` discarded normals per noisy draw that is not the last one, before the first block
+    (38 ns each measured on this machine: 0.13 s for 48 h at 20 Hz, but 33 s for a day at 10 kHz —
+    the price of equality with ``measure`` bit for bit).
     """
 
     def __init__(self, scene, inst, n, seed=None):
