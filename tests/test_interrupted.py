@@ -105,3 +105,76 @@ def test_a_file_truncated_elsewhere_is_recovered_complete_and_indexed(tmp_path):
         assert sum(1 for _ in r.messages()) == len(msgs)
     assert replay_bag(str(fixed))["latitude_deg"] == result["latitude_deg"]
     json.dumps(result, allow_nan=False)
+
+
+def test_sigkill_during_a_block_integration_keeps_what_was_published_a_second_before(tmp_path):
+    """Issue 13: a SIGKILL at any time after the first message leaves a bag readable up to within
+    1 s of wall time of the kill. The run streams a test instrument whose blocks take 1.5 s of wall
+    time each (tests/streaming_instrument.py: as a slow integrator would), so the kill lands inside
+    an integration, when no message is being written. ``run`` prints ``sample i/n`` after samples
+    0..i-1 are delivered to the recorder; the kill comes 1.0 s after the line ``sample 300/2001``,
+    so every sample it announces must be in the bag: read by the repo's reader and by two
+    independent ones (``mcap`` with CRC validation, ``rosbags``), then ``recover`` and ``replay``."""
+    import os
+    import threading
+    from pathlib import Path
+    import yaml
+    from mcap.reader import make_reader
+    from rosbags.highlevel import AnyReader
+    from gyro_instrument.cli import main
+    from gyro_instrument.core.scene import EPOCH_NS
+    from gyro_instrument.recording.mcap_io import recording_state
+    tests = Path(__file__).resolve().parent
+    sys.path.insert(0, str(tests))
+    import streaming_instrument
+    scene = tmp_path / "slow.yaml"
+    scene.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=100.0, block_cost_s=1.5)))
+    bag = tmp_path / "killed.mcap"
+    child = (f"import sys; sys.path.insert(0, {str(tests)!r}); import streaming_instrument; "
+             f"streaming_instrument.register(); from gyro_instrument.ros.cli import main; "
+             f"sys.exit(main(['run', {str(scene)!r}, '--bag', {str(bag)!r}, '--window-s', '10']))")
+    p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lines = []
+    seen = threading.Event()
+
+    def read():
+        for line in p.stderr:
+            lines.append((time.monotonic(), line.strip()))
+            if line.strip() == "sample 300/2001":
+                seen.set()
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        assert seen.wait(120), lines
+        t_line = next(t for t, s in lines if s == "sample 300/2001")
+        time.sleep(max(0.0, t_line + 1.0 - time.monotonic()))
+        t_kill = time.monotonic()
+        p.kill()
+    finally:
+        p.kill()
+        p.wait(30)
+    assert t_kill - t_line >= 1.0
+    with open(bag, "rb") as fh:                      # mcap: indexed, CRCs valid, counts consistent
+        r = make_reader(fh, validate_crcs=True)
+        n = r.get_summary().statistics.message_count
+        clock = [m.log_time for _, ch, m in r.iter_messages() if ch.topic == "/clock"]
+    with AnyReader([bag]) as ar:
+        assert sum(1 for _ in ar.messages()) == n
+    msgs = list(read_messages(str(bag)))
+    assert len(msgs) == n and [m[2] for m in msgs if m[0] == "/clock"] == clock
+    # samples 0..299 were announced 1 s before the kill: their stamps (i / 20 Hz) are all in the bag
+    assert len(clock) >= 300 and max(clock) - EPOCH_NS >= 299 * 50_000_000, (len(clock), lines[-3:])
+    assert recording_state(str(bag)) == "recording"
+    fixed = tmp_path / "recovered.mcap"
+    assert main(["recover", str(bag), "--out", str(fixed)]) == 0
+    with AnyReader([fixed]) as ar:
+        assert sum(1 for _ in ar.messages()) == n
+    assert os.path.getsize(fixed) > 0
+    from gyro_instrument import instruments
+    streaming_instrument.register()                  # replay rebuilds the scene the bag stores
+    try:
+        result = replay_bag(str(bag))
+    finally:
+        instruments.unregister(streaming_instrument.AnalyticCompass.type_name)
+    assert any("interrupted" in note for note in result.get("replay_notes", []))
+    json.dumps(result, allow_nan=False)

@@ -557,6 +557,10 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
            ("instrument", "method", "setting", "cpu_s", "nfev", "error_rad"), wp)
     progress("speed targets")
     tg = targets(wp, quick, progress)
+    if not quick:       # child processes for minutes: the full bench only (issue 13: bench/live.py)
+        from gyro_instrument.bench.live import live_rows
+        progress("run as it streams: time to first message (1 h, 48 h), peak memory (1 h vs 48 h)")
+        tg += live_rows(quick, progress)
     hours = 3.0 if quick else 24.0
     progress(f"  plot: {hours:g} h of Foucault pendulum data from Parquet")
     secs, n = plot_day_seconds(out_dir, hours=hours)

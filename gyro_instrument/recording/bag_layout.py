@@ -232,6 +232,14 @@ class BagDirectoryWriter:
             self._carried.append((name, data))
         self._cur.add_metadata(name, data)
 
+    def pending(self):
+        """True when the current file holds messages written since its last commit."""
+        return self._cur.pending()
+
+    def since_commit_s(self):
+        """Wall time since the current file's last commit, s."""
+        return self._cur.since_commit_s()
+
     def commit(self):
         self._cur.commit()
 

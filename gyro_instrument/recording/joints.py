@@ -18,8 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.core.scene import sample_times_ns
-from gyro_instrument.estimators.pipeline import measure, simulate_truth
+from gyro_instrument.core.memory import sample_count
+from gyro_instrument.core.scene import DEFAULT_WINDOW_S, sample_blocks_ns, sample_times_ns
+from gyro_instrument.estimators.pipeline import MeasureStream, measure, simulate_truth
 
 
 @dataclass
@@ -86,6 +87,214 @@ def joint_streams(scene, kinds=None, seed=None, truth=None) -> tuple:
         if inst.SHOWS_CONTACT_POINT:          # true (simulated) contact point, body frame, (m, 3)
             streams[name].extra["contact_point_m"] = inst.contact_point_body(cols)
     return t_ns, streams
+
+
+def uniform_step_s(scene, window_s=DEFAULT_WINDOW_S) -> float | None:
+    """The spacing of the run's sample times (s) when every difference of ``sample_times`` is the
+    same float (``numpy.gradient`` then takes its uniform-spacing formula), else None. Read block by
+    block; it stops at the first unequal difference (in the first block, for most rates)."""
+    first, last = None, None
+    for b in sample_blocks_ns(scene, window_s):
+        t = b / 1e9
+        d = np.diff(np.concatenate([[last], t])) if last is not None else np.diff(t)
+        if d.size:
+            first = d[0] if first is None else first
+            if not np.all(d == first):
+                return None
+        last = t[-1]
+    return None if first is None else float(first)
+
+
+class GradientStream:
+    """``numpy.gradient(y, t)`` (edge order 1) of a run that arrives block by block, bit for bit.
+
+    Each :meth:`push` returns the derivative of every sample received except the last one (its
+    centred difference needs the next sample); :meth:`finish` returns the last one. The formulas
+    are numpy's: interior ``a f[i-1] + b f[i] + c f[i+1]`` from the two local spacings, or
+    ``(f[i+1] - f[i-1]) / (2 dx)`` when the whole run is uniformly spaced (``uniform_dx``, from
+    :func:`uniform_step_s`); first-order one-sided differences at the two ends.
+    """
+
+    def __init__(self, uniform_dx=None):
+        self.dx = uniform_dx
+        self.t = np.zeros(0)
+        self.y = None          # the last two rows received, (<= 2, k)
+        self.started = False
+
+    def push(self, t, y) -> np.ndarray:
+        """Rows ``y`` (m, k) at times ``t`` (m,); returns the derivatives of the rows before the newest."""
+        y = np.asarray(y, dtype=float)
+        if self.y is None:
+            self.y = np.zeros((0, y.shape[1]))
+        tt, yy = np.concatenate([self.t, t]), np.concatenate([self.y, y])
+        out = []
+        if not self.started and tt.size >= 2:
+            out.append((yy[1] - yy[0]) / (tt[1] - tt[0]))
+            self.started = True
+        if tt.size >= 3:
+            f0, f1, f2 = yy[:-2], yy[1:-1], yy[2:]
+            if self.dx is not None:
+                out.append((f2 - f0) / (2.0 * self.dx))
+            else:
+                dx = np.diff(tt)
+                dx1, dx2 = dx[:-1, None], dx[1:, None]
+                a = -(dx2) / (dx1 * (dx1 + dx2))
+                b = (dx2 - dx1) / (dx1 * dx2)
+                c = dx1 / (dx2 * (dx1 + dx2))
+                out.append(a * f0 + b * f1 + c * f2)
+        self.t, self.y = tt[-2:], yy[-2:]
+        if not out:
+            return np.zeros((0, yy.shape[1]))
+        return np.vstack([np.atleast_2d(o) for o in out])
+
+    def finish(self) -> np.ndarray:
+        """The derivative of the last row: (f[-1] - f[-2]) / (t[-1] - t[-2]); 0 for a run of one sample."""
+        if self.y is None or self.y.shape[0] == 0:
+            return np.zeros((0, 0))
+        if self.t.size < 2:
+            return np.zeros((1, self.y.shape[1]))
+        return ((self.y[1] - self.y[0]) / (self.t[1] - self.t[0]))[None, :]
+
+
+class _RotorStream:
+    """:func:`_rotor_angle` carried across blocks (the running trapezoid sum, bit for bit)."""
+
+    def __init__(self):
+        self.t = self.spin = None
+        self.total = 0.0
+
+    def push(self, t, spin):
+        if self.t is None:
+            tt, ss, start = t, spin, [0.0]
+        else:
+            tt, ss, start = np.concatenate([[self.t], t]), np.concatenate([[self.spin], spin]), []
+        inc = 0.5 * (ss[1:] + ss[:-1]) * np.diff(tt)
+        ang = np.cumsum(np.concatenate([[self.total], inc]))
+        ang = np.concatenate([start, ang[1:]]) if start else ang[1:]
+        self.t, self.spin, self.total = t[-1], spin[-1], ang[-1]
+        return np.mod(ang + np.pi, 2 * np.pi) - np.pi
+
+
+@dataclass
+class JointBlock:
+    """One block of :func:`joint_blocks`: samples ``start`` .. ``start + len(t_ns) - 1`` of the run."""
+
+    start: int
+    t_ns: np.ndarray
+    streams: dict
+
+
+class _InstrumentJoints:
+    """One instrument's joint layout, block by block (see :func:`joint_streams` for the layout)."""
+
+    def __init__(self, scene, name, inst, n, seed, uniform_dx):
+        self.name, self.inst = name, inst
+        self.names = tuple(f"{name}/{j}" for j in inst.JOINTS)
+        self.measure = MeasureStream(scene, inst, n, seed)
+        self.grad = GradientStream(uniform_dx)
+        self.rotor = None if inst.IS_PENDULUM else _RotorStream()
+        self.held = None       # the newest block's last row (position, spin/bob), waiting for its rate
+
+    def rows(self, t, columns):
+        """(position (m, k), rated columns of position, spin rate (m,) or bob (m, 3)) of a block."""
+        rec = self.measure.block(t, columns)
+        inst = self.inst
+        if inst.IS_PENDULUM:
+            e, n = (rec[c] for c in inst.MEASURED_CHANNELS)
+            pos = np.column_stack([e, n, np.hypot(e, n), np.arctan2(e, n)])
+            l = inst.pendulum_length_m()
+            x, y = l * e, l * n
+            return pos, pos, np.column_stack([x, y, -np.sqrt(np.maximum(l * l - x * x - y * y, 0.0))])
+        pos_cols = [rec[c] for c in inst.MEASURED_CHANNELS]
+        spin = rec.get("spin_rate", np.zeros_like(t))
+        true_spin = columns.get("spin_rate", spin)
+        pos = np.column_stack(pos_cols + [self.rotor.push(t, np.nan_to_num(true_spin))])
+        return pos, np.column_stack(pos_cols), spin
+
+    def stream(self, pos, side, rates, contact=None):
+        """A :class:`JointStream` from positions, their rates, and the spin (gyroscope) or bob (pendulum);
+        ``contact``: the true contact point (m, 3) of a body that shows it (``SHOWS_CONTACT_POINT``)."""
+        if self.inst.IS_PENDULUM:
+            js = JointStream(self.name, self.inst.type_name, self.names, pos, rates, np.zeros_like(pos), side)
+        else:
+            vel = np.column_stack([rates, side])
+            js = JointStream(self.name, self.inst.type_name, self.names, pos, vel, np.zeros_like(pos), None)
+        if contact is not None:
+            js.extra["contact_point_m"] = contact
+        return js
+
+
+def joint_blocks(scene, kinds=None, seed=None, window_s=DEFAULT_WINDOW_S, insts=None):
+    """:func:`joint_streams` block by block: integrate (``Instrument.stream``), measure
+    (:class:`~gyro_instrument.estimators.pipeline.MeasureStream`) and lay out one window of
+    ``window_s`` simulated seconds at a time; memory is a few blocks whatever the duration.
+
+    A sample's velocity is a centred difference that needs the next sample, so every block but the
+    last is yielded one sample short and that sample leads the next block. The concatenated blocks
+    equal :func:`joint_streams` bit for bit (same draws, same formulas, running sums carried).
+
+    Parameters
+    ----------
+    scene : Scene
+    kinds : iterable of str, optional
+        Instrument types to lay out (default: every instrument).
+    seed : int, optional
+        Sensor seed (default the scene's).
+    window_s : float
+        Simulated seconds per block (:func:`~gyro_instrument.core.scene.sample_blocks_ns`).
+    insts : dict, optional
+        Instruments already built (name -> Instrument), default ``build_instruments(scene)``.
+
+    Yields
+    ------
+    JointBlock
+        ``start`` (index of the first sample), ``t_ns`` (int64 stamps from release, ns) and
+        ``streams`` (instrument name -> :class:`JointStream` of that block).
+
+    Raises
+    ------
+    SceneError
+        On ``window_s`` when it is not a positive finite number (before anything is integrated).
+    """
+    from gyro_instrument.core.scene import sample_blocks
+    from gyro_instrument.scenes import build_instruments
+    blocks_ns = sample_blocks_ns(scene, window_s)
+    first = next(blocks_ns)                  # SceneError on window_s here, before any integration
+    insts = build_instruments(scene) if insts is None else insts
+    chosen = {n: i for n, i in insts.items() if kinds is None or i.type_name in kinds}
+    if not chosen:
+        return
+    n_total = sample_count(scene)
+    dx = uniform_step_s(scene, window_s)
+    lay = {n: _InstrumentJoints(scene, n, inst, n_total, seed, dx) for n, inst in chosen.items()}
+    gens = {n: inst.stream(sample_blocks(scene, window_s)) for n, inst in chosen.items()}
+    held_t, start = None, 0
+    for b_ns in _chain_first(first, blocks_ns):
+        t = b_ns / 1e9
+        parts = {}
+        for name, j in lay.items():
+            sim = next(gens[name])
+            pos, rated, side = j.rows(t, sim.columns)
+            rates = j.grad.push(t, rated)
+            contact = j.inst.contact_point_body(sim.columns) if j.inst.SHOWS_CONTACT_POINT else None
+            if j.held is not None:
+                pos, side = np.concatenate([j.held[0], pos]), np.concatenate([j.held[1], side])
+                if contact is not None:
+                    contact = np.concatenate([j.held[2], contact])
+            j.held = (pos[-1:], side[-1:], None if contact is None else contact[-1:])
+            parts[name] = (pos[:-1], side[:-1], rates, None if contact is None else contact[:-1])
+        t_all = b_ns if held_t is None else np.concatenate([held_t, b_ns])
+        held_t = t_all[-1:]
+        if t_all.size > 1:
+            yield JointBlock(start, t_all[:-1], {n: lay[n].stream(*parts[n]) for n in lay})
+            start += t_all.size - 1
+    yield JointBlock(start, held_t, {n: j.stream(j.held[0], j.held[1], j.grad.finish(), j.held[2])
+                                     for n, j in lay.items()})
+
+
+def _chain_first(first, rest):
+    yield first
+    yield from rest
 
 
 def records_from_joints(insts, samples) -> dict:

@@ -146,6 +146,14 @@ class BagWriter:
         if self._bytes >= self.chunk_size or time.monotonic() - self._last_commit >= self.commit_period_s:
             self.commit()
 
+    def pending(self) -> bool:
+        """True when messages were written since the last commit (a SIGKILL now would lose them)."""
+        return self._bytes > 0
+
+    def since_commit_s(self) -> float:
+        """Wall time since the last commit, s (a bound on the age of what a SIGKILL would lose)."""
+        return time.monotonic() - self._last_commit
+
     def add_metadata(self, name, data) -> None:
         """A metadata record (str -> str mapping), committed to disk at once."""
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})

@@ -36,6 +36,10 @@ def build_parser():
                         "log time (0, default: no limit)")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
+    p.add_argument("--window-s", type=float, default=10.0, metavar="S",
+                   help="simulated seconds integrated per block (default 10): each block is published before the "
+                        "next is integrated, so the first message leaves at once and memory does not grow with "
+                        "--duration-s; in [0.001, 1e6]")
     p.add_argument("--namespace", metavar="NS", default="",
                    help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
                         "NS/...; suites in different namespaces run side by side")
@@ -90,6 +94,8 @@ def _command(core_cli, argv):
                          args.max_bag_size, args.max_bag_duration)
     elif args.bag_format or args.max_bag_size or args.max_bag_duration:
         raise SceneError("--bag", None, "is needed by --bag-format, --max-bag-size and --max-bag-duration")
+    from gyro_instrument.ros.suite import check_window
+    check_window(args.window_s)
     if args.real_time_factor < 0 or args.real_time_factor != args.real_time_factor:
         raise SceneError("--real-time-factor", args.real_time_factor, "must be >= 0 (0: as fast as possible)")
     from gyro_instrument.ros.suite import run_suite
@@ -98,13 +104,15 @@ def _command(core_cli, argv):
                               command=" ".join(["gyro-instrument"] + full), progress=progress,
                               overwrite=args.overwrite, bag_format=bag_format,
                               max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
-                              namespace=args.namespace, ros_args=ros_args)
+                              namespace=args.namespace, ros_args=ros_args, window_s=args.window_s)
     if result is None:
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3
     result = core_cli.to_jsonable(result)
     if args.stats:
-        print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded")}),
+        print(json.dumps({k: stats[k] for k in ("samples", "wall_s", "real_time_factor_achieved", "recorded",
+                                                "first_message_s", "blocks", "estimator_bytes",
+                                                "peak_rss_streaming_mb", "peak_rss_mb")}),
               file=sys.stderr)
     if args.json:
         print(json.dumps(result, indent=2))

@@ -121,6 +121,9 @@ SIMULATOR = SCENE + [
                                          "time; false: it follows the clock another node publishes (one owner per "
                                          "namespace)", read_only=True),
     Spec("seed", "int", -1, "measurement-noise seed, -1: the scene's (a change restarts the run)", -1, INT32_MAX),
+    Spec("window_s", "double", 10.0, "simulated seconds integrated per block: the node publishes a block before "
+                                     "it integrates the next, so memory is one block whatever duration_s",
+         1.0e-3, 1.0e6, read_only=True),
     Spec("wait_for", "string[]", ["estimator", "recorder"],
          "nodes (same namespace) whose subscriptions to this node's topics must be matched before sim time starts; "
          "the clock owner also waits for the scene's other simulators", read_only=True),

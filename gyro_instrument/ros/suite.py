@@ -2,8 +2,9 @@
 and recorder as nodes of one context over DDS, stepped in lock-step so nothing is dropped.
 
 The first simulator owns ``clock`` (``/clock``; ``<namespace>/clock`` with a namespace) and the
-simulators step in the suite's loop, a batch of samples at a time: each simulator publishes the
-batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
+simulators step in the suite's loop, a batch of samples at a time, integrating a new block of
+``window_s`` simulated seconds when a batch needs it (the recorder commits first): each simulator
+publishes the batch (pre-serialized CDR; the RELIABLE / KEEP_ALL subscriptions queue it), then
 :class:`LockStep` takes every message of the batch from the estimator's and the recorder's
 subscriptions, waiting on a wait set for any not yet delivered, and runs their callbacks sample
 by sample (sample i of every topic before sample i + 1), so the recorder writes the same ordered
@@ -15,6 +16,8 @@ file starts them) is :mod:`gyro_instrument.ros.launch`.
 """
 
 import json
+import math
+import resource
 import signal
 import threading
 import time
@@ -27,7 +30,9 @@ from rclpy.parameter import Parameter
 from rclpy.subscription import Subscription
 
 from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
-from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.scene import DEFAULT_WINDOW_S
+from gyro_instrument.instruments import REGISTRY, simulator_kinds
 
 
 #: samples per batch at full speed; at most the publishers' KEEP_LAST depth (1000), so a writer
@@ -154,6 +159,52 @@ class LockStep:
             ws.wait(int(timeout_s * 1e9))
 
 
+#: a block integrated faster than this (s of wall time) is quick: the suite commits the bag before
+#: the next integration only when its last commit is this old (see run_suite)
+QUICK_S = 0.25
+#: accepted ``window_s`` (simulated seconds per integrated block), as the simulators' parameter
+MIN_WINDOW_S, MAX_WINDOW_S = 1.0e-3, 1.0e6
+
+
+def check_window(window_s, field="--window-s"):
+    """Refuse a window that cannot work: not a number, not finite, or outside [:data:`MIN_WINDOW_S`,
+    :data:`MAX_WINDOW_S`] (below a millisecond every block is one sample and the run crawls).
+
+    Raises
+    ------
+    SceneError
+        Naming ``field``, the value and the valid range.
+    """
+    ok = isinstance(window_s, (int, float)) and not isinstance(window_s, bool) and math.isfinite(window_s)
+    if not (ok and MIN_WINDOW_S <= window_s <= MAX_WINDOW_S):
+        raise SceneError(field, window_s, f"must be a number of simulated seconds in [{MIN_WINDOW_S:g}, "
+                                          f"{MAX_WINDOW_S:g}]")
+
+
+#: bytes per sample of the final estimate's work arrays, per instrument, with a margin of 1.5: 437
+#: measured (peak RSS of estimate_records on 172 800 samples of one horizontal gyrocompass, +72 MB)
+FIT_BYTES_PER_SAMPLE = 660
+
+
+def check_run_memory(scene):
+    """Refuse a run that cannot fit in memory, before any node starts. Instruments that stream hold
+    one block; one that does not (``STREAMS`` False) holds the run (``core.memory.check_memory``'s
+    estimate). The estimator keeps 8 (2 + k) bytes per sample of each instrument (k its measured
+    channels) in arrays that double (2x), and its final fits take :data:`FIT_BYTES_PER_SAMPLE` more."""
+    from gyro_instrument.core.memory import available_bytes, check_memory, sample_count
+    types = [spec[0] for spec in scene.instruments.values()]
+    if not all(getattr(REGISTRY.get(t), "STREAMS", False) for t in types):
+        check_memory(scene)
+        return
+    n = sample_count(scene)
+    need = n * sum(2 * 8 * (2 + len(REGISTRY[t].MEASURED_CHANNELS)) + FIT_BYTES_PER_SAMPLE for t in types)
+    available = available_bytes()
+    if available is not None and need > available:
+        raise SceneError("duration_s", scene.duration_s,
+                         f"the estimator would keep ~{need / 1e9:.3g} GB for {n} samples at {scene.sample_rate_hz:g} "
+                         f"Hz; {available / 1e9:.3g} GB available: lower duration_s or sample_rate_hz")
+
+
 def _params(scene, overrides, duration_s, **extra):
     ps = [Parameter("scene", value=scene), Parameter("duration_s", value=float(duration_s or 0.0))]
     if overrides:
@@ -164,8 +215,21 @@ def _params(scene, overrides, duration_s, **extra):
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
               timeout_s=10.0, progress=None, batch=None, overwrite=False, bag_format=None, max_bag_size=0,
-              max_bag_duration_s=0.0, namespace="", ros_args=()):
+              max_bag_duration_s=0.0, namespace="", ros_args=(), window_s=DEFAULT_WINDOW_S):
     """Run the scene's nodes; return (estimate dict, stats dict).
+
+    The simulators integrate one window of ``window_s`` simulated seconds at a time
+    (:func:`~gyro_instrument.recording.joints.joint_blocks` over ``Instrument.stream``) and publish
+    it before integrating the next, so the first message leaves after one window's integration
+    whatever the duration; before an integration (and before a paced sleep) the recorder commits
+    what it wrote (:meth:`RecorderNode.commit`; after a quick block, < :data:`QUICK_S`, only once its
+    last commit is that old), so a SIGKILL loses at most the last second of wall time. Memory: one
+    block per simulator (plus what an instrument that does not stream yet holds,
+    ``Instrument.STREAMS`` False), the estimator's kept samples (:class:`JointBuffer`, 8 (2 + k) bytes
+    per sample) and the bag writer's chunk index (one entry per chunk); then the estimate's work
+    arrays over every kept sample (the fits; ~440 bytes per sample for one gyroscope). The stats
+    give the process's peak RSS before the estimate (``peak_rss_streaming_mb``) and at the end
+    (``peak_rss_mb``), in MB.
 
     ``namespace``: every node (and so every topic, ``clock`` included) in this namespace, so that
     suites in different namespaces run side by side. ``ros_args``: the arguments after
@@ -182,13 +246,14 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     Raises
     ------
     SceneError
-        Bad scene values, a ``bag`` path that exists without ``overwrite`` or is the scene file, or a
-        run too large for the memory available (checked before any node starts).
+        Bad scene values, a ``bag`` path that exists without ``overwrite`` or is the scene file, a
+        ``window_s`` that is not a positive finite number, or a run too large for the memory available
+        (checked before any node starts).
     DeliveryError
         A sample was not delivered within ``timeout_s``.
     """
-    from gyro_instrument.core.memory import check_memory
     from gyro_instrument.scenes import load_scene
+    t_start = time.perf_counter()
     overrides = list(overrides)
     overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
     scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
@@ -197,7 +262,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         from gyro_instrument.recording.bag_layout import bag_format as layout_of, check_bag_output
         bag_format = layout_of(bag, bag_format, max_bag_size, max_bag_duration_s)
         check_bag_output(bag, bag_format, "bag", scene_inputs(scene), overwrite, max_bag_size, max_bag_duration_s)
-    check_memory(scene_obj)                               # and a run that cannot fit in memory
+    check_window(window_s)
+    check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
     # SIGINT/SIGTERM set a flag read between samples, so the interrupt never lands inside a write
     # (the recorder then finishes the file with status 'interrupted')
@@ -218,7 +284,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             if types & set(kinds):
                 sims.append(SimulatorNode(name, kinds, context=context, pub_qos=RELIABLE_1000, **ns,
                                           parameter_overrides=_params(
-                    scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner)))
+                    scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner,
+                    window_s=float(window_s))))
                 owner = False
         est = EstimatorNode(context=context, **ns, parameter_overrides=_params(scene, overrides, duration_s))
         rec = RecorderNode(context=context, reorder=False, **ns, parameter_overrides=_params(
@@ -260,17 +327,30 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         every = max(n_samples // 20, 1)
         w0 = time.perf_counter()
         t_spin = w0
+        first_message_s = None
+        last_block_s = None
         i = 0
         while i < n_samples:
             if stop:
                 raise KeyboardInterrupt
+            integrating = not all(s.block_ready(batch) for s in sims)
+            if rec is not None and integrating:
+                # on disk before the next integration: always after a slow one (it may be as slow);
+                # after quick ones only once the last commit is QUICK_S old (a commit costs more as
+                # the file grows), so what a SIGKILL loses stays under QUICK_S + one quick block
+                rec.commit(0.0 if last_block_s is None or last_block_s >= QUICK_S else QUICK_S)
             step = {}
+            t_batch = time.perf_counter()
             for s in sims:
                 k = s.publish_steps(batch)
+                if first_message_s is None and k:
+                    first_message_s = time.perf_counter() - t_start
                 for topic in s.topics():
                     # per-sample topics: k messages; markers: at these offsets in the batch
                     step[topic] = s.offsets.get(topic, k)
                     published[topic] += len(step[topic]) if isinstance(step[topic], list) else k
+            if integrating:
+                last_block_s = time.perf_counter() - t_batch
             lockstep.deliver(step, timeout_s, lambda: f"samples {i}..{i + batch - 1}")
             i_next = i + batch
             now = time.perf_counter()
@@ -280,11 +360,15 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
             if real_time_factor > 0:
                 lag = min(i_next, n_samples) * dt / real_time_factor - (time.perf_counter() - w0)
                 if lag > 0:
+                    if rec is not None and lag > 0.1:
+                        rec.commit()
                     time.sleep(lag)
             if progress and (i_next - 1) // every > (i - 1) // every:
                 progress(f"sample {min(i_next, n_samples)}/{n_samples}")
             i = i_next
         wall = time.perf_counter() - w0
+        # the process's peak so far: the streaming part of the run, before the estimate's work arrays
+        peak_streaming_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         base = rec.received() if rec else 0
         result = est.finalize()
         if rec:
@@ -296,8 +380,12 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         stats = {"samples": n_samples, "wall_s": wall,
                  "real_time_factor_achieved": (n_samples * dt / wall) if wall > 0 else None,
                  "estimator_messages": est.received(), "recorded": dict(rec.counts) if rec else {},
-                 "published": {name: s.samples for s in sims for name in s.streams},
-                 "published_topics": published, "batch": batch}
+                 "published": {name: s.samples for s in sims for name in s.chosen},
+                 "published_topics": published, "batch": batch, "first_message_s": first_message_s,
+                 "blocks": {s.get_name(): s.blocks_pulled for s in sims}, "window_s": float(window_s),
+                 "estimator_bytes": sum(b.nbytes() for b in est.buffers.values()),
+                 "peak_rss_streaming_mb": peak_streaming_mb,
+                 "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
         return result, stats
     finally:
         for n in nodes:

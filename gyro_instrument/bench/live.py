@@ -1,0 +1,216 @@
+"""``gyro-instrument run`` as it streams (issue 13 item 2), measured on child processes.
+
+* time to first message: from the launch of ``gyro-instrument run SCENE --bag X.mcap`` to the first
+  message committed to the bag on disk (the file is a complete MCAP after every commit, so the
+  bench reads its provisional summary every 5 ms), for 1 h and 48 h of the same scene; the child
+  is then killed (SIGKILL), so a 48 h run costs only its start. The launch includes the
+  interpreter and rclpy's import, measured alone in the same run (``import`` row);
+* peak memory: the maximum resident set size (``wait4``'s ``ru_maxrss``) of whole runs of 1 h and
+  48 h of the same scene, with the run's own account of what grows (``--stats``:
+  ``estimator_bytes``, the estimator's kept samples).
+
+Two kinds of instrument: ``foucault_pantheon``'s pendulum as shipped (it does not stream yet,
+``Instrument.STREAMS`` False: its default ``stream`` integrates the whole run before the first
+block), and the closed-form gyrocompass of ``tests/streaming_instrument.py`` (streams; needs a source
+checkout), which isolates what the layers downstream of ``Instrument.stream`` cost: simulator
+blocks, estimator, recorder, DDS. Every child runs on loopback like the suite's other benchmark
+(discovery range LOCALHOST and, as root, a loopback-only network namespace).
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+#: 48 h, the long run of the issue
+LONG_S = 48 * 3600.0
+#: 1 h, the reference run
+SHORT_S = 3600.0
+
+
+def _loopback(cmd):
+    """(command, environment) kept on loopback (as :func:`.studies.suite_real_time_factor`)."""
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+    if os.geteuid() == 0 and shutil.which("unshare") and shutil.which("ip") and not env.get("GYRO_IN_NETNS"):
+        env["GYRO_IN_NETNS"] = "1"
+        cmd = ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh"] + cmd
+    return cmd, env
+
+
+def _run_command(scene, duration_s, bag, overrides=(), extra=()):
+    cmd = [sys.executable, "-m", "gyro_instrument.ros.cli", "run", scene, "--duration-s", f"{duration_s:g}",
+           "--bag", bag, *extra]
+    for o in overrides:
+        cmd += ["--set", o]
+    return _loopback(cmd)
+
+
+def _committed_messages(path):
+    """Messages in the bag's (provisional) summary, 0 while there is none or it is being rewritten."""
+    from mcap.reader import make_reader
+    try:
+        with open(path, "rb") as fh:
+            summary = make_reader(fh).get_summary()
+        return summary.statistics.message_count if summary and summary.statistics else 0
+    except Exception:       # a commit in progress, or no file yet
+        return 0
+
+
+def time_to_first_message(scene, duration_s, overrides=(), timeout_s=60.0) -> tuple:
+    """Seconds from launching ``run`` to its first message on disk, or None after ``timeout_s``;
+    the child is killed at once. Returns (seconds or None, note)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = os.path.join(tmp, "first.mcap")
+        return _first_message_of(*_run_command(scene, duration_s, bag, overrides, ("--quiet",)), bag, timeout_s)
+
+
+def _first_message_of(cmd, env, bag, timeout_s):
+    t0 = time.monotonic()
+    p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        while time.monotonic() - t0 < timeout_s:
+            if os.path.exists(bag) and _committed_messages(bag) > 0:
+                return time.monotonic() - t0, ""
+            if p.poll() is not None:
+                err = p.stderr.read().strip().splitlines()
+                return None, f"run ended first: {err[-1] if err else p.returncode}"
+            time.sleep(0.005)
+        return None, f"no message within {timeout_s:g} s"
+    finally:
+        p.kill()
+        p.wait()
+
+
+def peak_rss(scene, duration_s, overrides=(), extra=()) -> tuple:
+    """(maximum RSS in MB, the run's ``--stats`` dict) of a whole ``run`` with a recording; (None,
+    {"error": ...}) when it fails."""
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = os.path.join(tmp, "rss.mcap")
+        return _peak_rss_of(*_run_command(scene, duration_s, bag, overrides, ("--stats", *extra)), tmp)
+
+
+def _streaming_child(tmp, duration_s, rate_hz, args):
+    """(command, environment, bag) of ``run`` over the tests' streaming gyrocompass, or None."""
+    tests = Path(__file__).resolve().parents[2] / "tests"
+    if not (tests / "streaming_instrument.py").exists():
+        return None
+    import yaml
+    sys.path.insert(0, str(tests))
+    try:
+        import streaming_instrument
+    finally:
+        sys.path.remove(str(tests))
+    scene, bag = os.path.join(tmp, "streaming.yaml"), os.path.join(tmp, "streaming.mcap")
+    with open(scene, "w") as fh:
+        yaml.safe_dump(streaming_instrument.scene(duration_s=duration_s, rate_hz=rate_hz), fh)
+    child = (f"import sys; sys.path.insert(0, {str(tests)!r}); import streaming_instrument; "
+             f"streaming_instrument.register(); from gyro_instrument.ros.cli import main; "
+             f"sys.exit(main(['run', {scene!r}, '--bag', {bag!r}] + {list(args)!r}))")
+    return (*_loopback([sys.executable, "-c", child]), bag)
+
+
+def layers_first_message(duration_s, rate_hz=20.0, timeout_s=60.0) -> tuple:
+    """:func:`time_to_first_message` over the tests' streaming gyrocompass (see :func:`layers_peak_rss`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        got = _streaming_child(tmp, duration_s, rate_hz, ["--quiet"])
+        if got is None:
+            return None, "tests/streaming_instrument.py not found (a source checkout is needed)"
+        return _first_message_of(*got, timeout_s)
+
+
+def layers_peak_rss(duration_s, rate_hz=1.0, window_s=100.0) -> tuple:
+    """:func:`peak_rss` of ``run`` over an instrument that streams: the closed-form small-amplitude
+    gyrocompass of ``tests/streaming_instrument.py`` (u = u0 cos(√K t), Quet sec. 4 §1 eq. 2
+    linearised), registered in the child. What it measures is what the layers downstream of
+    ``Instrument.stream`` hold (simulator blocks, estimator, recorder, DDS), until the shipped
+    instruments stream. Needs a source checkout (the tests directory); (None, {"error": ...}) otherwise."""
+    with tempfile.TemporaryDirectory() as tmp:
+        got = _streaming_child(tmp, duration_s, rate_hz, ["--stats", "--window-s", f"{window_s:g}"])
+        if got is None:
+            return None, {"error": "tests/streaming_instrument.py not found (a source checkout is needed)"}
+        return _peak_rss_of(*got[:2], tmp)
+
+
+def _peak_rss_of(cmd, env, tmp):
+    """Run ``cmd`` to its end; (ru_maxrss in MB, the last stderr line as JSON) or (None, {"error": ...})."""
+    with open(os.path.join(tmp, "out"), "w+") as out, open(os.path.join(tmp, "err"), "w+") as err:
+        p = subprocess.Popen(cmd, env=env, stdout=out, stderr=err)
+        _, status, usage = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+        err.seek(0)
+        lines = err.read().strip().splitlines()
+    if p.returncode != 0 or not lines:
+        return None, {"error": lines[-1] if lines else f"exit {p.returncode}"}
+    return usage.ru_maxrss / 1024.0, json.loads(lines[-1])
+
+
+def import_time() -> float:
+    """Seconds to start the interpreter and import the suite (rclpy included), in a child."""
+    cmd, env = _loopback([sys.executable, "-c", "import gyro_instrument.ros.suite"])
+    t0 = time.monotonic()
+    subprocess.run(cmd, env=env, check=True, capture_output=True)
+    return time.monotonic() - t0
+
+
+def live_rows(quick=False, progress=print) -> list:
+    """Rows (target, measured, unit, goal, met) for ``targets.csv``.
+
+    * launch to first message on disk, 1 h and 48 h: ``foucault_pantheon`` as shipped (adaptive; the
+      pendulum does not stream yet, ``STREAMS`` False: its whole run is integrated before its first
+      block, so the 48 h row is capped at 60 s), on its parareal fast path, and over the tests'
+      streaming gyrocompass (:func:`layers_first_message`: the layers downstream of ``stream``);
+    * peak RSS of whole runs, 1 h vs 48 h: ``foucault_pantheon`` on its fast path at 0.2 Hz, and the
+      streaming gyrocompass at 1 Hz with 100 s windows (172 800 samples for 48 h). The goal (48 h within
+      10 % of 1 h) is for the streaming case; the estimator's kept samples (``estimator_bytes``,
+      8 bytes per kept value) are what grows by design and are reported beside it.
+    """
+    import importlib.util
+    if importlib.util.find_spec("rclpy") is None:
+        return [("run: time to first message", float("nan"), "s (rclpy not installed)", "<= 2", False)]
+    rows = []
+    imp = import_time()
+    rows.append(("run: interpreter start and import of the suite (rclpy), alone", imp, "s", "", True))
+    cases = [("foucault_pantheon, adaptive as shipped (does not stream yet)", ()),
+             ("foucault_pantheon, parareal (does not stream yet)", ("instruments.pendulum.integrator=parareal",))]
+    for d in (SHORT_S, LONG_S):
+        for label, over in cases[1 if quick else 0:]:
+            progress(f"  run {label}, {d / 3600:g} h: time to first message")
+            s, note = time_to_first_message("foucault_pantheon", d, over)
+            rows.append(_first_row(f"{label}, {d / 3600:g} h", s, note, imp))
+        progress(f"  run over a streaming instrument, {d / 3600:g} h: time to first message")
+        s, note = layers_first_message(d)
+        rows.append(_first_row(f"streaming gyrocompass (tests/streaming_instrument.py), {d / 3600:g} h", s, note, imp))
+    # at 1 Hz the pendulum publishes its markers every sample (once per second): 0.2 Hz keeps its
+    # 48 h run to 34 560 samples; the gyrocompass has no markers and runs 172 800 samples at 1 Hz
+    fast = ("sample_rate_hz=0.2", "instruments.pendulum.integrator=parareal")
+    for label, rate, measure in (("foucault_pantheon, parareal (does not stream yet)", 0.2,
+                                  lambda d: peak_rss("foucault_pantheon", d, fast, ("--window-s", "500"))),
+                                 ("streaming gyrocompass (tests/streaming_instrument.py)", 1.0, layers_peak_rss)):
+        got = {}
+        for d in (SHORT_S, LONG_S):
+            progress(f"  run {label}, {d / 3600:g} h at {rate:g} Hz: peak RSS")
+            got[d] = measure(d)
+            mb, stats = got[d]
+            rows.append((f"run {label}, {d / 3600:g} h at {rate:g} Hz, peak RSS", mb if mb is not None else float("nan"),
+                         "MB" + (f" ({stats['error']})" if mb is None else ""), "", mb is not None))
+        (a, sa), (b, sb) = got[SHORT_S], got[LONG_S]
+        if a is not None and b is not None:
+            kept = (sb.get("estimator_bytes", 0) - sa.get("estimator_bytes", 0)) / 2 ** 20
+            sa_, sb_ = sa.get("peak_rss_streaming_mb"), sb.get("peak_rss_streaming_mb")
+            if sa_ and sb_:
+                rows.append((f"run {label}: peak RSS while streaming (before the estimate) 48 h / 1 h", sb_ / sa_,
+                             f"x ({sa_:.1f} -> {sb_:.1f} MB; the estimator keeps {kept:.1f} MB more)", "<= 1.10",
+                             sb_ / sa_ <= 1.10))
+            rows.append((f"run {label}: peak RSS of the whole process, estimate included, 48 h / 1 h", b / a,
+                         f"x ({a:.1f} -> {b:.1f} MB)", "", True))
+    return rows
+
+
+def _first_row(label, s, note, imp):
+    return (f"run {label}: launch to first message on disk", s if s is not None else float("nan"),
+            "s" + (f" ({note})" if note else ""), "<= 2 + import", s is not None and s - imp <= 2.0)
