@@ -1,6 +1,8 @@
-"""Joint samples from a recorded bag, decoded without ROS (``mcap_ros2``'s dynamic decoder)."""
+"""Joint samples from a recorded bag, decoded without ROS (the fixed CDR layouts of recording/cdr.py, else ``mcap_ros2``'s dynamic decoder)."""
 
 import numpy as np
+
+from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.recording.bag_layout import scan_path
 
 
@@ -48,7 +50,6 @@ def samples_from_bag(path, scan=None):
         ``path`` is not an MCAP file nor a bag directory (see
         :func:`~gyro_instrument.recording.bag_layout.bag_files`).
     """
-    from gyro_instrument.core.scene import EPOCH_NS
     scan = scan or scan_path(path)
     meta = scan.metadata_record("gyro_instrument")
     notes = list(scan.notes) + [f"before recovery: {n}" for n in scan.recorded_notes]
@@ -62,31 +63,71 @@ def samples_from_bag(path, scan=None):
 def joint_samples(scan, epoch_ns) -> tuple:
     """Every ``[/<namespace>]/<instrument>/joint_states`` JointState of the intact records of ``scan``:
     ({instrument: (t_ns from ``epoch_ns``, position (m, j), velocity (m, j))}, messages read,
-    messages that did not decode)."""
-    data = {}
+    messages that did not decode).
+
+    A channel whose first message has the fixed layout this package publishes
+    (:func:`~gyro_instrument.recording.cdr.joint_state_layout`: the estimator node's decoder) is
+    decoded with it, many messages at once; any other message through ``mcap_ros2``'s dynamic
+    decoder. Both read the same float64 bytes."""
+    from gyro_instrument.recording.cdr import joint_state_layout
     decode = MessageDecoder()
+    layouts = {}                 # channel id -> CdrLayout, or None: decode message by message
+    rows = {}                    # instrument -> list of (layout, bytes) or (None, (stamp, pos, vel))
     count = undecodable = 0
     for schema, channel, message in scan.records():
         if schema is None or not channel.topic.endswith("/joint_states") \
                 or schema.name != "sensor_msgs/msg/JointState":
             continue
-        try:
-            msg = decode(schema, channel, message.data)
-            stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - epoch_ns
-            pos, vel = list(msg.position), list(msg.velocity)
-        except Exception:  # an intact record holding a message that does not decode
-            undecodable += 1
-            continue
+        data = message.data
+        lay = layouts.get(channel.id)
+        if lay is not None and lay.matches(data):
+            entry = (lay, data)
+        else:
+            try:
+                msg = decode(schema, channel, data)
+                stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) - epoch_ns
+                pos, vel = list(msg.position), list(msg.velocity)
+            except Exception:  # an intact record holding a message that does not decode
+                undecodable += 1
+                continue
+            if channel.id not in layouts:
+                try:
+                    lay = joint_state_layout(tuple(msg.name), msg.header.frame_id)
+                except ValueError:      # no joints
+                    lay = None
+                layouts[channel.id] = lay if lay is not None and lay.matches(data) and epoch_ns == EPOCH_NS \
+                    else None
+            entry = (None, (stamp, pos, vel))
         parts = channel.topic.strip("/").split("/")          # [<namespace>/...]<instrument>/joint_states
         name = parts[-2] if len(parts) >= 2 else parts[0]
-        ts, ps, vs = data.setdefault(name, ([], [], []))
-        ts.append(stamp)
-        ps.append(pos)
-        vs.append(vel)
+        rows.setdefault(name, []).append(entry)
         count += 1
-    out = {n: (np.array(v[0], dtype=np.int64), np.array(v[1], dtype=float), np.array(v[2], dtype=float))
-           for n, v in data.items()}
+    out = {name: _arrays(entries) for name, entries in rows.items()}
     return out, count, undecodable
+
+
+def _arrays(entries):
+    """(t_ns int64, position, velocity) from :func:`joint_samples`' entries, in their order; runs of
+    fixed-layout messages are decoded together (:meth:`~gyro_instrument.recording.cdr.CdrLayout.decode`)."""
+    ts, ps, vs = [], [], []
+    k = 0
+    while k < len(entries):
+        lay, item = entries[k]
+        if lay is None:
+            ts.append(item[0])
+            ps.append(item[1])
+            vs.append(item[2])
+            k += 1
+            continue
+        z = k
+        while z < len(entries) and entries[z][0] is lay:
+            z += 1
+        t, (pos, vel, _) = lay.decode([d for _, d in entries[k:z]])
+        ts.extend(t.tolist())
+        ps.extend(pos.tolist())
+        vs.extend(vel.tolist())
+        k = z
+    return np.array(ts, dtype=np.int64), np.array(ps, dtype=float), np.array(vs, dtype=float)
 
 
 def status_notes(scan, count) -> list:

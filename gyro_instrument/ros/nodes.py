@@ -5,7 +5,7 @@
   ``window_s`` simulated seconds at a time, over ``Instrument.stream``) whose blocks it publishes as
   it gets them, integrating the next only when the samples due go past the current one, as
   ``sensor_msgs/JointState`` (and the bob position); messages are
-  serialized with numpy (:class:`~gyro_instrument.ros.messages.CdrLayout`), many samples at a
+  serialized with numpy (:class:`~gyro_instrument.recording.cdr.CdrLayout`), many samples at a
   time, and published as CDR bytes. Run alone (:meth:`SimulatorNode.start`) it waits for the
   subscribers the scene expects (``wait_for``), then either owns ``clock`` (``publish_clock``) and
   paces it, or follows the owner's clock, publishing each sample when sim time reaches it.
