@@ -1,4 +1,5 @@
-"""Joint samples from a recorded bag, decoded without ROS (the fixed CDR layouts of recording/cdr.py, else ``mcap_ros2``'s dynamic decoder)."""
+"""Joint samples from a recorded bag, decoded without ROS: the fixed CDR layouts of
+:mod:`gyro_instrument.recording.cdr` (the estimator node's), else ``mcap_ros2``'s dynamic decoder."""
 
 import numpy as np
 
