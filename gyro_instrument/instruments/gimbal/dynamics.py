@@ -1,0 +1,281 @@
+"""The gimbal's equations of motion in closed form, on Python floats (the fast right-hand side).
+
+The generic :class:`~gyro_instrument.instruments.chain.HingeChain` spends ~380 µs per evaluation
+on numpy calls on 3-vectors (three links, partial velocities, a 3×3 ``numpy.linalg.solve``); the
+free gimbal's fast nutation (sec. 4 §V eq. 14: C ρ0 / √(a u²) ≈ 840 rad/s for the shipped rotor)
+needs ~1300 steps per simulated second at rtol 1e-11, so the chain ran at 0.13× real time.
+:func:`closed_form_rhs` evaluates the same Kane equations unrolled for this chain — outer ring
+about ``oz`` (inertia diag(A2, C2, A2)), inner ring about ``NN'`` (diag(A1, C1, A1)), rotor about
+``oQ`` (diag(A, A, C)) — with scalar arithmetic only, and solves M q̈ = f with the closed-form
+inverse of M (sec. 4 §III eq. 12, first; :func:`~.theory.free_mass_matrix`)::
+
+    θ̈ = f_θ / (A + A1),   ψ̈ = (f_ψ − cos θ f_φ) / u²,   φ̈ = f_φ / C − cos θ ψ̈,
+    u² = (A + C1) sin²θ + A1 cos²θ + A2          (det M = (A + A1) C u²).
+
+The rotor's terms are written in the inner ring's axes (Résal's frame): for an axisymmetric rotor
+its inertia, angular velocity and Kane projections are the same there as in its own axes.
+
+Each body's inertia torque is τ = I a + w × I w + c_l L(I, w, Ω) + c_q Ω × I Ω with
+L = I(Ω × w) + w × IΩ + Ω × Iw (:mod:`gyro_instrument.effects.earth_rotation`, :mod:`.centrifugal`).
+The coefficients c_l, c_q are not assumed: :func:`rigid_body_coefficients` measures them on the
+instrument's active effects' own ``rigid_body_torque`` terms and refuses (returns None) when their
+sum is not of that form, so an effect added later is never silently dropped — the instrument then
+falls back to the chain. Hinge torques are the effects' own ``damping_torque`` / ``spin_torque``
+called with floats. ``tests/test_gimbal.py`` holds this function to the chain's right-hand side at
+random states to round-off, for every configuration and effect list.
+"""
+
+import math
+
+import numpy as np
+
+from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN
+
+#: Relative residual above which the active effects' rigid-body torques are not c_l L + c_q Q
+#: (the probes are O(1) numbers; a sum of the two exact forms agrees to ~1e-16).
+_FORM_TOLERANCE = 1e-12
+
+
+def _linear(I, w, om):
+    """The inertia torque's part linear in Ω: I(Ω × w) + w × IΩ + Ω × Iw (body axes)."""
+    return I @ np.cross(om, w) + np.cross(w, I @ om) + np.cross(om, I @ w)
+
+
+def _quadratic(I, om):
+    """The inertia torque's part quadratic in Ω: Ω × IΩ (body axes)."""
+    return np.cross(om, I @ om)
+
+
+def rigid_body_coefficients(effects) -> tuple | None:
+    """(c_l, c_q) with Σ rigid_body_torque(I, w, Ω) = c_l L(I, w, Ω) + c_q Ω × IΩ over ``effects``.
+
+    Measured on the effects' own terms at fixed O(1) probes (a full inertia tensor, angular
+    velocity and frame rate), then checked at two more probes (another state, and Ω tripled so a
+    term of another degree in Ω shows). ``earth_rotation`` gives (1, 0), ``centrifugal`` (0, 1),
+    both (1, 1), none (0, 0).
+
+    Returns
+    -------
+    tuple of float or None
+        None when the sum is not of that form to :data:`_FORM_TOLERANCE` (relative).
+    """
+    terms = [e.rigid_body_torque for e in effects if RIGID_BODY in e.MECHANICS]
+    I = np.array([[2.0, 0.3, -0.2], [0.3, 1.5, 0.1], [-0.2, 0.1, 1.1]])
+
+    def total(w, om):
+        out = np.zeros(3)
+        for term in terms:
+            out = out + np.asarray(term(I, w, om), dtype=float)
+        return out
+    w, om = np.array([0.7, -1.3, 2.1]), np.array([0.4, 0.9, -0.6])
+    S0 = total(np.zeros(3), om)                   # the linear part vanishes at w = 0
+    Q, L = _quadratic(I, om), _linear(I, w, om)
+    cq = float(S0 @ Q / (Q @ Q))
+    cl = float((total(w, om) - S0) @ L / (L @ L))
+    # an integer (each effect contributes its term once) is recovered exactly, not to round-off
+    cq, cl = (float(round(c)) if abs(c - round(c)) < _FORM_TOLERANCE else c for c in (cq, cl))
+    for w2, om2 in ((np.array([-1.1, 0.4, 0.8]), np.array([-0.5, 0.2, 1.3])), (w, 3.0 * om)):
+        want = cl * _linear(I, w2, om2) + cq * _quadratic(I, om2)
+        got = total(w2, om2)
+        if np.max(np.abs(got - want)) > _FORM_TOLERANCE * max(1.0, float(np.max(np.abs(want)))):
+            return None
+    return cl, cq
+
+
+def _torque(Ix, Iy, Iz, wx, wy, wz, ax, ay, az, ox, oy, oz, cl, cq):
+    """τ = I a + w × I w + c_l [I(Ω × w) + w × IΩ + Ω × Iw] + c_q Ω × IΩ for I = diag(Ix, Iy, Iz)."""
+    hx, hy, hz = Ix * wx, Iy * wy, Iz * wz                   # I w
+    tx = Ix * ax + wy * hz - wz * hy
+    ty = Iy * ay + wz * hx - wx * hz
+    tz = Iz * az + wx * hy - wy * hx
+    if cl:
+        gx, gy, gz = Ix * ox, Iy * oy, Iz * oz               # I Ω
+        tx += cl * (Ix * (oy * wz - oz * wy) + (wy * gz - wz * gy) + (oy * hz - oz * hy))
+        ty += cl * (Iy * (oz * wx - ox * wz) + (wz * gx - wx * gz) + (oz * hx - ox * hz))
+        tz += cl * (Iz * (ox * wy - oy * wx) + (wx * gy - wy * gx) + (ox * hy - oy * hx))
+    if cq:
+        tx += cq * (Iz - Iy) * oy * oz
+        ty += cq * (Ix - Iz) * oz * ox
+        tz += cq * (Iy - Ix) * ox * oy
+    return tx, ty, tz
+
+
+def _hinge_terms(effects, kind, method):
+    return [getattr(e, method) for e in effects if kind in e.MECHANICS]
+
+
+def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias):
+    """Right-hand side ``f(t, *y) -> tuple`` of the gimbal on floats, the chain's state layout.
+
+    Parameters
+    ----------
+    configuration : str
+        ``free`` (y = ψ, θ, φ, ψ̇, θ̇, φ̇), ``locked`` (θ held at ``held_angle``; y = ψ, φ, ψ̇, φ̇)
+        or ``outer_fixed`` (ψ held at ``held_angle``; y = θ, φ, θ̇, φ̇); rad and rad/s.
+    inertias : tuple of float
+        (A, C, A1, C1, A2, C2) as simulated, kg m².
+    omega_base : array_like, shape (3,)
+        Earth rate in Quet's base axes (``HingeChain.omega_base``), rad/s.
+    coefficients : tuple of float
+        (c_l, c_q) of :func:`rigid_body_coefficients`.
+    effects : iterable of Effect
+        The active effects: their ``damping_torque`` act on the ring hinges (swinging inertias
+        ``swing_inertias`` = (J_outer, J_inner), kg m²) and their ``spin_torque`` on the rotor's
+        bearing (moment C, rate φ̇), as :func:`~gyro_instrument.instruments.chain.effect_hinge_torques`.
+    held_angle : float
+        The held ring's angle (Quet's θ or ψ), rad; ignored for ``free``.
+
+    Returns
+    -------
+    callable
+        For :func:`gyro_instrument.core.integrate.integrate` with ``method="DOP853-scalar"``.
+    """
+    A, C, A1, C1, A2, C2 = (float(v) for v in inertias)
+    Ox, Oy, Oz = (float(v) for v in omega_base)
+    cl, cq = (float(v) for v in coefficients)
+    effects = list(effects)
+    damp = _hinge_terms(effects, DAMPING, "damping_torque")
+    spin = _hinge_terms(effects, SPIN, "spin_torque")
+    J_outer, J_inner = (float(v) for v in swing_inertias)
+    a_inner = A + A1
+
+    # Constants of the unrolled torques (:func:`_torque` of the inner ring, diag(A1, C1, A1), and
+    # of the rotor, diag(A, A, C), summed and simplified; the outer ring enters through τ·e_z only).
+    k_lx, k_ly, k_lz = 2.0 * A1 - C1, 2.0 * A - C, C1 - 2.0 * A1
+    k_qx, k_qy, k_qz, k_q0 = cq * (A1 - C1 + C - A), cq * (A - C), cq * (C1 - A1), cq * (C2 - A2)
+    u2_s, u2_c = A + C1, A1
+
+    def forces(psi, theta, v0, v1, v2):
+        """(f_ψ, f_θ, f_φ, cos θ, u²): Kane's generalised forces less the inertia terms (the hot loop).
+
+        In the inner ring's axes (x = NN', z = oQ): the ring turns at w = (θ̇, ψ̇ sin θ, ψ̇ cos θ),
+        the rotor at (θ̇, ψ̇ sin θ, ψ̇ cos θ + φ̇); Ω = (oa, p2, p3) there."""
+        cp, sp = math.cos(psi), math.sin(psi)
+        c, s = math.cos(theta), math.sin(theta)
+        oa, ob = Ox * cp + Oy * sp, Oy * cp - Ox * sp              # Ω, outer ring's axes
+        p2, p3 = ob * c + Oz * s, Oz * c - ob * s                  # Ω, inner ring's axes
+        wy, wz = v0 * s, v0 * c
+        rz = wz + v2
+        # I a + w × I w of ring + rotor (a: the velocity-product accelerations, q̈ = 0)
+        tx = (A1 - C1) * wy * wz + A * v2 * wy + (C - A) * wy * rz
+        ty = (C1 + A) * v1 * wz - A * v2 * v1 + (A - C) * v1 * rz
+        tz = -(A1 + C) * v1 * wy + (C1 - A1) * v1 * wy
+        g2 = oa * wy - p2 * v1
+        # cl [I(Ω × w) + w × IΩ + Ω × Iw] and cq Ω × IΩ, ring + rotor
+        tx += cl * (k_lx * p2 * wz - C1 * p3 * wy + (C - 2.0 * A) * p3 * wy + C * p2 * rz) + k_qx * p2 * p3
+        ty += cl * (C1 * (p3 * v1 - oa * wz) + k_ly * p3 * v1 - C * oa * rz) + k_qy * p3 * oa
+        tz += cl * (k_lz * p2 * v1 + C1 * oa * wy + C * g2) + k_qz * oa * p2
+        f0 = -(k_q0 * oa * ob + s * ty + c * tz)
+        f1 = -tx
+        f2 = C * (v1 * wy - cl * g2)                               # rotor: −τ·e_z = −C (a_z + cl g2)
+        for term in damp:
+            f0 += term(J_outer, v0)
+            f1 += term(J_inner, v1)
+        for term in spin:
+            f2 += term(C, v2)
+        return f0, f1, f2, c, u2_s * s * s + u2_c * c * c + A2
+
+    if configuration == "free":
+        def rhs(t, psi, theta, phi, v0, v1, v2):
+            f0, f1, f2, c, u2 = forces(psi, theta, v0, v1, v2)
+            psi_dd = (f0 - c * f2) / u2
+            return v0, v1, v2, psi_dd, f1 / a_inner, f2 / C - c * psi_dd
+    elif configuration == "locked":
+        theta_held = float(held_angle)
+
+        def rhs(t, psi, phi, v0, v2):
+            f0, _, f2, c, u2 = forces(psi, theta_held, v0, 0.0, v2)
+            psi_dd = (f0 - c * f2) / u2
+            return v0, v2, psi_dd, f2 / C - c * psi_dd
+    elif configuration == "outer_fixed":
+        psi_held = float(held_angle)
+
+        def rhs(t, theta, phi, v1, v2):
+            _, f1, f2, _, _ = forces(psi_held, theta, 0.0, v1, v2)
+            return v1, v2, f1 / a_inner, f2 / C
+    else:
+        raise ValueError(f"configuration must be free, locked or outer_fixed (got {configuration!r})")
+    return rhs
+
+
+#: Hairer's DOP853 return codes (IDID) on failure.
+_DOP853_FAILURES = {-1: "input is not consistent", -2: "larger nsteps is needed", -3: "step size becomes too small",
+                    -4: "problem is probably stiff (interrupted)"}
+
+
+class ClosedFormRun:
+    """A resumable run of :func:`closed_form_rhs` through Hairer's DOP853 (Fortran, in scipy as
+    ``scipy.integrate.ode(...).set_integrator("dop853")``), from sample to sample.
+
+    The Fortran driver does the stage arithmetic that costs ~60 µs per step on Python floats
+    (:mod:`gyro_instrument.core.dop853`); only the right-hand side runs in Python. Each sample time
+    is reached by one call of the driver from the previous sample (its last step lands on the
+    sample; each call starts with Hairer's initial-step guess), so the states depend on the sample
+    times only — never on how they are cut into blocks: :meth:`advance` over consecutive blocks
+    gives the one-shot run bit for bit, in memory of one block. Method and error control are those
+    of ``solve_ivp``'s DOP853 (the same 8(5,3) pair and error norm), the steps are not (they stop
+    at the samples).
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, *y) -> tuple`` (:func:`closed_form_rhs`).
+    y0 : array_like
+        State at ``t0``.
+    t0 : float
+        Start, s.
+    rtol, atol : float
+        DOP853's tolerances.
+
+    Raises
+    ------
+    IntegrationError
+        From :meth:`advance`: the driver's failure (its message: step size too small, probably
+        stiff...) or a non-finite state.
+    """
+
+    #: Most steps the driver may take between two samples (its ``nsteps``; a 32-bit integer).
+    MAX_STEPS_PER_SAMPLE = 2 ** 31 - 1
+
+    def __init__(self, rhs, y0, t0, rtol, atol) -> None:
+        from scipy.integrate import ode
+
+        def f(t, y):
+            self.nfev += 1
+            return rhs(t, *y.tolist())
+        self.nfev = 0
+        self.solver = ode(f).set_integrator("dop853", rtol=rtol, atol=atol, nsteps=self.MAX_STEPS_PER_SAMPLE)
+        self.solver.set_initial_value(np.asarray(y0, dtype=float), float(t0))
+        self.t, self.y = float(t0), np.asarray(y0, dtype=float).copy()
+        self.meta = {"rtol": rtol, "atol": atol, "driver": "DOP853 (Fortran, scipy.integrate.ode)"}
+        self.wall_time_s = self.cpu_time_s = 0.0
+
+    def advance(self, t, progress=None):
+        """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
+        sample on), shape (n, len(t)); ``progress(t_i)`` is called after each sample when given."""
+        import time
+        import warnings
+
+        from gyro_instrument.core.errors import IntegrationError
+        t = np.asarray(t, dtype=float)
+        w0, c0 = time.perf_counter(), time.process_time()
+        out = np.empty((self.y.size, t.size))
+        solver = self.solver
+        for i, ti in enumerate(t):
+            if ti != self.t:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")           # the failure is raised below instead
+                    y = solver.integrate(ti)
+                if not solver.successful():
+                    code = solver.get_return_code()
+                    msg = _DOP853_FAILURES.get(code, f"return code {code}")
+                    raise IntegrationError(f"DOP853 failed between t = {self.t:.6g} s and {ti:.6g} s: {msg}")
+                self.t, self.y = float(ti), y
+                if progress is not None:
+                    progress(ti)
+            out[:, i] = self.y
+        self.wall_time_s += time.perf_counter() - w0
+        self.cpu_time_s += time.process_time() - c0
+        if not np.all(np.isfinite(out)):
+            raise IntegrationError("DOP853 produced a non-finite state")
+        return out
