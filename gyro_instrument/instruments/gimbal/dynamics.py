@@ -279,3 +279,60 @@ class ClosedFormRun:
         if not np.all(np.isfinite(out)):
             raise IntegrationError("DOP853 produced a non-finite state")
         return out
+
+
+class DenseRun:
+    """A resumable run of :func:`closed_form_rhs` through scipy's DOP853 ``OdeSolver`` stepped with
+    no end (``t_bound`` = ∞), the samples read from each step's dense output as ``solve_ivp`` does.
+
+    For a slow motion (the locked and outer-fixed swings: a step covers many samples) this costs
+    nothing per sample, where :class:`ClosedFormRun` spends at least one step on each. The steps
+    never depend on the samples, and a step's dense output is kept across blocks, so
+    :meth:`advance` over consecutive blocks gives the one-shot run bit for bit. Parameters and
+    errors as :class:`ClosedFormRun`.
+    """
+
+    def __init__(self, rhs, y0, t0, rtol, atol) -> None:
+        from scipy.integrate import DOP853
+
+        def f(t, y):
+            self.nfev += 1
+            return np.array(rhs(t, *y.tolist()))
+        self.nfev = 0
+        self.y0 = np.asarray(y0, dtype=float)
+        self.solver = DOP853(f, float(t0), self.y0, np.inf, rtol=rtol, atol=atol)
+        self.stepped, self.dense = False, None
+        self.meta = {"rtol": rtol, "atol": atol, "nsteps": 0, "driver": "DOP853 (scipy OdeSolver, dense output)"}
+        self.wall_time_s = self.cpu_time_s = 0.0
+
+    def advance(self, t, progress=None):
+        """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
+        sample on, not before ``t0``), shape (n, len(t)); ``progress(t_i)`` after each step."""
+        import time
+
+        from gyro_instrument.core.errors import IntegrationError
+        t = np.asarray(t, dtype=float)
+        w0, c0 = time.perf_counter(), time.process_time()
+        out = np.empty((self.y0.size, t.size))
+        solver, i = self.solver, 0
+        while i < t.size:
+            if self.stepped:
+                j = int(np.searchsorted(t, solver.t, side="right"))     # the samples this step reaches
+                if j > i:
+                    if self.dense is None:
+                        self.dense = solver.dense_output()
+                    out[:, i:j] = self.dense(t[i:j])
+                    i = j
+                    continue
+            message = solver.step()
+            if solver.status == "failed":
+                raise IntegrationError(f"DOP853 failed at t = {solver.t:.6g} s: {message}")
+            self.stepped, self.dense = True, None
+            self.meta["nsteps"] += 1
+            if progress is not None:
+                progress(solver.t)
+        self.wall_time_s += time.perf_counter() - w0
+        self.cpu_time_s += time.process_time() - c0
+        if not np.all(np.isfinite(out)):
+            raise IntegrationError("DOP853 produced a non-finite state")
+        return out

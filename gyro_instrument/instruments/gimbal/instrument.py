@@ -69,7 +69,8 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link
-from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, closed_form_rhs, rigid_body_coefficients
+from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs,
+                                                         rigid_body_coefficients)
 from gyro_instrument.instruments.gimbal.theory import (axial_momentum, free_mass_matrix, locked_swing_constant,
                                                        outer_fixed_swing_constant, quet_energy, quet_swing_durations_s,
                                                        spin_invariant, swing_duration_s, swing_inertias_kg_m2)
@@ -531,6 +532,15 @@ class GimbalGyroscope(Instrument):
                               held.get(self.configuration, 0.0), self.swing_inertias())
         return rhs, [float(v) for v in self.initial_state(chain)]
 
+    def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
+        """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
+        DOP853 (:class:`~.dynamics.ClosedFormRun`) for the free rings, whose nutation takes tens of
+        steps per sample; scipy's DOP853 with dense output (:class:`~.dynamics.DenseRun`) for the
+        slow locked and outer-fixed swings, whose steps cover many samples (``gyro-instrument bench``,
+        realtime.csv: the work-precision rows of both drivers)."""
+        run = ClosedFormRun if self.configuration == "free" else DenseRun
+        return run(*self.closed_form(chain), t0, self.rtol, ATOL)
+
     def simulate(self, t) -> Simulation:
         """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
 
@@ -558,7 +568,7 @@ class GimbalGyroscope(Instrument):
             traj = integrate(chain.rhs, self.initial_state(chain), t, rtol=self.rtol, atol=ATOL)
             traj.meta.update(integrator=choice, reason=why)
             return self._simulation(traj.t, traj.y, traj, chain)
-        run = ClosedFormRun(*self.closed_form(chain), t[0], self.rtol, ATOL)
+        run = self.closed_form_run(chain, t[0])
         span = float(t[-1] - t[0]) or 1.0
         y = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
         return self._simulation(t, y, self._trajectory(run, t, y, why), chain)
@@ -581,7 +591,7 @@ class GimbalGyroscope(Instrument):
             if run is None:
                 if b.size == 0:
                     continue
-                run = ClosedFormRun(*self.closed_form(chain), b[0], self.rtol, ATOL)
+                run = self.closed_form_run(chain, b[0])
             y = run.advance(b)
             yield self._simulation(b, y, self._trajectory(run, b, y, why), chain)
 
