@@ -139,35 +139,37 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
     J_outer, J_inner = (float(v) for v in swing_inertias)
     a_inner = A + A1
 
-    # Constants of the unrolled torques (:func:`_torque` of the inner ring, diag(A1, C1, A1), and
-    # of the rotor, diag(A, A, C), summed and simplified; the outer ring enters through τ·e_z only).
-    k_lx, k_ly, k_lz = 2.0 * A1 - C1, 2.0 * A - C, C1 - 2.0 * A1
-    k_qx, k_qy, k_qz, k_q0 = cq * (A1 - C1 + C - A), cq * (A - C), cq * (C1 - A1), cq * (C2 - A2)
+    # Constants of the unrolled torques: :func:`_torque` of the inner ring, diag(A1, C1, A1), plus
+    # that of the rotor, diag(A, A, C), both in the inner ring's axes, collected by monomial (the
+    # outer ring enters through τ·e_z only). I a + w × I w:
+    kx1, kx2, ky1, ky2, kz0 = A1 - C1, C - A, C1 + A, A - C, C1 - 2.0 * A1 - C
+    # c_l [I(Ω × w) + w × IΩ + Ω × Iw]:
+    lx1, lx2, lx3 = cl * (2.0 * A1 - C1), cl * C, cl * (C - 2.0 * A - C1)
+    ly1, ly2 = cl * (C1 + 2.0 * A - C), cl * C1
+    lz1, lz2 = cl * (C1 - 2.0 * A1 - C), cl * (C1 + C)
+    # c_q Ω × IΩ:
+    qx, qy, qz, q0 = cq * (A1 - C1 + C - A), cq * (A - C), cq * (C1 - A1), cq * (C2 - A2)
     u2_s, u2_c = A + C1, A1
 
     def forces(psi, theta, v0, v1, v2):
         """(f_ψ, f_θ, f_φ, cos θ, u²): Kane's generalised forces less the inertia terms (the hot loop).
 
         In the inner ring's axes (x = NN', z = oQ): the ring turns at w = (θ̇, ψ̇ sin θ, ψ̇ cos θ),
-        the rotor at (θ̇, ψ̇ sin θ, ψ̇ cos θ + φ̇); Ω = (oa, p2, p3) there."""
+        the rotor at (θ̇, ψ̇ sin θ, ψ̇ cos θ + φ̇); Ω = (oa, p2, p3) there. τ = (tx, ty, tz) is the
+        ring's and the rotor's inertia torque summed; f_ψ = −τ·(0, sin θ, cos θ) − τ_outer·e_z,
+        f_θ = −τ·e_x, f_φ = −τ_rotor·e_z, plus the hinge torques."""
         cp, sp = math.cos(psi), math.sin(psi)
         c, s = math.cos(theta), math.sin(theta)
         oa, ob = Ox * cp + Oy * sp, Oy * cp - Ox * sp              # Ω, outer ring's axes
         p2, p3 = ob * c + Oz * s, Oz * c - ob * s                  # Ω, inner ring's axes
         wy, wz = v0 * s, v0 * c
         rz = wz + v2
-        # I a + w × I w of ring + rotor (a: the velocity-product accelerations, q̈ = 0)
-        tx = (A1 - C1) * wy * wz + A * v2 * wy + (C - A) * wy * rz
-        ty = (C1 + A) * v1 * wz - A * v2 * v1 + (A - C) * v1 * rz
-        tz = -(A1 + C) * v1 * wy + (C1 - A1) * v1 * wy
-        g2 = oa * wy - p2 * v1
-        # cl [I(Ω × w) + w × IΩ + Ω × Iw] and cq Ω × IΩ, ring + rotor
-        tx += cl * (k_lx * p2 * wz - C1 * p3 * wy + (C - 2.0 * A) * p3 * wy + C * p2 * rz) + k_qx * p2 * p3
-        ty += cl * (C1 * (p3 * v1 - oa * wz) + k_ly * p3 * v1 - C * oa * rz) + k_qy * p3 * oa
-        tz += cl * (k_lz * p2 * v1 + C1 * oa * wy + C * g2) + k_qz * oa * p2
-        f0 = -(k_q0 * oa * ob + s * ty + c * tz)
+        tx = wy * (kx1 * wz + A * v2 + kx2 * rz) + p2 * (lx1 * wz + lx2 * rz) + lx3 * p3 * wy + qx * p2 * p3
+        ty = v1 * (ky1 * wz - A * v2 + ky2 * rz + ly1 * p3) - oa * (ly2 * wz + lx2 * rz - qy * p3)
+        tz = v1 * (kz0 * wy + lz1 * p2) + oa * (lz2 * wy + qz * p2)
+        f0 = -(q0 * oa * ob + s * ty + c * tz)
         f1 = -tx
-        f2 = C * (v1 * wy - cl * g2)                               # rotor: −τ·e_z = −C (a_z + cl g2)
+        f2 = C * v1 * wy - lx2 * (oa * wy - p2 * v1)             # −C (a_z + c_l (Ω × w)_z), rotor
         for term in damp:
             f0 += term(J_outer, v0)
             f1 += term(J_inner, v1)
@@ -175,7 +177,24 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
             f2 += term(C, v2)
         return f0, f1, f2, c, u2_s * s * s + u2_c * c * c + A2
 
-    if configuration == "free":
+    if configuration == "free" and not damp and not spin:
+        cos, sin = math.cos, math.sin
+
+        def rhs(t, psi, theta, phi, v0, v1, v2):
+            # ``forces`` inlined (the free gimbal's nutation makes this the hot loop: ~1e5 calls per
+            # simulated second; the test holds both to the chain)
+            cp, sp, c, s = cos(psi), sin(psi), cos(theta), sin(theta)
+            oa, ob = Ox * cp + Oy * sp, Oy * cp - Ox * sp
+            p2, p3 = ob * c + Oz * s, Oz * c - ob * s
+            wy, wz = v0 * s, v0 * c
+            rz = wz + v2
+            tx = wy * (kx1 * wz + A * v2 + kx2 * rz) + p2 * (lx1 * wz + lx2 * rz) + lx3 * p3 * wy + qx * p2 * p3
+            ty = v1 * (ky1 * wz - A * v2 + ky2 * rz + ly1 * p3) - oa * (ly2 * wz + lx2 * rz - qy * p3)
+            tz = v1 * (kz0 * wy + lz1 * p2) + oa * (lz2 * wy + qz * p2)
+            f2 = C * v1 * wy - lx2 * (oa * wy - p2 * v1)
+            psi_dd = (-(q0 * oa * ob + s * ty + c * tz) - c * f2) / (u2_s * s * s + u2_c * c * c + A2)
+            return v0, v1, v2, psi_dd, -tx / a_inner, f2 / C - c * psi_dd
+    elif configuration == "free":
         def rhs(t, psi, theta, phi, v0, v1, v2):
             f0, f1, f2, c, u2 = forces(psi, theta, v0, v1, v2)
             psi_dd = (f0 - c * f2) / u2
@@ -240,15 +259,21 @@ class ClosedFormRun:
     def __init__(self, rhs, y0, t0, rtol, atol) -> None:
         from scipy.integrate import ode
 
+        count = self._count = [0]
+
         def f(t, y):
-            self.nfev += 1
+            count[0] += 1
             return rhs(t, *y.tolist())
-        self.nfev = 0
         self.solver = ode(f).set_integrator("dop853", rtol=rtol, atol=atol, nsteps=self.MAX_STEPS_PER_SAMPLE)
         self.solver.set_initial_value(np.asarray(y0, dtype=float), float(t0))
         self.t, self.y = float(t0), np.asarray(y0, dtype=float).copy()
         self.meta = {"rtol": rtol, "atol": atol, "driver": "DOP853 (Fortran, scipy.integrate.ode)"}
         self.wall_time_s = self.cpu_time_s = 0.0
+
+    @property
+    def nfev(self) -> int:
+        """Right-hand-side evaluations so far."""
+        return self._count[0]
 
     def advance(self, t, progress=None):
         """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
