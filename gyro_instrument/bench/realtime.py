@@ -3,7 +3,8 @@ work-precision study that chooses its integrators.
 
 * :func:`realtime_rows` — for every instrument of every shipped scene, as shipped and with each
   other choice of its ``configuration``, ``integrator`` and ``model`` parameters (one at a time; a
-  combination the scene checks refuse is listed with the reason), the simulated seconds per CPU
+  combination the scene checks refuse is listed with the reason), and the free gimbal's harder
+  variants (:data:`EXTRA_VARIANTS`), the simulated seconds per CPU
   second of ``simulate`` at the scene's sample rate and tolerance. Each run is sized to take about
   ``target_cpu_s`` of CPU (never beyond the scene's ``duration_s``), so slow and fast variants are
   measured in one ``bench`` run. The goal is :data:`GOAL`.
@@ -36,6 +37,22 @@ GOAL = 10.0
 
 #: Parameters whose choices are an instrument's configurations and integrator variants.
 VARIANT_PARAMS = ("configuration", "integrator", "model")
+
+#: Variants beyond the parameters' choices, (scene, instrument, label, overrides): the free gimbal
+#: with massless rings (faster nutation, μρ0/sin θ), twice the spin (twice the nutation rate), at
+#: 100 Hz and 1 kHz, with PP' along Earth's axis, and with bearing and pivot friction.
+EXTRA_VARIANTS = tuple(
+    ("gimbal_paris", "gimbal_locked", f"configuration=free, {label}", ["instruments.gimbal_locked.configuration=free"] + over)
+    for label, over in (
+        ("massless rings (no ring_inertia)", ["effects={earth_rotation: {}, centrifugal: {}}"]),
+        ("spin 2π·200 rad/s", ["instruments.gimbal_locked.spin_rate_rad_s=1256.6370614359173"]),
+        ("100 Hz", ["sample_rate_hz=100"]),
+        ("1 kHz", ["sample_rate_hz=1000"]),
+        ("PP' polar", ["instruments.gimbal_locked.outer_axis=polar"]),
+        ("pivot_damping and spin_decay", ["effects={earth_rotation: {}, centrifugal: {}, ring_inertia: {}, "
+                                          "pivot_damping: {time_constant_s: 600}, "
+                                          "spin_decay: {time_constant_s: 3600}}"]))) + (
+    ("gimbal_paris", "gimbal_locked", "as shipped, 1 kHz", ["sample_rate_hz=1000"]),)
 
 REALTIME_HEADER = ("scene", "instrument", "type", "variant", "integrator", "simulated_s", "sample_rate_hz",
                    "cpu_s", "wall_s", "real_time_factor", "nfev", "met", "note")
@@ -83,23 +100,24 @@ def measure_realtime(scene_name, name, overrides, target_cpu_s=3.0, probe_s=1.0)
     return inst, d, cpu, wall, nfev, integrator
 
 
-def realtime_rows(quick=False, progress=print, scenes=None) -> list:
-    """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``)."""
+def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None) -> list:
+    """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``),
+    each run sized to ~``target_cpu_s`` of CPU (default 3 s, 1 s with ``quick``)."""
     rows = []
-    target = 1.0 if quick else 3.0
-    for scene_name in scenes or shipped_scene_names():
-        for name, label, overrides in variants(scene_name):
-            progress(f"  real time: {scene_name}/{name} {label}")
-            try:
-                inst, d, cpu, wall, nfev, integ = measure_realtime(scene_name, name, overrides, target)
-            except SceneError as e:
-                rows.append((scene_name, name, "", label, "", None, None, None, None, None, None, None,
-                             f"refused by the scene checks: {e}"))
-                continue
-            rate = load_scene(scene_name, overrides).sample_rate_hz
-            rtf = d / cpu if cpu > 0 else math.inf
-            rows.append((scene_name, name, inst.type_name, label, integ, d, rate, cpu, wall, rtf, nfev,
-                         rtf >= GOAL, ""))
+    target = target_cpu_s or (1.0 if quick else 3.0)
+    cases = [(sc, *v) for sc in scenes or shipped_scene_names() for v in variants(sc)]
+    cases += [v for v in EXTRA_VARIANTS if scenes is None or v[0] in scenes]
+    for scene_name, name, label, overrides in cases:
+        progress(f"  real time: {scene_name}/{name} {label}")
+        try:
+            inst, d, cpu, wall, nfev, integ = measure_realtime(scene_name, name, overrides, target)
+        except SceneError as e:
+            rows.append((scene_name, name, "", label, "", None, None, None, None, None, None, None,
+                         f"refused by the scene checks: {e}"))
+            continue
+        rate = load_scene(scene_name, overrides).sample_rate_hz
+        rtf = d / cpu if cpu > 0 else math.inf
+        rows.append((scene_name, name, inst.type_name, label, integ, d, rate, cpu, wall, rtf, nfev, rtf >= GOAL, ""))
     return rows
 
 

@@ -104,6 +104,13 @@ def _hinge_terms(effects, kind, method):
     return [getattr(e, method) for e in effects if kind in e.MECHANICS]
 
 
+class _Floats(tuple):
+    """A tuple of floats read like a numpy array's ``tolist()`` (the free rhs's scalar entry)."""
+
+    def tolist(self):
+        return self
+
+
 def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias):
     """Right-hand side ``f(t, *y) -> tuple`` of the gimbal on floats, the chain's state layout.
 
@@ -128,7 +135,9 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
     Returns
     -------
     callable
-        For :func:`gyro_instrument.core.integrate.integrate` with ``method="DOP853-scalar"``.
+        For :func:`gyro_instrument.core.integrate.integrate` with ``method="DOP853-scalar"``; the
+        free configuration's also has ``on_array(t, y)`` taking the state as an ndarray (the
+        Fortran driver's call, one Python frame less per evaluation).
     """
     A, C, A1, C1, A2, C2 = (float(v) for v in inertias)
     Ox, Oy, Oz = (float(v) for v in omega_base)
@@ -180,9 +189,11 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
     if configuration == "free":
         cos, sin = math.cos, math.sin
 
-        def rhs(t, psi, theta, phi, v0, v1, v2):
-            # ``forces`` inlined (the free gimbal's nutation makes this the hot loop: ~2e4 calls per
-            # simulated second; the test holds both to the chain)
+        def on_array(t, y):
+            # ``forces`` inlined and the state read straight from the driver's array (the free
+            # gimbal's nutation makes this the hot loop: ~2e4 calls per simulated second; the test
+            # holds it to the chain)
+            psi, theta, phi, v0, v1, v2 = y.tolist()
             cp, sp, c, s = cos(psi), sin(psi), cos(theta), sin(theta)
             oa, ob = Ox * cp + Oy * sp, Oy * cp - Ox * sp
             p2, p3 = ob * c + Oz * s, Oz * c - ob * s
@@ -200,6 +211,10 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
                 f2 += term(C, v2)
             psi_dd = (f0 - c * f2) / (u2_s * s * s + u2_c * c * c + A2)
             return v0, v1, v2, psi_dd, f1 / a_inner, f2 / C - c * psi_dd
+
+        def rhs(t, *y):
+            return on_array(t, _Floats(y))
+        rhs.on_array = on_array
     elif configuration == "locked":
         theta_held = float(held_angle)
 
@@ -262,16 +277,24 @@ class ClosedFormRun:
 
         count = self._count = [0]
 
-        def f(t, y):
+        def counted(t, y):
             count[0] += 1
             return rhs(t, *y.tolist())
-        self.solver = ode(f).set_integrator("dop853", rtol=rtol, atol=atol, nsteps=self.MAX_STEPS_PER_SAMPLE)
-        self.solver.set_solout(self._accepted)
-        self.solver.set_initial_value(np.asarray(y0, dtype=float), float(t0))
+        # The free rings' RHS reads the driver's array itself, counted by the driver (Hairer's
+        # NFCN, IWORK(17)) when scipy's integrator exposes it; otherwise the counting wrapper.
+        on_array = getattr(rhs, "on_array", None)
+        for f in ((on_array, counted) if on_array is not None else (counted,)):
+            self.solver = ode(f).set_integrator("dop853", rtol=rtol, atol=atol, nsteps=self.MAX_STEPS_PER_SAMPLE)
+            self.solver.set_solout(self._accepted)
+            self.solver.set_initial_value(np.asarray(y0, dtype=float), float(t0))   # makes WORK, IWORK
+            integrator = getattr(self.solver, "_integrator", None)
+            self._iwork = getattr(integrator, "iwork", None) if f is on_array else None
+            if f is counted or (self._iwork is not None and self._iwork.size > 16):
+                break
         # The driver's first step of each call (its WORK(7), 0 = Hairer's initial guess): the last
         # step not cut short by a sample, so a call resumes the step sequence instead of ramping
         # up from a guess (~5 evaluations per sample saved). Left at 0 if scipy's layout differs.
-        self._work = getattr(getattr(self.solver, "_integrator", None), "work", None)
+        self._work = getattr(integrator, "work", None)
         self._t_step = self._target = None
         self._h = 0.0
         self.t, self.y = float(t0), np.asarray(y0, dtype=float).copy()
@@ -309,6 +332,8 @@ class ClosedFormRun:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")           # the failure is raised below instead
                     y = solver.integrate(ti)
+                if self._iwork is not None:
+                    self._count[0] += int(self._iwork[16])
                 if not solver.successful():
                     code = solver.get_return_code()
                     msg = _DOP853_FAILURES.get(code, f"return code {code}")
