@@ -575,10 +575,10 @@ def build_parser():
                    help="override a value of the --scene scene")
     p.add_argument("--topic", dest="topics", action="append", default=[], metavar="INSTRUMENT=/TOPIC",
                    help="a foreign bag's topic for an instrument (as for replay)")
-    p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, real-time factors, "
-                                     "latitude and Earth-rate error versus observation time with the systematic "
-                                     "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
-                                     "summary.md in --out")
+    p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
+                                     "real-time factors, latitude and Earth-rate error versus observation time "
+                                     "with the systematic floors, a site sweep, effect cost; CSV, PNG (with "
+                                     "matplotlib) and summary.md in --out")
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")

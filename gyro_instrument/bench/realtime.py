@@ -42,7 +42,8 @@ VARIANT_PARAMS = ("configuration", "integrator", "model")
 #: with massless rings (faster nutation, μρ0/sin θ), twice the spin (twice the nutation rate), at
 #: 100 Hz and 1 kHz, with PP' along Earth's axis, and with bearing and pivot friction.
 EXTRA_VARIANTS = tuple(
-    ("gimbal_paris", "gimbal_locked", f"configuration=free, {label}", ["instruments.gimbal_locked.configuration=free"] + over)
+    ("gimbal_paris", "gimbal_locked", f"configuration=free, {label}",
+     ["instruments.gimbal_locked.configuration=free"] + over)
     for label, over in (
         ("massless rings (no ring_inertia)", ["effects={earth_rotation: {}, centrifugal: {}}"]),
         ("spin 2π·200 rad/s", ["instruments.gimbal_locked.spin_rate_rad_s=1256.6370614359173"]),

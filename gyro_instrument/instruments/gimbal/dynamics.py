@@ -3,8 +3,8 @@
 The generic :class:`~gyro_instrument.instruments.chain.HingeChain` spends ~380 µs per evaluation
 on numpy calls on 3-vectors (three links, partial velocities, a 3×3 ``numpy.linalg.solve``); the
 free gimbal's fast nutation (sec. 4 §V eq. 14: C ρ0 / √(a u²) ≈ 840 rad/s for the shipped rotor)
-needs ~1300 steps per simulated second at rtol 1e-11, so the chain ran at 0.13× real time.
-:func:`closed_form_rhs` evaluates the same Kane equations unrolled for this chain — outer ring
+needs ~1700 DOP853 steps per simulated second at rtol 1e-11 (atol 1e-13), so the chain ran at
+0.13× real time. :func:`closed_form_rhs` (~3 µs per evaluation) evaluates the same Kane equations unrolled for this chain — outer ring
 about ``oz`` (inertia diag(A2, C2, A2)), inner ring about ``NN'`` (diag(A1, C1, A1)), rotor about
 ``oQ`` (diag(A, A, C)) — with scalar arithmetic only, and solves M q̈ = f with the closed-form
 inverse of M (sec. 4 §III eq. 12, first; :func:`~.theory.free_mass_matrix`)::
@@ -23,6 +23,12 @@ sum is not of that form, so an effect added later is never silently dropped — 
 falls back to the chain. Hinge torques are the effects' own ``damping_torque`` / ``spin_torque``
 called with floats. ``tests/test_gimbal.py`` holds this function to the chain's right-hand side at
 random states to round-off, for every configuration and effect list.
+
+Two resumable drivers run it (``gyro-instrument bench``: ``gimbal_work_precision.csv``):
+:class:`ClosedFormRun`, Hairer's Fortran DOP853 from sample to sample, for the free rings (tens of
+steps per sample: the stage arithmetic in Fortran halves the CPU of the Python-float driver of
+:mod:`gyro_instrument.core.dop853`), and :class:`DenseRun`, scipy's DOP853 with dense output, for
+the slow locked and outer-fixed swings (a step covers many samples).
 """
 
 import math
@@ -82,24 +88,6 @@ def rigid_body_coefficients(effects) -> tuple | None:
     return cl, cq
 
 
-def _torque(Ix, Iy, Iz, wx, wy, wz, ax, ay, az, ox, oy, oz, cl, cq):
-    """τ = I a + w × I w + c_l [I(Ω × w) + w × IΩ + Ω × Iw] + c_q Ω × IΩ for I = diag(Ix, Iy, Iz)."""
-    hx, hy, hz = Ix * wx, Iy * wy, Iz * wz                   # I w
-    tx = Ix * ax + wy * hz - wz * hy
-    ty = Iy * ay + wz * hx - wx * hz
-    tz = Iz * az + wx * hy - wy * hx
-    if cl:
-        gx, gy, gz = Ix * ox, Iy * oy, Iz * oz               # I Ω
-        tx += cl * (Ix * (oy * wz - oz * wy) + (wy * gz - wz * gy) + (oy * hz - oz * hy))
-        ty += cl * (Iy * (oz * wx - ox * wz) + (wz * gx - wx * gz) + (oz * hx - ox * hz))
-        tz += cl * (Iz * (ox * wy - oy * wx) + (wx * gy - wy * gx) + (ox * hy - oy * hx))
-    if cq:
-        tx += cq * (Iz - Iy) * oy * oz
-        ty += cq * (Ix - Iz) * oz * ox
-        tz += cq * (Iy - Ix) * ox * oy
-    return tx, ty, tz
-
-
 def _hinge_terms(effects, kind, method):
     return [getattr(e, method) for e in effects if kind in e.MECHANICS]
 
@@ -148,9 +136,9 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
     J_outer, J_inner = (float(v) for v in swing_inertias)
     a_inner = A + A1
 
-    # Constants of the unrolled torques: :func:`_torque` of the inner ring, diag(A1, C1, A1), plus
-    # that of the rotor, diag(A, A, C), both in the inner ring's axes, collected by monomial (the
-    # outer ring enters through τ·e_z only). I a + w × I w:
+    # Constants of the unrolled torques τ = I a + w × I w + c_l L(I, w, Ω) + c_q Ω × IΩ of the inner
+    # ring, diag(A1, C1, A1), plus that of the rotor, diag(A, A, C), both in the inner ring's axes,
+    # collected by monomial (the outer ring enters through τ·e_z only). I a + w × I w:
     kx1, kx2, ky1, ky2, kz0 = A1 - C1, C - A, C1 + A, A - C, C1 - 2.0 * A1 - C
     # c_l [I(Ω × w) + w × IΩ + Ω × Iw]:
     lx1, lx2, lx3 = cl * (2.0 * A1 - C1), cl * C, cl * (C - 2.0 * A - C1)
