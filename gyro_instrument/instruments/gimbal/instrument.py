@@ -190,8 +190,9 @@ class GimbalGyroscope(Instrument):
               doc="initial θ̇, degrees/s (must be 0 for locked)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
-              doc="closed_form: the gimbal's equations unrolled on floats, Hairer's DOP853 (Fortran) from "
-                  "sample to sample, streams; hinge_chain: the generic hinge chain through solve_ivp's DOP853 "
+              doc="closed_form: the gimbal's equations unrolled on floats (free rings: Hairer's Fortran "
+                  "DOP853 from sample to sample; locked, outer_fixed: scipy's DOP853 with dense output), "
+                  "streams block by block; hinge_chain: the generic hinge chain through solve_ivp's DOP853 "
                   "(the reference; integrates the whole run before the first block); auto: closed_form "
                   "unless an active effect's rigid-body terms are not the Earth rate's first- and "
                   "second-order terms"),
@@ -521,7 +522,7 @@ class GimbalGyroscope(Instrument):
             return "hinge_chain", ("auto: an active effect's rigid-body terms are not the Earth rate's first- and "
                                    "second-order terms, which only the generic chain sums")
         why = "chosen in the scene" if self.integrator == "closed_form" else \
-            "auto: the effects' terms fit the closed form (~100x faster than the chain at the same rtol)"
+            "auto: the effects' terms fit the closed form (18-75x less CPU than the chain at the same rtol)"
         return "closed_form", why
 
     def closed_form(self, chain) -> tuple:
@@ -576,9 +577,9 @@ class GimbalGyroscope(Instrument):
     def stream(self, blocks, **options) -> Iterator[Simulation]:
         """:meth:`simulate` block by block (see :meth:`Instrument.stream`).
 
-        With the closed form, one :class:`~.dynamics.ClosedFormRun` advances over the blocks: its
-        states depend on the sample times only, so the concatenated blocks equal :meth:`simulate`
-        over the concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
+        With the closed form, one run (:meth:`closed_form_run`) advances over the blocks, its steps
+        never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
+        concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
         ``hinge_chain`` (the reference) integrates the whole run at once and slices it.
         """
         choice, why = self.integrator_choice()
