@@ -488,9 +488,9 @@ def _add_bag_commands(sub):
 def _add_study_commands(sub):
     """bench, plan: studies over many runs."""
     p = sub.add_parser("bench", help="what accuracy costs: work-precision by fidelity tier, speed targets, "
-                                     "latitude and Earth-rate error versus observation time with the systematic "
-                                     "floors, a site sweep, effect cost; CSV, PNG (with matplotlib) and "
-                                     "summary.md in --out")
+                                     "real-time factors, latitude and Earth-rate error versus observation time "
+                                     "with the systematic floors, a site sweep, effect cost; CSV, PNG (with "
+                                     "matplotlib) and summary.md in --out")
     p.add_argument("--quick", action="store_true", help="short runs and few seeds (about a minute; the full "
                                                         "bench, with a sidereal day of the pendulum, takes minutes)")
     p.add_argument("--out", default="bench_out", metavar="DIR", help="output directory (default bench_out)")

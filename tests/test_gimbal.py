@@ -20,7 +20,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import validate_params
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
-from gyro_instrument.instruments.gimbal import GimbalGyroscope
+from gyro_instrument.instruments.gimbal import GimbalGyroscope, scaled_condition
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
 SITE = Site.from_degrees(48.85)
@@ -326,3 +326,129 @@ def test_parameter_errors(raw, field, text):
         make(**raw)
     assert err.value.field == f"instruments.g.{field}"
     assert text in str(err.value)
+
+
+# ------------------------------------------------------------------ the closed form (issue 13 item 5)
+@pytest.mark.parametrize("effects", [EXACT, ("earth_rotation", "ring_inertia", "pivot_damping", "spin_decay"),
+                                     ("centrifugal",), ()], ids=lambda e: "+".join(e) or "none")
+def test_closed_form_is_the_chain(effects):
+    """:func:`closed_form_rhs` (Kane's equations unrolled, M solved in closed form) equals the
+    generic chain's right-hand side at random states, every configuration, three PP' directions.
+
+    Bound: 1000 eps κ max(S, |q̈|), S = v (v + n) ΣI / min(A, C) the force scale (v the largest
+    rate: every acceleration is a sum of inertia × rate × rate over an inertia), κ the scaled
+    condition number of M (:func:`scaled_condition`): both sides round sums of ~30 such terms and
+    solve M q̈ = f, whose forward error is ~κ eps (κ ≲ 10 with ring inertia, up to ~1e5 for massless
+    rings near the lock, where q̈ grows as 1/sin²θ); observed 0.74 eps κ max(S, |q̈|) at worst
+    (5e-13 of the scale without κ). A wrong sign or a missing term is O(1e-3..1) of S.
+    """
+    rng = np.random.default_rng(13)
+    for conf in ("free", "locked", "outer_fixed"):
+        for axis in ("vertical", "north_south", "polar"):
+            g = make(effects, configuration=conf, outer_axis=axis, inner_ring_axial_inertia_kg_m2=3.0e-4,
+                     integrator="closed_form")
+            if "pivot_damping" in effects:
+                g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
+            chain = g.build_chain()
+            f, _ = g.closed_form(chain)
+            inertia = g.A + g.C + g.A1 + g.C1 + g.A2 + g.C2
+            for _ in range(30):
+                q = rng.uniform(-3.0, 3.0, chain.nf)
+                v = rng.uniform(-5.0, 5.0, chain.nf)
+                v[-1] *= 100.0                         # the rotor spins fast
+                y = np.concatenate([q, v])
+                ref = chain.rhs(0.0, y)
+                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.A, g.C),
+                            np.max(np.abs(ref[chain.nf:])))
+                kappa = scaled_condition(g.mass_matrix(chain, q))
+                bound = 1000 * np.finfo(float).eps * kappa * scale
+                assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, (conf, axis)
+
+
+def test_closed_form_free_gimbal_equals_the_chain_run():
+    """The free gimbal with large excursions (the invariants test's release): closed form
+    (Fortran DOP853, sample to sample) against the chain (solve_ivp DOP853), both at rtol 1e-11,
+    over 0.5 s. Each has a global error ~1e-11 rad on these O(1) rad excursions (rtol 1e-11 per
+    step; ~100 steps for the chain, ~430 for the closed form stopping at the 201 samples, whose
+    errors add); bound 1e-9 rad on the angles and 1e-9 relative on the rates (observed 1.8e-11 rad
+    and 9e-11). Swapping the integrators changes nothing that is not integration error."""
+    params = dict(configuration="free", outer_axis="vertical", spin_rate_rad_s=2 * math.pi * 5,
+                  initial_outer_angle_deg=20.0, initial_inner_angle_deg=-30.0,
+                  initial_outer_rate_deg_s=300.0, initial_inner_rate_deg_s=200.0)
+    t = np.linspace(0.0, 0.5, 201)
+    fast = make(**params).simulate(t)
+    ref = make(**params, integrator="hinge_chain").simulate(t)
+    assert fast.trajectory.meta["integrator"] == "closed_form"
+    assert ref.trajectory.meta["integrator"] == "hinge_chain"
+    for k in ("outer_angle", "inner_angle", "rotor_angle"):
+        assert np.max(np.abs(fast.columns[k] - ref.columns[k])) < 1e-9, k
+    for k in ("outer_rate", "inner_rate", "spin_rate"):
+        assert np.max(np.abs(fast.columns[k] - ref.columns[k])) < 1e-9 * np.max(np.abs(ref.columns[k])), k
+
+
+def test_unknown_rigid_body_term_falls_back_to_the_chain():
+    """An effect whose rigid-body torque is not c_l L + c_q Ω × IΩ (here cubic in Ω) is never
+    dropped by the closed form: ``auto`` runs the chain, an explicit ``closed_form`` is refused
+    by name."""
+    from gyro_instrument.core.effect import RIGID_BODY, Effect
+    from gyro_instrument.instruments.gimbal.dynamics import rigid_body_coefficients
+
+    class Cubic(Effect):
+        name = "cubic"
+        MECHANICS = frozenset({RIGID_BODY})
+
+        def rigid_body_torque(self, inertia, w_rel, omega_b):
+            return np.dot(omega_b, omega_b) * np.cross(omega_b, inertia @ omega_b)
+
+    assert rigid_body_coefficients([EFFECTS["earth_rotation"](), EFFECTS["centrifugal"]()]) == (1.0, 1.0)
+    assert rigid_body_coefficients([Cubic()]) is None
+    p = validate_params("instruments.g", GimbalGyroscope.PARAMS, {"configuration": "free"})
+    g = GimbalGyroscope("g", SITE, p, {"earth_rotation": EFFECTS["earth_rotation"](), "cubic": Cubic()})
+    assert g.integrator_choice()[0] == "hinge_chain"
+    p = validate_params("instruments.g", GimbalGyroscope.PARAMS, {"configuration": "free", "integrator": "closed_form"})
+    with pytest.raises(SceneError) as err:
+        GimbalGyroscope("g", SITE, p, {"cubic": Cubic()})
+    assert err.value.field == "g.integrator"
+
+
+@pytest.mark.parametrize("configuration", ["locked", "outer_fixed", "free"])
+def test_stream_equals_simulate_bit_for_bit(configuration):
+    """Streaming (issue 13 item 1): the closed form's runs never let the blocks steer the steps (the
+    free gimbal's reaches each sample by one Fortran DOP853 call from the previous sample; the
+    locked and outer-fixed swings' steps with no end and keeps a step's dense output across
+    blocks), so blocks of any size concatenate to the one-shot run exactly (bound 0, not
+    round-off), and each block comes with
+    the run's cumulative RHS count. (The counts themselves are not compared with the one-shot run:
+    scipy's DOP853 spent 36 fewer evaluations on the second sample of the first run in a process,
+    with identical states.)"""
+    from gyro_instrument.core.scene import sample_blocks, sample_times
+    from gyro_instrument.scenes import build_instruments, load_scene
+    over = ["instruments.gimbal_locked.configuration=free"] if configuration == "free" else []
+    duration = 1.5 if configuration == "free" else 30.0      # ~3 nutations per sample / ~2 swings
+    scene = load_scene("gimbal_paris", [f"duration_s={duration}", "sample_rate_hz=50"] + over)
+    g = build_instruments(scene)["gimbal_outer_fixed" if configuration == "outer_fixed" else "gimbal_locked"]
+    assert g.configuration == configuration
+    assert g.STREAMS and g.integrator_choice()[0] == "closed_form"
+    one = g.simulate(sample_times(scene))
+    for window_s in (0.07, 1.0):
+        parts = list(g.stream(sample_blocks(scene, window_s)))
+        assert len(parts) > 1
+        for k, v in one.columns.items():
+            assert np.array_equal(np.concatenate([p.columns[k] for p in parts]), v), (window_s, k)
+        counts = [p.trajectory.nfev for p in parts]
+        assert counts == sorted(counts) and counts[-1] > counts[0]       # the run's count so far
+
+
+def test_two_free_gimbals_streamed_together_equal_each_alone():
+    """A node streams a scene's instruments side by side: two free gimbals' runs interleaved block by
+    block (each its own Fortran DOP853 state) equal each one-shot run bit for bit (bound 0)."""
+    from gyro_instrument.core.scene import sample_blocks, sample_times
+    from gyro_instrument.scenes import build_instruments, load_scene
+    scene = load_scene("gimbal_paris", ["duration_s=1", "instruments.gimbal_locked.configuration=free",
+                                        "instruments.gimbal_outer_fixed.configuration=free"])
+    pair = list(build_instruments(scene).values())
+    alone = [g.simulate(sample_times(scene)) for g in pair]
+    together = list(zip(*(g.stream(sample_blocks(scene, 0.1)) for g in pair)))
+    for i, one in enumerate(alone):
+        for k, v in one.columns.items():
+            assert np.array_equal(np.concatenate([blocks[i].columns[k] for blocks in together]), v), (i, k)

@@ -27,6 +27,10 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
   Earth rate) the observation time ``gyro-instrument plan`` gives and the rms achieved by seeded
   runs at that time (:func:`.studies.planner_accuracy`);
 * ``site_sweep.csv`` — the same errors for the default scene moved over latitudes −85°…85°;
+* ``realtime.csv``, ``gimbal_work_precision.csv`` (:mod:`.realtime`) — simulated seconds per CPU
+  second of every instrument configuration of every shipped scene (each ``configuration``,
+  ``integrator`` and ``model`` choice), goal 10; the gimbal's error versus CPU for the hinge chain
+  and the closed form through three DOP853 drivers (free and locked rings);
 * ``effect_cost.csv`` (:mod:`.effect_cost`) — for each effect of a scene: CPU with and without
   it, and the error made by leaving it out (angles, noise-free latitude and Earth rate);
 * ``--scene SCENE`` (with ``--set``): only the observation-time study (floors with the scene's own

@@ -561,6 +561,12 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
         from gyro_instrument.bench.live import live_rows
         progress("run as it streams: time to first message (1 h, 48 h), peak memory (1 h vs 48 h)")
         tg += live_rows(quick, progress)
+    from gyro_instrument.bench.realtime import (gimbal_work_precision_rows, realtime_rows, realtime_target,
+                                                summary_lines, write_realtime)
+    progress("real-time factor of every instrument configuration; the gimbal's work-precision")
+    rt, gwp = realtime_rows(quick, progress), gimbal_work_precision_rows(quick, progress)
+    write_realtime(out_dir, rt, gwp)
+    tg.append(realtime_target(rt))
     hours = 3.0 if quick else 24.0
     progress(f"  plot: {hours:g} h of Foucault pendulum data from Parquet")
     secs, n = plot_day_seconds(out_dir, hours=hours)
@@ -598,6 +604,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     lines += ["", "## Work-precision (error at the end against a tight reference)", "",
               "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
     lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
+    lines += [""] + summary_lines(rt, gwp)
     lines += [""] + _obs_lines(ot, floors, "quet_paris", "quet_paris with a 1 h spin decay added")
     lines += _planner_lines(pl)
     lines += ["", "## Error versus site latitude (quet_paris moved, rms over seeds)", "",

@@ -58,21 +58,28 @@ Quet's §V takes the south part, ω = 0, k = n).
 """
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
 from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, RIGID_BODY, SPIN
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link
+from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs,
+                                                         rigid_body_coefficients)
 from gyro_instrument.instruments.gimbal.theory import (axial_momentum, free_mass_matrix, locked_swing_constant,
                                                        outer_fixed_swing_constant, quet_energy, quet_swing_durations_s,
                                                        spin_invariant, swing_duration_s, swing_inertias_kg_m2)
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
+INTEGRATORS = ("auto", "closed_form", "hinge_chain")
+
+#: Absolute tolerance of both integrators (rad, rad/s), as before the closed form existed.
+ATOL = 1e-13
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
 
 #: Default initial swing angle (0.1 rad, as for the directing-plane gyroscope), degrees.
@@ -182,11 +189,19 @@ class GimbalGyroscope(Instrument):
         Param("initial_inner_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6,
               doc="initial θ̇, degrees/s (must be 0 for locked)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+        Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
+              doc="closed_form: the gimbal's equations unrolled on floats (free rings: Hairer's Fortran "
+                  "DOP853 from sample to sample; locked, outer_fixed: scipy's DOP853 with dense output), "
+                  "streams block by block; hinge_chain: the generic hinge chain through solve_ivp's DOP853 "
+                  "(the reference; integrates the whole run before the first block); auto: closed_form "
+                  "unless an active effect's rigid-body terms are not the Earth rate's first- and "
+                  "second-order terms"),
     )
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA})
     MEASURED_CHANNELS = ("outer_angle", "inner_angle")
     JOINTS = ("outer_ring", "inner_ring", "rotor")
     SIMULATOR_NODE = "gyrocompass_sim"
+    STREAMS = True
     COLUMNS = (
         Column("outer_angle", "rad", "ψ − 90°: azimuth of the rotor axis' projection from ox, about PP' "
                                      "(outer ring joint; equilibrium line 0 when locked)"),
@@ -320,6 +335,11 @@ class GimbalGyroscope(Instrument):
         self.inner0 = math.radians(inner0)
         self.outer_rate0 = math.radians(self.initial_outer_rate_deg_s)
         self.inner_rate0 = math.radians(self.initial_inner_rate_deg_s)
+        self.rigid_body_coefficients = rigid_body_coefficients(self.effects.values())
+        if self.integrator == "closed_form" and self.rigid_body_coefficients is None:
+            raise SceneError(f"{name}.integrator", "closed_form",
+                             "needs rigid-body effect terms of first and second order in the Earth rate "
+                             "(earth_rotation, centrifugal); use auto or hinge_chain with these effects")
 
     def directing_model(self) -> DirectingModel | None:
         """What an estimator may know: K = (π/T0)² = gain · n ρ · s(γ) for the configured swing, or
@@ -491,6 +511,38 @@ class GimbalGyroscope(Instrument):
                        self.spin_rate_rad_s - self.outer_rate0 * math.cos(self.theta0)])
         return np.concatenate([q[chain.free], qd[chain.free]])
 
+    def integrator_choice(self) -> tuple:
+        """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why.
+
+        ``closed_form`` (:mod:`.dynamics`) whenever the active effects' rigid-body terms are
+        c_l L + c_q Ω × IΩ (:func:`~.dynamics.rigid_body_coefficients`: true of every registered
+        effect); ``hinge_chain`` otherwise, or when the scene asks for it."""
+        if self.integrator == "hinge_chain":
+            return "hinge_chain", "chosen in the scene"
+        if self.rigid_body_coefficients is None:
+            return "hinge_chain", ("auto: an active effect's rigid-body terms are not the Earth rate's first- and "
+                                   "second-order terms, which only the generic chain sums")
+        why = "chosen in the scene" if self.integrator == "closed_form" else \
+            "auto: the effects' terms fit the closed form (18-75x less CPU than the chain at the same rtol)"
+        return "closed_form", why
+
+    def closed_form(self, chain) -> tuple:
+        """(rhs, y0) of :func:`~.dynamics.closed_form_rhs` for this gimbal, in ``chain``'s state layout."""
+        held = {"locked": chain.links[1].locked_angle, "outer_fixed": chain.links[0].locked_angle}
+        rhs = closed_form_rhs(self.configuration, (self.A, self.C, self.A1, self.C1, self.A2, self.C2),
+                              chain.omega_base, self.rigid_body_coefficients, self.effects.values(),
+                              held.get(self.configuration, 0.0), self.swing_inertias())
+        return rhs, [float(v) for v in self.initial_state(chain)]
+
+    def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
+        """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
+        DOP853 (:class:`~.dynamics.ClosedFormRun`) for the free rings, whose nutation takes tens of
+        steps per sample; scipy's DOP853 with dense output (:class:`~.dynamics.DenseRun`) for the
+        slow locked and outer-fixed swings, whose steps cover many samples (``gyro-instrument bench``,
+        realtime.csv: the work-precision rows of both drivers)."""
+        run = ClosedFormRun if self.configuration == "free" else DenseRun
+        return run(*self.closed_form(chain), t0, self.rtol, ATOL)
+
     def simulate(self, t) -> Simulation:
         """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
 
@@ -503,25 +555,66 @@ class GimbalGyroscope(Instrument):
         -------
         Simulation
             ``columns`` as in ``COLUMNS``; ``extra`` holds ``psi``, ``theta`` (Quet's angles,
-            rad), ``rotor_joint_rate`` (φ̇, rad/s) and the ``chain``.
+            rad), ``rotor_joint_rate`` (φ̇, rad/s) and the ``chain``. ``trajectory.meta`` names
+            the ``integrator`` and why (:meth:`integrator_choice`).
+
+        Raises
+        ------
+        IntegrationError
+            When the integrator fails (a step size below round-off).
         """
         t = np.asarray(t, dtype=float)
         chain = self.build_chain()
-        y0 = self.initial_state(chain)
-        traj = integrate(chain.rhs, y0, t, rtol=self.rtol, atol=1e-13)
+        choice, why = self.integrator_choice()
+        if choice == "hinge_chain":
+            traj = integrate(chain.rhs, self.initial_state(chain), t, rtol=self.rtol, atol=ATOL)
+            traj.meta.update(integrator=choice, reason=why)
+            return self._simulation(traj.t, traj.y, traj, chain)
+        run = self.closed_form_run(chain, t[0])
+        span = float(t[-1] - t[0]) or 1.0
+        y = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
+        return self._simulation(t, y, self._trajectory(run, t, y, why), chain)
+
+    def stream(self, blocks, **options) -> Iterator[Simulation]:
+        """:meth:`simulate` block by block (see :meth:`Instrument.stream`).
+
+        With the closed form, one run (:meth:`closed_form_run`) advances over the blocks, its steps
+        never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
+        concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
+        ``hinge_chain`` (the reference) integrates the whole run at once and slices it.
+        """
+        choice, why = self.integrator_choice()
+        if choice == "hinge_chain":
+            yield from super().stream(blocks, **options)
+            return
+        chain, run = self.build_chain(), None
+        for b in blocks:
+            b = np.asarray(b, dtype=float)
+            if run is None:
+                if b.size == 0:
+                    continue
+                run = self.closed_form_run(chain, b[0])
+            y = run.advance(b)
+            yield self._simulation(b, y, self._trajectory(run, b, y, why), chain)
+
+    def _trajectory(self, run, t, y, why) -> Trajectory:
+        return Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
+                          dict(run.meta, integrator="closed_form", reason=why))
+
+    def _simulation(self, t, y, traj, chain) -> Simulation:
+        """Columns and Quet's angles from states ``y`` (chain layout, shape (2 nf, m))."""
         nf = chain.nf
-        m = traj.y.shape[1]
+        m = y.shape[1]
         q = np.array([[L.locked_angle] * m for L in chain.links], dtype=float)
         qd = np.zeros((3, m))
-        q[chain.free] = traj.y[:nf]
-        qd[chain.free] = traj.y[nf:]
+        q[chain.free] = y[:nf]
+        qd[chain.free] = y[nf:]
         psi, theta, phi = q
         psid, thetad, phid = qd
         rho = phid + psid * np.cos(theta)
         cols = {"outer_angle": psi - math.pi / 2, "inner_angle": theta - self.theta_ref, "rotor_angle": phi,
                 "outer_rate": psid, "inner_rate": thetad, "spin_rate": rho}
-        return Simulation(traj.t, cols, traj,
-                          extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
+        return Simulation(t, cols, traj, extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
 
     def mass_matrix(self, chain, qf) -> np.ndarray:
         """Mass matrix M(q) of the free coordinates (Kane: M_ab = Σ_k P_kaᵀ I_k P_kb), kg m².
