@@ -35,3 +35,109 @@ def test_default_stream_equals_simulate():
         parts = list(inst.stream(sample_blocks(scene, 4.0)))
         for k, v in one.columns.items():
             assert np.array_equal(np.concatenate([p.columns[k] for p in parts]), v), (inst.name, k)
+
+
+# --------------------------------------------------------------------------- streaming instruments
+# Every instrument but the gimbal streams (STREAMS): it integrates window by window with its exact
+# state carried, and ``simulate`` is its stream with one block. The adaptive drivers continue one
+# step sequence bounded by the run's end and evaluate each sample from the step that reaches it, as
+# one solve_ivp call does; so a streamed run equals the one-shot run bit for bit (np.array_equal, no
+# tolerance), whatever the blocks. Irregular block sizes (1 sample, a prime, a long one) exercise
+# samples on both sides of a step.
+
+from gyro_instrument.core.site import Site                                   # noqa: E402
+from gyro_instrument.instruments import REGISTRY                             # noqa: E402
+from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum   # noqa: E402
+from tests.conftest import make                                              # noqa: E402
+
+PARIS = Site.from_degrees(48.8462)
+
+
+def _cut(t, sizes=(1, 7, 113, 2, 997)):
+    """``t`` cut into consecutive blocks of the given sizes, cycled."""
+    out, i, k = [], 0, 0
+    while i < t.size:
+        out.append(t[i:i + sizes[k % len(sizes)]])
+        i += sizes[k % len(sizes)]
+        k += 1
+    return out
+
+
+def _assert_stream_equals_simulate(inst, t, **options):
+    one = inst.simulate(t, **options)
+    parts = list(inst.stream(_cut(t), t_end=float(t[-1]), **options))
+    assert [p.t.size for p in parts] == [b.size for b in _cut(t)]
+    for k, v in one.columns.items():
+        assert np.array_equal(np.concatenate([p.columns[k] for p in parts]), v), (inst.type_name, k)
+    # and without being told the end: the blocks are read once to find it (run_span)
+    again = list(inst.stream(iter(_cut(t)), **options))
+    for k, v in one.columns.items():
+        assert np.array_equal(np.concatenate([p.columns[k] for p in again]), v), (inst.type_name, k)
+    return one, parts
+
+
+def test_every_instrument_but_the_gimbal_streams():
+    streams = {name for name, cls in REGISTRY.items() if cls.STREAMS}
+    assert streams >= {"spherical_pendulum", "compound_pendulum", "plane_gyroscope", "free_gyroscope"}
+
+
+@pytest.mark.parametrize("integrator,effects", [
+    ("adaptive", ("earth_rotation", "finite_amplitude", "centrifugal")),     # Cartesian model, scipy DOP853
+    ("adaptive", ("earth_rotation",)),                                       # linear model, scipy DOP853
+    ("adaptive", ("earth_rotation", "finite_amplitude", "air_drag")),
+    ("parareal", ("earth_rotation", "finite_amplitude", "centrifugal")),
+])
+def test_spherical_pendulum_streams_bit_for_bit(integrator, effects, monkeypatch):
+    # parareal windows of 4 swings (16.4 s each on 67 m) so that 150 s holds three windows
+    monkeypatch.setattr(SphericalPendulum, "WINDOW_SWINGS", 4)
+    p = make(SphericalPendulum, PARIS, effects, length_m=67.0, initial_deflection_deg=2.0, integrator=integrator)
+    one, parts = _assert_stream_equals_simulate(p, np.arange(0.0, 150.0 + 1e-9, 0.05))
+    assert parts[-1].trajectory.nfev == one.trajectory.nfev        # the same work, counted over the run
+
+
+def test_parareal_windows_agree_with_one_window(monkeypatch):
+    # Windows of whole swings, each started from the fine end state of the last, against one window
+    # over the whole run (10 swings): both are the full model converged to shooting_tol = 1e-9 of the
+    # amplitude (2.34 m) at each swing start, so they may differ by that order, growing at most
+    # linearly over the swings: bound 10 swings x 1e-9 x 2.34 m = 2.3e-8 m.
+    t = np.arange(0.0, 164.0, 0.05)
+    p = make(SphericalPendulum, PARIS, ("earth_rotation", "finite_amplitude"), length_m=67.0,
+             initial_deflection_deg=2.0, integrator="parareal")
+    whole = p.simulate(t)
+    monkeypatch.setattr(SphericalPendulum, "WINDOW_SWINGS", 3)
+    windowed = p.simulate(t)
+    assert "4 windows" in windowed.trajectory.method
+    d = np.max(np.abs(windowed.extra["position_enu"] - whole.extra["position_enu"]))
+    assert d < 2.3e-8
+
+
+def test_compound_pendulum_streams_bit_for_bit():
+    cp = make(CompoundPendulum, PARIS, ("earth_rotation",), initial_deflection_deg=5.0)
+    _assert_stream_equals_simulate(cp, np.arange(0.0, 4.0 + 1e-9, 0.01))     # a swing of λ = 1 m: 2 s
+
+
+@pytest.mark.parametrize("scene,over", [
+    ("quet_paris", []),                                                      # reduced model, scalar DOP853
+    ("quet_paris", ["instruments.gyro_horizontal.model=chain", "instruments.gyro_meridian.model=chain"]),
+    ("quet_gyroscopes", []),
+    ("free_gyroscope", []),                                                  # closed form
+    ("free_gyroscope", ["instruments.free_gyro.model=numerical", "duration_s=2"]),
+    ("puiseux_spheroid", ["duration_s=2"]),
+])
+def test_scene_instruments_stream_bit_for_bit(scene, over):
+    sc = load_scene(scene, ["duration_s=30"] + over)
+    for inst in build_instruments(sc).values():
+        if inst.STREAMS and not inst.IS_PENDULUM:
+            _assert_stream_equals_simulate(inst, sample_times(sc))
+
+
+def test_stream_from_sample_blocks_knows_the_end():
+    # sample_blocks carries the run's last sample time: an adaptive instrument needs it before its
+    # first step (it bounds the last step as in one call over the whole run)
+    sc = load_scene("quet_paris", ["duration_s=30"])
+    blocks = sample_blocks(sc, 4.0)
+    assert blocks.end_s == sample_times(sc)[-1]
+    inst = build_instruments(sc)["gyro_meridian"]
+    one = inst.simulate(sample_times(sc))
+    got = np.concatenate([s.columns["angle"] for s in inst.stream(blocks)])
+    assert np.array_equal(got, one.columns["angle"])

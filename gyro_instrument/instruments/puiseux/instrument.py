@@ -7,16 +7,16 @@ small-angle or other approximation, so there is nothing to switch on or off.
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.integrate import integration
 from gyro_instrument.core.params import PairParam, Param
 from gyro_instrument.core.quaternion import rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
 from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface
 from gyro_instrument.instruments.puiseux.theory import (classify_coefficients, critical_spin_general_rad_s,
@@ -266,8 +266,11 @@ class PuiseuxBody(Instrument):
                 "normal_force_N": N, "energy_J": energy, "angular_momentum_vertical_kg_m2_s": lz,
                 "quaternion_norm": np.sqrt(qn2)}
 
-    def simulate(self, t, rtol=None, atol=1e-12) -> Simulation:
-        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]).
+    STREAMS = True
+
+    def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
+        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]): one block of
+        :meth:`stream`.
 
         Returns
         -------
@@ -277,19 +280,29 @@ class PuiseuxBody(Instrument):
             ``min_normal_force_N`` (negative: the body would leave the plane, outside the model)
             and ``state`` (7, m).
         """
-        t = np.asarray(t, dtype=float)
-        traj = integrate(self.rhs(), self.initial_state(), t, method="DOP853",
-                         rtol=self.rtol if rtol is None else rtol, atol=atol)
-        d = self.diagnostics(traj.y)
-        n, axis = d["n"], d["axis_enu"]
-        tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
-        columns = {"tilt": tilt,
-                   "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
-                   "spin_rate": traj.y[6].copy(),
-                   "com_height": d["com_height_m"],
-                   "vertical_body_x": n[0], "vertical_body_y": n[1]}
-        extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
-                                   "normal_force_N", "com_velocity_m_s")}
-        extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
-        extra["state"] = traj.y
-        return Simulation(t, columns, traj, extra=extra)
+        return super().simulate(t, rtol=rtol, atol=atol, **options)
+
+    def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
+        """Block by block (:meth:`Instrument.stream`): one DOP853 step sequence bounded by the run's
+        end, carried across blocks (the blocks concatenate to :meth:`simulate` bit for bit);
+        ``extra["min_normal_force_N"]`` is the block's minimum."""
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
+        run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
+                          rtol=self.rtol if rtol is None else rtol, atol=atol)
+        for t in blocks:
+            traj = run.advance(t)
+            d = self.diagnostics(traj.y)
+            n, axis = d["n"], d["axis_enu"]
+            tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
+            columns = {"tilt": tilt,
+                       "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
+                       "spin_rate": traj.y[6].copy(),
+                       "com_height": d["com_height_m"],
+                       "vertical_body_x": n[0], "vertical_body_y": n[1]}
+            extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
+                                       "normal_force_N", "com_velocity_m_s")}
+            extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
+            extra["state"] = traj.y
+            yield Simulation(t, columns, traj, extra=extra)
