@@ -141,3 +141,58 @@ def test_stream_from_sample_blocks_knows_the_end():
     one = inst.simulate(sample_times(sc))
     got = np.concatenate([s.columns["angle"] for s in inst.stream(blocks)])
     assert np.array_equal(got, one.columns["angle"])
+
+
+# --------------------------------------------------------------------------- simulate streams to disk
+
+from gyro_instrument.cli import check_disk, main, simulate_scene              # noqa: E402
+from gyro_instrument.estimators.data_io import ROWS_PER_WRITE, read_table     # noqa: E402
+
+
+@pytest.mark.parametrize("ext", ["csv", "parquet"])
+def test_simulate_writes_the_one_shot_columns_exactly(tmp_path, ext, capsys):
+    # 3 600 s at 20 Hz = 72 001 rows: more than one write buffer (65 536 rows), so the file is
+    # written in two pieces; read back, every value equals simulate_scene's to the last bit (the CSV
+    # holds the shortest representation that reads back to the same double).
+    out = tmp_path / f"run.{ext}"
+    assert main(["simulate", "quet_paris", "--duration-s", "3600", "--quiet", "--out", str(out)]) == 0
+    t, cols, _ = simulate_scene(load_scene("quet_paris", ["duration_s=3600"]))
+    assert t.size > ROWS_PER_WRITE
+    got = read_table(str(out))
+    assert list(got) == ["time_s"] + list(cols)
+    assert np.array_equal(got["time_s"], t)
+    for k, v in cols.items():
+        assert np.array_equal(got[k], v), k
+    if ext == "csv":
+        assert out.read_text().split("\n", 1)[0] == ",".join(["time_s"] + list(cols))   # header unquoted
+
+
+def test_output_rate_decimates_without_changing_the_integration(tmp_path):
+    # --output-rate-hz 2 of a 20 Hz scene keeps samples 0, 10, 20...: the same values as the full
+    # output at those rows (the integration and its grid are unchanged)
+    full, dec = tmp_path / "full.parquet", tmp_path / "dec.parquet"
+    assert main(["simulate", "quet_paris", "--duration-s", "100", "--quiet", "--out", str(full)]) == 0
+    assert main(["simulate", "quet_paris", "--duration-s", "100", "--quiet", "--output-rate-hz", "2",
+                 "--out", str(dec)]) == 0
+    a, b = read_table(str(full)), read_table(str(dec))
+    assert b["time_s"].size == 201
+    for k in a:
+        assert np.array_equal(a[k][::10], b[k]), k
+
+
+@pytest.mark.parametrize("rate", ["0", "-1", "nan", "inf", "40", "3"])
+def test_bad_output_rate_is_refused_by_name(tmp_path, rate, capsys):
+    # 20 Hz scene: 40 Hz is above the sample rate, 3 Hz does not divide it
+    out = tmp_path / "x.csv"
+    assert main(["simulate", "quet_paris", "--duration-s", "10", "--quiet", "--output-rate-hz", rate,
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--output-rate-hz" in err and "divides" in err, err
+    assert not out.exists()
+
+
+def test_output_that_does_not_fit_is_refused_before_the_run(tmp_path):
+    # 1e6 rows x 8 columns of CSV at <= 25 bytes a value: 2e8 bytes against 1e6 free
+    with pytest.raises(SceneError, match=r"--out.*2e\+08 bytes.*1000000 bytes free"):
+        check_disk(str(tmp_path / "x.csv"), 1_000_000, 8, free=1_000_000)
+    check_disk(str(tmp_path / "x.parquet"), 1_000_000, 8, free=10 ** 8)     # 6.56e7 bytes fit

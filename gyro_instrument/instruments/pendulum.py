@@ -431,11 +431,13 @@ class SphericalPendulum(Instrument):
             out[b + 1] = s * y[b] + c * y[b + 1]
         return out[:3], out[3:], nfev
 
-    #: Swings per parareal window of a streamed run: memory ~5 kB per swing at 48 steps (the grid
-    #: of positions and derivatives), so a window of 512 swings (2.3 h of the 67 m pendulum) holds
-    #: ~2.5 MB whatever the duration; long enough that the Python overhead of a window (~600
-    #: batched right-hand-side calls per Newton pass) stays below the numpy work it drives.
-    WINDOW_SWINGS = 512
+    #: Swings per parareal window of a streamed run: memory ~10 kB per swing at 48 steps (the grid
+    #: of positions and derivatives, the Newton pass's stages), so a window of 2048 swings (9.3 h of
+    #: the 67 m pendulum) holds ~20 MB whatever the duration; long enough that the Python overhead
+    #: of a window (~600 batched right-hand-side calls per Newton pass) stays small against the
+    #: numpy work it drives (a sidereal day at 20 Hz, CPU under load: one window 2.2 s, windows of
+    #: 2048 swings 2.8 s, of 512 swings 3.7 s).
+    WINDOW_SWINGS = 2048
 
     def _parareal_window(self, y_start, n_seg, period, phi, scale, progress):
         """Newton-parareal over ``n_seg`` whole swings from ``y_start`` (:func:`~gyro_instrument.core.
@@ -466,6 +468,7 @@ class SphericalPendulum(Instrument):
         from the fine end state of window w's last swing, so the state carried is the integrated one
         and the windows do not depend on how the samples are cut into blocks."""
         c0, w0t = time.process_time(), time.perf_counter()
+        cpu = wall = 0.0                     # this generator's own time (not the consumer's between blocks)
         period, phi, evals, _ = self._first_swing(r0, v0)
         n_total = max(1, int(math.ceil((t_end - t0) / period)))
         per = self.WINDOW_SWINGS
@@ -474,6 +477,8 @@ class SphericalPendulum(Instrument):
         window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
         passes = 0
         for t in blocks:
+            if c0 is None:
+                c0, w0t = time.process_time(), time.perf_counter()
             tau = t - t0
             seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
             win = seg // per
@@ -489,10 +494,12 @@ class SphericalPendulum(Instrument):
                 if sel.any():
                     y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3)
             pos, vel = y[:3], y[3:]
-            traj = Trajectory(t, y, evals, time.perf_counter() - w0t, time.process_time() - c0,
+            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
+            c0 = None
+            traj = Trajectory(t, y, evals, wall, cpu,
                               f"parareal RK8 ({self.segment_steps} steps/period, {passes} passes in "
                               f"{window + 1} window{'s' if window else ''})")
-            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
                                                    "period_s": period, "segments": n_total})
 
