@@ -238,6 +238,9 @@ def describe(scene):
                                     "parameters": dict(inst.params), "effects": effects,
                                     "predictions": inst.predictions(),
                                     "columns": [f"{name}.{c.name} [{c.unit}]" for c in inst.COLUMNS]}
+        chosen = inst.chosen_integrator(scene.duration_s)
+        if chosen is not None:           # an instrument with several integrators: which one runs, and why
+            out["instruments"][name]["integrator"] = {"chosen": chosen[0], "reason": chosen[1]}
     return to_jsonable(out)
 
 
@@ -253,6 +256,8 @@ def print_description(d, stream=None):
         w(f"  note: {note}\n")
     for name, inst in d["instruments"].items():
         w(f"\n  {name} ({inst['type']}): {inst['summary']}\n")
+        if "integrator" in inst:
+            w(f"    integrator: {inst['integrator']['chosen']} ({inst['integrator']['reason']})\n")
         w(f"    {'effect':<18}{'active':<8}{'relative size':>14}  estimate\n")
         for ename, e in inst["effects"].items():
             size = e["relative_size"]

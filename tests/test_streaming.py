@@ -196,3 +196,17 @@ def test_output_that_does_not_fit_is_refused_before_the_run(tmp_path):
     with pytest.raises(SceneError, match=r"--out.*2e\+08 bytes.*1000000 bytes free"):
         check_disk(str(tmp_path / "x.csv"), 1_000_000, 8, free=1_000_000)
     check_disk(str(tmp_path / "x.parquet"), 1_000_000, 8, free=10 ** 8)     # 6.56e7 bytes fit
+
+
+def test_auto_integrator_picks_the_fast_path_and_says_why():
+    # foucault_pantheon (full conservative model, 2 deg from rest) runs parareal by default; an
+    # explicit choice wins; a model the fast path is not validated for keeps DOP853, with the reason
+    from gyro_instrument.cli import describe
+    d = describe(load_scene("foucault_pantheon"))["instruments"]["pendulum"]["integrator"]
+    assert d["chosen"] == "parareal" and d["reason"].startswith("auto:")
+    for over, reason in [("instruments.pendulum.integrator=adaptive", "chosen in the scene"),
+                         ("instruments.pendulum.initial_deflection_deg=30", "beyond the 10 deg"),
+                         ("effects.finite_amplitude=null", "linear")]:
+        d = describe(load_scene("foucault_pantheon", [over]))["instruments"]["pendulum"]["integrator"]
+        assert d["chosen"] == "adaptive" and reason in d["reason"], (over, d)
+    assert "integrator" not in describe(load_scene("quet_paris"))["instruments"]["gyro_horizontal"]
