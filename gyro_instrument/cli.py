@@ -365,6 +365,9 @@ def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None):
     times = sample_blocks(scene, window_s)
     span = times.end_s or 1.0
     insts = build_instruments(scene)
+    if not all(i.STREAMS for i in insts.values()):
+        from gyro_instrument.core.memory import check_memory
+        check_memory(scene)          # an instrument that does not stream holds its whole run
     if progress:
         progress(f"simulating {', '.join(f'{n} ({i.type_name})' for n, i in insts.items())} for "
                  f"{scene.duration_s:g} s")
