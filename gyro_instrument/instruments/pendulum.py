@@ -157,7 +157,8 @@ class SphericalPendulum(Instrument):
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance (adaptive)"),
         Param("integrator", kind="str", default="auto", choices=("auto", "adaptive", "parareal"),
               doc="auto: parareal whenever the model allows it (finite_amplitude listed, no effect outside "
-                  "earth_rotation, centrifugal, finite_amplitude, a release from rest at up to 10 degrees), "
+                  "earth_rotation, centrifugal, finite_amplitude, a release from rest at up to 10 degrees whose amplitude is "
+                  "above the round-off floor), "
                   "else adaptive ('describe' says which and why); adaptive: DOP853 swing after swing; parareal: "
                   "every swing period of a window at once (fixed-step RK8 batched over periods, Newton-parareal "
                   "from Quet's comparison pendulum), the fast path for long runs of the full model"),
@@ -212,6 +213,14 @@ class SphericalPendulum(Instrument):
             return "adaptive", f"auto: parareal is for a conservative swing; {', '.join(other)} listed"
         if not (0.0 < self.initial_deflection_deg < 90.0) or self.radial_speed_m_s or self.transverse_speed_m_s:
             return "adaptive", "auto: parareal needs a release from rest between 0 and 90 degrees"
+        # The bob's height (~l) carries round-off eps·l: relative to the swing amplitude l sin θ0 that is
+        # eps / sin θ0, and Newton cannot move the swing starts by less (at θ0 = 1e-9 rad it stalled at
+        # 1e-7 > shooting_tol 1e-9). Auto asks for a floor 100 times below the tolerance.
+        floor = np.finfo(float).eps / math.sin(self.theta0)
+        if 100.0 * floor > self.shooting_tol:
+            return "adaptive", (f"auto: at a release of {self.initial_deflection_deg:.3g} deg the round-off of the "
+                                f"bob's height is {floor:.1e} of the amplitude, too close to parareal's shooting "
+                                f"tolerance {self.shooting_tol:g}")
         if self.initial_deflection_deg > self.PARAREAL_AUTO_MAX_DEG:
             return "adaptive", (f"auto: a release at {self.initial_deflection_deg:g} deg is beyond the "
                                 f"{self.PARAREAL_AUTO_MAX_DEG:g} deg where parareal's {self.segment_steps}-step grid "
