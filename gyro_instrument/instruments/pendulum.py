@@ -35,7 +35,7 @@ from scipy.special import ellipk
 from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN
 from gyro_instrument.core.integrate import Trajectory, integration
-from gyro_instrument.core.parareal import dense_output
+from gyro_instrument.core.parareal import dense_output, hermite_rows
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import (Column, Instrument, Simulation, check_period_count, run_span,
                                               with_notes)
@@ -448,7 +448,7 @@ class SphericalPendulum(Instrument):
     #: 2048 swings 2.8 s, of 512 swings 3.7 s).
     WINDOW_SWINGS = 2048
 
-    def _parareal_window(self, y_start, n_seg, period, phi, scale, progress):
+    def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
         """Newton-parareal over ``n_seg`` whole swings from ``y_start`` (:func:`~gyro_instrument.core.
         parareal.parareal`); first guess of each swing's start: ``y_start`` turned about the vertical by
         ``phi`` per swing (Quet's comparison pendulum, sec. 2). Returns (grid, info, end state)."""
@@ -461,7 +461,8 @@ class SphericalPendulum(Instrument):
             pred[:, b + 2] = y_start[b + 2]
         w0sq = self.g / self.l
         _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.segment_steps, scale,
-                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress)
+                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
+                                 span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
     def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
@@ -496,12 +497,14 @@ class SphericalPendulum(Instrument):
                 while window < w:            # every window in turn: the state is carried through all
                     window += 1
                     n_seg = min(per, n_total - window * per)
-                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress)
+                    span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
+                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
+                    rows = hermite_rows(grid, 3)          # once per window, for every block in it
                     evals += info["rhs_columns"]
                     passes += info["iterations"]
                 sel = win == w
                 if sel.any():
-                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3)
+                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3, rows=rows)
             pos, vel = y[:3], y[3:]
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
