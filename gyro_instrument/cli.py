@@ -644,7 +644,9 @@ def build_parser():
     add_scene_arguments(p)
     p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
                    help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
-                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV; "
+                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV (full precision); "
+                        "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
+                        "leaves no partial file); refused before the run when it would not fit on the disk; "
                         "an existing file is refused unless --overwrite; never the scene file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--output-rate-hz", type=float, default=None, metavar="HZ",
