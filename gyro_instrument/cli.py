@@ -22,6 +22,7 @@ import argparse
 import json
 import math
 import os
+import shutil
 import signal
 import sys
 import threading
@@ -164,6 +165,9 @@ def describe(scene):
                                     "parameters": dict(inst.params), "effects": effects,
                                     "predictions": inst.predictions(),
                                     "columns": [f"{name}.{c.name} [{c.unit}]" for c in inst.COLUMNS]}
+        chosen = inst.chosen_integrator(scene.duration_s)
+        if chosen is not None:           # an instrument with several integrators: which one runs, and why
+            out["instruments"][name]["integrator"] = {"chosen": chosen[0], "reason": chosen[1]}
     return to_jsonable(out)
 
 
@@ -179,6 +183,8 @@ def print_description(d, stream=None):
         w(f"  note: {note}\n")
     for name, inst in d["instruments"].items():
         w(f"\n  {name} ({inst['type']}): {inst['summary']}\n")
+        if "integrator" in inst:
+            w(f"    integrator: {inst['integrator']['chosen']} ({inst['integrator']['reason']})\n")
         w(f"    {'effect':<18}{'active':<8}{'relative size':>14}  estimate\n")
         for ename, e in inst["effects"].items():
             size = e["relative_size"]
@@ -215,6 +221,117 @@ def simulate_scene(scene, progress=None):
         for c in inst.COLUMNS:
             columns[f"{name}.{c.name}"] = sim.columns[c.name]
     return t, columns, sims
+
+
+#: Samples per block of a streamed ``simulate`` (each instrument's :meth:`stream`): large enough
+#: that the per-block overhead (a few numpy calls per column) is negligible, small enough that a
+#: block of every column is a few MB.
+SIMULATE_BLOCK_SAMPLES = 65536
+
+
+def output_step(scene, output_rate_hz) -> int:
+    """Keep every k-th sample for ``--output-rate-hz`` (k = sample_rate_hz / output_rate_hz, 1 when
+    None): the integration and its sample grid are unchanged.
+
+    Raises
+    ------
+    SceneError
+        On ``--output-rate-hz`` when the rate is not positive and finite, exceeds the sample rate or
+        does not divide it.
+    """
+    if output_rate_hz is None:
+        return 1
+    rate = scene.sample_rate_hz
+    valid = f"a rate in (0, {rate:g}] Hz that divides the scene's sample_rate_hz = {rate:g} Hz " \
+            f"(sample_rate_hz / output_rate_hz a whole number)"
+    if not (math.isfinite(output_rate_hz) and 0.0 < output_rate_hz <= rate * (1 + 1e-12)):
+        raise SceneError("--output-rate-hz", output_rate_hz, valid)
+    k = round(rate / output_rate_hz)
+    if abs(rate / output_rate_hz - k) > 1e-9 * k:
+        raise SceneError("--output-rate-hz", output_rate_hz, valid)
+    return k
+
+
+def check_disk(path, rows, columns, free=None):
+    """Refuse an output that would not fit on its disk, before the run starts.
+
+    Raises
+    ------
+    SceneError
+        On ``--out``: "needs ~N bytes (R rows x C columns, B bytes a value); F bytes free".
+    """
+    from gyro_instrument.estimators.data_io import BYTES_PER_VALUE, output_bytes, table_kind
+    need = output_bytes(path, rows, columns)
+    if free is None:
+        free = shutil.disk_usage(os.path.dirname(os.path.abspath(path)) or ".").free
+    if need > free:
+        raise SceneError("--out", path, f"needs ~{need:.4g} bytes ({rows} rows x {columns} columns at "
+                                        f"~{BYTES_PER_VALUE[table_kind(path)]:g} bytes a value); {free} bytes "
+                                        f"free on its disk: shorten duration_s, lower --output-rate-hz or "
+                                        f"write elsewhere")
+
+
+def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None):
+    """Simulate every instrument of a scene block by block on the common sample grid.
+
+    Each instrument streams (:meth:`~gyro_instrument.instruments.base.Instrument.stream` over its
+    own :func:`~gyro_instrument.core.scene.sample_blocks`); the blocks concatenate to
+    :func:`simulate_scene` bit for bit for an instrument that ``STREAMS`` (the others run once
+    and are sliced).
+
+    Yields
+    ------
+    (t, columns, sims)
+        One block: sample times (s), ``<instrument>.<column>`` -> array, instrument name ->
+        Simulation of the block (its trajectory's nfev and wall time count the run so far).
+    """
+    from gyro_instrument.core.integrate import report
+    from gyro_instrument.core.scene import sample_blocks
+    from gyro_instrument.scenes import build_instruments
+    window_s = block_samples / scene.sample_rate_hz
+    times = sample_blocks(scene, window_s)
+    span = times.end_s or 1.0
+    insts = build_instruments(scene)
+    if not all(i.STREAMS for i in insts.values()):
+        from gyro_instrument.core.memory import check_memory
+        check_memory(scene)          # an instrument that does not stream holds its whole run
+    if progress:
+        progress(f"simulating {', '.join(f'{n} ({i.type_name})' for n, i in insts.items())} for "
+                 f"{scene.duration_s:g} s")
+    streams = {name: inst.stream(sample_blocks(scene, window_s)) for name, inst in insts.items()}
+    for t in times:
+        columns, sims = {}, {}
+        for name, inst in insts.items():
+            sim = next(streams[name])
+            sims[name] = sim
+            for c in inst.COLUMNS:
+                columns[f"{name}.{c.name}"] = sim.columns[c.name]
+        report(t[-1] / span)
+        yield t, columns, sims
+
+
+def simulate_to_file(scene, out, output_rate_hz=None, progress=None):
+    """``gyro-instrument simulate``: stream the scene into the table ``out`` (CSV or Parquet) block
+    by block, every k-th sample (:func:`output_step`), after checking that it fits on the disk
+    (:func:`check_disk`). Returns (rows written, columns, nfev, integration wall s)."""
+    from gyro_instrument.core.memory import sample_count
+    from gyro_instrument.estimators.data_io import TableWriter
+    from gyro_instrument.scenes import build_instruments
+    k = output_step(scene, output_rate_hz)
+    names = [f"{n}.{c.name}" for n, i in build_instruments(scene).items() for c in i.COLUMNS]
+    n = sample_count(scene)
+    check_disk(out, (n - 1) // k + 1, len(names) + 1)
+    first = 0                                  # index of the block's first sample in the run
+    nfev = wall = 0.0
+    with TableWriter(out, names) as writer:
+        with terminal_progress("  simulating", enabled=progress is not None):
+            for t, columns, sims in stream_scene(scene, progress=progress):
+                keep = slice((-first) % k, None, k)
+                writer.write(t[keep], {c: v[keep] for c, v in columns.items()})
+                first += t.size
+                nfev = sum(s.trajectory.nfev for s in sims.values())
+                wall = sum(s.trajectory.wall_time_s for s in sims.values())
+    return writer.rows, len(names) + 1, int(nfev), wall
 
 
 @contextmanager
@@ -438,9 +555,14 @@ def _add_scene_commands(sub):
     add_scene_arguments(p)
     p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
                    help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
-                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV; "
+                        "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV (full precision); "
+                        "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
+                        "leaves no partial file); refused before the run when it would not fit on the disk; "
                         "an existing file is refused unless --overwrite; never the scene file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--output-rate-hz", type=float, default=None, metavar="HZ",
+                   help="write every k-th sample, k = sample_rate_hz / HZ (a whole number; HZ <= sample_rate_hz): "
+                        "the integration and its sample grid are unchanged")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p = sub.add_parser("estimate", help="simulate the scene's instruments through their sensors and estimate "
                                         "latitude and Earth rate (Quet items 8-9, Foucault) with standard errors; "
@@ -630,17 +752,13 @@ def describe_command(args) -> int:
 
 def simulate_command(args) -> int:
     """``gyro-instrument simulate``: every instrument channel to CSV or Parquet (``--out``)."""
-    from gyro_instrument.estimators.data_io import write_table
     check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
     scene = scene_from_args(args)
     print_scene_notes(scene)
     progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
-    t, columns, sims = simulate_scene(scene, progress)
-    write_table(args.out, t, columns)
+    rows, ncol, nfev, wall = simulate_to_file(scene, args.out, args.output_rate_hz, progress)
     if progress:
-        nfev = sum(s.trajectory.nfev for s in sims.values())
-        wall = sum(s.trajectory.wall_time_s for s in sims.values())
-        progress(f"wrote {args.out}: {t.size} rows x {len(columns) + 1} columns "
+        progress(f"wrote {args.out}: {rows} rows x {ncol} columns "
                  f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
     return 0
 

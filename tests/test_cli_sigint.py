@@ -18,6 +18,9 @@ import pytest
 
 EXE = shutil.which("gyro-instrument", path=os.path.dirname(sys.executable)) or "gyro-instrument"
 ONE_LINE = "gyro-instrument: interrupted\n"
+#: The adaptive DOP853 keeps these runs minutes long (the default parareal fast path would finish a
+#: 100 000 s run in seconds, before the moment to interrupt).
+SLOW = ("--set", "instruments.pendulum.integrator=adaptive")
 
 
 def mapped(pid, needle):
@@ -68,7 +71,7 @@ def assert_interrupted(rc, err):
 ])
 def test_simulate_interrupted_one_line_130_no_output(tmp_path, moment, ready, after_s):
     out = tmp_path / "run.csv"
-    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000", "--quiet",
+    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000", *SLOW, "--quiet",
                                  "--out", str(out)], ready, after_s)
     assert_interrupted(rc, err)
     assert os.listdir(tmp_path) == []          # neither run.csv nor run.csv.partial
@@ -78,7 +81,7 @@ def test_simulate_interrupted_while_writing_leaves_no_partial(tmp_path):
     """Interrupt once the CSV is being written: the .partial goes, the output never appears."""
     out = tmp_path / "run.csv"
     part = tmp_path / "run.csv.partial"
-    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "20000", "--quiet",
+    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "20000", *SLOW, "--quiet",
                                  "--out", str(out)], lambda pid: part.exists() and part.stat().st_size > 1000,
                                 timeout=300)
     assert_interrupted(rc, err)
@@ -87,7 +90,7 @@ def test_simulate_interrupted_while_writing_leaves_no_partial(tmp_path):
 
 def test_simulate_progress_lines_then_one_line(tmp_path):
     """Without --quiet the progress lines come first; the interrupt is still one line, the last."""
-    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000",
+    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000", *SLOW,
                                  "--out", str(tmp_path / "x.csv")], imported, 1.0)
     assert rc == 130 and "Traceback" not in err and err.endswith(ONE_LINE), err
     assert all(line.startswith("simulating ") for line in err.splitlines()[:-1]), err
@@ -95,7 +98,7 @@ def test_simulate_progress_lines_then_one_line(tmp_path):
 
 @pytest.mark.parametrize("ready, after_s", [(importing, 0.0), (imported, 1.5)], ids=["imports", "mid-estimate"])
 def test_estimate_interrupted(ready, after_s):
-    rc, out, err = interrupt_when([EXE, "estimate", "foucault_pantheon", "--duration-s", "100000"], ready, after_s)
+    rc, out, err = interrupt_when([EXE, "estimate", "foucault_pantheon", "--duration-s", "100000", *SLOW], ready, after_s)
     assert_interrupted(rc, err)
     assert out == ""
 
@@ -108,7 +111,7 @@ def test_python_dash_m_interrupted_during_imports():
 
 def test_terminal_ctrl_c_to_the_process_group_mid_simulation(tmp_path):
     """A terminal sends SIGINT to every process of the group: still one line."""
-    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000", "--quiet",
+    rc, _, err = interrupt_when([EXE, "simulate", "foucault_pantheon", "--duration-s", "100000", *SLOW, "--quiet",
                                  "--out", str(tmp_path / "x.csv")], imported, 1.0, group=True)
     assert_interrupted(rc, err)
     assert os.listdir(tmp_path) == []

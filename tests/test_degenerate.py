@@ -87,14 +87,22 @@ def test_the_threshold_is_where_the_condition_number_says():
 
 # ------------------------------------------------------------------ impossible sizes
 def test_a_run_too_large_for_memory_is_refused_before_integrating(capsys):
-    """10 kHz for a day: ~0.9 TB; refused in about a second, exit 2, with the sizes."""
-    for cmd in (["simulate", "quet_paris", "--quiet", "--out", "/tmp/never.csv"], ["estimate", "quet_paris"]):
-        rc = main(cmd + ["--set", "sample_rate_hz=10000", "--duration-s", "86400"])
-        err = capsys.readouterr().err.strip().splitlines()
-        assert rc == 2 and len(err) == 1, err
-        assert err[0].startswith("gyro-instrument: error: duration_s = 86400.0 is invalid: needs ~")
-        assert "864000001 samples x 13 channels" in err[0] and "GB available: lower duration_s or sample_rate_hz" \
-            in err[0]
+    """10 kHz for a day: ~0.9 TB in memory for estimate, which holds the run; refused in about a second,
+    exit 2, with the sizes. simulate streams (memory of one block, issue 13): its CSV would need
+    864000001 rows x 13 columns x <= 25 bytes = 2.8e11 bytes, refused by the disk check with the
+    needed and free bytes, before integrating."""
+    rc = main(["estimate", "quet_paris", "--set", "sample_rate_hz=10000", "--duration-s", "86400"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert err[0].startswith("gyro-instrument: error: duration_s = 86400.0 is invalid: needs ~")
+    assert "864000001 samples x 13 channels" in err[0] and "GB available: lower duration_s or sample_rate_hz" \
+        in err[0]
+    rc = main(["simulate", "quet_paris", "--quiet", "--out", "/tmp/never.csv", "--set", "sample_rate_hz=10000",
+               "--duration-s", "86400"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1, err
+    assert err[0].startswith("gyro-instrument: error: --out = '/tmp/never.csv' is invalid: needs ~2.808e+11 bytes "
+                             "(864000001 rows x 13 columns") and "bytes free" in err[0], err
     assert not os.path.exists("/tmp/never.csv")
 
 

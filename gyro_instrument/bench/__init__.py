@@ -15,6 +15,10 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 * ``targets.csv`` — the speed targets measured in one run (fast path: CPU, end error and the
   DOP853/fast-path CPU ratio at the same error; one hour of both plane-gyroscope configurations;
   estimator samples per second; the ROS suite at 100 Hz with its recording checked complete);
+* ``streaming.csv`` (:mod:`.streaming`) — the whole ``simulate --out X.parquet`` process for a
+  sidereal day of foucault_pantheon (1 h with ``--quick``) against a textbook ``solve_ivp`` script
+  in the same run (wall clock, end errors against the same reference), peak RSS of 1 h, 24 h and
+  48 h runs, CSV and Parquet writer MB/s;
 * ``observation_time.csv`` — latitude and Earth-rate rms error versus observation time (1–60 min)
   for the sine fit, Quet's counting and the Cramér–Rao bound, with the mean reported σ and the
   noise-free error, over seeds run in a process pool

@@ -42,6 +42,11 @@ def _pendulum(duration_s, rate_hz, **params):
     return build_instruments(scene)["pendulum"], sample_times(scene), scene
 
 
+#: (duration_s, rate_hz) -> the tight reference's swing azimuth at the last sample (rad), kept by
+#: :func:`foucault_work_precision` for the whole-process comparison (:mod:`.streaming`).
+REFERENCE = {}
+
+
 def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, progress=print) -> list:
     """Rows (instrument, tier, setting, cpu_s, nfev, error_rad): the 67 m Foucault pendulum
     released at 2°, output at ``rate_hz``; error = swing-plane azimuth at the last sample against
@@ -51,15 +56,16 @@ def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, 
     (the textbook baseline) or the parareal fast path."""
     name = f"Foucault pendulum 67 m, {duration_s:g} s at {rate_hz:g} Hz"
     progress(f"  reference: DOP853 rtol 1e-13 over {duration_s:g} s")
-    p, t, scene = _pendulum(duration_s, rate_hz, rtol=1e-13)
+    p, t, scene = _pendulum(duration_s, rate_hz, rtol=1e-13, integrator="adaptive")
     ref = _end_swing_azimuth(p.simulate(t))
+    REFERENCE[(duration_s, rate_hz)] = ref
     rows = []
 
     def add(tier, setting, sim, cpu, nfev):
         rows.append((name, tier, setting, cpu, nfev, abs(_wrapped(_end_swing_azimuth(sim) - ref))))
 
     for rtol in rtols:
-        p, t, _ = _pendulum(duration_s, rate_hz, rtol=rtol)
+        p, t, _ = _pendulum(duration_s, rate_hz, rtol=rtol, integrator="adaptive")
         sim, cpu = _cpu(lambda: p.simulate(t))
         add("full equations, DOP853", f"rtol {rtol:g}", sim, cpu, sim.trajectory.nfev)
         progress(f"  DOP853 rtol {rtol:g}: {cpu:.2f} s CPU, error {rows[-1][-1]:.2e} rad")
@@ -69,7 +75,8 @@ def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, 
         add("full equations, parareal RK8 (fast path)", f"{steps} steps/swing, tol {tol:g}", sim, cpu,
             sim.trajectory.nfev)
         progress(f"  parareal {steps} steps, tol {tol:g}: {cpu:.2f} s CPU, error {rows[-1][-1]:.2e} rad")
-    p, t, _ = _pendulum(duration_s, rate_hz, rtol=1e-10, effects=("earth_rotation", "centrifugal"))
+    p, t, _ = _pendulum(duration_s, rate_hz, rtol=1e-10, effects=("earth_rotation", "centrifugal"),
+                        integrator="adaptive")
     sim, cpu = _cpu(lambda: p.simulate(t))
     add("linear (small-angle) model, DOP853", "rtol 1e-10", sim, cpu, sim.trajectory.nfev)
     p, t, _ = _pendulum(duration_s, rate_hz)
@@ -575,6 +582,10 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
                                                                    " (matplotlib or pyarrow missing)"),
                "<= 30", secs is not None and secs <= 30.0))
     _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
+    progress("streaming: whole simulate process against the textbook script, peak memory, output throughput")
+    from gyro_instrument.bench.streaming import streaming_rows
+    st = streaming_rows(wp, REFERENCE[(3600.0 if quick else 86164.0989, 20.0)], quick, progress)
+    _write(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
     progress("observation time")
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
                                   executor=executor)
@@ -601,6 +612,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
              "## Speed targets (measured in this run)", "",
              "| target | measured | unit | goal | met |", "|---|---|---|---|---|"]
     lines += [f"| {a} | {b:.4g} | {c} | {d} | {'yes' if e else 'no'} |" for a, b, c, d, e in tg]
+    lines += streaming_lines(st)
     lines += ["", "## Work-precision (error at the end against a tight reference)", "",
               "| instrument | method | setting | CPU s | RHS evaluations | error (rad) |", "|---|---|---|---|---|---|"]
     lines += [f"| {i} | {m} | {st} | {c:.3g} | {n} | {e:.2e} |" for i, m, st, c, n, e in wp]
@@ -622,6 +634,14 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
             b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
             dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
     return _write_summary(out_dir, lines, pngs)
+
+
+def streaming_lines(rows) -> list:
+    """summary.md's section of the streaming rows (:mod:`.streaming`)."""
+    lines = ["", "## Streaming: whole simulate process, peak memory, output (measured in this run)", "",
+             "| target | measured | unit | goal | met |", "|---|---|---|---|---|"]
+    return lines + [f"| {a} | {b:.4g} | {c} | {d} | {'yes' if e else ('—' if d == '—' else 'no')} |"
+                    for a, b, c, d, e in rows]
 
 
 def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:

@@ -19,3 +19,71 @@ def unwrap(angle) -> np.ndarray:
     if turns.any():
         out[1:] -= TWO_PI * np.cumsum(turns)
     return out
+
+
+class Unwrapper:
+    """:func:`unwrap` continued across consecutive blocks of one angle history.
+
+    Carries the last wrapped sample and the whole turns removed so far (an integer held exactly in a
+    float), so ``concatenate([u(a) for a in blocks])`` equals ``unwrap(concatenate(blocks))`` bit for
+    bit: both subtract 2π × the same integer from each sample.
+    """
+
+    def __init__(self) -> None:
+        self.prev = None
+        self.turns = 0.0
+
+    def __call__(self, angle) -> np.ndarray:
+        angle = np.asarray(angle, dtype=float)
+        if angle.size == 0:
+            return angle.copy()
+        first = self.prev is None
+        x = angle if first else np.concatenate([[self.prev], angle])
+        turns = self.turns + np.cumsum(np.rint(np.diff(x) / TWO_PI))
+        out = angle.copy()
+        if turns.size and (turns.any() or self.turns):
+            if first:
+                out[1:] -= TWO_PI * turns
+            else:
+                out -= TWO_PI * turns
+        self.prev = float(angle[-1])
+        self.turns = float(turns[-1]) if turns.size else self.turns
+        return out
+
+
+class NumpyUnwrapper:
+    """``numpy.unwrap`` (period 2π) continued across consecutive blocks of one angle history: the
+    same corrections (numpy's formula on the differences, the previous block's last sample first)
+    summed in the same order from the running total, so the blocks concatenate to
+    ``numpy.unwrap(concatenate(blocks))`` bit for bit."""
+
+    def __init__(self) -> None:
+        self.prev = None
+        self.total = 0.0
+
+    def __call__(self, angle) -> np.ndarray:
+        angle = np.asarray(angle, dtype=float)
+        if angle.size == 0:
+            return angle.copy()
+        first = self.prev is None
+        x = angle if first else np.concatenate([[self.prev], angle])
+        period = 2 * np.pi
+        low, high = -period / 2, period / 2
+        dd = np.diff(x)
+        ddmod = np.mod(dd - low, period) + low
+        np.copyto(ddmod, high, where=(ddmod == low) & (dd > 0))
+        correct = ddmod - dd
+        np.copyto(correct, 0, where=abs(dd) < high)
+        out = angle.copy()
+        if first:
+            out[1:] = angle[1:] + correct.cumsum()
+        else:
+            running = np.concatenate([[self.total], correct]).cumsum()[1:]
+            out = angle + running
+            correct = running
+        if first:
+            self.total = float(correct.cumsum()[-1]) if correct.size else 0.0
+        else:
+            self.total = float(correct[-1])
+        self.prev = float(angle[-1])
+        return out

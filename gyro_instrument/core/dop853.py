@@ -150,48 +150,91 @@ def _dense_samples(t_eval, t_old, t_new_all, h_all, y_old, coef, n):
     return out
 
 
-def integrate_dop853_scalar(f, y0, t_eval, rtol=1e-10, atol=1e-12) -> Trajectory:
-    """DOP853 on a small state held in Python floats; ``f(t, *y) -> tuple`` of the derivatives.
+class ScalarDOP853:
+    """DOP853 on a small state held in Python floats, resumable block by block.
 
-    Same method, step control and dense output as ``integrate(..., method="DOP853")`` (see the
-    module docstring); ``t_eval`` must increase. Returns a :class:`Trajectory` whose ``nfev``
-    counts every RHS evaluation as ``integrate`` does (15 per accepted step, 12 per rejected,
-    2 at the start).
+    ``f(t, *y) -> tuple`` of the derivatives. Same method, step control and dense output as
+    ``integrate(..., method="DOP853")`` (see the module docstring). :meth:`advance` steps until the
+    block's last sample is reached, evaluates the block from the steps taken for it and keeps only
+    the last step (the next block's first samples may lie in it), so the steps are those of one run
+    from ``t0`` to ``t_end`` and every sample is evaluated from the same step as in one call over the
+    whole run: the blocks concatenate bit for bit (``tests/test_streaming.py``), in memory of one
+    block. ``nfev`` counts every RHS evaluation as ``integrate`` does (15 per accepted step, 12 per
+    rejected, 2 at the start).
+
+    Raises
+    ------
+    IntegrationError
+        A non-finite initial state; from :meth:`advance`, a step size below the spacing of floats
+        or a non-finite state.
     """
-    t_eval = np.asarray(t_eval, dtype=float)
-    y = tuple(float(v) for v in y0)
-    n = len(y)
-    if not all(math.isfinite(v) for v in y):
-        raise IntegrationError(f"initial state is not finite: {y}")
-    if t_eval.size == 1 or t_eval[-1] == t_eval[0]:
-        return Trajectory(t_eval, np.array(y)[:, None].repeat(t_eval.size, axis=1), 0, 0.0, 0.0, "DOP853")
-    attempt, dense = _dop853_kernels(n)
-    rtol = max(float(rtol), 100 * np.finfo(float).eps)   # as scipy's validate_tol
-    atol = float(atol)
-    w0, c0 = time.perf_counter(), time.process_time()
-    t, t_end = float(t_eval[0]), float(t_eval[-1])
-    fy = tuple(f(t, *y))
-    h_abs = _initial_step(f, t, y, fy, t_end, rtol, atol)
-    nfev, nrej = 2, 0
-    t_old, t_new_all, h_all, y_old, coef = [], [], [], [], []
-    while t < t_end:
-        t_new, h, z, fz, stages, h_abs, evals, rejections = _accepted_step(attempt, f, t, y, fy, h_abs, t_end,
-                                                                           rtol, atol)
-        nfev += evals
-        nrej += rejections
+
+    def __init__(self, f, y0, t0, t_end, rtol=1e-10, atol=1e-12) -> None:
+        y = tuple(float(v) for v in y0)
+        if not all(math.isfinite(v) for v in y):
+            raise IntegrationError(f"initial state is not finite: {y}")
+        self.f, self.y, self.n = f, y, len(y)
+        self.t0 = self.t = float(t0)
+        self.t_end = float(t_end)
+        self.rtol = max(float(rtol), 100 * np.finfo(float).eps)   # as scipy's validate_tol
+        self.atol = float(atol)
+        self.nfev = self.nsteps = self.nrej = 0
+        self.wall_time_s = self.cpu_time_s = 0.0
+        self._steps = ([], [], [], [], [])      # t_old, t_new, h, y_old, dense coefficients
+        if self.t_end != self.t0:
+            w0, c0 = time.perf_counter(), time.process_time()
+            self.attempt, self.dense = _dop853_kernels(self.n)
+            self.fy = tuple(f(self.t, *y))
+            self.h_abs = _initial_step(f, self.t, y, self.fy, self.t_end, self.rtol, self.atol)
+            self.nfev = 2
+            self.wall_time_s += time.perf_counter() - w0
+            self.cpu_time_s += time.process_time() - c0
+
+    def _step(self):
+        """One accepted step from the current state; its dense coefficients are kept."""
+        f, t, y, fy = self.f, self.t, self.y, self.fy
+        t_new, h, z, fz, stages, self.h_abs, evals, rejections = _accepted_step(
+            self.attempt, f, t, y, fy, self.h_abs, self.t_end, self.rtol, self.atol)
         dy = [b - a for a, b in zip(y, z)]
+        t_old, t_new_all, h_all, y_old, coef = self._steps
         coef.append((*dy, *[h * a - d for a, d in zip(fy, dy)],
-                     *[2 * d - h * (a + b) for a, b, d in zip(fy, fz, dy)], *dense(f, t, h, *y, stages)))
-        nfev += 3
+                     *[2 * d - h * (a + b) for a, b, d in zip(fy, fz, dy)], *self.dense(f, t, h, *y, stages)))
         t_old.append(t)
         t_new_all.append(t_new)
         h_all.append(h)
         y_old.append(y)
-        t, y, fy = t_new, z, fz
-    out = _dense_samples(t_eval, t_old, t_new_all, h_all, y_old, coef, n)
-    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
-    if not np.all(np.isfinite(out)):
-        raise IntegrationError("DOP853 produced a non-finite state")
-    return Trajectory(t_eval, out.T.copy(), nfev, wall, cpu, "DOP853",
-                      {"rtol": rtol, "atol": atol, "nsteps": len(t_old), "nrejected": nrej,
-                       "driver": "scalar"})
+        self.nfev += evals + 3
+        self.nrej += rejections
+        self.nsteps += 1
+        self.t, self.y, self.fy = t_new, z, fz
+
+    def advance(self, t) -> Trajectory:
+        """States at the sample times ``t`` (1-D, non-decreasing, not before the previous block's
+        last sample nor past ``t_end``), s. Returns a :class:`Trajectory` of this block whose
+        ``nfev``, ``wall_time_s`` and ``cpu_time_s`` count the whole run so far."""
+        t = np.asarray(t, dtype=float)
+        if self.t_end == self.t0:
+            return Trajectory(t, np.array(self.y)[:, None].repeat(t.size, axis=1), 0, 0.0, 0.0, "DOP853")
+        if t.size and t[-1] > self.t_end:
+            raise IntegrationError(f"sample time {t[-1]!r} s is after the run's end {self.t_end!r} s")
+        w0, c0 = time.perf_counter(), time.process_time()
+        last = float(t[-1]) if t.size else self.t
+        while self.t < last or not self._steps[0]:
+            self._step()
+        out = _dense_samples(t, *self._steps, self.n) if t.size else np.empty((0, self.n))
+        for kept in self._steps:               # the last step may hold the next block's first samples
+            del kept[:-1]
+        self.wall_time_s += time.perf_counter() - w0
+        self.cpu_time_s += time.process_time() - c0
+        if not np.all(np.isfinite(out)):
+            raise IntegrationError("DOP853 produced a non-finite state")
+        return Trajectory(t, out.T.copy(), self.nfev, self.wall_time_s, self.cpu_time_s, "DOP853",
+                          {"rtol": self.rtol, "atol": self.atol, "nsteps": self.nsteps, "nrejected": self.nrej,
+                           "driver": "scalar"})
+
+
+def integrate_dop853_scalar(f, y0, t_eval, rtol=1e-10, atol=1e-12) -> Trajectory:
+    """DOP853 on a small state held in Python floats over ``t_eval`` at once: one
+    :meth:`ScalarDOP853.advance` from ``t_eval[0]`` to ``t_eval[-1]`` (``t_eval`` non-decreasing)."""
+    t_eval = np.asarray(t_eval, dtype=float)
+    return ScalarDOP853(f, y0, t_eval[0], t_eval[-1], rtol=rtol, atol=atol).advance(t_eval)

@@ -92,8 +92,141 @@ class _Counted:
 SCALAR_DOP853 = "DOP853-scalar"
 
 
+def _solver_class(method):
+    """The ``scipy.integrate`` OdeSolver class for a ``solve_ivp`` method name (or the class)."""
+    import scipy.integrate as si
+    if isinstance(method, type):
+        return method
+    if method not in ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA"):
+        raise ValueError(f"`method` must be one of RK23, RK45, DOP853, Radau, BDF, LSODA (got {method!r})")
+    return getattr(si, method)
+
+
+def _check_samples(t, after, t_end):
+    """Sample times of one block: 1-D, strictly increasing, after ``after`` and not past ``t_end``."""
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1:
+        raise ValueError("`t_eval` must be 1-dimensional.")
+    if t.size and (np.any(np.diff(t) <= 0) or (after is not None and t[0] <= after)):
+        raise ValueError("Values in `t_eval` are not properly sorted.")
+    if t.size and t[-1] > t_end:
+        raise IntegrationError(f"sample time {t[-1]!r} s is after the run's end {t_end!r} s")
+    return t
+
+
+class Integration:
+    """A resumable integration of ``dy/dt = rhs(t, y)`` from ``t0`` toward ``t_end``.
+
+    :meth:`advance` takes the next block of sample times and returns the states there, carrying
+    the solver's exact state (current step, step size, last derivative) to the next block. The
+    solver is scipy's ``OdeSolver`` driven step by step with ``t_bound = t_end`` — the loop of
+    ``scipy.integrate.solve_ivp`` with ``t_eval``: each sample is evaluated with the dense output
+    of the first step that reaches it — so the steps and the samples are those of one
+    ``solve_ivp`` call over the whole run, bit for bit, however the samples are cut into blocks
+    (``tests/test_streaming.py``). Memory is one step and one block, whatever ``t_end``.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, y) -> dy/dt``, ``y`` a 1-D array.
+    y0 : array_like
+        State at ``t0``.
+    t0, t_end : float
+        Start and end of the run, s (the end bounds the last step, as ``solve_ivp``'s ``t_span``).
+    method, rtol, atol, max_step
+        As for :func:`integrate`.
+
+    Raises
+    ------
+    IntegrationError
+        A non-finite initial state; from :meth:`advance`, a failed step or a non-finite state.
+    """
+
+    def __init__(self, rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> None:
+        self.y0 = np.asarray(y0, dtype=float)
+        if not np.all(np.isfinite(self.y0)):
+            raise IntegrationError(f"initial state is not finite: {self.y0}")
+        self.t0, self.t_end = float(t0), float(t_end)
+        self.method = method
+        self.meta = {"rtol": rtol, "atol": atol, "nsteps": 0}
+        self.wall_time_s = self.cpu_time_s = 0.0
+        self._last = None                       # last sample time returned
+        self._counted = _Counted(rhs, self.t0, self.t_end)
+        self._solver = None
+        self._dense = None                      # dense output of the current step (None: not made yet)
+        if self.t_end != self.t0:
+            w0, c0 = time.perf_counter(), time.process_time()
+            self._solver = _solver_class(method)(self._counted, self.t0, self.y0, self.t_end, vectorized=False,
+                                                 rtol=rtol, atol=atol, max_step=max_step)
+            self._stepped = False
+            self._clock(w0, c0)
+
+    @property
+    def nfev(self) -> int:
+        """Right-hand-side evaluations so far (counted by the driver)."""
+        return self._counted.n
+
+    def _clock(self, w0, c0):
+        self.wall_time_s += time.perf_counter() - w0
+        self.cpu_time_s += time.process_time() - c0
+
+    def _step(self):
+        solver = self._solver
+        message = solver.step()
+        if solver.status == "failed":
+            raise IntegrationError(f"{self.method} failed at t = {solver.t:.6g} s: {message}")
+        self._stepped = True
+        self._dense = None
+
+    def advance(self, t) -> Trajectory:
+        """States at the sample times ``t`` (1-D, increasing, after the previous block's, not past
+        ``t_end``), s. Returns a :class:`Trajectory` of this block whose ``nfev``, ``wall_time_s``
+        and ``cpu_time_s`` count the whole run so far."""
+        if self._solver is None:              # a run of zero length: the initial state throughout
+            t = np.asarray(t, dtype=float)
+            return Trajectory(t, self.y0[:, None].repeat(t.size, axis=1), 0, 0.0, 0.0, self.method)
+        t = _check_samples(t, self._last, self.t_end)
+        if t.size:
+            self._last = float(t[-1])
+        w0, c0 = time.perf_counter(), time.process_time()
+        solver, parts, i = self._solver, [], 0
+        while i < t.size:
+            if self._stepped:
+                # the samples this step reaches (solve_ivp: searchsorted(t_eval, t, side="right"))
+                j = int(np.searchsorted(t, solver.t, side="right"))
+                if j > i:
+                    if self._dense is None:
+                        self._dense = solver.dense_output()
+                    parts.append(self._dense(t[i:j]))
+                    i = j
+                    continue
+            self._step()
+        y = np.hstack(parts) if parts else np.empty((self.y0.size, 0))
+        self.meta["nsteps"] = int(solver.nfev)
+        self._clock(w0, c0)
+        if not np.all(np.isfinite(y)):
+            raise IntegrationError(f"{self.method} produced a non-finite state")
+        return Trajectory(t, y, self.nfev, self.wall_time_s, self.cpu_time_s, self.method, dict(self.meta))
+
+
+def integration(rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf):
+    """A resumable integration from ``t0`` to ``t_end`` (:class:`Integration`, or for
+    ``method="DOP853-scalar"`` :class:`gyro_instrument.core.dop853.ScalarDOP853`): call
+    ``advance(block)`` block after block; the concatenated states equal :func:`integrate` over the
+    concatenated blocks, bit for bit."""
+    if method == SCALAR_DOP853:
+        if max_step != np.inf:
+            raise IntegrationError(f"method {SCALAR_DOP853} takes no max_step (got {max_step!r})")
+        from gyro_instrument.core.dop853 import ScalarDOP853   # it imports Trajectory from here
+        return ScalarDOP853(rhs, y0, t0, t_end, rtol=rtol, atol=atol)
+    return Integration(rhs, y0, t0, t_end, method=method, rtol=rtol, atol=atol, max_step=max_step)
+
+
 def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> Trajectory:
     """Integrate ``dy/dt = rhs(t, y)`` from ``t_eval[0]`` and sample at ``t_eval``.
+
+    One block of :func:`integration` from ``t_eval[0]`` to ``t_eval[-1]``: the same steps and
+    samples as ``scipy.integrate.solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method, t_eval)``.
 
     Parameters
     ----------
@@ -103,11 +236,11 @@ def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step
     y0 : array_like
         Initial state at ``t_eval[0]``.
     t_eval : array_like
-        Increasing sample times in seconds (at least one).
+        Strictly increasing sample times in seconds (at least one).
     method : str
         Any ``solve_ivp`` method name (default DOP853, Hairer's 8(5,3) pair), or
         ``"DOP853-scalar"``: the same method, steps and dense output on Python floats, for a
-        small state and increasing ``t_eval`` (no ``max_step``, no progress reports).
+        small state (no ``max_step``).
     rtol, atol : float
         Tolerances passed to the solver.
     max_step : float
@@ -121,30 +254,10 @@ def integrate(rhs, y0, t_eval, method="DOP853", rtol=1e-10, atol=1e-12, max_step
     ------
     IntegrationError
         If the solver fails or the state becomes non-finite.
+    ValueError
+        Sample times not 1-D or not strictly increasing (as ``solve_ivp``).
     """
-    if method == SCALAR_DOP853:
-        if max_step != np.inf:
-            raise IntegrationError(f"method {SCALAR_DOP853} takes no max_step (got {max_step!r})")
-        from gyro_instrument.core.dop853 import integrate_dop853_scalar   # it imports Trajectory from here
-        return integrate_dop853_scalar(rhs, y0, t_eval, rtol=rtol, atol=atol)
     t_eval = np.asarray(t_eval, dtype=float)
-    y0 = np.asarray(y0, dtype=float)
     if t_eval.ndim != 1 or t_eval.size == 0:
         raise IntegrationError("t_eval must be a non-empty 1-D array of times")
-    if not np.all(np.isfinite(y0)):
-        raise IntegrationError(f"initial state is not finite: {y0}")
-    counted = _Counted(rhs, float(t_eval[0]), float(t_eval[-1]))
-    w0, c0 = time.perf_counter(), time.process_time()
-    if t_eval.size == 1 or t_eval[-1] == t_eval[0]:
-        y = y0[:, None].repeat(t_eval.size, axis=1)
-        return Trajectory(t_eval, y, 0, 0.0, 0.0, method)
-    sol = solve_ivp(counted, (t_eval[0], t_eval[-1]), y0, method=method, t_eval=t_eval,
-                    rtol=rtol, atol=atol, max_step=max_step)
-    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
-    if sol.status < 0:
-        raise IntegrationError(f"{method} failed at t = {sol.t[-1] if len(sol.t) else t_eval[0]:.6g} s: "
-                               f"{sol.message}")
-    if not np.all(np.isfinite(sol.y)):
-        raise IntegrationError(f"{method} produced a non-finite state")
-    return Trajectory(sol.t, sol.y, counted.n, wall, cpu, method,
-                      {"rtol": rtol, "atol": atol, "nsteps": int(getattr(sol, "nfev", 0))})
+    return integration(rhs, y0, t_eval[0], t_eval[-1], method, rtol, atol, max_step).advance(t_eval)

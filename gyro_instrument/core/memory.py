@@ -1,14 +1,17 @@
 """Refuse a run that cannot fit in memory, before anything is allocated.
 
-Runs are held in memory whole (streaming is a later issue): the sample grid, the integrator's
-states at the samples, the output columns, the sensor model's copies and the estimator's work
-arrays. :func:`check_memory` estimates the peak as
+A run held in memory whole (``estimate``, the sensor model and the estimator, an instrument that
+does not stream) holds the sample grid, the integrator's states at the samples, the output
+columns, the sensor model's copies and the estimator's work arrays. A streamed run (``simulate``,
+:class:`gyro_instrument.core.scene.SampleBlocks`) holds one block of them: the check is then
+applied to one block, not the run. :func:`check_memory` estimates the peak as
 
     samples × channels × 8 bytes × :data:`PEAK_FACTOR`
 
 (channels: ``time`` plus every instrument's output columns) and compares it with the memory
 available now; :func:`gyro_instrument.core.scene.sample_times_ns` calls it before building the
-grid, so ``simulate``, ``estimate``, ``run`` and the bench all refuse up front with a
+grid (and :class:`~gyro_instrument.core.scene.SampleBlocks` for one block), so ``estimate``,
+``run``, the bench and ``simulate`` all refuse up front with a
 :class:`SceneError` on ``duration_s`` instead of dying in numpy's ``_ArrayMemoryError``.
 """
 

@@ -65,7 +65,7 @@ def rk8_batch(rhs, y0, h, m, keep=False) -> tuple:
 
 
 def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_stride=32, align=None,
-             max_iter=8, progress=None) -> tuple:
+             max_iter=8, progress=None, span=(0.0, 1.0)) -> tuple:
     """Segment starts ``U`` (shape (n + 1, d)) of the whole run, converged by Newton-type parareal.
 
     The coarse propagator over segment ``j`` is the linearisation of the fine one about the
@@ -99,6 +99,9 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     align : callable or None
         ``align(U) -> (n + 1, d, d)`` orthogonal matrices ``R_j`` such that ``R_(j+1)ᵀ J_j R_j``
         varies slowly in ``j`` (default: identity).
+    span : (float, float)
+        The fraction of the whole run these segments cover: progress is reported in it (a streamed
+        run converges one window of segments after another).
 
     Returns
     -------
@@ -151,7 +154,7 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
         changes.append(change)
         # quadratic convergence: passes still needed ~ log2(log(change)/log(tol))
         left = max(math.log2(max(math.log(tol) / math.log(min(change, 0.5)), 1.0)), 0.0) if change > tol else 0.0
-        report(it / (it + 1.0 + left))
+        report(span[0] + (span[1] - span[0]) * it / (it + 1.0 + left))
         if progress:
             progress(f"parareal pass {it}: the next update moves segment starts by {change:.2e} "
                      f"(tolerance {tol:.1e})")
@@ -161,19 +164,29 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     raise IntegrationError(f"parareal did not converge in {max_iter} iterations (changes {changes})")
 
 
-def dense_output(grid, segment_s, t, npos, chunk=16384) -> np.ndarray:
+def hermite_rows(grid, npos) -> np.ndarray:
+    """The rows :func:`dense_output` interpolates between: one contiguous row per grid point
+    (position, velocity, acceleration), shape (segments × (steps + 1), 3 npos). Build them once per
+    grid and pass them to every :func:`dense_output` call on it."""
+    ys, fs = grid
+    m, n_seg = ys.shape[0] - 1, ys.shape[2]
+    rows = np.concatenate([ys[:, :2 * npos], fs[:, npos:2 * npos]], axis=1)       # (m + 1, 3 npos, n)
+    return np.ascontiguousarray(rows.transpose(2, 0, 1)).reshape(n_seg * (m + 1), 3 * npos)
+
+
+def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray:
     """States at times ``t`` (seconds from the start of segment 0) from a pass's grid
     (:func:`parareal`): quintic Hermite interpolation of the first ``npos`` components
     (positions) from their values, velocities (the next ``npos`` components) and accelerations
     (the derivatives' last ``npos`` components) at both ends of each step; the velocities are
-    the interpolant's derivative. Returns an array (2 npos, len(t))."""
+    the interpolant's derivative. ``rows``: :func:`hermite_rows` of ``grid`` when already built.
+    Returns an array (2 npos, len(t))."""
     ys, fs = grid
     m, n_seg = ys.shape[0] - 1, ys.shape[2]
     h = segment_s / m
     t = np.asarray(t, dtype=float)
     # one contiguous row per grid point: position, velocity, acceleration (a gather per end)
-    rows = np.concatenate([ys[:, :2 * npos], fs[:, npos:2 * npos]], axis=1)       # (m + 1, 3 npos, n)
-    rows = np.ascontiguousarray(rows.transpose(2, 0, 1)).reshape(n_seg * (m + 1), 3 * npos)
+    rows = hermite_rows(grid, npos) if rows is None else rows
     out = np.empty((2 * npos, t.size))
     for a in range(0, t.size, chunk):         # blocks that stay in cache: the work is memory-bound
         tt = t[a:a + chunk]

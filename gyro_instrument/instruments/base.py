@@ -23,6 +23,7 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
 Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports.
 """
 
+import itertools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -127,6 +128,35 @@ class Simulation:
     extra: dict = field(default_factory=dict)
 
 
+def run_span(blocks, t_end=None) -> tuple:
+    """The blocks of a streamed run, its start and its end (s).
+
+    ``t_end`` is the last sample time of the run when given, else the blocks' ``end_s`` (as
+    :func:`gyro_instrument.core.scene.sample_blocks` provides), else the blocks are read once to
+    find it (their times are then held in memory). An adaptive integrator needs the end before its
+    first step: it bounds the last step as in one call over the whole run.
+
+    Returns
+    -------
+    (iterator of ndarray, float or None, float or None)
+        The blocks (float arrays, the first already read), ``t0`` (the first sample) and the end;
+        ``(iter(()), None, None)`` when there is no sample.
+    """
+    end = t_end if t_end is not None else getattr(blocks, "end_s", None)
+    it = iter(blocks)
+    if end is None:
+        kept = [np.asarray(b, dtype=float) for b in it]
+        kept = [b for b in kept if b.size]
+        if not kept:
+            return iter(()), None, None
+        end, it = float(kept[-1][-1]), iter(kept)
+    for first in it:
+        first = np.asarray(first, dtype=float)
+        if first.size:
+            return itertools.chain([first], it), float(first[0]), float(end)
+    return iter(()), None, None
+
+
 class _SupportedEffects:
     """``SUPPORTED_EFFECTS`` of an instrument class or object: the registered effects that contribute
     to one of its ``MECHANICS`` kinds (frozenset of names), computed at each access so an effect
@@ -221,6 +251,13 @@ class Instrument:
         the instrument measures no Earth rate through a swing duration)."""
         return None
 
+    def chosen_integrator(self, duration_s=None) -> "tuple | None":
+        """(integrator, reason) for an instrument with several integrators (an ``integrator``
+        parameter whose ``auto`` picks the fast path when the instrument and its effects allow it):
+        what a run of ``duration_s`` seconds would use and why (``describe`` shows it). None (the
+        default) for an instrument with one integrator."""
+        return None
+
     def axis_direction_enu(self, position):
         """Unit rotor-axis vectors in ENU, shape (m, 3), from the published joint positions
         ``position`` (m, len(JOINTS)), rad; None for an instrument whose axis is not shown
@@ -292,8 +329,14 @@ class Instrument:
         raise NotImplementedError
 
     def simulate(self, t, **options) -> Simulation:
-        """Integrate and return a :class:`Simulation` sampled at times ``t`` (s)."""
-        raise NotImplementedError
+        """Integrate and return a :class:`Simulation` sampled at times ``t`` (s).
+
+        For an instrument that streams (``STREAMS``) this is :meth:`stream` with one block, ``t``
+        (one code path: a streamed run's blocks concatenate to this result); others override it."""
+        if not self.STREAMS:
+            raise NotImplementedError
+        t = np.asarray(t, dtype=float)
+        return next(iter(self.stream([t], t_end=float(t[-1]), **options)))
 
     def stream(self, blocks, **options) -> Iterator[Simulation]:
         """Integrate block by block: yield one :class:`Simulation` per block of sample times.
@@ -304,7 +347,8 @@ class Instrument:
             Consecutive, increasing 1-D arrays of sample times (s); together they are the ``t`` of
             the equivalent one-shot :meth:`simulate` (e.g. :func:`gyro_instrument.core.scene.sample_blocks`).
         **options
-            As for :meth:`simulate`.
+            As for :meth:`simulate`; ``t_end`` (s), the last sample time of the run, when the blocks
+            do not carry it (:func:`run_span`).
 
         Yields
         ------

@@ -87,15 +87,16 @@ cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 from gyro_instrument.core.effect import FRAME_RATE
-from gyro_instrument.core.integrate import Trajectory, integrate
+from gyro_instrument.core.angles import NumpyUnwrapper
+from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span, with_notes
 
 # ----------------------------------------------------------------------------- geometry
 
@@ -414,8 +415,11 @@ class FreeGyroscope(Instrument):
                 0.0])
         return f
 
-    def columns_from_state(self, tau, y) -> tuple:
+    def columns_from_state(self, tau, y, unwrappers=None) -> tuple:
         """Columns and diagnostics from states ``y`` (7, m) at times ``tau`` since release.
+
+        ``unwrappers``: a pair of :class:`~gyro_instrument.core.angles.NumpyUnwrapper` (azimuth, hour
+        angle) carried across the blocks of a streamed run; fresh ones (``numpy.unwrap``) by default.
 
         Returns
         -------
@@ -426,6 +430,7 @@ class FreeGyroscope(Instrument):
             ``attitude_enu`` (m, 3, 3) body → ENU; ``angular_momentum`` (m, 3) inertial, kg m²/s;
             ``kinetic_energy_j`` (m,); ``quaternion_norm`` (m,) before renormalisation.
         """
+        unwrap_az, unwrap_ha = unwrappers if unwrappers is not None else (NumpyUnwrapper(), NumpyUnwrapper())
         n = self.model_rate()
         q = y[:4].T
         wb = y[4:].T
@@ -440,8 +445,8 @@ class FreeGyroscope(Instrument):
         Re = quat_to_matrix(quat_from_rotvec(self.e_axis, -n * tau)) @ R
         columns = {
             "axis_altitude": np.arctan2(u, np.hypot(e, nn)),
-            "axis_azimuth": np.unwrap(np.arctan2(e, nn)),
-            "hour_angle": np.unwrap(np.arctan2(dw, dm)),
+            "axis_azimuth": unwrap_az(np.arctan2(e, nn)),
+            "hour_angle": unwrap_ha(np.arctan2(dw, dm)),
             "declination": np.arctan2(de, np.hypot(dm, dw)),
             "spin_rate": wb[:, 2] - n * (k_in @ self.e_axis),
         }
@@ -451,8 +456,10 @@ class FreeGyroscope(Instrument):
                  "quaternion_norm": np.linalg.norm(q, axis=1)}
         return columns, extra
 
-    def simulate(self, t, model=None, rtol=None) -> Simulation:
-        """Release at ``t[0]`` and sample at ``t`` (s).
+    STREAMS = True
+
+    def simulate(self, t, model=None, rtol=None, **options) -> Simulation:
+        """Release at ``t[0]`` and sample at ``t`` (s): one block of :meth:`stream`.
 
         Parameters
         ----------
@@ -469,19 +476,33 @@ class FreeGyroscope(Instrument):
             ``columns`` as in ``COLUMNS``; ``trajectory.y`` rows [q (4), ω_body (3)] in the
             inertial frame (ENU frozen at release); ``extra`` as in :meth:`columns_from_state`.
         """
+        return super().simulate(t, model=model, rtol=rtol, **options)
+
+    def stream(self, blocks, model=None, rtol=None, **options) -> Iterator[Simulation]:
+        """Block by block (:meth:`Instrument.stream`), released at the first sample: the closed form
+        at each block's times, or the numerical path's DOP853 step sequence carried across blocks
+        (:class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue across
+        blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
         model = model or self.model
-        t = np.asarray(t, dtype=float)
-        tau = t - t[0]
-        if model == "analytic":
-            w0, c0 = time.perf_counter(), time.process_time()
-            y = self.analytic_state(tau)
-            traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
-        else:
+        unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
+        run = None
+        if model != "analytic":
             wb0 = self.R0.T @ self.motion_constants()["omega0"]
-            traj = integrate(self.rhs(), np.concatenate([self.q0, wb0]), tau,
-                             rtol=self.rtol if rtol is None else rtol, atol=1e-14)
-            traj.t = t
-            y = traj.y
-        columns, extra = self.columns_from_state(tau, y)
-        extra["motion_constants"] = self.motion_constants()
-        return Simulation(t, columns, traj, extra)
+            run = integration(self.rhs(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
+                              rtol=self.rtol if rtol is None else rtol, atol=1e-14)
+        for t in blocks:
+            tau = t - t0
+            if run is None:
+                w0, c0 = time.perf_counter(), time.process_time()
+                y = self.analytic_state(tau)
+                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
+            else:
+                traj = run.advance(tau)
+                traj.t = t
+                y = traj.y
+            columns, extra = self.columns_from_state(tau, y, unwrappers)
+            extra["motion_constants"] = self.motion_constants()
+            yield Simulation(t, columns, traj, extra)

@@ -27,16 +27,18 @@ pendulum of length λ = A / (M l) when μ = C/A is small and ρ0 ≈ 0 (eq. 57).
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 from scipy.special import ellipk
 
-from gyro_instrument.core.angles import unwrap
+from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN
-from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.integrate import Trajectory, integration
+from gyro_instrument.core.parareal import dense_output, hermite_rows
 from gyro_instrument.core.params import Param
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, check_period_count, with_notes
+from gyro_instrument.instruments.base import (Column, Instrument, Simulation, check_period_count, run_span,
+                                              with_notes)
 from gyro_instrument.instruments.chain import HingeChain, Link
 
 PENDULUM_COLUMNS = (
@@ -161,19 +163,23 @@ def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity
     return z.real, z.imag, zd.real, zd.imag
 
 
-def pendulum_columns(pos, vel, omega0_sq) -> dict:
-    """Derived columns from bob positions/velocities (arrays (3, m), ENU)."""
+def pendulum_columns(pos, vel, omega0_sq, unwrappers=None) -> dict:
+    """Derived columns from bob positions/velocities (arrays (3, m), ENU).
+
+    ``unwrappers``: a pair of :class:`~gyro_instrument.core.angles.Unwrapper` (azimuth, swing
+    azimuth) carried from block to block of a streamed run; fresh ones by default (one block)."""
+    unwrap_az, unwrap_swing = unwrappers if unwrappers is not None else (Unwrapper(), Unwrapper())
     x, y, z = pos
     vx, vy = vel[0], vel[1]
     rh = np.hypot(x, y)
     deflection = np.arctan2(rh, -z)
-    azimuth = unwrap(np.arctan2(x, y))
+    azimuth = unwrap_az(np.arctan2(x, y))
     # Fradkin tensor in (north, east) axes: its major axis is the swing plane.
     n, e, vn, ve = y, x, vy, vx
     tnn = omega0_sq * n * n + vn * vn
     tee = omega0_sq * e * e + ve * ve
     tne = omega0_sq * n * e + vn * ve
-    swing = 0.5 * unwrap(np.arctan2(2.0 * tne, tnn - tee))
+    swing = 0.5 * unwrap_swing(np.arctan2(2.0 * tne, tnn - tee))
     return {"deflection": deflection, "azimuth": azimuth, "swing_azimuth": swing,
             "x_east": x, "y_north": y, "z_up": z}
 
@@ -193,10 +199,13 @@ class SphericalPendulum(Instrument):
               doc="launch speed perpendicular to the release plane (u0 of sec. 2 §IV), positive clockwise "
                   "seen from above (toward increasing azimuth)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance (adaptive)"),
-        Param("integrator", kind="str", default="adaptive", choices=("adaptive", "parareal"),
-              doc="adaptive: DOP853 swing after swing; parareal: every swing period at once (fixed-step "
-                  "RK8 batched over periods, Newton-parareal from Quet's comparison pendulum), the fast path "
-                  "for long runs of the full model (needs finite_amplitude, no air_drag)"),
+        Param("integrator", kind="str", default="auto", choices=("auto", "adaptive", "parareal"),
+              doc="auto: parareal whenever the model allows it (finite_amplitude listed, no effect outside "
+                  "earth_rotation, centrifugal, finite_amplitude, a release from rest at up to 10 degrees whose amplitude is "
+                  "above the round-off floor), "
+                  "else adaptive ('describe' says which and why); adaptive: DOP853 swing after swing; parareal: "
+                  "every swing period of a window at once (fixed-step RK8 batched over periods, Newton-parareal "
+                  "from Quet's comparison pendulum), the fast path for long runs of the full model"),
         Param("segment_steps", kind="int", default=48, low=8, high=100000,
               doc="parareal: RK8 steps per swing period"),
         Param("shooting_tol", default=1e-9, low=1e-14, high=1e-3,
@@ -223,6 +232,45 @@ class SphericalPendulum(Instrument):
                     or p["radial_speed_m_s"] != 0.0 or p["transverse_speed_m_s"] != 0.0:
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs a release from rest at a deflection "
                                  "in (0, 90) degrees (its period and precession come from that release)")
+
+    #: The effects the parareal fast path is chosen with by ``integrator: auto``: conservative terms
+    #: (its Newton iteration starts from the comparison pendulum, a conservative swing).
+    PARAREAL_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude"})
+    #: Largest release deflection (deg) at which ``integrator: auto`` takes parareal at its default
+    #: grid: against DOP853 at rtol 1e-12 (5 m, 20 min, full model) the largest position difference
+    #: over the amplitude was 3.2e-10, 2.2e-10, 3.2e-10 at 2°, 5°, 10°, under the shooting tolerance
+    #: 1e-9, then 1.3e-9 at 20°, 4.7e-9 at 30° and 6.1e-7 at 60° (48 RK8 steps per swing no longer
+    #: resolve the large swing's harmonics): beyond 10° auto keeps the adaptive DOP853.
+    PARAREAL_AUTO_MAX_DEG = 10.0
+
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """(integrator, reason): ``adaptive`` or ``parareal`` as the scene asks, or for ``auto`` the fast
+        path parareal when the full model and a release from rest allow it (the conditions
+        :meth:`check_effects` enforces for an explicit parareal, and no effect outside
+        :data:`PARAREAL_EFFECTS`), else adaptive with the reason."""
+        if self.integrator != "auto":
+            return self.integrator, "chosen in the scene"
+        if not self.has("finite_amplitude"):
+            return "adaptive", "auto: the linear (small-angle) model has no parareal path (finite_amplitude not listed)"
+        other = sorted(set(self.effects) - self.PARAREAL_EFFECTS)
+        if other:
+            return "adaptive", f"auto: parareal is for a conservative swing; {', '.join(other)} listed"
+        if not (0.0 < self.initial_deflection_deg < 90.0) or self.radial_speed_m_s or self.transverse_speed_m_s:
+            return "adaptive", "auto: parareal needs a release from rest between 0 and 90 degrees"
+        # The bob's height (~l) carries round-off eps·l: relative to the swing amplitude l sin θ0 that is
+        # eps / sin θ0, and Newton cannot move the swing starts by less (at θ0 = 1e-9 rad it stalled at
+        # 1e-7 > shooting_tol 1e-9). Auto asks for a floor 100 times below the tolerance.
+        floor = np.finfo(float).eps / math.sin(self.theta0)
+        if 100.0 * floor > self.shooting_tol:
+            return "adaptive", (f"auto: at a release of {self.initial_deflection_deg:.3g} deg the round-off of the "
+                                f"bob's height is {floor:.1e} of the amplitude, too close to parareal's shooting "
+                                f"tolerance {self.shooting_tol:g}")
+        if self.initial_deflection_deg > self.PARAREAL_AUTO_MAX_DEG:
+            return "adaptive", (f"auto: a release at {self.initial_deflection_deg:g} deg is beyond the "
+                                f"{self.PARAREAL_AUTO_MAX_DEG:g} deg where parareal's {self.segment_steps}-step grid "
+                                f"is validated to its shooting tolerance")
+        return "parareal", ("auto: the full conservative model released from rest, the fast path (all swings of "
+                            "a window at once; DOP853 with integrator: adaptive)")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
@@ -369,35 +417,62 @@ class SphericalPendulum(Instrument):
             return np.array([vx, vy, ax, ay])
         return rhs
 
-    def simulate(self, t, **options) -> Simulation:
-        t = np.asarray(t, dtype=float)
+    STREAMS = True
+
+    def stream(self, blocks, **options) -> Iterator[Simulation]:
+        """Integrate block by block (:meth:`Instrument.stream`), carrying the exact state.
+
+        The adaptive paths (full Cartesian model, linear model) continue one DOP853 step sequence
+        bounded by the run's end (:class:`~gyro_instrument.core.integrate.Integration`): the blocks
+        concatenate to :meth:`simulate` bit for bit. The parareal path converges windows of
+        :attr:`WINDOW_SWINGS` whole swings one after the other, each from the end state of the
+        last (:meth:`_stream_parareal`); the windows depend on the run, not on the blocks, so the
+        blocks concatenate to :meth:`simulate` bit for bit there too. ``options``: ``progress``
+        (callable taking a line of text: parareal passes), ``t_end``.
+
+        Raises
+        ------
+        SceneError
+            The run would hold more swings than can be integrated (``length_m``).
+        IntegrationError
+            A failed step or a non-finite state.
+        """
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
         r0, v0 = self.initial_state()
         w0sq = self.g / self.l
         # Absolute tolerances scale with the motion, not the rod: a 1e-9 rad swing on 67 m moves
         # the bob 7e-8 m, which an atol of 1e-12 l would resolve to only 1e-3 of itself.
         w0 = math.sqrt(w0sq)
-        check_period_count(f"instruments.{self.name}.length_m", self.l, 2.0 * math.pi / w0, float(t[-1] - t[0]))
+        check_period_count(f"instruments.{self.name}.length_m", self.l, 2.0 * math.pi / w0, t_end - t0)
         amp = max(self.l * math.sin(self.theta0), float(np.linalg.norm(v0)) / w0, 1e-12 * self.l)
         atol_r, atol_v = self.rtol * amp, self.rtol * amp * w0
         # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
         # level, which no tolerance may ask to resolve (an inverted bob took 7e6 evaluations).
         atol_z, atol_vz = max(atol_r, 1e-14 * self.l), max(atol_v, 1e-14 * self.l * w0)
-        if self.integrator == "parareal":
-            return self._simulate_parareal(t, r0, v0, amp, options.get("progress"))
-        if self.restoring_law() is not None:          # finite_amplitude: the exact (Cartesian) model
-            traj = integrate(self.rhs_exact(), np.concatenate([r0, v0]), t, rtol=self.rtol,
-                             atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
-            pos, vel = traj.y[:3], traj.y[3:]
+        unwrappers = (Unwrapper(), Unwrapper())
+        if self.chosen_integrator(t_end - t0)[0] == "parareal":
+            yield from self._stream_parareal(blocks, t0, t_end, r0, v0, amp, options.get("progress"), unwrappers)
+            return
+        exact = self.restoring_law() is not None          # finite_amplitude: the exact (Cartesian) model
+        if exact:
+            run = integration(self.rhs_exact(), np.concatenate([r0, v0]), t0, t_end, rtol=self.rtol,
+                              atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
         else:
-            traj = integrate(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t, rtol=self.rtol,
-                             atol=np.array([atol_r] * 2 + [atol_v] * 2))
-            x, y, vx, vy = traj.y
-            rh2 = x * x + y * y
-            pos = np.vstack([x, y, -np.sqrt(np.maximum(self.l ** 2 - rh2, 0.0))])
-            vel = np.vstack([vx, vy, np.zeros_like(vx)])
-        cols = pendulum_columns(pos, vel, w0sq)
-        return Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
-
+            run = integration(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t0, t_end, rtol=self.rtol,
+                              atol=np.array([atol_r] * 2 + [atol_v] * 2))
+        for t in blocks:
+            traj = run.advance(t)
+            if exact:
+                pos, vel = traj.y[:3], traj.y[3:]
+            else:
+                x, y, vx, vy = traj.y
+                rh2 = x * x + y * y
+                pos = np.vstack([x, y, -np.sqrt(np.maximum(self.l ** 2 - rh2, 0.0))])
+                vel = np.vstack([vx, vy, np.zeros_like(vx)])
+            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
 
     def _first_swing(self, r0, v0):
         """Period and apsidal turn of the first swing, from the full equations (DOP853, rtol 1e-12).
@@ -445,40 +520,80 @@ class SphericalPendulum(Instrument):
             out[b + 1] = s * y[b] + c * y[b + 1]
         return out[:3], out[3:], nfev
 
-    def _simulate_parareal(self, t, r0, v0, amp, progress=None):
-        """The fast path: all swings at once (:mod:`gyro_instrument.core.parareal`).
+    #: Swings per parareal window of a streamed run: memory ~10 kB per swing at 48 steps (the grid
+    #: of positions and derivatives, the Newton pass's stages), so a window of 2048 swings (9.3 h of
+    #: the 67 m pendulum) holds ~20 MB whatever the duration; long enough that the Python overhead
+    #: of a window (~600 batched right-hand-side calls per Newton pass) stays small against the
+    #: numpy work it drives (a sidereal day at 20 Hz, CPU under load: one window 2.2 s, windows of
+    #: 2048 swings 2.8 s, of 512 swings 3.7 s).
+    WINDOW_SWINGS = 2048
 
-        Segments are one swing period T = 4 × the exact quarter period (42) of the comparison
-        pendulum released at θ0 with Quet's minimum deflection β (sec. 2 §II); the first guess of
-        each swing's start is the release turned by the apsidal rate of sec. 2 §III per period
-        (Quet's comparison pendulum: the non-rotating solution turned by k t). Newton-parareal
-        then converges the starts on the full equations (:meth:`rhs_exact`, every listed effect),
-        so the result is the full model to ``shooting_tol``, not the comparison solution.
-        """
-        from gyro_instrument.core.integrate import Trajectory
-        from gyro_instrument.core.parareal import dense_output, parareal
-        c0, w0t = time.process_time(), time.perf_counter()
-        period, phi, nfev0, _ = self._first_swing(r0, v0)
-        span = float(t[-1] - t[0])
-        n = max(1, int(math.ceil(span / period)))
-        y0 = np.concatenate([r0, v0])
-        ang = phi * np.arange(n + 1)
-        pred = np.empty((n + 1, 6))
+    def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
+        """Newton-parareal over ``n_seg`` whole swings from ``y_start`` (:func:`~gyro_instrument.core.
+        parareal.parareal`); first guess of each swing's start: ``y_start`` turned about the vertical by
+        ``phi`` per swing (Quet's comparison pendulum, sec. 2). Returns (grid, info, end state)."""
+        from gyro_instrument.core.parareal import parareal
+        ang = phi * np.arange(n_seg + 1)
+        pred = np.empty((n_seg + 1, 6))
         for b in (0, 3):
-            pred[:, b] = np.cos(ang) * y0[b] - np.sin(ang) * y0[b + 1]
-            pred[:, b + 1] = np.sin(ang) * y0[b] + np.cos(ang) * y0[b + 1]
-            pred[:, b + 2] = y0[b + 2]
+            pred[:, b] = np.cos(ang) * y_start[b] - np.sin(ang) * y_start[b + 1]
+            pred[:, b + 1] = np.sin(ang) * y_start[b] + np.cos(ang) * y_start[b + 1]
+            pred[:, b + 2] = y_start[b + 2]
         w0sq = self.g / self.l
-        scale = np.array([amp] * 3 + [amp * math.sqrt(w0sq)] * 3)
-        U, grid, info = parareal(self.rhs_exact(), y0, period, pred, self.segment_steps, scale,
-                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress)
-        y = dense_output(grid, period, t - t[0], 3)
-        pos, vel = y[:3], y[3:]
-        traj = Trajectory(t, y, info["rhs_columns"] + nfev0, time.perf_counter() - w0t, time.process_time() - c0,
-                          f"parareal RK8 ({self.segment_steps} steps/period, {info['iterations']} passes)")
-        cols = pendulum_columns(pos, vel, w0sq)
-        return Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
-                                                "period_s": period, "segments": n})
+        _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.segment_steps, scale,
+                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
+                                 span=span)
+        return grid, info, grid[0][-1, :, -1].copy()
+
+    def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
+        """The fast path (:mod:`gyro_instrument.core.parareal`), window by window of whole swings.
+
+        Segments are one swing period T, measured on the first swing of the full model
+        (:meth:`_first_swing`: Quet's quarter period (42) with the minimum deflection β of sec. 2 §II
+        as the guess); the first guess of each swing's start is the window's start turned by the
+        apsidal angle per period (sec. 2 §III: the comparison pendulum). Newton-parareal then
+        converges the starts on the full equations (:meth:`rhs_exact`, every listed effect), so the
+        result is the full model to ``shooting_tol``, not the comparison solution. The run's
+        ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
+        from the fine end state of window w's last swing, so the state carried is the integrated one
+        and the windows do not depend on how the samples are cut into blocks."""
+        c0, w0t = time.process_time(), time.perf_counter()
+        cpu = wall = 0.0                     # this generator's own time (not the consumer's between blocks)
+        period, phi, evals, _ = self._first_swing(r0, v0)
+        n_total = max(1, int(math.ceil((t_end - t0) / period)))
+        per = self.WINDOW_SWINGS
+        scale = np.array([amp] * 3 + [amp * math.sqrt(self.g / self.l)] * 3)
+        w0sq = self.g / self.l
+        window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
+        passes = 0
+        for t in blocks:
+            if c0 is None:
+                c0, w0t = time.process_time(), time.perf_counter()
+            tau = t - t0
+            seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
+            win = seg // per
+            y = np.empty((6, t.size))
+            for w in range(int(win[0]), int(win[-1]) + 1):
+                while window < w:            # every window in turn: the state is carried through all
+                    window += 1
+                    n_seg = min(per, n_total - window * per)
+                    span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
+                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
+                    rows = hermite_rows(grid, 3)          # once per window, for every block in it
+                    evals += info["rhs_columns"]
+                    passes += info["iterations"]
+                sel = win == w
+                if sel.any():
+                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3, rows=rows)
+            pos, vel = y[:3], y[3:]
+            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
+            c0 = None
+            traj = Trajectory(t, y, evals, wall, cpu,
+                              f"parareal RK8 ({self.segment_steps} steps/period, {passes} passes in "
+                              f"{window + 1} window{'s' if window else ''})")
+            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
+                                                   "period_s": period, "segments": n_total})
 
 
 def _swing_frames(U, w0sq):
@@ -611,25 +726,36 @@ class CompoundPendulum(Instrument):
         return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
                           np.array([0.0, 0.0, -self.site.gravity_m_s2]), self.effects.values())
 
-    def simulate(self, t, **options) -> Simulation:
-        t = np.asarray(t, dtype=float)
+    STREAMS = True
+
+    def stream(self, blocks, **options) -> Iterator[Simulation]:
+        """Integrate the hinge chain block by block (:meth:`Instrument.stream`): one DOP853 step
+        sequence bounded by the run's end, carried across blocks, so the blocks concatenate to
+        :meth:`simulate` bit for bit. Raises SceneError (``transverse_inertia_kg_m2``) for a run of
+        more swings than can be integrated."""
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
         check_period_count(f"instruments.{self.name}.transverse_inertia_kg_m2", self.A,
-                           2.0 * math.pi * math.sqrt(self.equivalent_length_m / self.site.gravity_m_s2),
-                           float(t[-1] - t[0]))
+                           2.0 * math.pi * math.sqrt(self.equivalent_length_m / self.site.gravity_m_s2), t_end - t0)
         chain = self.build_chain()
         d = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
                       -math.cos(self.theta0)])
         # Body axis (0,0,-1) after Rx(a) Ry(b) is (−sin b, cos b sin a, −cos b cos a).
         b = math.asin(-d[0])
         a = math.atan2(d[1], -d[2])
-        traj = integrate(chain.rhs, [a, b, 0.0, 0.0, 0.0, self.spin_rate_rad_s], t, rtol=self.rtol, atol=1e-13)
-        qa, qb, qs, qda, qdb, qds = traj.y
-        lc = self.lc
-        pos = lc * np.vstack([-np.sin(qb), np.cos(qb) * np.sin(qa), -np.cos(qb) * np.cos(qa)])
-        # velocity of the CM by differentiating the expression
-        vel = lc * np.vstack([-np.cos(qb) * qdb,
-                              -np.sin(qb) * qdb * np.sin(qa) + np.cos(qb) * np.cos(qa) * qda,
-                              np.sin(qb) * qdb * np.cos(qa) + np.cos(qb) * np.sin(qa) * qda])
-        cols = pendulum_columns(pos, vel, self.site.gravity_m_s2 / self.equivalent_length_m)
-        cols["spin_rate"] = relative_spin_rad_s(qb, qda, qds)
-        return Simulation(t, cols, traj, extra={"chain": chain})
+        run = integration(chain.rhs, [a, b, 0.0, 0.0, 0.0, self.spin_rate_rad_s], t0, t_end, rtol=self.rtol,
+                          atol=1e-13)
+        unwrappers = (Unwrapper(), Unwrapper())
+        for t in blocks:
+            traj = run.advance(t)
+            qa, qb, qs, qda, qdb, qds = traj.y
+            lc = self.lc
+            pos = lc * np.vstack([-np.sin(qb), np.cos(qb) * np.sin(qa), -np.cos(qb) * np.cos(qa)])
+            # velocity of the CM by differentiating the expression
+            vel = lc * np.vstack([-np.cos(qb) * qdb,
+                                  -np.sin(qb) * qdb * np.sin(qa) + np.cos(qb) * np.cos(qa) * qda,
+                                  np.sin(qb) * qdb * np.cos(qa) + np.cos(qb) * np.sin(qa) * qda])
+            cols = pendulum_columns(pos, vel, self.site.gravity_m_s2 / self.equivalent_length_m, unwrappers)
+            cols["spin_rate"] = relative_spin_rad_s(qb, qda, qds)
+            yield Simulation(t, cols, traj, extra={"chain": chain})

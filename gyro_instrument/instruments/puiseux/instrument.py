@@ -7,16 +7,17 @@ small-angle or other approximation, so there is nothing to switch on or off.
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from gyro_instrument.core.angles import NumpyUnwrapper
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.integrate import integrate
+from gyro_instrument.core.integrate import integration
 from gyro_instrument.core.params import PairParam, Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
-from gyro_instrument.instruments.base import Column, Instrument, Simulation
+from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general
 from gyro_instrument.instruments.puiseux.general import (general_modes, inertia_conjugacy, linear_rotation,
                                                          normal_frame)
@@ -501,8 +502,11 @@ class PuiseuxBody(Instrument):
                 "normal_force_N": N, "energy_J": energy, "angular_momentum_vertical_kg_m2_s": lz,
                 "quaternion_norm": np.sqrt(qn2)}
 
-    def simulate(self, t, rtol=None, atol=1e-12) -> Simulation:
-        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]).
+    STREAMS = True
+
+    def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
+        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]): one block of
+        :meth:`stream`.
 
         Returns
         -------
@@ -512,31 +516,43 @@ class PuiseuxBody(Instrument):
             ``min_normal_force_N`` (negative: the body would leave the plane, outside the model)
             and ``state`` (7, m).
         """
-        t = np.asarray(t, dtype=float)
-        traj = integrate(self.rhs(), self.initial_state(), t, method="DOP853",
-                         rtol=self.rtol if rtol is None else rtol, atol=atol)
-        d = self.diagnostics(traj.y)
-        n, axis = d["n"], d["axis_enu"]
-        if self.general:
-            u = self.u_body
-            tilt = np.arctan2(np.linalg.norm(np.cross(n.T, u), axis=1), u @ n)
-            spin = u @ traj.y[4:]
-        else:
-            tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
-            spin = traj.y[6].copy()
-        columns = {"tilt": tilt,
-                   "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
-                   "spin_rate": spin,
-                   "com_height": d["com_height_m"],
-                   "vertical_body_x": n[0], "vertical_body_y": n[1]}
-        columns.update(self.contact_columns(traj.y, n))
-        extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
-                                   "normal_force_N", "com_velocity_m_s")}
-        extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
-        extra["state"] = traj.y
-        return Simulation(t, columns, traj, extra=extra)
+        return super().simulate(t, rtol=rtol, atol=atol, **options)
 
-    def contact_columns(self, y, n) -> dict:
+    def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
+        """Block by block (:meth:`Instrument.stream`): one DOP853 step sequence bounded by the run's
+        end, carried across blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn
+        about the vertical is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the
+        block's minimum."""
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
+        run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
+                          rtol=self.rtol if rtol is None else rtol, atol=atol)
+        carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
+        for t in blocks:
+            traj = run.advance(t)
+            d = self.diagnostics(traj.y)
+            n, axis = d["n"], d["axis_enu"]
+            if self.general:
+                u = self.u_body
+                tilt = np.arctan2(np.linalg.norm(np.cross(n.T, u), axis=1), u @ n)
+                spin = u @ traj.y[4:]
+            else:
+                tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
+                spin = traj.y[6].copy()
+            columns = {"tilt": tilt,
+                       "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
+                       "spin_rate": spin,
+                       "com_height": d["com_height_m"],
+                       "vertical_body_x": n[0], "vertical_body_y": n[1]}
+            columns.update(self.contact_columns(traj.y, n, carry))
+            extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
+                                       "normal_force_N", "com_velocity_m_s")}
+            extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
+            extra["state"] = traj.y
+            yield Simulation(t, columns, traj, extra=extra)
+
+    def contact_columns(self, y, n, carry=None) -> dict:
         """The contact point and the turn about the vertical along a state history (sec. I and III).
 
         Parameters
@@ -545,6 +561,10 @@ class PuiseuxBody(Instrument):
             States.
         n : ndarray (3, m)
             Upward vertical in body axes.
+        carry : dict, optional
+            Across consecutive blocks of one run: ``{"unwrap": NumpyUnwrapper(), "turn0": None}``,
+            updated in place (the turn is unwrapped across blocks and measured from the run's first
+            sample); None for a whole history at once.
 
         Returns
         -------
@@ -562,6 +582,14 @@ class PuiseuxBody(Instrument):
         world = np.einsum("mij,jm->im", R, xp)
         rest = self.rest_quaternion()
         rel = quat_mul(q, rest * np.array([1.0, -1.0, -1.0, -1.0]))
-        turn = 2.0 * np.unwrap(np.arctan2(rel[:, 3], rel[:, 0]))
+        raw = np.arctan2(rel[:, 3], rel[:, 0])
+        if carry is None:
+            turn = 2.0 * np.unwrap(raw)
+            turn0 = turn[0]
+        else:
+            turn = 2.0 * carry["unwrap"](raw)
+            if carry["turn0"] is None:
+                carry["turn0"] = turn[0]
+            turn0 = carry["turn0"]
         return {"contact_x": xp[0], "contact_y": xp[1], "contact_z": xp[2],
-                "contact_east": world[0], "contact_north": world[1], "turn_angle": turn - turn[0]}
+                "contact_east": world[0], "contact_north": world[1], "turn_angle": turn - turn0}
