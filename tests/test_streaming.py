@@ -123,6 +123,7 @@ def test_compound_pendulum_streams_bit_for_bit():
     ("free_gyroscope", []),                                                  # closed form
     ("free_gyroscope", ["instruments.free_gyro.model=numerical", "duration_s=2"]),
     ("puiseux_spheroid", ["duration_s=2"]),
+    ("puiseux_general", ["duration_s=2"]),                                  # sec. III body, contact point, turn
 ])
 def test_scene_instruments_stream_bit_for_bit(scene, over):
     sc = load_scene(scene, ["duration_s=30"] + over)

@@ -534,9 +534,12 @@ class PuiseuxBody(Instrument):
             d = self.diagnostics(traj.y)
             n, axis = d["n"], d["axis_enu"]
             if self.general:
-                u = self.u_body
-                tilt = np.arctan2(np.linalg.norm(np.cross(n.T, u), axis=1), u @ n)
-                spin = u @ traj.y[4:]
+                u = self.u_body      # elementwise sums, not BLAS: the same floats whatever the block
+                w = traj.y[4:]
+                cross = np.cross(n.T, u)
+                tilt = np.arctan2(np.sqrt(cross[:, 0] ** 2 + cross[:, 1] ** 2 + cross[:, 2] ** 2),
+                                  u[0] * n[0] + u[1] * n[1] + u[2] * n[2])
+                spin = u[0] * w[0] + u[1] * w[1] + u[2] * w[2]
             else:
                 tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
                 spin = traj.y[6].copy()
@@ -579,7 +582,7 @@ class PuiseuxBody(Instrument):
         xp = self.contact_points_body(n)
         q = np.asarray(y[:4], dtype=float).T
         R = quat_to_matrix(q)
-        world = np.einsum("mij,jm->im", R, xp)
+        world = [R[:, i, 0] * xp[0] + R[:, i, 1] * xp[1] + R[:, i, 2] * xp[2] for i in (0, 1)]   # R x_P, per sample
         rest = self.rest_quaternion()
         rel = quat_mul(q, rest * np.array([1.0, -1.0, -1.0, -1.0]))
         raw = np.arctan2(rel[:, 3], rel[:, 0])
