@@ -9,9 +9,9 @@
   48 h of the same scene, with the run's own account of what grows (``--stats``:
   ``estimator_bytes``, the estimator's kept samples).
 
-Two kinds of instrument: ``foucault_pantheon``'s pendulum as shipped (it does not stream yet,
-``Instrument.STREAMS`` False: its default ``stream`` integrates the whole run before the first
-block), and the closed-form gyrocompass of ``tests/streaming_instrument.py`` (streams; needs a source
+Two kinds of instrument: ``foucault_pantheon``'s pendulum as shipped (it streams: ``integrator:
+auto`` runs parareal window by window of whole swings; ``adaptive`` continues one DOP853 step
+sequence), and the closed-form gyrocompass of ``tests/streaming_instrument.py`` (streams; needs a source
 checkout), which isolates what the layers downstream of ``Instrument.stream`` cost: simulator
 blocks, estimator, recorder, DDS. Every child runs on loopback like the suite's other benchmark
 (discovery range LOCALHOST and, as root, a loopback-only network namespace).
@@ -160,9 +160,8 @@ def import_time() -> float:
 def live_rows(quick=False, progress=print) -> list:
     """Rows (target, measured, unit, goal, met) for ``targets.csv``.
 
-    * launch to first message on disk, 1 h and 48 h: ``foucault_pantheon`` as shipped (adaptive; the
-      pendulum does not stream yet, ``STREAMS`` False: its whole run is integrated before its first
-      block, so the 48 h row is capped at 60 s), on its parareal fast path, and over the tests'
+    * launch to first message on disk, 1 h and 48 h: ``foucault_pantheon`` as shipped (``integrator:
+      auto``, parareal windows) and on its adaptive integrator, and over the tests'
       streaming gyrocompass (:func:`layers_first_message`: the layers downstream of ``stream``);
     * peak RSS of whole runs, 1 h vs 48 h: ``foucault_pantheon`` on its fast path at 0.2 Hz, and the
       streaming gyrocompass at 1 Hz with 100 s windows (172 800 samples for 48 h). The goal (48 h within
@@ -175,8 +174,8 @@ def live_rows(quick=False, progress=print) -> list:
     rows = []
     imp = import_time()
     rows.append(("run: interpreter start and import of the suite (rclpy), alone", imp, "s", "", True))
-    cases = [("foucault_pantheon, adaptive as shipped (does not stream yet)", ()),
-             ("foucault_pantheon, parareal (does not stream yet)", ("instruments.pendulum.integrator=parareal",))]
+    cases = [("foucault_pantheon, adaptive", ("instruments.pendulum.integrator=adaptive",)),
+             ("foucault_pantheon as shipped (auto: parareal)", ())]
     for d in (SHORT_S, LONG_S):
         for label, over in cases[1 if quick else 0:]:
             progress(f"  run {label}, {d / 3600:g} h: time to first message")
@@ -187,8 +186,8 @@ def live_rows(quick=False, progress=print) -> list:
         rows.append(_first_row(f"streaming gyrocompass (tests/streaming_instrument.py), {d / 3600:g} h", s, note, imp))
     # at 1 Hz the pendulum publishes its markers every sample (once per second): 0.2 Hz keeps its
     # 48 h run to 34 560 samples; the gyrocompass has no markers and runs 172 800 samples at 1 Hz
-    fast = ("sample_rate_hz=0.2", "instruments.pendulum.integrator=parareal")
-    for label, rate, measure in (("foucault_pantheon, parareal (does not stream yet)", 0.2,
+    fast = ("sample_rate_hz=0.2",)
+    for label, rate, measure in (("foucault_pantheon as shipped (auto: parareal)", 0.2,
                                   lambda d: peak_rss("foucault_pantheon", d, fast, ("--window-s", "500"))),
                                  ("streaming gyrocompass (tests/streaming_instrument.py)", 1.0, layers_peak_rss)):
         got = {}
