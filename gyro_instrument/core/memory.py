@@ -29,11 +29,7 @@ from gyro_instrument.core.errors import SceneError
 #: The estimate path (sensor copies, estimator work arrays) sets it: 9.0, taken as 12 for margin.
 PEAK_FACTOR = 12.0
 
-#: Instrument type -> output channels per sample. The core knows no instrument: the instruments
-#: package fills this from each class's ``COLUMNS`` when it is imported.
-CHANNELS = {}
-
-#: Channels assumed for a type missing from :data:`CHANNELS`.
+#: Channels assumed for a scene built without its instruments' classes (``Scene.output_channels`` 0).
 DEFAULT_CHANNELS = 8
 
 
@@ -44,7 +40,7 @@ def sample_count(scene) -> int:
 
 def channel_count(scene) -> int:
     """``time`` plus the output columns of every instrument of the scene."""
-    return 1 + sum(CHANNELS.get(spec[0], DEFAULT_CHANNELS) for spec in scene.instruments.values())
+    return scene.output_channels or 1 + DEFAULT_CHANNELS * len(scene.instruments)
 
 
 def available_bytes() -> int | None:

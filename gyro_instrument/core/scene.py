@@ -70,6 +70,9 @@ class Scene:
     estimator: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     source: str = ""
     raw: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    #: output channels per sample: ``time`` plus every instrument's ``COLUMNS`` (read from each
+    #: instrument class when the scene is built; the memory and disk checks use it)
+    output_channels: int = 0
 
 
 def read_yaml(path) -> dict:
@@ -281,7 +284,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
                  sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
                  effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
                  sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
-                 source=source, raw=MappingProxyType(data))
+                 source=source, raw=MappingProxyType(data),
+                 output_channels=1 + sum(len(instrument_registry[spec[0]].COLUMNS) for spec in instruments.values()))
 
 
 def _build_effects(effects_raw, effect_registry):

@@ -5,7 +5,6 @@ package needs to know about a type is a declared member of the class (the protoc
 :mod:`.base`). A new instrument is one class and one :func:`register` call (docs/extending.md).
 """
 
-from gyro_instrument.core.memory import CHANNELS
 from gyro_instrument.instruments.base import DirectingModel, Instrument
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.gimbal import GimbalGyroscope
@@ -45,14 +44,12 @@ def register(cls) -> type:
         raise ValueError(f"register: {name} MEASURED_CHANNELS {cls.MEASURED_CHANNELS} must be columns "
                          f"({', '.join(sorted(columns))})")
     REGISTRY[name] = cls
-    CHANNELS[name] = len(cls.COLUMNS)   # output channels, for the core's up-front memory check
     return cls
 
 
 def unregister(type_name) -> None:
     """Remove the instrument type ``type_name`` from :data:`REGISTRY` (for tests that register their own)."""
     REGISTRY.pop(type_name, None)
-    CHANNELS.pop(type_name, None)
 
 
 def simulator_kinds() -> dict:
