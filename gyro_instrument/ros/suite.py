@@ -159,7 +159,7 @@ class LockStep:
                 for cb, args in sparse_at.get(i, ()):
                     cb(*args)
 
-    def drain(self):
+    def drain(self) -> None:
         """Run the callbacks of whatever the other subscriptions hold."""
         for sub in self.others:
             with sub.handle:
@@ -188,7 +188,7 @@ QUICK_S = 0.25
 MIN_WINDOW_S, MAX_WINDOW_S = 1.0e-3, 1.0e6
 
 
-def check_window(window_s, field="--window-s"):
+def check_window(window_s, field="--window-s") -> None:
     """Refuse a window that cannot work: not a number, not finite, or outside [:data:`MIN_WINDOW_S`,
     :data:`MAX_WINDOW_S`] (below a millisecond every block is one sample and the run crawls).
 
@@ -208,7 +208,7 @@ def check_window(window_s, field="--window-s"):
 FIT_BYTES_PER_SAMPLE = 660
 
 
-def check_run_memory(scene):
+def check_run_memory(scene) -> None:
     """Refuse a run that cannot fit in memory, before any node starts. Instruments that stream hold
     one block; one that does not (``STREAMS`` False) holds the run (``core.memory.check_memory``'s
     estimate). The estimator keeps 8 (2 + k) bytes per sample of each instrument (k its measured
