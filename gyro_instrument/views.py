@@ -45,7 +45,7 @@ def _pyplot():
 
 
 # ----------------------------------------------------------------------------- input
-def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE"):
+def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE") -> tuple:
     """What to draw from a table or a bag.
 
     Returns
@@ -165,7 +165,7 @@ def _finite(*arrays):
     return [np.asarray(a, dtype=float)[ok][order] for a in arrays]
 
 
-def swing_azimuth(t, east, north):
+def swing_azimuth(t, east, north) -> tuple:
     """Swing-plane azimuth per swing period: (window centre times s, compass azimuth rad, unwrapped
     modulo π, period s); the principal axis of the deflection over each period (as the Foucault
     estimator measures it). Empty arrays when there is no swing."""
@@ -200,7 +200,7 @@ def swing_azimuth(t, east, north):
     return tc, az, period
 
 
-def oscillation_residuals(t, y):
+def oscillation_residuals(t, y) -> tuple | None:
     """(t, residual) of a gyroscope angle less its fitted oscillation (fundamental and third
     harmonic at the frequency :func:`~gyro_instrument.estimators.period.fit_oscillation` finds,
     plus a constant); None when no oscillation can be fitted."""
@@ -246,7 +246,7 @@ def _k_line(scene):
     return scene.site.earth_rate_rad_s * math.sin(lat), scene.site.latitude_deg, scene.site.earth_rate_rad_s
 
 
-def draw_views(series, scene, out_dir, title=""):
+def draw_views(series, scene, out_dir, title="") -> list:
     """Write the PNGs of :data:`VIEWS` that apply (swing azimuth and bob path need a pendulum);
     return their paths."""
     plt = _pyplot()
@@ -360,7 +360,7 @@ def _residuals_figure(plt, residual_rows, axis):
     return fig
 
 
-def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False):
+def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False) -> tuple:
     """Read ``path`` (table or bag), draw the views into ``out_dir``; return (PNG paths, notes).
 
     Raises

@@ -66,7 +66,7 @@ TARGETS = {"latitude_arcsec": ("latitude", ARCSEC_RAD), "latitude_deg": ("latitu
            "earth_rate_deg_h": ("earth_rate", DEG_H_RAD_S)}
 
 
-def parse_targets(specs):
+def parse_targets(specs) -> list:
     """``["latitude_arcsec=1", "earth_rate_rad_s=1e-10"]`` -> list of (name, value in its unit, SI value).
 
     Raises
@@ -116,12 +116,12 @@ class InstrumentModel:
     label: str = ""
 
     @property
-    def min_record_s(self):
+    def min_record_s(self) -> float:
         cycles = GYRO_MIN_CYCLES if self.kind == "gyro" else PENDULUM_MIN_PERIODS
         return cycles * 2.0 * math.pi / self.omega
 
 
-def instrument_models(scene):
+def instrument_models(scene) -> tuple:
     """(models, skipped): :class:`InstrumentModel` per Earth-rate instrument of ``scene``, probed by
     a noise-free simulation of four periods (its amplitudes and frequency, as the fit sees them),
     and name -> reason for the instruments that give no Earth-rate measurement."""
@@ -178,27 +178,27 @@ class SensorSpec:
     rate_hz: float
 
     @classmethod
-    def from_scene(cls, scene):
+    def from_scene(cls, scene) -> "SensorSpec":
         s = dict(scene.sensor)
         return cls(s.get("noise_rad", 1e-4), s.get("quantization_rad", 0.0), s.get("spin_noise_rad_s", 0.0),
                    s.get("dropout_fraction", 0.0), scene.sample_rate_hz)
 
     @property
-    def sigma_rad(self):
+    def sigma_rad(self) -> float:
         """√(σ² + q²/12): quantization as extra white noise (period.py's module docstring)."""
         return math.sqrt(self.noise_rad ** 2 + self.quantization_rad ** 2 / 12.0)
 
-    def scaled(self, noise=1.0, rate=1.0):
+    def scaled(self, noise=1.0, rate=1.0) -> "SensorSpec":
         return SensorSpec(self.noise_rad * noise, self.quantization_rad, self.spin_noise_rad_s * noise,
                           self.dropout_fraction, self.rate_hz * rate)
 
 
-def samples(T, rate_hz):
+def samples(T, rate_hz) -> int:
     """N = ⌊T f⌋ + 1, the scene's sample grid (:func:`gyro_instrument.core.scene.sample_times`)."""
     return int(math.floor(T * rate_hz + 1e-9)) + 1
 
 
-def sine_fit_covariance(T, rate_hz, omega, coef, sigma, keep=1.0):
+def sine_fit_covariance(T, rate_hz, omega, coef, sigma, keep=1.0) -> tuple:
     """Inverse Fisher information of ``fit_oscillation``'s model (offset, first and third harmonic, ω)
     for the swing ``coef`` = (a1, b1, a3, b3) on t_i = i/f over T, white noise σ, a fraction
     ``keep`` of the samples kept. Returns (var ω̂ (rad²/s²), var â1 (rad²), cov(ω̂, â1), method);
@@ -240,7 +240,7 @@ def sine_fit_covariance(T, rate_hz, omega, coef, sigma, keep=1.0):
     return float(cov[0, 0]), var_a, cov_wa, method
 
 
-def instrument_sigma(m, T, sensor):
+def instrument_sigma(m, T, sensor) -> tuple:
     """1-σ Cramér–Rao bound on the measurement of ``m`` (rad/s: y = n s(γ) or k) over T s, and how."""
     keep = 1.0 - sensor.dropout_fraction
     sigma = sensor.sigma_rad
@@ -263,13 +263,13 @@ def instrument_sigma(m, T, sensor):
     return abs(m.value) * math.sqrt(rel2), how
 
 
-def counting_sigma(m, T):
+def counting_sigma(m, T) -> float:
     """σ of y from Quet's counting over T s: 2 T_swing / (√3 T) relative (:func:`.period.count_oscillations`)."""
     t_swing = math.pi / m.omega
     return abs(m.value) * 2.0 * t_swing / (math.sqrt(3.0) * T)
 
 
-def combined(models, sigmas, hemisphere=None, latitude_rad=None):
+def combined(models, sigmas, hemisphere=None, latitude_rad=None) -> dict:
     """Combined 1-σ bounds from per-instrument σ: dict with latitude_rad, earth_rate_rad_s (None with
     ``*_reason`` when not determined), via ``solve_latitude(..., use_crlb=True)``."""
     # a noise-free sensor has a zero bound: keep its structure (what it can determine) with a vanishing σ
@@ -299,19 +299,19 @@ class Planner:
     def __init__(self, models, sensor, hemisphere=None):
         self.models, self.sensor, self.hemisphere = models, sensor, hemisphere
 
-    def min_record_s(self):
+    def min_record_s(self) -> float:
         return max(m.min_record_s for m in self.models)
 
-    def bounds(self, T, counting=False):
+    def bounds(self, T, counting=False) -> tuple:
         """Combined bounds at T (dict, see :func:`combined`) and the per-instrument σ (name -> rad/s)."""
         models = [m for m in self.models if not counting or m.kind == "gyro"]
         sig = [counting_sigma(m, T) if counting else instrument_sigma(m, T, self.sensor)[0] for m in models]
         return combined(models, sig, self.hemisphere), dict(zip((m.name for m in models), sig))
 
-    def sigma(self, quantity, T, counting=False):
+    def sigma(self, quantity, T, counting=False) -> float | None:
         return self.bounds(T, counting)[0].get(f"{quantity}_rad" if quantity == "latitude" else "earth_rate_rad_s")
 
-    def solve(self, quantity, target, counting=False):
+    def solve(self, quantity, target, counting=False) -> tuple:
         """Shortest T (s) with the bound ≤ ``target`` (SI), the estimator's minimum record included:
         (T or None, note). Bisection in log T to 1e-4 relative."""
         t_min = max(m.min_record_s for m in self.models if m.kind == "gyro") if counting else self.min_record_s()
@@ -338,7 +338,7 @@ class Planner:
                 lo = mid
         return hi, ""
 
-    def slope(self, quantity, T, factor=2.0):
+    def slope(self, quantity, T, factor=2.0) -> float | None:
         """d ln σ / d ln T around T, the secant from T/factor to T·factor (−3/2 in the long-record
         regime; a secant, because the exact bound ripples with the phase at which the record ends)."""
         a, b = self.sigma(quantity, T / factor), self.sigma(quantity, T * factor)
@@ -363,13 +363,13 @@ NOISE_FREE = ("sensor.noise_rad=0", "sensor.quantization_rad=0", "sensor.spin_no
               "sensor.dropout_fraction=0")
 
 
-def noise_free_overrides():
+def noise_free_overrides() -> list:
     """The overrides that switch the sensor off (as ``bench``'s systematic-floor study does)."""
     return list(NOISE_FREE)
 
 
 def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_factors=RATE_FACTORS, floor=True,
-         progress=None):
+         progress=None) -> dict:
     """The plan for ``scene_arg`` (shipped name or YAML path) with ``overrides``: per target, the
     observation time per configuration, the bound's dependence on T, the systematic floor at that T,
     the sensitivity to the sensor's noise and rate, and Quet's counting for the same target.
@@ -521,7 +521,7 @@ def _bias(result, quantity):
     return None if n is None else n - truth["earth_rate_rad_s"]
 
 
-def noise_free_estimate(scene_arg, overrides, T):
+def noise_free_estimate(scene_arg, overrides, T) -> tuple:
     """The estimate of the scene with the sensor switched off, over T s per configuration."""
     from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import load_scene
@@ -530,7 +530,7 @@ def noise_free_estimate(scene_arg, overrides, T):
     return scene, estimate_records(scene, truth[1], measure(scene, truth))
 
 
-def systematic_floor(scene_arg, overrides, T, quantity, si, name):
+def systematic_floor(scene_arg, overrides, T, quantity, si, name) -> dict:
     """The estimator's noise-free bias at T against the target; when it exceeds the target, the bias
     with each of the scene's effects (but ``earth_rotation``) switched off names the one that sets it."""
     try:
@@ -569,7 +569,7 @@ def _errors(results, quantity):
     return [e for e in errs if e is not None], sum(e is None for e in errs)
 
 
-def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, chunk=None):
+def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, chunk=None) -> dict:
     """Seeded Monte Carlo at observation time T: ``n_seeds`` sensor draws of one simulation per
     chunk (:func:`~gyro_instrument.estimators.pipeline.seed_sweep` through ``executor``, by default
     :func:`~gyro_instrument.core.parallel.process_executor`); ``progress(done, total)`` after each
@@ -598,7 +598,7 @@ def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, c
     return out
 
 
-def verify_plan(result, n_seeds=100, executor=None, progress=None):
+def verify_plan(result, n_seeds=100, executor=None, progress=None) -> dict:
     """Add ``verify`` to each planned target of ``result`` (from :func:`plan`): the achieved rms over
     ``n_seeds`` at the planned T next to the target and the planned σ (ratio achieved / target)."""
     for entry in result["targets"]:

@@ -22,11 +22,15 @@ files found in it, in split order, with a note; so is a ``.mcap`` of the directo
 import dataclasses
 import os
 import re
+from typing import TYPE_CHECKING
 
 import yaml
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.recording.bag_scan import STATUS_RECORD, BagScan, check_mcap, scan_bag
+
+if TYPE_CHECKING:      # annotations only
+    from gyro_instrument.recording.mcap_io import BagWriter
 
 METADATA = "metadata.yaml"
 ROSBAG2_VERSION = 9
@@ -40,7 +44,7 @@ _LIVELINESS = {0: "system_default", 1: "automatic", 2: "manual_by_node", 3: "man
 
 
 # ----------------------------------------------------------------------------- output
-def bag_format(path, fmt=None, max_bag_size=0, max_bag_duration_s=0.0, field="--bag-format"):
+def bag_format(path, fmt=None, max_bag_size=0, max_bag_duration_s=0.0, field="--bag-format") -> str:
     """The layout to record ``path`` in: ``rosbag2`` (a bag directory) when asked for, when the
     path ends with a slash or names an existing directory, or when splitting is asked for;
     ``mcap`` (one bare file) otherwise.
@@ -68,7 +72,7 @@ def _bag_dir_contents_ok(path):
 
 
 def check_bag_output(path, fmt, field="--bag", inputs=(), overwrite=False, max_bag_size=0,
-                     max_bag_duration_s=0.0):
+                     max_bag_duration_s=0.0) -> None:
     """Refuse a recording destination before anything runs (see ``cli.check_output`` for a file).
 
     A rosbag2 destination is a directory that must not exist, unless ``overwrite`` and it holds
@@ -107,7 +111,8 @@ def check_bag_output(path, fmt, field="--bag", inputs=(), overwrite=False, max_b
                                           "are replaced): not written over")
 
 
-def open_bag_writer(path, fmt="mcap", max_bag_size=0, max_bag_duration_s=0.0, overwrite=False, **kwargs):
+def open_bag_writer(path, fmt="mcap", max_bag_size=0, max_bag_duration_s=0.0, overwrite=False,
+                    **kwargs) -> "BagWriter | BagDirectoryWriter":
     """A :class:`~gyro_instrument.recording.mcap_io.BagWriter` (``mcap``) or a
     :class:`BagDirectoryWriter` (``rosbag2``); the caller checked the path
     (:func:`check_bag_output`)."""
@@ -196,13 +201,13 @@ class BagDirectoryWriter:
         self.commits += self._cur.commits
         self._cur.close(state=state, **fields)
 
-    def split(self):
+    def split(self) -> None:
         """Close the current file (status ``split``) and continue in the next one."""
         self._close_current("split")
         self._open_next()
 
     # -------------------------------------------------------------- BagWriter interface
-    def add_topic(self, topic, type_name, qos=None):
+    def add_topic(self, topic, type_name, qos=None) -> int:
         """Register a topic in the current file and every later one."""
         from gyro_instrument.recording.mcap_io import qos_yaml
         qos = qos or qos_yaml()
@@ -210,7 +215,7 @@ class BagDirectoryWriter:
         self.counts.setdefault(topic, 0)
         return self._cur.add_topic(topic, type_name, qos)
 
-    def write(self, topic, log_time_ns, data, publish_time_ns=None):
+    def write(self, topic, log_time_ns, data, publish_time_ns=None) -> None:
         """Append one message, starting a new file first when a limit is reached."""
         f = self.files[-1]
         if f["count"] and ((self.max_bag_size and self._cur._fh.tell() + self._cur._bytes >= self.max_bag_size)
@@ -225,25 +230,25 @@ class BagDirectoryWriter:
         f["count"] += 1
         self.counts[topic] += 1
 
-    def add_metadata(self, name, data):
+    def add_metadata(self, name, data) -> None:
         """A metadata record in the current file; records added before the first message (the
         scene) are repeated at the start of every later file."""
         if not any(f["count"] for f in self.files):
             self._carried.append((name, data))
         self._cur.add_metadata(name, data)
 
-    def pending(self):
+    def pending(self) -> bool:
         """True when the current file holds messages written since its last commit."""
         return self._cur.pending()
 
-    def since_commit_s(self):
+    def since_commit_s(self) -> float:
         """Wall time since the current file's last commit, s."""
         return self._cur.since_commit_s()
 
-    def commit(self):
+    def commit(self) -> None:
         self._cur.commit()
 
-    def close(self, state="complete", **fields):
+    def close(self, state="complete", **fields) -> None:
         """Finish the last file with status ``state`` (and the recorder's ``fields``: per-topic counts,
         late messages; see :meth:`BagWriter.close`) and write the final ``metadata.yaml``."""
         if not self.closed:
@@ -252,7 +257,7 @@ class BagDirectoryWriter:
             self.closed = True
 
     # -------------------------------------------------------------- metadata.yaml
-    def bag_information(self):
+    def bag_information(self) -> dict:
         """The ``rosbag2_bagfile_information`` mapping (version 9) for the files so far."""
         starts = [f["start"] for f in self.files if f["start"] is not None]
         ends = [f["end"] for f in self.files if f["end"] is not None]
@@ -280,7 +285,7 @@ class BagDirectoryWriter:
             "ros_distro": "jazzy",
         }
 
-    def write_metadata(self):
+    def write_metadata(self) -> None:
         """Write ``metadata.yaml`` atomically (temporary file, then rename)."""
         target = os.path.join(self.path, METADATA)
         tmp = target + ".partial"
@@ -303,7 +308,47 @@ def _split_key(name):
     return (0, int(m.group(1)), name) if m else (1, 0, name)
 
 
-def bag_files(path, field="bag"):
+def _listed_files(path, field, found, notes):
+    """The files of the rosbag2 bag directory ``path`` as its ``metadata.yaml`` lists them, then any
+    ``.mcap`` file it does not list (``found``, noted in ``notes``), in split order.
+
+    Raises :class:`SceneError` (naming ``field``) for a metadata file that does not parse or is not
+    a rosbag2 one, a storage other than mcap, rosbag2 compression, listed files that are missing,
+    or no file at all.
+    """
+    meta_path = os.path.join(path, METADATA)
+    try:
+        with open(meta_path, encoding="utf-8") as fh:
+            doc = yaml.safe_load(fh)
+        info = doc["rosbag2_bagfile_information"]
+        listed = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
+        storage = info.get("storage_identifier", "mcap")
+        mode = str(info.get("compression_mode") or "").lower()
+    except (OSError, yaml.YAMLError, TypeError, KeyError, AttributeError) as exc:
+        raise SceneError(field, path, f"{METADATA} is not a rosbag2 metadata file "
+                                      f"({exc.__class__.__name__})") from None
+    if storage != "mcap":
+        raise SceneError(field, path, f"{METADATA} names storage '{storage}'; only mcap is read "
+                                      f"(convert with 'ros2 bag convert')")
+    if mode not in ("", "none"):
+        raise SceneError(field, path, f"{METADATA} says compression_mode '{mode}'; only uncompressed bag "
+                                      f"files are read (MCAP chunk compression is fine)")
+    missing = [n for n in listed if not os.path.isfile(os.path.join(path, n))]
+    if missing:
+        raise SceneError(field, path, f"{METADATA} names missing files: {', '.join(missing)}")
+    extra = [n for n in found if n not in listed]
+    if extra:
+        notes.append(f"{', '.join(extra)} not listed in {METADATA} (a recording killed before it was "
+                     f"rewritten?): read too")
+    names = sorted(set(listed) | set(extra), key=lambda n: (listed.index(n) if n in listed else len(listed),
+                                                              _split_key(n)))
+    if not names:
+        raise SceneError(field, path, f"is a directory with no bag in it ({METADATA} lists no file and "
+                                      f"there is no .mcap file)")
+    return [os.path.join(path, n) for n in names]
+
+
+def bag_files(path, field="bag") -> tuple:
     """The ``.mcap`` files of a bag, in order, and what was noticed on the way.
 
     Parameters
@@ -340,41 +385,13 @@ def bag_files(path, field="bag"):
                      f"({', '.join(found)})")
         files = [os.path.join(path, n) for n in found]
     else:
-        try:
-            with open(meta_path, encoding="utf-8") as fh:
-                doc = yaml.safe_load(fh)
-            info = doc["rosbag2_bagfile_information"]
-            listed = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
-            storage = info.get("storage_identifier", "mcap")
-            mode = str(info.get("compression_mode") or "").lower()
-        except (OSError, yaml.YAMLError, TypeError, KeyError, AttributeError) as exc:
-            raise SceneError(field, path, f"{METADATA} is not a rosbag2 metadata file "
-                                          f"({exc.__class__.__name__})") from None
-        if storage != "mcap":
-            raise SceneError(field, path, f"{METADATA} names storage '{storage}'; only mcap is read "
-                                          f"(convert with 'ros2 bag convert')")
-        if mode not in ("", "none"):
-            raise SceneError(field, path, f"{METADATA} says compression_mode '{mode}'; only uncompressed bag "
-                                          f"files are read (MCAP chunk compression is fine)")
-        missing = [n for n in listed if not os.path.isfile(os.path.join(path, n))]
-        if missing:
-            raise SceneError(field, path, f"{METADATA} names missing files: {', '.join(missing)}")
-        extra = [n for n in found if n not in listed]
-        if extra:
-            notes.append(f"{', '.join(extra)} not listed in {METADATA} (a recording killed before it was "
-                         f"rewritten?): read too")
-        names = sorted(set(listed) | set(extra), key=lambda n: (listed.index(n) if n in listed else len(listed),
-                                                                  _split_key(n)))
-        if not names:
-            raise SceneError(field, path, f"is a directory with no bag in it ({METADATA} lists no file and "
-                                          f"there is no .mcap file)")
-        files = [os.path.join(path, n) for n in names]
+        files = _listed_files(path, field, found, notes)
     for f in files:
         check_mcap(f, field)
     return files, notes
 
 
-def bag_inputs(path):
+def bag_inputs(path) -> tuple:
     """Every path a command reads for the bag ``path`` (the directory and its files), for the
     never-write-over-an-input checks; a missing or bad bag gives just ``path``."""
     try:
@@ -394,7 +411,7 @@ class BagSetScan(BagScan):
     files: list = dataclasses.field(default_factory=list)
     file_scans: list = dataclasses.field(default_factory=list)
 
-    def damage_dicts(self, epoch_ns):
+    def damage_dicts(self, epoch_ns) -> list:
         out = []
         for f, s in zip(self.files, self.file_scans):
             out += [dict(d, file=os.path.basename(f)) for d in s.damage_dicts(epoch_ns)]
@@ -456,7 +473,7 @@ def _merge(path, files, scans, notes):
     return merged
 
 
-def scan_path(path, field="bag"):
+def scan_path(path, field="bag") -> "BagScan | BagSetScan":
     """:func:`~gyro_instrument.recording.bag_scan.scan_bag` for a bare ``.mcap``, or the merged
     :class:`BagSetScan` of a bag directory (every file CRC-checked); see :func:`bag_files` for
     what is accepted.

@@ -23,7 +23,7 @@ class MessageDecoder:
         return dec(data)
 
 
-def samples_from_bag(path, scan=None):
+def samples_from_bag(path, scan=None) -> tuple:
     """(metadata dict or None, {instrument: (t_ns, position, velocity)}, notes, damaged).
 
     ``path``: a bare ``.mcap`` or a rosbag2 bag directory, split or not

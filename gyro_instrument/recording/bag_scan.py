@@ -27,6 +27,7 @@ import mmap
 import os
 import struct
 import zlib
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from io import BytesIO
 
@@ -66,7 +67,7 @@ class Damage:
     span_from: str = None
     chunk_offsets: tuple = ()
 
-    def as_dict(self, epoch_ns):
+    def as_dict(self, epoch_ns) -> dict:
         """JSON form: times in seconds from ``epoch_ns`` (the scene's start)."""
         def s(ns):
             return None if ns is None else (ns - epoch_ns) / 1e9
@@ -96,7 +97,7 @@ class BagScan:
     recorded_status: str = None
 
     @property
-    def state(self):
+    def state(self) -> str | None:
         """The recorder's last status (see :func:`~gyro_instrument.recording.mcap_io.recording_state`)."""
         if not self.data_end:
             return "no summary"
@@ -106,18 +107,18 @@ class BagScan:
                 state = rec.metadata.get("state")
         return state
 
-    def metadata_record(self, name):
+    def metadata_record(self, name) -> dict | None:
         """The first metadata record of that name as a dict, or None."""
         for rec in self.metadata:
             if rec.name == name:
                 return dict(rec.metadata)
         return None
 
-    def damage_dicts(self, epoch_ns):
+    def damage_dicts(self, epoch_ns) -> list:
         """Every loss, this file's own and what a previous ``recover`` recorded, as JSON dicts."""
         return [d.as_dict(epoch_ns) for d in self.damaged] + [dict(d) for d in self.recorded_damage]
 
-    def records(self, topics=None):
+    def records(self, topics=None) -> Iterator:
         """Yield (schema, channel, message) of every intact message with a known channel."""
         for _, _, _, msg in self.messages:
             ch = self.channels.get(msg.channel_id)
@@ -126,7 +127,7 @@ class BagScan:
             yield (self.schemas.get(ch.schema_id) if ch.schema_id else None), ch, msg
 
 
-def check_mcap(path, field="bag"):
+def check_mcap(path, field="bag") -> None:
     """Refuse what is not an MCAP file before anything is read or written.
 
     Raises
@@ -473,7 +474,7 @@ class _Scanner:
                 scan.recorded_status = rec.metadata.get("status", scan.recorded_status)
 
 
-def scan_bag(path, field="bag"):
+def scan_bag(path, field="bag") -> "BagScan":
     """Read every intact record of an MCAP file, checking every CRC; see the module docstring.
 
     Parameters

@@ -20,7 +20,7 @@ from gyro_instrument.core.scene import EPOCH_NS
 _STAMP_LE, _STAMP_BE = struct.Struct("<iI").unpack_from, struct.Struct(">iI").unpack_from
 
 
-def cdr_stamp_ns(data):
+def cdr_stamp_ns(data) -> int | None:
     """Stamp of a CDR message whose first field is a Time (any Header-first type, or Clock):
     after the 4-byte encapsulation header, int32 sec and uint32 nanosec (little endian here)."""
     if len(data) < 12:
@@ -58,7 +58,7 @@ class CdrLayout:
         self._fixed = [(lo, hi, self.template[lo:hi]) for lo, hi in fixed]
         self._row = np.frombuffer(self.template, dtype=np.uint8)
 
-    def matches(self, data):
+    def matches(self, data) -> bool:
         """True if ``data`` has this layout (same length and the same bytes outside the stamp, the
         float64 fields and the alignment padding)."""
         if len(data) != self.size:
@@ -68,7 +68,7 @@ class CdrLayout:
                 return False
         return True
 
-    def encode(self, t_ns_from_release, *columns):
+    def encode(self, t_ns_from_release, *columns) -> list:
         """One serialized message (bytes) per stamp; ``columns[j]`` is an (n, k_j) array (or (n,)
         for k_j = 1) for field j."""
         t = EPOCH_NS + np.asarray(t_ns_from_release, dtype=np.int64)
@@ -83,7 +83,7 @@ class CdrLayout:
         buf, size = rows.tobytes(), self.size
         return [buf[i:i + size] for i in range(0, n * size, size)]
 
-    def decode(self, datas):
+    def decode(self, datas) -> tuple:
         """Inverse of :meth:`encode` for messages that :meth:`matches`: (t_ns from release as int64,
         [float64 array (n, k) per field])."""
         n = len(datas)
@@ -137,7 +137,7 @@ class _CdrTemplate:
         return off
 
 
-def joint_state_layout(names, frame_id=""):
+def joint_state_layout(names, frame_id="") -> CdrLayout:
     """:class:`CdrLayout` of sensor_msgs/JointState with these joint names; fields position,
     velocity, effort (each ``len(names)`` values, never empty: see :func:`joint_state`)."""
     if not names:
@@ -150,7 +150,7 @@ def joint_state_layout(names, frame_id=""):
     return w.layout([(w.doubles(len(names), True), len(names)) for _ in range(3)])
 
 
-def point_stamped_layout(frame_id):
+def point_stamped_layout(frame_id) -> CdrLayout:
     """:class:`CdrLayout` of geometry_msgs/PointStamped: one field (x, y, z)."""
     w = _CdrTemplate()
     w.string(frame_id)

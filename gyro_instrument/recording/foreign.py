@@ -25,7 +25,7 @@ from gyro_instrument.core.scene import EPOCH_NS
 JOINT_STATE = "sensor_msgs/msg/JointState"
 
 
-def parse_topic_remaps(items, insts, field="--topic"):
+def parse_topic_remaps(items, insts, field="--topic") -> dict:
     """``["pendulum=/lab/bob", ...]`` -> {instrument: topic}.
 
     Raises
@@ -69,7 +69,7 @@ def _column_of(names, name, joint):
     return None
 
 
-def foreign_samples(scan, insts, remaps=None):
+def foreign_samples(scan, insts, remaps=None) -> tuple:
     """Joint samples of the scene's instruments found by name and type in a scanned bag.
 
     Parameters
@@ -194,7 +194,7 @@ def _arrays(wanted, rows, report, notes):
     return samples
 
 
-def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()):
+def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()) -> dict:
     """``replay`` of a bag with the scene given (``--scene``) or taken from the bag's record, the
     instruments' topics found by name and type (:func:`foreign_samples`).
 

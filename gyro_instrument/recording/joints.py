@@ -14,6 +14,7 @@ integrate the simulated spin; efforts are 0 (no torque sensor) — every array i
 Fast-CDR and independent readers expect.
 """
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -224,7 +225,7 @@ class _InstrumentJoints:
         return js
 
 
-def joint_blocks(scene, kinds=None, seed=None, window_s=DEFAULT_WINDOW_S, insts=None):
+def joint_blocks(scene, kinds=None, seed=None, window_s=DEFAULT_WINDOW_S, insts=None) -> Iterator:
     """:func:`joint_streams` block by block: integrate (``Instrument.stream``), measure
     (:class:`~gyro_instrument.estimators.pipeline.MeasureStream`) and lay out one window of
     ``window_s`` simulated seconds at a time; memory is a few blocks whatever the duration.
@@ -273,16 +274,7 @@ def joint_blocks(scene, kinds=None, seed=None, window_s=DEFAULT_WINDOW_S, insts=
         t = b_ns / 1e9
         parts = {}
         for name, j in lay.items():
-            sim = next(gens[name])
-            pos, rated, side = j.rows(t, sim.columns)
-            rates = j.grad.push(t, rated)
-            contact = j.inst.contact_point_body(sim.columns) if j.inst.SHOWS_CONTACT_POINT else None
-            if j.held is not None:
-                pos, side = np.concatenate([j.held[0], pos]), np.concatenate([j.held[1], side])
-                if contact is not None:
-                    contact = np.concatenate([j.held[2], contact])
-            j.held = (pos[-1:], side[-1:], None if contact is None else contact[-1:])
-            parts[name] = (pos[:-1], side[:-1], rates, None if contact is None else contact[:-1])
+            parts[name] = _block_part(j, t, next(gens[name]))
         t_all = b_ns if held_t is None else np.concatenate([held_t, b_ns])
         held_t = t_all[-1:]
         if t_all.size > 1:
@@ -290,6 +282,22 @@ def joint_blocks(scene, kinds=None, seed=None, window_s=DEFAULT_WINDOW_S, insts=
             start += t_all.size - 1
     yield JointBlock(start, held_t, {n: j.stream(j.held[0], j.held[1], j.grad.finish(), j.held[2])
                                      for n, j in lay.items()})
+
+
+def _block_part(j, t, sim):
+    """Lay out one integrated block ``sim`` (at times ``t``, s) of one instrument's joints ``j``:
+    positions, side channels and contact points with the sample held back from the previous block
+    in front, the block's last sample held back for the next one (its velocity needs the sample
+    after it). Returns ``(pos, side, rates, contact)`` of the samples this block completes."""
+    pos, rated, side = j.rows(t, sim.columns)
+    rates = j.grad.push(t, rated)
+    contact = j.inst.contact_point_body(sim.columns) if j.inst.SHOWS_CONTACT_POINT else None
+    if j.held is not None:
+        pos, side = np.concatenate([j.held[0], pos]), np.concatenate([j.held[1], side])
+        if contact is not None:
+            contact = np.concatenate([j.held[2], contact])
+    j.held = (pos[-1:], side[-1:], None if contact is None else contact[-1:])
+    return pos[:-1], side[:-1], rates, None if contact is None else contact[:-1]
 
 
 def _chain_first(first, rest):

@@ -272,6 +272,30 @@ def damage_record(scan, epoch_ns) -> dict:
             "status": str(scan.recorded_status or scan.state), "source": os.path.basename(scan.path)}
 
 
+def _write_intact(fo, scan, records, lossy, epoch_ns):
+    """Write to the open binary file ``fo`` a complete, indexed (ZSTD chunks, data CRCs) MCAP of
+    what ``scan`` found intact: its schemas and channels, the messages ``records`` and its metadata,
+    the old damage record replaced by a fresh :func:`damage_record` when ``lossy``."""
+    w = Writer(fo, compression=CompressionType.ZSTD, enable_data_crcs=True)
+    w.start(profile=scan.header.profile if scan.header else "ros2", library="gyro_instrument recover")
+    schema_ids, channel_ids = {}, {}
+    for sid in sorted(scan.schemas):
+        s = scan.schemas[sid]
+        schema_ids[sid] = w.register_schema(s.name, s.encoding, s.data)
+    for cid in sorted(scan.channels):
+        c = scan.channels[cid]
+        channel_ids[cid] = w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
+                                              dict(c.metadata))
+    for rec in scan.metadata:
+        if rec.name != DAMAGE_RECORD:       # merged into the new one below
+            w.add_metadata(rec.name, dict(rec.metadata))
+    for _, channel, m in records:
+        w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
+    if lossy:
+        w.add_metadata(DAMAGE_RECORD, damage_record(scan, epoch_ns))
+    w.finish()
+
+
 def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
     """Rewrite a recording that is cut short (no summary/footer) or damaged (chunks failing their
     CRC, a broken summary) into a complete, indexed MCAP holding only what is intact: the schemas
@@ -318,24 +342,7 @@ def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{os.path.basename(out)}.", suffix=".partial")
     try:
         with os.fdopen(fd, "wb") as fo:
-            w = Writer(fo, compression=CompressionType.ZSTD, enable_data_crcs=True)
-            w.start(profile=scan.header.profile if scan.header else "ros2", library="gyro_instrument recover")
-            schema_ids, channel_ids = {}, {}
-            for sid in sorted(scan.schemas):
-                s = scan.schemas[sid]
-                schema_ids[sid] = w.register_schema(s.name, s.encoding, s.data)
-            for cid in sorted(scan.channels):
-                c = scan.channels[cid]
-                channel_ids[cid] = w.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
-                                                      dict(c.metadata))
-            for rec in scan.metadata:
-                if rec.name != DAMAGE_RECORD:       # merged into the new one below
-                    w.add_metadata(rec.name, dict(rec.metadata))
-            for _, channel, m in records:
-                w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
-            if lossy:
-                w.add_metadata(DAMAGE_RECORD, damage_record(scan, epoch_ns))
-            w.finish()
+            _write_intact(fo, scan, records, lossy, epoch_ns)
         os.chmod(tmp, 0o644)
         os.replace(tmp, out)
     except BaseException:

@@ -18,7 +18,7 @@ def _span_s(v, end):
     return f"{txt}0 s" if txt.endswith(".") else f"{txt} s"
 
 
-def damage_line(d):
+def damage_line(d) -> str:
     """One line for a lost stretch of a bag (a ``damaged`` entry of the replay JSON)."""
     reason = d.get("reason") or "damaged"
     where = f" at byte {d['offset']}" if d.get("offset") is not None else ""
@@ -36,7 +36,7 @@ def damage_line(d):
     return f"{what}: {span}"
 
 
-def replay_bag(path, scene=None, overrides=(), topics=()):
+def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     """Estimate from a recorded bag (no DDS): the scene from the bag's metadata, the samples from its
     JointState messages decoded without ROS. Every chunk's CRC is checked; a damaged chunk is left
     out and listed under ``damaged`` with the log-time span it held (seconds from the scene's start).
@@ -83,7 +83,7 @@ def replay_bag(path, scene=None, overrides=(), topics=()):
     return result
 
 
-def read_span_s(samples):
+def read_span_s(samples) -> float:
     """Shortest span of joint stamps actually decoded from a bag, over its instruments, s (0 when
     none): the observation a replay really had (``samples`` as from ``samples_from_bag``)."""
     spans = [(int(t[-1]) - int(t[0])) / 1e9 for t, _, _ in samples.values() if len(t)]

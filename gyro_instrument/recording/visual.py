@@ -17,7 +17,7 @@ import numpy as np
 from gyro_instrument.core.site import plane_frame
 
 
-def swing_plane_azimuth(t_s, east, north, window_s):
+def swing_plane_azimuth(t_s, east, north, window_s) -> tuple:
     """Compass azimuth of the swing plane (rad, unwrapped) and its mean rate over the last period
     (rad/s; the Foucault precession, positive clockwise seen from above) per sample.
 
@@ -52,7 +52,7 @@ def swing_plane_azimuth(t_s, east, north, window_s):
     return az, rate
 
 
-def axis_directions(inst, stream):
+def axis_directions(inst, stream) -> np.ndarray | None:
     """Unit rotor-axis vectors in ENU (m, 3) of a gyroscope from its published angles, or None
     for an instrument whose axis is not shown (``Instrument.axis_direction_enu``)."""
     return inst.axis_direction_enu(stream.position) if inst.SHOWS_AXIS else None
@@ -87,7 +87,7 @@ class SwingPlaneStream:
         self.correction = 0.0              # running sum of the unwrapping's corrections
         self.offset = None
 
-    def push(self, t_s, east, north):
+    def push(self, t_s, east, north) -> tuple:
         """Azimuth (rad, unwrapped) and rate (rad/s) at the block's samples, as the one-shot gives them."""
         e = np.nan_to_num(np.asarray(east, dtype=float))
         n = np.nan_to_num(np.asarray(north, dtype=float))

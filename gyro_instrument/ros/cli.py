@@ -6,11 +6,12 @@ moment after Python starts (even while numpy and scipy are being imported) ends 
 ``gyro-instrument: interrupted`` and exit status 130 (:func:`gyro_instrument.cli.guarded`).
 """
 
+import argparse
 import json
 import sys
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     from gyro_instrument import cli as core_cli
     parser = core_cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
@@ -54,7 +55,7 @@ def build_parser():
     return parser
 
 
-def split_ros_args(argv):
+def split_ros_args(argv) -> tuple:
     """(own arguments, arguments after ``--ros-args``) of a command line."""
     argv = list(argv)
     if "--ros-args" in argv:
@@ -63,7 +64,7 @@ def split_ros_args(argv):
     return argv, []
 
 
-def main(argv=None):
+def main(argv=None) -> int:
     """Run one command line; exit status as :func:`gyro_instrument.cli.main` (0, 2, 3, 130)."""
     try:
         from gyro_instrument import cli as core_cli

@@ -21,14 +21,14 @@ import yaml
 from gyro_instrument.instruments import simulator_kinds
 
 
-def simulators_of(scene_obj):
+def simulators_of(scene_obj) -> list:
     """Names of the simulator nodes the scene needs, in :func:`~gyro_instrument.instruments.simulator_kinds` order."""
     types = {spec[0] for spec in scene_obj.instruments.values()}
     return [name for name, kinds in simulator_kinds().items() if types & set(kinds)]
 
 
 def write_params(path, scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, sims=(),
-                 overwrite=False, any_namespace=False):
+                 overwrite=False, any_namespace=False) -> dict:
     """A ROS 2 params file (``--params-file``) for every node of the scene; the first simulator in
     ``sims`` owns the clock; ``any_namespace``: sections keyed ``/**/<node>`` (they apply whatever
     ``__ns`` the nodes get). Returns the dict written."""
@@ -56,7 +56,7 @@ def _command(node):
 
 
 def launch(scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, namespace="", timeout_s=300.0,
-           log_dir=None, overwrite=False, extra_ros_args=(), delay_s=0.0):
+           log_dir=None, overwrite=False, extra_ros_args=(), delay_s=0.0) -> dict:
     """Start the scene's nodes as separate processes and wait until the recorder finished ``bag``.
 
     Returns

@@ -45,7 +45,7 @@ _EXAMPLES = {
 }
 
 
-def help_text(name):
+def help_text(name) -> str:
     return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name], _EXAMPLES[name])
 
 
@@ -96,30 +96,30 @@ def _simulator(name, args=None):
     return _run(name, lambda: SimulatorNode(name, simulator_kinds().get(name, ())), args)
 
 
-def gyrocompass_sim(args=None):
+def gyrocompass_sim(args=None) -> int:
     return _simulator("gyrocompass_sim", args)
 
 
-def pendulum_sim(args=None):
+def pendulum_sim(args=None) -> int:
     return _simulator("pendulum_sim", args)
 
 
-def top_sim(args=None):
+def top_sim(args=None) -> int:
     return _simulator("top_sim", args)
 
 
-def estimator(args=None):
+def estimator(args=None) -> int:
     from gyro_instrument.ros.nodes import EstimatorNode
     return _run("estimator", EstimatorNode, args)
 
 
-def recorder(args=None):
+def recorder(args=None) -> int:
     from gyro_instrument.ros.nodes import RecorderNode
     # SIGINT (or stop_when_complete) finishes a complete, indexed MCAP with its status
     return _run("recorder", RecorderNode, args, on_exit=lambda node: node.close())
 
 
-def player(args=None):
+def player(args=None) -> int:
     from gyro_instrument.ros.nodes import PlayerNode
     return _run("player", PlayerNode, args)
 

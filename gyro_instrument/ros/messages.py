@@ -22,22 +22,22 @@ from gyro_instrument.recording.cdr import (_STAMP_BE, _STAMP_LE, CLOCK_LAYOUT, C
 SITE_FRAME = "site_enu"
 
 
-def stamp(t_ns_from_release):
+def stamp(t_ns_from_release) -> Time:
     """builtin_interfaces/Time for ``EPOCH_NS + t``."""
     total = EPOCH_NS + int(t_ns_from_release)
     return Time(sec=total // 1_000_000_000, nanosec=total % 1_000_000_000)
 
 
-def stamp_to_release_ns(st):
+def stamp_to_release_ns(st) -> int:
     """Inverse of :func:`stamp`."""
     return int(st.sec) * 1_000_000_000 + int(st.nanosec) - EPOCH_NS
 
 
-def clock(t_ns):
+def clock(t_ns) -> Clock:
     return Clock(clock=stamp(t_ns))
 
 
-def joint_state(t_ns, names, position, velocity, effort, frame_id=""):
+def joint_state(t_ns, names, position, velocity, effort, frame_id="") -> JointState:
     msg = JointState()
     msg.header.stamp = stamp(t_ns)
     msg.header.frame_id = frame_id
@@ -48,7 +48,7 @@ def joint_state(t_ns, names, position, velocity, effort, frame_id=""):
     return msg
 
 
-def point_stamped(t_ns, xyz, frame_id):
+def point_stamped(t_ns, xyz, frame_id) -> PointStamped:
     msg = PointStamped()
     msg.header.stamp = stamp(t_ns)
     msg.header.frame_id = frame_id
@@ -56,11 +56,11 @@ def point_stamped(t_ns, xyz, frame_id):
     return msg
 
 
-def float64(value):
+def float64(value) -> Float64:
     return Float64(data=float("nan") if value is None else float(value))
 
 
-def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad):
+def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad) -> Vector3Stamped:
     """The estimated Earth-rate vector in ENU, n (0, cos γ, sin γ) (REP-145)."""
     msg = Vector3Stamped()
     msg.header.stamp = stamp(t_ns)
@@ -74,7 +74,7 @@ def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad):
     return msg
 
 
-def diagnostics(t_ns, name, level_ok, message, values):
+def diagnostics(t_ns, name, level_ok, message, values) -> DiagnosticArray:
     """diagnostic_msgs/DiagnosticArray with one status; values: mapping -> KeyValue strings."""
     st = DiagnosticStatus(level=DiagnosticStatus.OK if level_ok else DiagnosticStatus.WARN, name=name,
                           message=message, hardware_id="gyro_instrument")
@@ -84,7 +84,7 @@ def diagnostics(t_ns, name, level_ok, message, values):
     return arr
 
 
-def marker_array_stamp_ns(data):
+def marker_array_stamp_ns(data) -> int | None:
     """Stamp of a serialized visualization_msgs/MarkerArray: its first marker's header (after the
     encapsulation header and the uint32 sequence length); None when empty."""
     if len(data) < 16 or struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)[0] == 0:
@@ -121,7 +121,8 @@ def _set_points(mk, pts):
         p.x, p.y, p.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
 
 
-def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, half_length_m, size_m, reuse=None):
+def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, half_length_m, size_m,
+                     reuse=None) -> "MarkerArray":
     """visualization_msgs/MarkerArray of a pendulum in ``site_enu``: the bob (sphere), the wire,
     the bob's recent trail and the swing plane (a line through the point below the pivot along
     the compass azimuth ``plane_azimuth``). ``reuse``: a MarkerArray this function returned
@@ -148,7 +149,7 @@ def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, h
     return arr
 
 
-def axis_markers(t_ns, name, origin_enu, axis_enu, length_m):
+def axis_markers(t_ns, name, origin_enu, axis_enu, length_m) -> "MarkerArray":
     """visualization_msgs/MarkerArray of a gyroscope's rotor axis (an arrow) in ``site_enu``."""
     from visualization_msgs.msg import Marker, MarkerArray
     o = np.asarray(origin_enu, dtype=float)
@@ -158,7 +159,7 @@ def axis_markers(t_ns, name, origin_enu, axis_enu, length_m):
     ])
 
 
-def message_class(type_name):
+def message_class(type_name) -> type:
     """Class of ``pkg/msg/Type``."""
     pkg, _, name = type_name.split("/")
     return getattr(importlib.import_module(f"{pkg}.msg"), name)

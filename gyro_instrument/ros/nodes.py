@@ -100,14 +100,14 @@ class SceneNode(Node):
         self.add_on_set_parameters_callback(self._check_params)
         self.add_post_set_parameters_callback(self._after_set)
 
-    def value(self, name, default=None):
+    def value(self, name, default=None) -> object:
         """A parameter's value (``default`` if it is not declared)."""
         if not self.has_parameter(name):
             return default
         v = self.get_parameter(name).value
         return default if v is None else v
 
-    def refuse_sim_time_if_owner(self):
+    def refuse_sim_time_if_owner(self) -> None:
         """A clock owner started with ``use_sim_time:=true`` would wait for its own clock: refused."""
         if self.clock_owner and self.value("use_sim_time", False):
             self.get_logger().error("use_sim_time = true is invalid on the clock owner (it publishes clock and "
@@ -148,11 +148,11 @@ class SceneNode(Node):
             if not self.standalone:
                 self.restart()
 
-    def restart(self):
+    def restart(self) -> None:
         """Reload the scene after a parameter change (subclasses tear down and start again)."""
         self._restart = False
 
-    def load(self):
+    def load(self) -> bool:
         """Load the scene from the parameters; on bad input log it and return False (stay up)."""
         bad = [n for n in self.refused if n in P.SCENE_NAMES or n == "seed"]
         if bad:
@@ -217,7 +217,7 @@ class SimulatorNode(SceneNode):
         if self.load():
             self.prepare()
 
-    def prepare(self):
+    def prepare(self) -> None:
         """Create the publishers and the block iterator (:func:`joint_blocks`): nothing is integrated
         until the first publish, and then one window of ``window_s`` simulated seconds at a time."""
         seed = self.get_parameter("seed").value
@@ -301,7 +301,7 @@ class SimulatorNode(SceneNode):
         self.block = block
         return block
 
-    def block_ready(self, k):
+    def block_ready(self, k) -> bool:
         """True when the next ``k`` samples (or the rest of the run) are already integrated: a
         :meth:`publish_steps` of ``k`` integrates nothing (the suite commits the bag before it does)."""
         b = self.block
@@ -321,7 +321,7 @@ class SimulatorNode(SceneNode):
                                       np.nan_to_num(trail), float(v["plane"][j, 0]), v["half"], size, v.get("msg"))
         return v["msg"]
 
-    def teardown(self):
+    def teardown(self) -> None:
         for t in (self.timer,):
             if t is not None:
                 self.destroy_timer(t)
@@ -335,7 +335,7 @@ class SimulatorNode(SceneNode):
         self.blocks, self.block, self.chosen, self.n_total = None, None, {}, 0
         self.index = 0
 
-    def restart(self):
+    def restart(self) -> None:
         """A scene (or seed) change: stop, reload, and run again from t = 0."""
         super().restart()
         self.teardown()
@@ -348,29 +348,29 @@ class SimulatorNode(SceneNode):
             self.state = "idle"
 
     @property
-    def samples(self):
+    def samples(self) -> int:
         """Samples of the whole run (0 when the scene has no instrument of this node's kinds)."""
         return self.n_total
 
-    def messages_per_step(self):
+    def messages_per_step(self) -> int:
         return sum(1 + inst.IS_PENDULUM + inst.SHOWS_CONTACT_POINT for inst in self.chosen.values())
 
-    def publishers(self):
+    def publishers(self) -> list:
         """This node's publishers, the clock first."""
         return ([self.clock_pub] if self.clock_pub is not None else []) + list(self.pubs.values())
 
-    def topics(self):
+    def topics(self) -> list:
         """Topics this node publishes (fully qualified), each once per sample."""
         return [pub.topic_name for pub in self.publishers()]
 
-    def sample_index(self, t_ns):
+    def sample_index(self, t_ns) -> int:
         """How many samples have a stamp <= ``t_ns`` (ns from release): stamps are round(i · 1e9 / f)."""
         i = int(math.floor(t_ns / self.step_ns)) + 2
         while i > 0 and round((i - 1) * self.step_ns) > t_ns:
             i -= 1
         return min(i, self.samples)
 
-    def publish_steps(self, k):
+    def publish_steps(self, k) -> int:
         """Publish samples ``index`` .. ``index + k - 1`` (fewer at the end): topic by topic, the
         clock first, each topic's messages in sample order (each topic is its own ordered stream);
         return how many samples were published (0 when none remain). Blocks are integrated here,
@@ -433,13 +433,13 @@ class SimulatorNode(SceneNode):
                     self.offsets.setdefault(self.pubs[name + key].topic_name, []).extend((marks - i0).tolist())
         self.index = z
 
-    def publish_step(self):
+    def publish_step(self) -> bool:
         """Publish sample ``index`` (clock first); return False when none remain."""
         return self.publish_steps(1) > 0
 
     # ---- run alone (ros2 run): wait for subscribers, then own or follow the clock -----------------
 
-    def expected_subscribers(self):
+    def expected_subscribers(self) -> dict:
         """{node name: [topics it must subscribe to]} from ``wait_for`` and the scene: the recorder
         every topic, the estimator the joint states of estimable instruments, another name any of
         this node's topics; the clock owner also waits for the scene's other simulators (they
@@ -463,7 +463,7 @@ class SimulatorNode(SceneNode):
                     out[sim] = [self.clock_pub.topic_name]
         return out
 
-    def start(self):
+    def start(self) -> None:
         """Run alone: log what is published, wait for the expected subscribers (at most
         ``wait_timeout_s``), then publish (owner: paced by ``real_time_factor``; follower: as the
         owner's clock reaches each sample)."""
@@ -472,7 +472,7 @@ class SimulatorNode(SceneNode):
         if self.samples:
             self._wait_begin()
 
-    def startup_line(self):
+    def startup_line(self) -> str:
         pubs = ", ".join(f"{pub.topic_name} ({pub.msg_type.__module__.split('.')[0]}/msg/{pub.msg_type.__name__})"
                          for pub in self.publishers())
         clock = ("owns the clock (publish_clock = true): publishes " + self.clock_pub.topic_name
@@ -571,14 +571,14 @@ class JointBuffer:
     #: serialized messages kept before they are decoded into arrays (at most this many bytes objects)
     DECODE_EVERY = 4096
 
-    def add_raw(self, data):
+    def add_raw(self, data) -> None:
         """A serialized message that ``layout.matches``."""
         self._raw.append(data)
         self.count += 1
         if len(self._raw) >= self.DECODE_EVERY:
             self._flush()
 
-    def add(self, t_ns, position, velocity):
+    def add(self, t_ns, position, velocity) -> None:
         self._flush()
         self._append(np.array([t_ns], dtype=np.int64), np.array([position], dtype=np.float64),
                      np.array([velocity], dtype=np.float64))
@@ -605,18 +605,18 @@ class JointBuffer:
             self._raw = []
             self._append(t, pos, vel)
 
-    def arrays(self):
+    def arrays(self) -> tuple:
         """(t_ns (m,), position (m, keep), velocity (m, 1): the last joint's) of everything received;
         views of the buffer, valid until the next sample arrives."""
         self._flush()
         n = self._n
         return self._t[:n], self._pos[:n], self._vel[:n]
 
-    def nbytes(self):
+    def nbytes(self) -> int:
         """Bytes held (the arrays' capacity and the serialized messages not yet decoded)."""
         return self._t.nbytes + self._pos.nbytes + self._vel.nbytes + sum(len(d) for d in self._raw)
 
-    def last_stamp(self):
+    def last_stamp(self) -> int | None:
         if self._raw:
             return m.cdr_stamp_ns(self._raw[-1]) - m.EPOCH_NS
         return int(self._t[self._n - 1]) if self._n else None
@@ -644,7 +644,7 @@ class EstimatorNode(SceneNode):
         if self.load():
             self.prepare()
 
-    def prepare(self):
+    def prepare(self) -> None:
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
         for name, inst in self.insts.items():
@@ -664,7 +664,7 @@ class EstimatorNode(SceneNode):
         if period > 0:
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
 
-    def teardown(self):
+    def teardown(self) -> None:
         for t in self.timers_:
             self.destroy_timer(t)
         for sub in list(self.subs.values()) + ([self.clock_sub] if self.clock_sub is not None else []):
@@ -674,7 +674,7 @@ class EstimatorNode(SceneNode):
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
 
-    def restart(self):
+    def restart(self) -> None:
         super().restart()
         self.teardown()
         if self.load():
@@ -683,7 +683,7 @@ class EstimatorNode(SceneNode):
             if self.standalone:
                 self.get_logger().info(self.startup_line())
 
-    def start(self):
+    def start(self) -> None:
         """Run alone: publish once every expected sample has arrived (or 5 s of wall time after the
         clock reached the last sample, with what there is)."""
         self.standalone = True
@@ -691,7 +691,7 @@ class EstimatorNode(SceneNode):
         if self.scene is not None:
             self.get_logger().info(self.startup_line())
 
-    def startup_line(self):
+    def startup_line(self) -> str:
         subs = ", ".join(self.subs) or "no joint states (nothing estimable in this scene)"
         pubs = ", ".join(pub.topic_name for pub in self.pubs.values())
         return (f"scene {self.scene.name}: expects {self.expected} samples on {subs}; publishes {pubs} once "
@@ -727,10 +727,10 @@ class EstimatorNode(SceneNode):
             self._clock_done_at = time.monotonic()
             self._check_complete()
 
-    def received(self):
+    def received(self) -> int:
         return sum(len(b) for b in self.buffers.values())
 
-    def check_topic_types(self):
+    def check_topic_types(self) -> dict:
         """Topics the estimator listens to that the graph offers with another type (DDS never
         matches them, so nothing arrives): {topic: [types]}; logged once and put in diagnostics."""
         wrong = {}
@@ -777,7 +777,7 @@ class EstimatorNode(SceneNode):
         if self.standalone and len(self.buffers[name]) >= self.expected:
             self._check_complete()
 
-    def estimate(self):
+    def estimate(self) -> dict | None:
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
@@ -785,14 +785,14 @@ class EstimatorNode(SceneNode):
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
 
-    def stamp_ns(self):
+    def stamp_ns(self) -> int:
         """Stamp of an estimate: the last sample it used, else the last clock tick (sim time), else 0."""
         t = max((b.last_stamp() for b in self.buffers.values() if len(b)), default=None)
         if t is None:
             t = self.last_clock_ns
         return 0 if t is None else max(int(t), 0)
 
-    def finalize(self):
+    def finalize(self) -> dict | None:
         """Estimate and publish; returns the result dict."""
         try:
             self.result = self.estimate()
@@ -854,11 +854,32 @@ class RecorderNode(SceneNode):
         if self.load():
             self.prepare()
 
-    def prepare(self):
+    def prepare(self) -> None:
         out = self.get_parameter("output").value
         if not out:
             self.get_logger().error("output = '' is invalid: give an .mcap path to record to")
             return
+        fmt = self._output_format(out)
+        if fmt is None:
+            return
+        types = scene_topics(self.insts)
+        wanted = self._wanted_topics(types)
+        self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
+                                      overwrite=bool(self.value("overwrite", False)))
+        # the scene first, so that a recording cut short still says what it holds (replay needs it)
+        self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
+                                                     "scene": self.scene.name, "seed": self.scene.seed,
+                                                     "command": self.value("command", "recorder node")})
+        self._record_topics(wanted, types)
+        if self.reorder:
+            self.create_timer(0.5, self._control, clock=STEADY)
+
+    def _output_format(self, out):
+        """Check the ``output`` path for the bag layout the parameters give (``format``,
+        ``max_bag_size``, ``max_bag_duration``) and return that layout (``mcap`` or ``rosbag2``), or
+        None after logging why the path is invalid: a bad layout, a missing or unwritable directory,
+        a directory given for a file, the scene file itself, or an existing file without
+        ``overwrite``."""
         try:
             fmt = bag_format(out, self.value("format", "") or None, self.value("max_bag_size", 0),
                              self.value("max_bag_duration", 0.0), field="format")
@@ -869,25 +890,30 @@ class RecorderNode(SceneNode):
                                  self.value("max_bag_duration", 0.0))
         except SceneError as exc:
             self.get_logger().error(str(exc))
-            return
+            return None
         if fmt != "rosbag2":       # a bag directory was checked above (bag_layout.check_bag_output)
             directory = os.path.dirname(os.path.abspath(out)) or "."
             if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
                 self.get_logger().error(f"output = {out!r} is invalid: directory {directory} is missing or not writable")
-                return
+                return None
             if os.path.isdir(out):
                 self.get_logger().error(f"output = {out!r} is invalid: is a directory; give an .mcap file path")
-                return
+                return None
             scene_file = self.value("scene", "")
             if os.path.isfile(scene_file) and os.path.exists(out) and os.path.samefile(out, scene_file):
                 self.get_logger().error(f"output = {out!r} is invalid: is the scene file this node reads; record "
                                         f"elsewhere (overwrite never replaces an input)")
-                return
+                return None
             if os.path.lexists(out) and not self.value("overwrite", False):
                 self.get_logger().error(f"output = {out!r} is invalid: the file exists and parameter overwrite is "
                                         f"false; set overwrite:=true to replace it, or give a new path")
-                return
-        types = scene_topics(self.insts)
+                return None
+        return fmt
+
+    def _wanted_topics(self, types):
+        """The scene topics to record, relative names in the order of parameter ``topics`` (every
+        topic of the scene, ``types``, when empty); a name that resolves to no topic of the scene
+        is logged as an error and skipped."""
         resolved = {self.resolve_topic_name(tp): tp for tp in types}
         wanted = []
         for topic in self.value("topics", []) or list(types):
@@ -896,12 +922,12 @@ class RecorderNode(SceneNode):
                 self.get_logger().error(f"topics: {topic!r} is not a topic of this scene; valid: {', '.join(types)}")
                 continue
             wanted.append(rel)
-        self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
-                                      overwrite=bool(self.value("overwrite", False)))
-        # the scene first, so that a recording cut short still says what it holds (replay needs it)
-        self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
-                                                     "scene": self.scene.name, "seed": self.scene.seed,
-                                                     "command": self.value("command", "recorder node")})
+        return wanted
+
+    def _record_topics(self, wanted, types):
+        """Add each wanted topic to the bag writer and subscribe to it (raw, RELIABLE / KEEP_ALL),
+        classifying it (stamped, marker, per-sample) for the ordering and completeness checks and
+        noting the count of messages the scene publishes on it (``expected``)."""
         n = sample_count(self.scene)
         n_markers = len(range(0, n, visual_every(self.scene.sample_rate_hz)))
         self.stamped = set()
@@ -926,17 +952,15 @@ class RecorderNode(SceneNode):
             self.subs[name] = self.create_subscription(m.message_class(types[topic]), topic,
                                                        lambda data, tp=name: self._on_raw(tp, data),
                                                        RELIABLE_ALL, raw=True)
-        if self.reorder:
-            self.create_timer(0.5, self._control, clock=STEADY)
 
-    def start(self):
+    def start(self) -> None:
         self.standalone = True
         if self.writer is not None:
             self.get_logger().info(
                 f"recording {', '.join(self.subs)} to {self.writer.path}; expects "
                 f"{max(self.expected.values(), default=0)} samples per sample topic and one estimate")
 
-    def received(self):
+    def received(self) -> int:
         return sum(self.counts.values())
 
     def _on_raw(self, topic, data):
@@ -982,7 +1006,7 @@ class RecorderNode(SceneNode):
             st, _, _, topic, data = heapq.heappop(held)
             self._write(topic, st, data)
 
-    def commit(self, older_than_s=0.0):
+    def commit(self, older_than_s=0.0) -> None:
         """Put on disk what was written and not yet committed (MCAP chunk and provisional summary,
         no fsync) when the last commit is at least ``older_than_s`` old: the suite calls it before it
         integrates a block or sleeps, the node's timer every 0.5 s, so a SIGKILL loses at most the
@@ -1001,11 +1025,11 @@ class RecorderNode(SceneNode):
             self.get_logger().info(f"every expected message recorded ({self.received()}): finishing {self.writer.path}")
             self.done = True
 
-    def missing(self):
+    def missing(self) -> dict:
         """{topic: (recorded, expected)} of every topic short of what the scene publishes."""
         return {tp: (self.counts[tp], n) for tp, n in self.expected.items() if self.counts[tp] < n}
 
-    def close(self, metadata=None, name="gyro_instrument", state=None):
+    def close(self, metadata=None, name="gyro_instrument", state=None) -> None:
         """Write an optional metadata record and finish the file (summary, indexes, footer) with
         the status record: ``state`` if given (``interrupted`` when a run is cut short), else
         ``complete`` when every topic holds what the scene publishes, ``incomplete`` otherwise;
@@ -1067,10 +1091,10 @@ class PlayerNode(SceneNode):
             self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, self.pub_qos)
         self._last_clock = None
 
-    def load(self):
+    def load(self) -> bool:
         return False
 
-    def publish_next(self):
+    def publish_next(self) -> bool:
         """Publish the next message (and a clock tick when the bag has none); False when done."""
         if self.index >= len(self.queue):
             return False
@@ -1082,7 +1106,7 @@ class PlayerNode(SceneNode):
         self.index += 1
         return True
 
-    def start(self):
+    def start(self) -> None:
         """Wait for the subscribers (``wait_for``, ``min_subscribers``, at most ``wait_timeout_s``),
         then play."""
         self.standalone = True

@@ -15,6 +15,7 @@ The checks are what ROS users expect of a node run one by one:
 
 import difflib
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
@@ -59,13 +60,13 @@ class Spec:
     hi: object = None
     read_only: bool = False
 
-    def range_text(self):
+    def range_text(self) -> str:
         if self.type in ("double", "int") and self.lo is not None:
             fmt = (lambda v: str(int(v))) if self.type == "int" else (lambda v: f"{v:g}")
             return f"[{fmt(self.lo)}, {fmt(self.hi)}]"
         return {"bool": "true or false", "string": "a string", "string[]": "a list of strings"}.get(self.type, "")
 
-    def descriptor(self):
+    def descriptor(self) -> ParameterDescriptor:
         d = ParameterDescriptor(name=self.name, type=_TYPES[self.type][1], description=self.description,
                                 read_only=self.read_only)
         if self.lo is not None and self.type == "double":
@@ -75,11 +76,11 @@ class Spec:
         d.additional_constraints = f"valid: {self.range_text()}"
         return d
 
-    def parameter(self, value=None):
+    def parameter(self, value=None) -> Parameter:
         """A typed ``Parameter`` (also for an empty string array)."""
         return Parameter(self.name, _TYPES[self.type][0], self.default if value is None else value)
 
-    def check(self, param):
+    def check(self, param) -> tuple:
         """(converted Parameter, None) when ``param`` is valid, else (None, reason)."""
         t, v = param.type_, param.value
         want = _TYPES[self.type][0]
@@ -169,7 +170,7 @@ NODE_SPECS = {"gyrocompass_sim": SIMULATOR, "pendulum_sim": SIMULATOR, "top_sim"
 BUILTIN = ("use_sim_time", "start_type_description_service")
 
 
-def unknown_parameter_message(name, specs, node_name):
+def unknown_parameter_message(name, specs, node_name) -> str:
     """Log text for an override that names no parameter of this node."""
     names = [s.name for s in specs]
     hint = difflib.get_close_matches(name, names, n=1)
@@ -182,7 +183,7 @@ def unknown_parameter_message(name, specs, node_name):
     return f"parameter {name} is not a parameter of {node_name} and is ignored: {tip}"
 
 
-def declare_all(node, specs):
+def declare_all(node, specs) -> dict:
     """Declare ``specs`` on ``node`` with descriptors; start-up overrides are checked first (an integer
     for a double converted; a bad one logged, dropped for the default and returned).
 
@@ -214,7 +215,7 @@ def declare_all(node, specs):
     return refused
 
 
-def pre_set_checker(node, specs):
+def pre_set_checker(node, specs) -> Callable:
     """A pre-set callback: converts an integer for a double, logs every value that will be refused
     (wrong type, out of range, read-only) with its reason."""
     by_name = {s.name: s for s in specs}
@@ -243,7 +244,7 @@ def pre_set_checker(node, specs):
     return pre_set
 
 
-def help_text(node_name, summary, specs, topics, example):
+def help_text(node_name, summary, specs, topics, example) -> str:
     """``--help`` of a node executable."""
     lines = [f"usage: {node_name} [--help] [--ros-args ...]", "", summary, "", "parameters (-p NAME:=VALUE, or "
              "--params-file FILE):"]

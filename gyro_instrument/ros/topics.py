@@ -15,11 +15,11 @@ ESTIMATOR_TOPICS = {
 }
 
 
-def joint_topic(instrument):
+def joint_topic(instrument) -> str:
     return f"{instrument}/joint_states"
 
 
-def bob_topic(instrument):
+def bob_topic(instrument) -> str:
     return f"{instrument}/bob_position"
 
 
@@ -29,28 +29,28 @@ VISUAL_PERIOD_S = 1.0
 TRAIL = 30
 
 
-def visual_every(sample_rate_hz):
+def visual_every(sample_rate_hz) -> int:
     """Samples between two visual messages (:data:`VISUAL_PERIOD_S`; at least 1)."""
     return max(int(round(VISUAL_PERIOD_S * sample_rate_hz)), 1)
 
 
-def contact_point_topic(instrument):
+def contact_point_topic(instrument) -> str:
     return f"{instrument}/contact_point"
 
 
-def swing_plane_topic(instrument):
+def swing_plane_topic(instrument) -> str:
     return f"{instrument}/swing_plane"
 
 
-def axis_topic(instrument):
+def axis_topic(instrument) -> str:
     return f"{instrument}/axis_direction"
 
 
-def markers_topic(instrument):
+def markers_topic(instrument) -> str:
     return f"{instrument}/markers"
 
 
-def visual_topics(name, inst):
+def visual_topics(name, inst) -> dict:
     """The topics to look at for one instrument, with their types."""
     out = {}
     if inst.IS_PENDULUM:
@@ -62,7 +62,7 @@ def visual_topics(name, inst):
     return out
 
 
-def scene_topics(insts):
+def scene_topics(insts) -> dict:
     """All topics the suite publishes for these instruments, with their types."""
     out = {CLOCK: "rosgraph_msgs/msg/Clock"}
     for name, inst in insts.items():
@@ -76,14 +76,14 @@ def scene_topics(insts):
     return out
 
 
-def resolve(namespace, topic):
+def resolve(namespace, topic) -> str:
     """Fully qualified name of a relative ``topic`` in ``namespace``."""
     if topic.startswith("/"):
         return topic
     return "/" + "/".join(p for p in (namespace.strip("/"), topic) if p)
 
 
-def instrument_of(topic):
+def instrument_of(topic) -> str:
     """Instrument name of a ``.../<instrument>/joint_states`` (or ``bob_position``) topic."""
     parts = topic.strip("/").split("/")
     return parts[-2] if len(parts) >= 2 else parts[0]

@@ -32,6 +32,7 @@ the slow locked and outer-fixed swings (a step covers many samples).
 """
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -99,7 +100,40 @@ class _Floats(tuple):
         return self
 
 
-def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias):
+def _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias):
+    """:func:`closed_form_rhs`'s arguments as Python floats, flat: (A, C, A1, C1, A2, C2) the
+    inertias, (Ox, Oy, Oz) the Earth rate, (c_l, c_q) the coefficients, the effects' damping and
+    spin hinge terms (:func:`_hinge_terms`), and the swinging inertias (J_outer, J_inner)."""
+    A, C, A1, C1, A2, C2 = (float(v) for v in inertias)
+    Ox, Oy, Oz = (float(v) for v in omega_base)
+    cl, cq = (float(v) for v in coefficients)
+    effects = list(effects)
+    damp = _hinge_terms(effects, DAMPING, "damping_torque")
+    spin = _hinge_terms(effects, SPIN, "spin_torque")
+    J_outer, J_inner = (float(v) for v in swing_inertias)
+    return A, C, A1, C1, A2, C2, Ox, Oy, Oz, cl, cq, damp, spin, J_outer, J_inner
+
+
+def _torque_constants(A, C, A1, C1, A2, C2, cl, cq):
+    """The constants of :func:`closed_form_rhs`'s unrolled torques, by monomial, from the inertias
+    (kg m²) and the coefficients (c_l, c_q) of :func:`rigid_body_coefficients`: the k (inertia and
+    gyroscopic terms), l (c_l terms) and q (c_q terms) factors and the (u2_s, u2_c) of the
+    effective moment about the outer hinge, as one flat tuple in that order."""
+    # Constants of the unrolled torques τ = I a + w × I w + c_l L(I, w, Ω) + c_q Ω × IΩ of the inner
+    # ring, diag(A1, C1, A1), plus that of the rotor, diag(A, A, C), both in the inner ring's axes,
+    # collected by monomial (the outer ring enters through τ·e_z only). I a + w × I w:
+    kx1, kx2, ky1, ky2, kz0 = A1 - C1, C - A, C1 + A, A - C, C1 - 2.0 * A1 - C
+    # c_l [I(Ω × w) + w × IΩ + Ω × Iw]:
+    lx1, lx2, lx3 = cl * (2.0 * A1 - C1), cl * C, cl * (C - 2.0 * A - C1)
+    ly1, ly2 = cl * (C1 + 2.0 * A - C), cl * C1
+    lz1, lz2 = cl * (C1 - 2.0 * A1 - C), cl * (C1 + C)
+    # c_q Ω × IΩ:
+    qx, qy, qz, q0 = cq * (A1 - C1 + C - A), cq * (A - C), cq * (C1 - A1), cq * (C2 - A2)
+    u2_s, u2_c = A + C1, A1
+    return kx1, kx2, ky1, ky2, kz0, lx1, lx2, lx3, ly1, ly2, lz1, lz2, qx, qy, qz, q0, u2_s, u2_c
+
+
+def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias) -> Callable:
     """Right-hand side ``f(t, *y) -> tuple`` of the gimbal on floats, the chain's state layout.
 
     Parameters
@@ -127,26 +161,11 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
         free configuration's also has ``on_array(t, y)`` taking the state as an ndarray (the
         Fortran driver's call, one Python frame less per evaluation).
     """
-    A, C, A1, C1, A2, C2 = (float(v) for v in inertias)
-    Ox, Oy, Oz = (float(v) for v in omega_base)
-    cl, cq = (float(v) for v in coefficients)
-    effects = list(effects)
-    damp = _hinge_terms(effects, DAMPING, "damping_torque")
-    spin = _hinge_terms(effects, SPIN, "spin_torque")
-    J_outer, J_inner = (float(v) for v in swing_inertias)
+    (A, C, A1, C1, A2, C2, Ox, Oy, Oz, cl, cq, damp, spin, J_outer,
+     J_inner) = _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias)
     a_inner = A + A1
-
-    # Constants of the unrolled torques τ = I a + w × I w + c_l L(I, w, Ω) + c_q Ω × IΩ of the inner
-    # ring, diag(A1, C1, A1), plus that of the rotor, diag(A, A, C), both in the inner ring's axes,
-    # collected by monomial (the outer ring enters through τ·e_z only). I a + w × I w:
-    kx1, kx2, ky1, ky2, kz0 = A1 - C1, C - A, C1 + A, A - C, C1 - 2.0 * A1 - C
-    # c_l [I(Ω × w) + w × IΩ + Ω × Iw]:
-    lx1, lx2, lx3 = cl * (2.0 * A1 - C1), cl * C, cl * (C - 2.0 * A - C1)
-    ly1, ly2 = cl * (C1 + 2.0 * A - C), cl * C1
-    lz1, lz2 = cl * (C1 - 2.0 * A1 - C), cl * (C1 + C)
-    # c_q Ω × IΩ:
-    qx, qy, qz, q0 = cq * (A1 - C1 + C - A), cq * (A - C), cq * (C1 - A1), cq * (C2 - A2)
-    u2_s, u2_c = A + C1, A1
+    (kx1, kx2, ky1, ky2, kz0, lx1, lx2, lx3, ly1, ly2, lz1, lz2, qx, qy, qz, q0, u2_s,
+     u2_c) = _torque_constants(A, C, A1, C1, A2, C2, cl, cq)
 
     def forces(psi, theta, v0, v1, v2):
         """(f_ψ, f_θ, f_φ, cos θ, u²): Kane's generalised forces less the inertia terms (the hot loop).
@@ -301,7 +320,7 @@ class ClosedFormRun:
             self._h = t - self._t_step
         self._t_step = t
 
-    def advance(self, t, progress=None):
+    def advance(self, t, progress=None) -> np.ndarray:
         """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
         sample on), shape (n, len(t)); ``progress(t_i)`` is called after each sample when given."""
         import time
@@ -361,7 +380,7 @@ class DenseRun:
         self.meta = {"rtol": rtol, "atol": atol, "nsteps": 0, "driver": "DOP853 (scipy OdeSolver, dense output)"}
         self.wall_time_s = self.cpu_time_s = 0.0
 
-    def advance(self, t, progress=None):
+    def advance(self, t, progress=None) -> np.ndarray:
         """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
         sample on, not before ``t0``), shape (n, len(t)); ``progress(t_i)`` after each step."""
         import time
