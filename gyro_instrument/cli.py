@@ -26,7 +26,9 @@ import shutil
 import signal
 import sys
 import threading
+from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
@@ -38,12 +40,15 @@ from gyro_instrument.recording.replay import damage_line, read_span_s, replay_ba
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
+if TYPE_CHECKING:
+    from gyro_instrument.core.scene import Scene
+
 EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
 EXIT_INTERRUPTED = 130
 
 
-def add_scene_arguments(parser, positional=True):
+def add_scene_arguments(parser, positional=True) -> None:
     """The scene arguments shared by every subcommand (and mirrored by the ROS parameters).
     ``positional=False``: the scene is the option ``--scene`` (replay, plot); ``"optional"``: either
     (estimate: ``estimate SCENE`` or ``estimate --data FILE --scene SCENE``)."""
@@ -69,7 +74,7 @@ def add_scene_arguments(parser, positional=True):
 
 
 def add_scene_option(parser, scene_help, set_help="override a value of the --scene scene (as for 'estimate')",
-                     dest="scene_option", topics_help=None):
+                     dest="scene_option", topics_help=None) -> None:
     """``--scene SCENE`` and ``--set KEY=VALUE`` for a subcommand whose main input is a file or a bag
     (replay, plot, bench), and with ``topics_help`` the ``--topic INSTRUMENT=/TOPIC`` remaps of a
     foreign bag (:func:`gyro_instrument.recording.foreign.parse_topic_remaps`)."""
@@ -80,7 +85,7 @@ def add_scene_option(parser, scene_help, set_help="override a value of the --sce
                             help=topics_help)
 
 
-def scene_arg(args):
+def scene_arg(args) -> str | None:
     """The scene named by the positional SCENE or ``--scene`` (None when neither is given).
 
     Raises
@@ -94,7 +99,7 @@ def scene_arg(args):
     return pos or opt
 
 
-def scene_from_args(args):
+def scene_from_args(args) -> "Scene":
     """Load the scene named on the command line with its overrides."""
     from gyro_instrument.scenes import load_scene
     overrides = list(args.overrides)
@@ -103,7 +108,7 @@ def scene_from_args(args):
     return load_scene(scene_arg(args), overrides)
 
 
-def print_scene_notes(scene, stream=None):
+def print_scene_notes(scene, stream=None) -> None:
     """The scene's notes (:func:`gyro_instrument.scenes.scene_notes`) on stderr, one line each."""
     from gyro_instrument.scenes import scene_notes
     for note in scene_notes(scene):
@@ -116,12 +121,12 @@ FULL_PERIOD = "(full period)"
 QUARTER_PERIOD = "(quarter period, sec. 2 eq. 42)"
 
 
-def deg_h(rate_rad_s):
+def deg_h(rate_rad_s) -> str:
     """A rate in rad/s as ``x deg/h`` (for printing beside the rad/s value)."""
     return "null deg/h" if rate_rad_s is None else f"{math.degrees(rate_rad_s) * 3600.0:.6g} deg/h"
 
 
-def labelled(key, value):
+def labelled(key, value) -> str:
     """``key = value`` for a prediction, with the period convention beside a period or duration and
     deg/h beside a rad/s rate."""
     text = f"{key} = {value:.10g}" if isinstance(value, float) else f"{key} = {_fmt(value, '')}"
@@ -144,7 +149,7 @@ def labelled(key, value):
 
 
 # ----------------------------------------------------------------------------- describe
-def describe(scene):
+def describe(scene) -> dict:
     """Dict describing a scene: site, instruments, active effects, effect sizes, predictions."""
     from gyro_instrument.scenes import build_instruments, scene_notes
     insts = build_instruments(scene)
@@ -171,7 +176,7 @@ def describe(scene):
     return to_jsonable(out)
 
 
-def print_description(d, stream=None):
+def print_description(d, stream=None) -> None:
     w = (stream or sys.stdout).write
     s = d["site"]
     w(f"scene {d['scene']}: {d['description']}\n")
@@ -198,7 +203,7 @@ def print_description(d, stream=None):
 
 
 # ----------------------------------------------------------------------------- simulate
-def simulate_scene(scene, progress=None):
+def simulate_scene(scene, progress=None) -> tuple:
     """Simulate every instrument of a scene on the common sample grid.
 
     Returns
@@ -252,7 +257,7 @@ def output_step(scene, output_rate_hz) -> int:
     return k
 
 
-def check_disk(path, rows, columns, free=None):
+def check_disk(path, rows, columns, free=None) -> None:
     """Refuse an output that would not fit on its disk, before the run starts.
 
     Raises
@@ -271,7 +276,7 @@ def check_disk(path, rows, columns, free=None):
                                         f"write elsewhere")
 
 
-def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None):
+def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None) -> Iterator[tuple]:
     """Simulate every instrument of a scene block by block on the common sample grid.
 
     Each instrument streams (:meth:`~gyro_instrument.instruments.base.Instrument.stream` over its
@@ -310,7 +315,7 @@ def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None):
         yield t, columns, sims
 
 
-def simulate_to_file(scene, out, output_rate_hz=None, progress=None):
+def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     """``gyro-instrument simulate``: stream the scene into the table ``out`` (CSV or Parquet) block
     by block, every k-th sample (:func:`output_step`), after checking that it fits on the disk
     (:func:`check_disk`). Returns (rows written, columns, nfev, integration wall s)."""
@@ -335,7 +340,7 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None):
 
 
 @contextmanager
-def terminal_progress(label, enabled=True, stream=None, force=False):
+def terminal_progress(label, enabled=True, stream=None, force=False) -> Iterator:
     """Draw ``label: NN.N %`` on one terminal line while long integrations inside the block
     report (:func:`gyro_instrument.core.integrate.reporting`); only on a terminal (or
     ``force``), so logs and pipes stay clean."""
@@ -360,7 +365,7 @@ def terminal_progress(label, enabled=True, stream=None, force=False):
         print(f"\r{label}: done   ", file=stream, flush=True)
 
 
-def write_csv(path, t, columns):
+def write_csv(path, t, columns) -> None:
     """CSV: first column ``time_s``, then one column per channel, full float precision
     (:func:`gyro_instrument.estimators.data_io.write_csv`)."""
     from gyro_instrument.estimators.data_io import write_csv as _write_csv
@@ -371,7 +376,7 @@ def _fmt(v, spec):
     return "null" if v is None else format(v, spec)
 
 
-def without_rotation_reason(result, scene):
+def without_rotation_reason(result, scene) -> None:
     """When no pendulum of the scene simulates ``earth_rotation``, its k = 0 says nothing about the
     site (it is not "as at the equator"): the Foucault method's Earth-rate reason says so."""
     foucault = result.get("methods", {}).get("foucault")
@@ -382,7 +387,7 @@ def without_rotation_reason(result, scene):
                                          "so n = k / sin(latitude) is undetermined")
 
 
-def print_estimate(r, stream=None):
+def print_estimate(r, stream=None) -> None:
     """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
     w = (stream or sys.stdout).write
     tr = r["truth"]
@@ -437,7 +442,7 @@ def print_estimate(r, stream=None):
           + "\n")
 
 
-def print_damage(r, w):
+def print_damage(r, w) -> None:
     """The bag's lost stretches and the reader's notes (replay, estimate --data); nothing for a
     live estimate."""
     for d in r.get("damaged") or ():
@@ -447,7 +452,7 @@ def print_damage(r, w):
 
 
 # ----------------------------------------------------------------------------- plan
-def human_duration(s):
+def human_duration(s) -> str:
     """``161.6 s (2.69 min)``: seconds with the largest sensible unit beside them."""
     if s is None:
         return "null"
@@ -457,7 +462,7 @@ def human_duration(s):
     return f"{s:.4g} s"
 
 
-def print_plan(d, stream=None):
+def print_plan(d, stream=None) -> None:
     """Human-readable plan (:func:`gyro_instrument.estimators.planner.plan`)."""
     w = (stream or sys.stdout).write
     sen = d["sensor"]
@@ -528,11 +533,11 @@ def print_plan(d, stream=None):
 class OneLineParser(argparse.ArgumentParser):
     """argparse with its errors on one line (no usage block), like every other error here; exit 2."""
 
-    def error(self, message):
+    def error(self, message) -> NoReturn:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog="gyro-instrument",
         description="Gyrocompass and Foucault pendulum on the rotating Earth (Quet 1853, Puiseux 1852).")
@@ -664,7 +669,7 @@ def _add_recover_command(sub):
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file (never the input)")
 
 
-def main(argv=None):
+def main(argv=None) -> int:
     """Run one command line (``argv``, default ``sys.argv[1:]``) and return the exit status.
 
     0 success, 2 bad input (SceneError or an argparse error: one line on stderr), 3 integration
@@ -674,7 +679,7 @@ def main(argv=None):
     return guarded(lambda: run_command(build_parser().parse_args(argv)), process=argv is None)
 
 
-def guarded(body, process=False):
+def guarded(body, process=False) -> int:
     """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
 
     SceneError -> 2, IntegrationError -> 3, KeyboardInterrupt (wherever it lands: imports,
@@ -699,13 +704,13 @@ def guarded(body, process=False):
             _ignore_sigint()
 
 
-def one_line(exc):
+def one_line(exc) -> str:
     """The message of ``exc`` on one line: newlines and other control characters in quoted
     values (a key or value given on the command line) shown escaped."""
     return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(exc))
 
 
-def interrupted(process=False):
+def interrupted(process=False) -> int:
     """Print ``gyro-instrument: interrupted`` and return 130, with further SIGINTs ignored while
     printing (a second Ctrl-C must not interrupt the message); in-process callers get their
     handler back."""
@@ -851,7 +856,7 @@ def replay_command(args) -> int:
     return 0
 
 
-def plan_command(args):
+def plan_command(args) -> int:
     """``gyro-instrument plan``: see :mod:`gyro_instrument.estimators.planner`."""
     from gyro_instrument.estimators.planner import NOISE_FACTORS, RATE_FACTORS, parse_targets, plan, verify_plan
     targets = parse_targets(args.targets)

@@ -153,33 +153,12 @@ def test_every_registered_instrument_declares_the_protocol():
 
 
 # ----------------------------------------------------------------------------- issue 12: files that do one job
-#: public functions and methods without a return annotation, in files another branch is editing
-#: (cli.py, core/, estimators/data_io.py, instruments/{base,plane_gyroscope,free_gyroscope}.py,
-#: instruments/puiseux/instrument.py): they get theirs once that branch is merged, and this list
-#: empties. Nothing may be added to it.
-UNANNOTATED_ALLOWED = {
-    "cli.py": {"add_scene_arguments", "add_scene_option", "scene_arg", "scene_from_args", "print_scene_notes",
-               "deg_h", "labelled", "describe", "print_description", "simulate_scene", "terminal_progress",
-               "write_csv", "without_rotation_reason", "print_estimate", "print_damage", "human_duration",
-               "print_plan", "OneLineParser.error", "build_parser", "main", "guarded", "one_line", "interrupted",
-               "plan_command"},
-    "core/files.py": {"check_writable", "same_file", "check_output", "scene_inputs", "check_output_dir"},
-    "core/jsonable.py": {"to_jsonable"},
-    "core/parallel.py": {"dask_executor"},
-    "core/params.py": {"unit_aliases", "alias_note"},
-    "estimators/data_io.py": {"table_kind", "read_table", "write_table", "write_csv", "records_from_table",
-                              "estimate_data"},
-    "instruments/base.py": {"Instrument.axis_direction_enu", "Instrument.contact_point_body"},
-    "instruments/free_gyroscope.py": {"FreeGyroscope.axis_direction_enu"},
-    "instruments/plane_gyroscope.py": {"PlaneGyroscope.axis_direction_enu"},
-    "instruments/puiseux/instrument.py": {"PuiseuxBody.modes"},
-}
+#: public functions and methods allowed without a return annotation: none (the list emptied once the
+#: streaming branch merged). Nothing may be added to it.
+UNANNOTATED_ALLOWED = {}
 #: the most lines of code a function may have (its docstring not counted)
 MAX_FUNCTION_LINES = 80
-#: functions longer than that in the files another branch is editing (see above). None today; its
-#: functions over 60 lines of code, for the next split: bench/studies.py run_bench, cli.py
-#: print_plan, estimators/data_io.py records_from_table, instruments/puiseux/instrument.py
-#: general_predictions. Nothing may be added to it.
+#: functions allowed over MAX_FUNCTION_LINES: none. Nothing may be added to it.
 LONG_ALLOWED = {}
 
 

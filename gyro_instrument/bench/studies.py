@@ -554,7 +554,6 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     a Dask client's executor for ``bench --scheduler``."""
     if scene is not None:
         return run_scene_bench(out_dir, scene, overrides, quick, progress)
-    from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
     from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
     from gyro_instrument.bench.plots import write_plots
     os.makedirs(out_dir, exist_ok=True)
@@ -562,30 +561,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     wp = work_precision(quick, progress)
     _write(os.path.join(out_dir, "work_precision.csv"),
            ("instrument", "method", "setting", "cpu_s", "nfev", "error_rad"), wp)
-    progress("speed targets")
-    tg = targets(wp, quick, progress)
-    if not quick:       # child processes for minutes: the full bench only (issue 13: bench/live.py)
-        from gyro_instrument.bench.live import live_rows
-        progress("run as it streams: time to first message (1 h, 48 h), peak memory (1 h vs 48 h)")
-        tg += live_rows(quick, progress)
-    from gyro_instrument.bench.realtime import (gimbal_work_precision_rows, realtime_rows, realtime_target,
-                                                summary_lines, write_realtime)
-    progress("real-time factor of every instrument configuration; the gimbal's work-precision")
-    rt, gwp = realtime_rows(quick, progress), gimbal_work_precision_rows(quick, progress)
-    write_realtime(out_dir, rt, gwp)
-    tg.append(realtime_target(rt))
-    hours = 3.0 if quick else 24.0
-    progress(f"  plot: {hours:g} h of Foucault pendulum data from Parquet")
-    secs, n = plot_day_seconds(out_dir, hours=hours)
-    tg.append((f"plot {hours:g} h of pendulum data at 20 Hz ({n} samples, Parquet, 4 views to PNG), wall time",
-               secs if secs is not None else float("nan"), "s" + ("" if secs is not None else
-                                                                   " (matplotlib or pyarrow missing)"),
-               "<= 30", secs is not None and secs <= 30.0))
-    _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
-    progress("streaming: whole simulate process against the textbook script, peak memory, output throughput")
-    from gyro_instrument.bench.streaming import streaming_rows
-    st = streaming_rows(wp, REFERENCE[(3600.0 if quick else 86164.0989, 20.0)], quick, progress)
-    _write(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
+    tg, st, rt, gwp = _speed_studies(out_dir, wp, quick, progress)
     progress("observation time")
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
                                   executor=executor)
@@ -607,6 +583,45 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
+    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec)
+    return _write_summary(out_dir, lines, pngs)
+
+
+def _speed_studies(out_dir, wp, quick, progress) -> tuple:
+    """The speed targets (targets.csv: work-precision targets, run as it streams, real time of every
+    instrument configuration, plot of a day) and the streaming rows (streaming.csv); returns
+    (targets, streaming rows, real-time rows, gimbal work-precision rows)."""
+    progress("speed targets")
+    tg = targets(wp, quick, progress)
+    if not quick:       # child processes for minutes: the full bench only (issue 13: bench/live.py)
+        from gyro_instrument.bench.live import live_rows
+        progress("run as it streams: time to first message (1 h, 48 h), peak memory (1 h vs 48 h)")
+        tg += live_rows(quick, progress)
+    from gyro_instrument.bench.realtime import gimbal_work_precision_rows, realtime_rows, realtime_target, write_realtime
+    progress("real-time factor of every instrument configuration; the gimbal's work-precision")
+    rt, gwp = realtime_rows(quick, progress), gimbal_work_precision_rows(quick, progress)
+    write_realtime(out_dir, rt, gwp)
+    tg.append(realtime_target(rt))
+    hours = 3.0 if quick else 24.0
+    progress(f"  plot: {hours:g} h of Foucault pendulum data from Parquet")
+    secs, n = plot_day_seconds(out_dir, hours=hours)
+    tg.append((f"plot {hours:g} h of pendulum data at 20 Hz ({n} samples, Parquet, 4 views to PNG), wall time",
+               secs if secs is not None else float("nan"), "s" + ("" if secs is not None else
+                                                                   " (matplotlib or pyarrow missing)"),
+               "<= 30", secs is not None and secs <= 30.0))
+    _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
+    progress("streaming: whole simulate process against the textbook script, peak memory, output throughput")
+    from gyro_instrument.bench.streaming import streaming_rows
+    st = streaming_rows(wp, REFERENCE[(3600.0 if quick else 86164.0989, 20.0)], quick, progress)
+    _write(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
+    return tg, st, rt, gwp
+
+
+def _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) -> list:
+    """summary.md's lines (every table of the full bench; the plots are appended by
+    :func:`_write_summary`)."""
+    from gyro_instrument.bench.effect_cost import HEADER as EC_HEADER
+    from gyro_instrument.bench.realtime import summary_lines
     lines = ["# gyro-instrument bench" + (" (quick)" if quick else ""), "",
              "Regenerate: `gyro-instrument bench" + (" --quick" if quick else "") + f" --out {out_dir}`.", "",
              "## Speed targets (measured in this run)", "",
@@ -633,7 +648,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
             instrument=d["instrument"] or "—", a=_fmt(d["cpu_with_s"], ".3g"),
             b=_fmt(d["cpu_without_s"], ".3g"), c=_fmt(d["max_abs_diff_rad"], ".2e"),
             dl=_fmt(d["dlatitude_deg"], ".2e"), dn=_fmt(d["dearth_rate_rad_s"], ".2e")))
-    return _write_summary(out_dir, lines, pngs)
+    return lines
 
 
 def streaming_lines(rows) -> list:

@@ -35,7 +35,7 @@ def replaced_atomically(path) -> Iterator:
         raise
 
 
-def check_writable(path, field="--out"):
+def check_writable(path, field="--out") -> None:
     """Refuse an output path that cannot be written, before any simulation starts.
 
     Raises
@@ -52,7 +52,7 @@ def check_writable(path, field="--out"):
         raise SceneError(field, path, "is not writable")
 
 
-def same_file(a, b):
+def same_file(a, b) -> bool:
     """True when paths ``a`` and ``b`` name the same file (inode when both exist, else realpath)."""
     try:
         if os.path.exists(a) and os.path.exists(b):
@@ -62,7 +62,7 @@ def same_file(a, b):
     return os.path.realpath(a) == os.path.realpath(b)
 
 
-def check_output(path, field="--out", inputs=(), overwrite=False, also=()):
+def check_output(path, field="--out", inputs=(), overwrite=False, also=()) -> None:
     """Refuse an output path before anything is simulated, read or written: it must be writable,
     never one of the command's ``inputs`` (compared by inode/realpath, whatever ``overwrite`` says),
     and not an existing file unless ``overwrite``. ``also``: other paths the command writes on the
@@ -84,12 +84,12 @@ def check_output(path, field="--out", inputs=(), overwrite=False, also=()):
         raise SceneError(field, path, "exists; pass --overwrite to replace it, or give a new path")
 
 
-def scene_inputs(scene_arg):
+def scene_inputs(scene_arg) -> tuple:
     """The files a scene argument reads (a YAML path; none for a shipped scene name)."""
     return (scene_arg,) if os.path.isfile(scene_arg) else ()
 
 
-def check_output_dir(path, field="--out"):
+def check_output_dir(path, field="--out") -> None:
     """Create the output directory ``path`` (and its parents) or refuse it before any work.
 
     Raises

@@ -209,7 +209,7 @@ class Integration:
         return Trajectory(t, y, self.nfev, self.wall_time_s, self.cpu_time_s, self.method, dict(self.meta))
 
 
-def integration(rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf):
+def integration(rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> "Integration":
     """A resumable integration from ``t0`` to ``t_end`` (:class:`Integration`, or for
     ``method="DOP853-scalar"`` :class:`gyro_instrument.core.dop853.ScalarDOP853`): call
     ``advance(block)`` block after block; the concatenated states equal :func:`integrate` over the

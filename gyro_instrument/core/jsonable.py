@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 
-def to_jsonable(x):
+def to_jsonable(x) -> object:
     """Floats for JSON: non-finite values become None (never NaN or Infinity); a complex number
     becomes ``{"real": ..., "imag": ...}`` (a real one its real part)."""
     if isinstance(x, dict):

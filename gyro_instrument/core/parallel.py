@@ -17,6 +17,7 @@ import multiprocessing
 import os
 import signal
 import sys
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
@@ -52,7 +53,7 @@ def process_executor(max_workers=None) -> ProcessPoolExecutor:
 
 
 @contextmanager
-def dask_executor(address, timeout_s=10.0):
+def dask_executor(address, timeout_s=10.0) -> Iterator:
     """A ``dask.distributed`` client's ``concurrent.futures`` executor on the scheduler at
     ``address`` (``tcp://host:8786``); the client is closed on exit. The cluster's workers need
     this package installed (the tasks are its picklable sweep functions).

@@ -110,7 +110,7 @@ def _fmt(x):
 RATE_ALIASES = (("_turn_s", 2.0 * math.pi), ("_rpm", 2.0 * math.pi / 60.0), ("_deg_h", math.pi / 180.0 / 3600.0))
 
 
-def unit_aliases(param, known=()):
+def unit_aliases(param, known=()) -> list:
     """The accepted other spellings of ``param`` (a :class:`Param`): ``["spin_rate_turn_s", ...]``
     for a float named ``*_rad_s``, leaving out names in ``known`` (parameters of their own)."""
     if param.kind != "float" or not param.name.endswith("_rad_s"):
@@ -119,7 +119,7 @@ def unit_aliases(param, known=()):
     return [stem + suffix for suffix, _ in RATE_ALIASES if stem + suffix not in known]
 
 
-def alias_note(param, params=()):
+def alias_note(param, params=()) -> str:
     """Doc text for a rate's other spellings: ``also as `spin_rate_turn_s`, ... (converted)``, or ''."""
     names = unit_aliases(param, {p.name for p in params})
     if not names:

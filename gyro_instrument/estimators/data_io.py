@@ -32,7 +32,7 @@ from gyro_instrument.estimators.pipeline import estimable
 TIME_COLUMN = "time_s"
 
 
-def table_kind(path):
+def table_kind(path) -> str:
     """``parquet`` for a name ending in ``.parquet`` or ``.pq``, else ``csv``."""
     return "parquet" if str(path).lower().endswith((".parquet", ".pq")) else "csv"
 
@@ -47,7 +47,7 @@ def _pyarrow():
     return pyarrow
 
 
-def read_table(path, field="--data"):
+def read_table(path, field="--data") -> dict:
     """Every column of a CSV or Parquet table as float arrays.
 
     Returns
@@ -205,7 +205,7 @@ class TableWriter:
         return self._replace.__exit__(exc_type, exc, tb)
 
 
-def write_table(path, t, columns):
+def write_table(path, t, columns) -> None:
     """Write ``time_s`` and the channel columns in one block (:class:`TableWriter`: Parquet for a
     name ending in ``.parquet``/``.pq``, else CSV, full precision); written to ``<path>.partial``
     and renamed."""
@@ -213,7 +213,7 @@ def write_table(path, t, columns):
         w.write(t, columns)
 
 
-def write_csv(path, t, columns):
+def write_csv(path, t, columns) -> None:
     """CSV: first column ``time_s``, then one column per channel, full float precision (the shortest
     representation that reads back to the same double); written to ``<path>.partial`` and renamed
     when complete: an interrupted write leaves no ``path`` (or the previous one) and no
@@ -233,7 +233,7 @@ def _needs(inst):
     return ((model.angle_channel, "spin_rate"),)
 
 
-def records_from_table(insts, cols, path="data", field="--data"):
+def records_from_table(insts, cols, path="data", field="--data") -> tuple:
     """Estimator records from table columns (see the module docstring).
 
     Returns
@@ -326,7 +326,7 @@ def records_from_table(insts, cols, path="data", field="--data"):
     return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
 
 
-def estimate_data(scene, path, field="--data"):
+def estimate_data(scene, path, field="--data") -> dict:
     """The ``estimate`` JSON object from a CSV or Parquet table of measured channels, with
     ``data`` (the file), ``observation_s`` (the data's span) and ``data_notes``.
 

@@ -258,7 +258,7 @@ class Instrument:
         default) for an instrument with one integrator."""
         return None
 
-    def axis_direction_enu(self, position):
+    def axis_direction_enu(self, position) -> "np.ndarray | None":
         """Unit rotor-axis vectors in ENU, shape (m, 3), from the published joint positions
         ``position`` (m, len(JOINTS)), rad; None for an instrument whose axis is not shown
         (``SHOWS_AXIS`` False)."""
@@ -268,7 +268,7 @@ class Instrument:
     #: ``<name>/contact_point``, a PointStamped in the body frame ``<name>_body``, per sample)
     SHOWS_CONTACT_POINT: ClassVar[bool] = False
 
-    def contact_point_body(self, columns):
+    def contact_point_body(self, columns) -> "np.ndarray | None":
         """Contact points in the body's principal axes from its centre of mass, shape (m, 3), m, from
         simulated ``columns`` (true values, not a measurement); None when ``SHOWS_CONTACT_POINT`` is False."""
         return None

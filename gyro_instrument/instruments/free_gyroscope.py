@@ -203,7 +203,7 @@ class FreeGyroscope(Instrument):
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
     SHOWS_AXIS = True
 
-    def axis_direction_enu(self, position):
+    def axis_direction_enu(self, position) -> np.ndarray:
         """Rotor axis in ENU, (m, 3), from the ``axis_altitude`` and ``axis_azimuth`` (compass) joints, rad."""
         import numpy as np
         alt, az = np.asarray(position)[:, 0], np.asarray(position)[:, 1]

@@ -143,7 +143,7 @@ class PlaneGyroscope(Instrument):
             self.missing_effect_note(
             "finite_amplitude", "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
 
-    def axis_direction_enu(self, position):
+    def axis_direction_enu(self, position) -> "np.ndarray":
         """Rotor axis in ENU, (m, 3): cos u · ox + sin u · oy in the plane's frame (``core.site.plane_frame``),
         u the ``axis`` joint (rad)."""
         import numpy as np

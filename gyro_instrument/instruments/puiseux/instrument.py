@@ -19,8 +19,8 @@ from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general
-from gyro_instrument.instruments.puiseux.general import (general_modes, inertia_conjugacy, linear_rotation,
-                                                         normal_frame)
+from gyro_instrument.instruments.puiseux.general import (GeneralModes, general_modes, inertia_conjugacy,
+                                                         linear_rotation, normal_frame)
 from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface, GeneralEllipsoidSurface
 from gyro_instrument.instruments.puiseux.theory import (classify_coefficients, critical_spin_general_rad_s,
                                                         critical_spin_rad_s, curvature_coefficients,
@@ -300,7 +300,7 @@ class PuiseuxBody(Instrument):
         return np.column_stack([columns["contact_x"], columns["contact_y"], columns["contact_z"]])
 
     # ---------------------------------------------------------------- sec. III
-    def modes(self):
+    def modes(self) -> "GeneralModes":
         """:class:`~gyro_instrument.instruments.puiseux.general.GeneralModes` of the general body."""
         return general_modes(self.inertia, self.M, self.g, self.rho, self.rho_prime, self.gamma, self.P)
 
