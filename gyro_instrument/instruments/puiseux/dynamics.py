@@ -80,6 +80,17 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
     tz = szz * ndz
     f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
     hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
+    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
+                                            gx, gy, gz, hx, hy, hz, A, B, C, M, g)
+    return qdot, wdot, N, h, zdot, (nx, ny, nz)
+
+
+def _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz, gx, gy, gz, hx, hy, hz,
+                      A, B, C, M, g) -> tuple:
+    """The rigid body's response to the plane, shared by :func:`contact_dynamics` and
+    :func:`contact_dynamics_general` (the same operations in the same order for both): from the
+    vertical n, its rate ṅ, ∇h and H ṅ, the body rate ẇ (Sherman–Morrison inverse of I + M k kᵀ), the
+    normal force N, ż = k·w and q̇. Returns (q̇ (4), ẇ (3), N, ż)."""
     # k = grad h x n (z' = k.w) and its rate
     kx = gy * nz - gz * ny
     ky = gz * nx - gx * nz
@@ -105,7 +116,7 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
             0.5 * (qw * wx + qy * wz - qz * wy),
             0.5 * (qw * wy + qz * wx - qx * wz),
             0.5 * (qw * wz + qx * wy - qy * wx))
-    return qdot, (wdx, wdy, wdz), N, h, zdot, (nx, ny, nz)
+    return qdot, (wdx, wdy, wdz), N, zdot
 
 
 def reduced_rates(n, w, surf, inertia, M, g) -> np.ndarray:
@@ -150,7 +161,8 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     Same equations, with ``surf`` a
     :class:`~gyro_instrument.instruments.puiseux.surface.GeneralEllipsoidSurface` (full S and
     centre c in principal axes): h = √(nᵀSn) − c·n, ∇h = Sn/s − c, H ṅ = Sṅ/s − Sn (Sn·ṅ)/s³.
-    Kept apart so that the sec. I-II bodies keep their exact arithmetic. Returns the same tuple.
+    The surface terms are kept apart so that the sec. I-II bodies keep their exact arithmetic; the
+    body's response is shared (:func:`_contact_response`). Returns the same tuple.
     """
     qw, qx, qy, qz, wx, wy, wz = y
     A, B, C = inertia
@@ -174,25 +186,6 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     tz = sxz * ndx + syz * ndy + szz * ndz
     f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
     hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
-    kx = gy * nz - gz * ny
-    ky = gz * nx - gx * nz
-    kz = gx * ny - gy * nx
-    kdx = hy * nz - hz * ny + gy * ndz - gz * ndy
-    kdy = hz * nx - hx * nz + gz * ndx - gx * ndz
-    kdz = hx * ny - hy * nx + gx * ndy - gy * ndx
-    Lx, Ly, Lz = A * wx, B * wy, C * wz
-    coef = M * (g + kdx * wx + kdy * wy + kdz * wz)
-    bx = -(wy * Lz - wz * Ly) - coef * kx
-    by = -(wz * Lx - wx * Lz) - coef * ky
-    bz = -(wx * Ly - wy * Lx) - coef * kz
-    ux, uy, uz = bx / A, by / B, bz / C
-    vx, vy, vz = kx / A, ky / B, kz / C
-    fac = M * (kx * ux + ky * uy + kz * uz) / (1.0 + M * (kx * vx + ky * vy + kz * vz))
-    wdx, wdy, wdz = ux - fac * vx, uy - fac * vy, uz - fac * vz
-    N = M * (g + kdx * wx + kdy * wy + kdz * wz + kx * wdx + ky * wdy + kz * wdz)
-    zdot = kx * wx + ky * wy + kz * wz
-    qdot = (-0.5 * (qx * wx + qy * wy + qz * wz),
-            0.5 * (qw * wx + qy * wz - qz * wy),
-            0.5 * (qw * wy + qz * wx - qx * wz),
-            0.5 * (qw * wz + qx * wy - qy * wx))
-    return qdot, (wdx, wdy, wdz), N, h, zdot, (nx, ny, nz)
+    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
+                                            gx, gy, gz, hx, hy, hz, A, B, C, M, g)
+    return qdot, wdot, N, h, zdot, (nx, ny, nz)
