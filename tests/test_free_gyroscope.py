@@ -387,3 +387,18 @@ def test_initial_columns_and_scales(build):
     sc = g.scales(3600.0)
     assert set(sc) >= {"earth_rate_rad_s", "gyro_rate_rad_s", "restoring_rate_rad_s", "amplitude_rad", "duration_s"}
     assert sc["gyro_rate_rad_s"] == pytest.approx(2.0 * 60.0)
+
+
+def test_scalar_right_hand_side_is_the_array_one_term_for_term():
+    # the numerical model integrates rhs_scalar (Python floats, the scalar DOP853 driver, for speed);
+    # it must be rhs() exactly: the same terms in the same order give the same doubles (no tolerance)
+    import numpy as np
+    from gyro_instrument.scenes import build_instruments, load_scene
+    for over in ([], ["instruments.free_gyro.inertia_ratio=1.7"]):
+        inst = build_instruments(load_scene("free_gyroscope", ["instruments.free_gyro.model=numerical"] + over))[
+            "free_gyro"]
+        f, g = inst.rhs(), inst.rhs_scalar()
+        rng = np.random.default_rng(7)
+        for _ in range(50):
+            y = rng.normal(size=7)
+            assert np.array_equal(f(0.0, y), np.array(g(0.0, *(float(v) for v in y))))

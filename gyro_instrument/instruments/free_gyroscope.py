@@ -415,6 +415,24 @@ class FreeGyroscope(Instrument):
                 0.0])
         return f
 
+    def rhs_scalar(self) -> Callable:
+        """:meth:`rhs` on Python floats, ``f(t, qw, qx, qy, qz, w1, w2, w3) -> tuple`` (the same
+        terms in the same order) for the scalar DOP853 driver (``integrate(method="DOP853-scalar")``):
+        a 7-element state is evaluated ~5x faster without numpy's per-call overhead."""
+        a = 1.0 - self.mu
+        kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+
+        def f(t, qw, qx, qy, qz, w1, w2, w3):
+            corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
+            return (0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw,
+                    0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx,
+                    0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy,
+                    0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz,
+                    a * w2 * w3,
+                    -a * w1 * w3,
+                    0.0)
+        return f
+
     def columns_from_state(self, tau, y, unwrappers=None) -> tuple:
         """Columns and diagnostics from states ``y`` (7, m) at times ``tau`` since release.
 
@@ -491,8 +509,8 @@ class FreeGyroscope(Instrument):
         run = None
         if model != "analytic":
             wb0 = self.R0.T @ self.motion_constants()["omega0"]
-            run = integration(self.rhs(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
-                              rtol=self.rtol if rtol is None else rtol, atol=1e-14)
+            run = integration(self.rhs_scalar(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
+                              method="DOP853-scalar", rtol=self.rtol if rtol is None else rtol, atol=1e-14)
         for t in blocks:
             tau = t - t0
             if run is None:
