@@ -398,27 +398,19 @@ class FreeGyroscope(Instrument):
 
     def rhs(self) -> Callable:
         """Right-hand side for y = [q (4), ω_body (3)] in the inertial frame (Euler's equations
-        for A = A, C = μA, and q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|)."""
-        a = 1.0 - self.mu
-        kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+        for A = A, C = μA, and q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|), as an array:
+        :meth:`rhs_scalar`'s terms (``solve_ivp`` and the effect-size probes call this one)."""
+        g = self.rhs_scalar()
 
         def f(t, y):
-            qw, qx, qy, qz, w1, w2, w3 = y
-            corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
-            return np.array([
-                0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw,
-                0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx,
-                0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy,
-                0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz,
-                a * w2 * w3,
-                -a * w1 * w3,
-                0.0])
+            return np.array(g(t, *y))
         return f
 
     def rhs_scalar(self) -> Callable:
-        """:meth:`rhs` on Python floats, ``f(t, qw, qx, qy, qz, w1, w2, w3) -> tuple`` (the same
-        terms in the same order) for the scalar DOP853 driver (``integrate(method="DOP853-scalar")``):
-        a 7-element state is evaluated ~5x faster without numpy's per-call overhead."""
+        """The right-hand side on Python floats, ``f(t, qw, qx, qy, qz, w1, w2, w3) -> tuple``, for the
+        scalar DOP853 driver (``integrate(method="DOP853-scalar")``): a 7-element state is evaluated
+        ~5x faster without numpy's per-call overhead. Euler's equations for A = A, C = μA, and
+        q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|."""
         a = 1.0 - self.mu
         kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
 
