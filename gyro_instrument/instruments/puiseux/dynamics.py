@@ -58,15 +58,7 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
     qw, qx, qy, qz, wx, wy, wz = y
     A, B, C = inertia
     sxx, sxy, syy, szz, cz = surf.sxx, surf.sxy, surf.syy, surf.szz, surf.cz
-    nq = qw * qw + qx * qx + qy * qy + qz * qz
-    # upward vertical in body axes: third row of R(q/|q|) (body -> world)
-    nx = 2.0 * (qx * qz - qw * qy) / nq
-    ny = 2.0 * (qy * qz + qw * qx) / nq
-    nz = (qw * qw - qx * qx - qy * qy + qz * qz) / nq
-    # n' = n x w (n fixed in space, seen from the body)
-    ndx = ny * wz - nz * wy
-    ndy = nz * wx - nx * wz
-    ndz = nx * wy - ny * wx
+    nx, ny, nz, ndx, ndy, ndz = _vertical(qw, qx, qy, qz, wx, wy, wz)
     # gradient of h: S n / s - c
     sx = sxx * nx + sxy * ny
     sy = sxy * nx + syy * ny
@@ -83,6 +75,16 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
     qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
                                             gx, gy, gz, hx, hy, hz, A, B, C, M, g)
     return qdot, wdot, N, h, zdot, (nx, ny, nz)
+
+
+def _vertical(qw, qx, qy, qz, wx, wy, wz) -> tuple:
+    """The upward vertical n in body axes (third row of R(q/|q|), body -> world) and its rate
+    ṅ = n × w (n fixed in space, seen from the body): (nx, ny, nz, ṅx, ṅy, ṅz)."""
+    nq = qw * qw + qx * qx + qy * qy + qz * qz
+    nx = 2.0 * (qx * qz - qw * qy) / nq
+    ny = 2.0 * (qy * qz + qw * qx) / nq
+    nz = (qw * qw - qx * qx - qy * qy + qz * qz) / nq
+    return nx, ny, nz, ny * wz - nz * wy, nz * wx - nx * wz, nx * wy - ny * wx
 
 
 def _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz, gx, gy, gz, hx, hy, hz,
@@ -168,13 +170,7 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     A, B, C = inertia
     sxx, sxy, sxz, syy, syz, szz = surf.sxx, surf.sxy, surf.sxz, surf.syy, surf.syz, surf.szz
     cx, cy, cz = surf.cx, surf.cy, surf.cz
-    nq = qw * qw + qx * qx + qy * qy + qz * qz
-    nx = 2.0 * (qx * qz - qw * qy) / nq
-    ny = 2.0 * (qy * qz + qw * qx) / nq
-    nz = (qw * qw - qx * qx - qy * qy + qz * qz) / nq
-    ndx = ny * wz - nz * wy
-    ndy = nz * wx - nx * wz
-    ndz = nx * wy - ny * wx
+    nx, ny, nz, ndx, ndy, ndz = _vertical(qw, qx, qy, qz, wx, wy, wz)
     sx = sxx * nx + sxy * ny + sxz * nz
     sy = sxy * nx + syy * ny + syz * nz
     sz = sxz * nx + syz * ny + szz * nz
