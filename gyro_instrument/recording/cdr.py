@@ -20,14 +20,19 @@ from gyro_instrument.core.scene import EPOCH_NS
 _STAMP_LE, _STAMP_BE = struct.Struct("<iI").unpack_from, struct.Struct(">iI").unpack_from
 
 
-def cdr_stamp_ns(data) -> int | None:
-    """Stamp of a CDR message whose first field is a Time (any Header-first type, or Clock):
-    after the 4-byte encapsulation header, int32 sec and uint32 nanosec (little endian here)."""
-    if len(data) < 12:
-        return None
-    sec, nsec = (_STAMP_LE if data[1] == 1 else _STAMP_BE)(data, 4)
+def cdr_time_ns(data, offset) -> int:
+    """A builtin_interfaces/Time (int32 sec, uint32 nanosec) at byte ``offset`` of a CDR message,
+    in the message's byte order (encapsulation header byte 1: 1 little endian), as int ns."""
+    sec, nsec = (_STAMP_LE if data[1] == 1 else _STAMP_BE)(data, offset)
     return sec * 1_000_000_000 + nsec
 
+
+def cdr_stamp_ns(data) -> int | None:
+    """Stamp of a CDR message whose first field is a Time (any Header-first type, or Clock):
+    after the 4-byte encapsulation header, int32 sec and uint32 nanosec; None when too short."""
+    if len(data) < 12:
+        return None
+    return cdr_time_ns(data, 4)
 
 class CdrLayout:
     """The CDR bytes of a message type whose strings and sequence lengths are fixed, so that only

@@ -15,7 +15,7 @@ from std_msgs.msg import Float64
 
 from gyro_instrument.core.scene import EPOCH_NS
 # the CDR codec is rclpy-free and shared with replay (gyro_instrument.recording.cdr); re-exported here
-from gyro_instrument.recording.cdr import (_STAMP_BE, _STAMP_LE, CLOCK_LAYOUT, CdrLayout, cdr_stamp_ns,  # noqa: F401
+from gyro_instrument.recording.cdr import (CLOCK_LAYOUT, CdrLayout, cdr_stamp_ns, cdr_time_ns,  # noqa: F401
                                           joint_state_layout, point_stamped_layout)
 
 #: frame of ENU vectors at the site (REP-105 'map'-like local frame)
@@ -89,8 +89,7 @@ def marker_array_stamp_ns(data) -> int | None:
     encapsulation header and the uint32 sequence length); None when empty."""
     if len(data) < 16 or struct.unpack_from("<I" if data[1] == 1 else ">I", data, 4)[0] == 0:
         return None
-    sec, nsec = (_STAMP_LE if data[1] == 1 else _STAMP_BE)(data, 8)
-    return sec * 1_000_000_000 + nsec
+    return cdr_time_ns(data, 8)
 
 
 def _marker(t_ns, ns, mid, mtype, rgba, scale, points=(), position=(0.0, 0.0, 0.0), frame_id=SITE_FRAME):
