@@ -11,8 +11,8 @@
 
 Two kinds of instrument: ``foucault_pantheon``'s pendulum as shipped (it streams: ``integrator:
 auto`` runs parareal window by window of whole swings; ``adaptive`` continues one DOP853 step
-sequence), and the closed-form gyrocompass of ``tests/streaming_instrument.py`` (streams; needs a source
-checkout), which isolates what the layers downstream of ``Instrument.stream`` cost: simulator
+sequence), and ``quet_gyroscopes`` (:data:`LAYERS_SCENE`: two plane gyroscopes whose integration is
+nearly free), which isolates what the layers downstream of ``Instrument.stream`` cost: simulator
 blocks, estimator, recorder, DDS. Every child runs on loopback like the suite's other benchmark
 (discovery range LOCALHOST and, as root, a loopback-only network namespace).
 """
@@ -24,7 +24,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 #: 48 h, the long run of the issue
 LONG_S = 48 * 3600.0
@@ -94,46 +93,21 @@ def peak_rss(scene, duration_s, overrides=(), extra=()) -> tuple:
         return _peak_rss_of(*_run_command(scene, duration_s, bag, overrides, ("--stats", *extra)), tmp)
 
 
-def _streaming_child(tmp, duration_s, rate_hz, args):
-    """(command, environment, bag) of ``run`` over the tests' streaming gyrocompass, or None."""
-    tests = Path(__file__).resolve().parents[2] / "tests"
-    if not (tests / "streaming_instrument.py").exists():
-        return None
-    import yaml
-    sys.path.insert(0, str(tests))
-    try:
-        import streaming_instrument
-    finally:
-        sys.path.remove(str(tests))
-    scene, bag = os.path.join(tmp, "streaming.yaml"), os.path.join(tmp, "streaming.mcap")
-    with open(scene, "w") as fh:
-        yaml.safe_dump(streaming_instrument.scene(duration_s=duration_s, rate_hz=rate_hz), fh)
-    child = (f"import sys; sys.path.insert(0, {str(tests)!r}); import streaming_instrument; "
-             f"streaming_instrument.register(); from gyro_instrument.ros.cli import main; "
-             f"sys.exit(main(['run', {scene!r}, '--bag', {bag!r}] + {list(args)!r}))")
-    return (*_loopback([sys.executable, "-c", child]), bag)
+#: The shipped scene whose instruments are cheapest to integrate (two plane gyroscopes on the scalar
+#: DOP853 driver, ~30 000x real time): its rows measure what the layers downstream of
+#: ``Instrument.stream`` hold and cost (simulator blocks, estimator, recorder, DDS).
+LAYERS_SCENE = "quet_gyroscopes"
 
 
 def layers_first_message(duration_s, rate_hz=20.0, timeout_s=60.0) -> tuple:
-    """:func:`time_to_first_message` over the tests' streaming gyrocompass (see :func:`layers_peak_rss`)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        got = _streaming_child(tmp, duration_s, rate_hz, ["--quiet"])
-        if got is None:
-            return None, "tests/streaming_instrument.py not found (a source checkout is needed)"
-        return _first_message_of(*got, timeout_s)
+    """:func:`time_to_first_message` of ``run`` :data:`LAYERS_SCENE` at ``rate_hz``."""
+    return time_to_first_message(LAYERS_SCENE, duration_s, (f"sample_rate_hz={rate_hz:g}",), timeout_s)
 
 
 def layers_peak_rss(duration_s, rate_hz=1.0, window_s=100.0) -> tuple:
-    """:func:`peak_rss` of ``run`` over an instrument that streams: the closed-form small-amplitude
-    gyrocompass of ``tests/streaming_instrument.py`` (u = u0 cos(√K t), Quet sec. 4 §1 eq. 2
-    linearised), registered in the child. What it measures is what the layers downstream of
-    ``Instrument.stream`` hold (simulator blocks, estimator, recorder, DDS), until the shipped
-    instruments stream. Needs a source checkout (the tests directory); (None, {"error": ...}) otherwise."""
-    with tempfile.TemporaryDirectory() as tmp:
-        got = _streaming_child(tmp, duration_s, rate_hz, ["--stats", "--window-s", f"{window_s:g}"])
-        if got is None:
-            return None, {"error": "tests/streaming_instrument.py not found (a source checkout is needed)"}
-        return _peak_rss_of(*got[:2], tmp)
+    """:func:`peak_rss` of ``run`` :data:`LAYERS_SCENE` at ``rate_hz`` with windows of ``window_s``:
+    the instruments' own state is a few floats, so what grows is what the layers keep."""
+    return peak_rss(LAYERS_SCENE, duration_s, (f"sample_rate_hz={rate_hz:g}",), ("--window-s", f"{window_s:g}"))
 
 
 def _peak_rss_of(cmd, env, tmp):
@@ -161,10 +135,10 @@ def live_rows(quick=False, progress=print) -> list:
     """Rows (target, measured, unit, goal, met) for ``targets.csv``.
 
     * launch to first message on disk, 1 h and 48 h: ``foucault_pantheon`` as shipped (``integrator:
-      auto``, parareal windows) and on its adaptive integrator, and over the tests'
-      streaming gyrocompass (:func:`layers_first_message`: the layers downstream of ``stream``);
-    * peak RSS of whole runs, 1 h vs 48 h: ``foucault_pantheon`` on its fast path at 0.2 Hz, and the
-      streaming gyrocompass at 1 Hz with 100 s windows (172 800 samples for 48 h). The goal (48 h within
+      auto``, parareal windows) and on its adaptive integrator, and over
+      ``quet_gyroscopes`` (:func:`layers_first_message`: the layers downstream of ``stream``);
+    * peak RSS of whole runs, 1 h vs 48 h: ``foucault_pantheon`` on its fast path at 0.2 Hz, and
+      ``quet_gyroscopes`` at 1 Hz with 100 s windows (172 800 samples for 48 h). The goal (48 h within
       10 % of 1 h) is for the streaming case; the estimator's kept samples (``estimator_bytes``,
       8 bytes per kept value) are what grows by design and are reported beside it.
     """
@@ -183,13 +157,13 @@ def live_rows(quick=False, progress=print) -> list:
             rows.append(_first_row(f"{label}, {d / 3600:g} h", s, note, imp))
         progress(f"  run over a streaming instrument, {d / 3600:g} h: time to first message")
         s, note = layers_first_message(d)
-        rows.append(_first_row(f"streaming gyrocompass (tests/streaming_instrument.py), {d / 3600:g} h", s, note, imp))
+        rows.append(_first_row(f"quet_gyroscopes (layers), {d / 3600:g} h", s, note, imp))
     # at 1 Hz the pendulum publishes its markers every sample (once per second): 0.2 Hz keeps its
-    # 48 h run to 34 560 samples; the gyrocompass has no markers and runs 172 800 samples at 1 Hz
+    # 48 h run to 34 560 samples; the gyroscopes have no markers and runs 172 800 samples at 1 Hz
     fast = ("sample_rate_hz=0.2",)
     for label, rate, measure in (("foucault_pantheon as shipped (auto: parareal)", 0.2,
                                   lambda d: peak_rss("foucault_pantheon", d, fast, ("--window-s", "500"))),
-                                 ("streaming gyrocompass (tests/streaming_instrument.py)", 1.0, layers_peak_rss)):
+                                 ("quet_gyroscopes (layers)", 1.0, layers_peak_rss)):
         got = {}
         for d in (SHORT_S, LONG_S):
             progress(f"  run {label}, {d / 3600:g} h at {rate:g} Hz: peak RSS")
