@@ -411,6 +411,48 @@ def test_unknown_rigid_body_term_falls_back_to_the_chain():
     assert err.value.field == "g.integrator"
 
 
+def test_hinge_terms_linear_or_called():
+    """The free closed form multiplies hinge torques that are linear in the rate by their measured
+    coefficient (:func:`linear_hinge_coefficient`: pivot damping −(2/τ) J q̇, bearing −C ρ/τ) and
+    calls any other term. Both routes equal the chain's right-hand side (the same bound as
+    :func:`test_closed_form_is_the_chain`, 1000 eps κ S; a dropped or doubled term is O(J q̇/τ) ≈ 1e-3 S
+    here): a quadratic pivot drag is not linear (None) and is called as is."""
+    from gyro_instrument.core.effect import DAMPING, Effect
+    from gyro_instrument.instruments.gimbal.dynamics import linear_hinge_coefficient
+
+    class QuadraticDrag(Effect):
+        name = "quadratic_drag"
+        MECHANICS = frozenset({DAMPING})
+
+        def damping_torque(self, inertia, rate):
+            return -0.05 * inertia * rate * abs(rate)
+
+    damping = EFFECTS["pivot_damping"](time_constant_s=100.0)
+    decay = EFFECTS["spin_decay"](time_constant_s=50.0)
+    assert linear_hinge_coefficient([damping.damping_torque], 2.0) == damping.damping_torque(2.0, 1.0)
+    assert linear_hinge_coefficient([decay.spin_torque], 3.0) == decay.spin_torque(3.0, 1.0)
+    assert linear_hinge_coefficient([], 3.0) == 0.0
+    assert linear_hinge_coefficient([QuadraticDrag().damping_torque], 2.0) is None
+    rng = np.random.default_rng(17)
+    p = validate_params("instruments.g", GimbalGyroscope.PARAMS, {"configuration": "free", "integrator": "closed_form"})
+    for extra in ({"pivot_damping": damping, "spin_decay": decay},
+                  {"pivot_damping": damping, "spin_decay": decay, "quadratic_drag": QuadraticDrag()}):
+        effects = {k: EFFECTS[k]() for k in EXACT}
+        effects.update(extra)
+        g = GimbalGyroscope("g", SITE, p, effects)
+        chain = g.build_chain()
+        f, _ = g.closed_form(chain)
+        inertia = g.A + g.C + g.A1 + g.C1 + g.A2 + g.C2
+        for _ in range(20):
+            q, v = rng.uniform(-3.0, 3.0, chain.nf), rng.uniform(-5.0, 5.0, chain.nf)
+            v[-1] *= 100.0
+            ref = chain.rhs(0.0, np.concatenate([q, v]))
+            scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.A, g.C),
+                        np.max(np.abs(ref[chain.nf:])))
+            bound = 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
+            assert np.max(np.abs(np.array(f(0.0, *q, *v)) - ref)) < bound, sorted(extra)
+
+
 @pytest.mark.parametrize("configuration", ["locked", "outer_fixed", "free"])
 def test_stream_equals_simulate_bit_for_bit(configuration):
     """Streaming (issue 13 item 1): the closed form's runs never let the blocks steer the steps (the
