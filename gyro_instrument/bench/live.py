@@ -190,5 +190,7 @@ def live_rows(quick=False, progress=print) -> list:
 
 
 def _first_row(label, s, note, imp):
-    return (f"run {label}: launch to first message on disk", s if s is not None else float("nan"),
-            "s" + (f" ({note})" if note else ""), "<= 2 + import", s is not None and s - imp <= 2.0)
+    """The issue's goal is from the process's start: the interpreter and imports count."""
+    return (f"run {label}: launch to first message on disk (import alone {imp:.2f} s)",
+            s if s is not None else float("nan"), "s" + (f" ({note})" if note else ""), "<= 2",
+            s is not None and s <= 2.0)
