@@ -50,14 +50,15 @@ def rk8_batch(rhs, y0, h, m, keep=False) -> tuple:
         ys = np.empty((m + 1,) + y.shape)
         fs = np.empty((m + 1,) + y.shape)
     k = np.empty((_S,) + y.shape)
+    flat = k.reshape(_S, -1)                  # the stages as rows: one BLAS product per stage
     f0 = rhs(0.0, y)
     for step in range(m):
         if keep:
             ys[step], fs[step] = y, f0
         k[0] = f0
         for s in range(1, _S):
-            k[s] = rhs(0.0, y + h * np.tensordot(_A[s, :s], k[:s], axes=1))
-        y = y + h * np.tensordot(_B, k, axes=1)
+            k[s] = rhs(0.0, y + (_A[s, :s] @ flat[:s]).reshape(y.shape) * h)
+        y = y + (_B @ flat).reshape(y.shape) * h
         f0 = rhs(0.0, y)
     if keep:
         ys[m], fs[m] = y, f0
