@@ -600,8 +600,9 @@ class SphericalPendulum(Instrument):
                     window += 1
                     n_seg = min(per, n_total - window * per)
                     span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
+                    grid = rows = None               # the previous window's grid is not needed any more
                     grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
-                    rows = hermite_rows(grid, 3)          # once per window, for every block in it
+                    rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
                     evals += info["rhs_columns"]
                     passes += info["iterations"]
                 sel = win == w
