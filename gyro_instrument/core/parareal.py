@@ -24,17 +24,17 @@ points (position, velocity and acceleration known at both ends).
 import math
 
 import numpy as np
-from scipy.integrate import DOP853
 
+from gyro_instrument.core import dop853
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.integrate import report
 
-# The 8th-order formula of the DOP853 tableau, from scipy's public class (the same arrays as the
-# private ``scipy.integrate._ivp.dop853_coefficients`` module's A[:12, :12], B, C[:12]).
-_S = DOP853.n_stages               # 12 stages of the 8th-order formula
-_A = DOP853.A
-_B = DOP853.B
-_C = DOP853.C
+# The 8th-order formula of the DOP853 tableau (core/dop853.py: the doubles of scipy's public class
+# scipy.integrate.DOP853, A[:12, :12], B, C[:12] of its dop853_coefficients module).
+_S = dop853.N_STAGES               # 12 stages of the 8th-order formula
+_A = dop853.A
+_B = dop853.B
+_C = dop853.C
 
 
 def rk8_batch(rhs, y0, h, m, keep=False) -> tuple:

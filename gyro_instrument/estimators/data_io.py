@@ -29,7 +29,6 @@ import threading
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.pipeline import estimable
 
 TIME_COLUMN = "time_s"
 
@@ -287,6 +286,7 @@ def write_csv(path, t, columns) -> None:
 def _needs(inst):
     """Alternative column sets (each a tuple of channel names) that give this instrument's record;
     () for an instrument the estimator does not use."""
+    from gyro_instrument.estimators.pipeline import estimable   # here: writing a table needs no estimator (nor scipy.optimize)
     if inst.IS_PENDULUM:
         return (("x_east", "y_north"), tuple(inst.MEASURED_CHANNELS))
     if not estimable(inst):
