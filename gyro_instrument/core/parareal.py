@@ -165,33 +165,35 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     raise IntegrationError(f"parareal did not converge in {max_iter} iterations (changes {changes})")
 
 
-def hermite_rows(grid, npos, segment_s) -> np.ndarray:
+def hermite_rows(grid, npos, segment_s, block=256) -> np.ndarray:
     """The quintic Hermite interpolants :func:`dense_output` evaluates, one column per step of
-    every segment: shape (9 npos, segments × steps), in blocks of ``npos`` rows
+    every segment: shape (6 npos, segments × steps), in blocks of ``npos`` rows r0, v0, a0 / 2, c3,
+    c4, c5 (``r`` positions, ``v = h ṙ``, ``a = h² r̈`` at the step's start (0) and end (1), ``h`` the
+    step, ``c3..c5`` the coefficients matching both ends) for the scaled time ``s = (t − t0) / h`` in
+    [0, 1]: r(s) = r0 + s v0 + s² a0 / 2 + s³ c3 + s⁴ c4 + s⁵ c5.
 
-        r0, v0, a0 / 2, c3, c4, c5,  a0, 3 c3, 4 c4
-
-    (``r`` positions, ``v = h ṙ``, ``a = h² r̈`` at the step's start (0) and end (1), ``h`` the step,
-    ``c3..c5`` the coefficients matching both ends), for the scaled time ``s = (t − t0) / h`` in
-    [0, 1]: r(s) = r0 + s v0 + s² a0 / 2 + s³ c3 + s⁴ c4 + s⁵ c5. Computed once per step rather
-    than once per sample (~7 samples per step at 20 Hz on the 67 m pendulum, 48 steps per swing),
-    with the same operations as per sample, so the values are the same doubles. Build it once per
-    grid and pass it to every :func:`dense_output` call on it; ``segment_s`` (s) as there."""
+    Computed once per step rather than once per sample (~7 samples per step at 20 Hz on the 67 m
+    pendulum, 48 steps per swing), with the same operations as per sample, so the values are the
+    same doubles; ``block`` segments at a time (the temporaries stay small). Build it once per grid
+    and pass it to every :func:`dense_output` call on it; ``segment_s`` (s) as there."""
     ys, fs = grid
     m, n_seg = ys.shape[0] - 1, ys.shape[2]
     h = segment_s / m
-    ends = np.concatenate([ys[:, :2 * npos], fs[:, npos:2 * npos]], axis=1)         # (m + 1, 3 npos, n)
-    e0, e1 = ends[:-1], ends[1:]
-    r0, v0, a0 = e0[:, :npos], h * e0[:, npos:2 * npos], h * h * e0[:, 2 * npos:]  # (m, npos, n) each
-    r1, v1, a1 = e1[:, :npos], h * e1[:, npos:2 * npos], h * h * e1[:, 2 * npos:]
-    d = r1 - r0
-    c3 = 10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1
-    c4 = -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1
-    c5 = 6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1
-    table = np.empty((9, npos, n_seg, m))
-    for i, block in enumerate((r0, v0, 0.5 * a0, c3, c4, c5, a0, 3 * c3, 4 * c4)):
-        table[i] = block.transpose(1, 2, 0)
-    return table.reshape(9 * npos, n_seg * m)
+    table = np.empty((6, npos, n_seg, m))
+    for a in range(0, n_seg, block):
+        b = min(a + block, n_seg)
+        ends = np.concatenate([ys[:, :2 * npos, a:b], fs[:, npos:2 * npos, a:b]], axis=1)   # (m + 1, 3 npos, n)
+        e0, e1 = ends[:-1], ends[1:]
+        r0, v0, a0 = e0[:, :npos], h * e0[:, npos:2 * npos], h * h * e0[:, 2 * npos:]  # (m, npos, n) each
+        r1, v1, a1 = e1[:, :npos], h * e1[:, npos:2 * npos], h * h * e1[:, 2 * npos:]
+        d = r1 - r0
+        coefficients = (r0, v0, 0.5 * a0,
+                        10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1,
+                        -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1,
+                        6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1)
+        for i, c in enumerate(coefficients):
+            table[i, :, a:b] = c.transpose(1, 2, 0)
+    return table.reshape(6 * npos, n_seg * m)
 
 
 def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray:
@@ -217,7 +219,8 @@ def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray
         j = np.clip((tau // h).astype(np.int64), 0, m - 1)
         s = tau / h - j
         p = rows.take(seg * m + j, axis=1)
-        r0, v0, ha0, c3, c4, c5, a0, c3x3, c4x4 = (p[i * npos:(i + 1) * npos] for i in range(9))
+        r0, v0, ha0, c3, c4, c5 = (p[i * npos:(i + 1) * npos] for i in range(6))
         out[:npos, a:a + chunk] = r0 + s * (v0 + s * (ha0 + s * (c3 + s * (c4 + s * c5))))
-        out[npos:, a:a + chunk] = (v0 + s * (a0 + s * (c3x3 + s * (c4x4 + s * 5 * c5)))) / h
+        # a0 = 2 (a0 / 2) exactly (a power of two)
+        out[npos:, a:a + chunk] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
     return out

@@ -388,7 +388,8 @@ class SphericalPendulum(Instrument):
 
         def rhs(t, y):
             # the same operations in the same order as the plain expressions (kept in the comments),
-            # on fewer temporaries: ~100 us per call on a batch of (6, 2 400) in the parareal path
+            # on fewer temporaries: ~90 us per call on a batch of (6, 2 438) in the parareal path
+            # (cProfile, the effects' terms included; 150 us with the plain expressions)
             x, yy, z, vx, vy, vz = y
             dz = z - zr
             fx, fy, fz = 0.0, 0.0, -g
@@ -547,8 +548,9 @@ class SphericalPendulum(Instrument):
     #: of positions and derivatives, the Newton pass's stages), so a window of 2048 swings (9.3 h of
     #: the 67 m pendulum) holds ~20 MB whatever the duration; long enough that the Python overhead
     #: of a window (~600 batched right-hand-side calls per Newton pass) stays small against the
-    #: numpy work it drives (a sidereal day at 20 Hz, CPU under load: one window 2.2 s, windows of
-    #: 2048 swings 2.8 s, of 512 swings 3.7 s).
+    #: numpy work it drives (the whole ``simulate`` of a sidereal day at 20 Hz to Parquet, median of 3
+    #: with the CPU under load: one window of 5 247 swings 2.9 s and 272 MB peak RSS, windows of 2048
+    #: swings 2.5 s and 196 MB, of 512 swings 3.5 s and 152 MB).
     WINDOW_SWINGS = 2048
 
     def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
