@@ -549,8 +549,8 @@ class SphericalPendulum(Instrument):
     #: the 67 m pendulum) holds ~20 MB whatever the duration; long enough that the Python overhead
     #: of a window (~600 batched right-hand-side calls per Newton pass) stays small against the
     #: numpy work it drives (the whole ``simulate`` of a sidereal day at 20 Hz to Parquet, median of 3
-    #: with the CPU under load: one window of 5 247 swings 2.9 s and 272 MB peak RSS, windows of 2048
-    #: swings 2.5 s and 196 MB, of 512 swings 3.5 s and 152 MB).
+    #: with the CPU shared: one window of 5 247 swings 2.4 s and 203 MB peak RSS, windows of 2048
+    #: swings 2.6 s and 164 MB, of 512 swings 2.6 s and 145 MB; the times differ within the noise).
     WINDOW_SWINGS = 2048
 
     def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
