@@ -32,9 +32,17 @@ class Centrifugal(Effect):
 
     def point_mass_term(self, omega_enu) -> Callable:
         """−Ω × (Ω × δr) over the displacement δr from the rest point, written |Ω|² δr − (Ω·δr) Ω
-        (:func:`centrifugal_gradient_acceleration`, component form)."""
-        ox, oy, oz = omega_enu
+        (:func:`centrifugal_gradient_acceleration`, component form).
+
+        Ω in ENU has no east part (n (0, cos γ, sin γ)); then its zero products are left out: the
+        same doubles for a finite δr in 10 array operations instead of 14."""
+        ox, oy, oz = (float(o) for o in omega_enu)
         o2 = ox * ox + oy * oy + oz * oz
+        if ox == 0.0:
+            def gradient_no_east(dx, dy, dz, vx, vy, vz):
+                od = oy * dy + oz * dz
+                return o2 * dx, o2 * dy - od * oy, o2 * dz - od * oz
+            return gradient_no_east
 
         def gradient(dx, dy, dz, vx, vy, vz):
             od = ox * dx + oy * dy + oz * dz

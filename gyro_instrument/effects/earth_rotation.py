@@ -30,8 +30,19 @@ class EarthRotation(Effect):
         return n * scales["duration_s"], "n * duration (swing-plane turn over the run, rad, at most)"
 
     def point_mass_term(self, omega_enu) -> Callable:
-        """Coriolis acceleration −2 Ω × v (:func:`coriolis_acceleration`, component form)."""
-        ox, oy, oz = omega_enu
+        """Coriolis acceleration −2 Ω × v (:func:`coriolis_acceleration`, component form).
+
+        Ω in ENU has no east part (n (0, cos γ, sin γ)); then the zero products are left out and
+        the factor −2 is taken into the coefficients (exact: a power of two), so each component is
+        the same double as in the general form for finite v, in 5 array operations instead of 12
+        (the pendulum's batched right-hand side calls it ~5 700 times a sidereal day)."""
+        ox, oy, oz = (float(o) for o in omega_enu)
+        if ox == 0.0:
+            m2y, m2z = -2.0 * oy, -2.0 * oz
+
+            def coriolis_no_east(dx, dy, dz, vx, vy, vz):
+                return -m2z * vy + m2y * vz, m2z * vx, -m2y * vx
+            return coriolis_no_east
 
         def coriolis(dx, dy, dz, vx, vy, vz):
             return -2.0 * (oy * vz - oz * vy), -2.0 * (oz * vx - ox * vz), -2.0 * (ox * vy - oy * vx)
