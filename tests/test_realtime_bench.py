@@ -24,7 +24,7 @@ def test_every_instrument_and_choice_is_a_row():
 def test_a_refused_combination_is_reported_not_raised():
     """gimbal_locked switched to outer_fixed keeps its initial outer angle, which the scene checks
     refuse: the row carries the reason (field and value) instead of a number."""
-    rows = realtime_rows(progress=lambda *_: None, scenes=["gimbal_paris"], target_cpu_s=0.01)   # probes only
+    rows = realtime_rows(progress=lambda *_: None, scenes=["gimbal_paris"], target_cpu_s=0.01, repeats=1)   # probes
     row = dict(zip(REALTIME_HEADER, next(r for r in rows if r[1] == "gimbal_locked"
                                          and r[3] == "configuration=outer_fixed")))
     assert row["real_time_factor"] is None and "initial_outer_angle_deg" in row["note"]

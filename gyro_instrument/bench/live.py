@@ -5,7 +5,7 @@
   bench reads its provisional summary every 5 ms), for 1 h and 48 h of the same scene; the child
   is then killed (SIGKILL), so a 48 h run costs only its start. The launch includes the
   interpreter and rclpy's import, measured alone in the same run (``import`` row);
-* peak memory: the maximum resident set size (``wait4``'s ``ru_maxrss``) of whole runs of 1 h and
+* peak memory: the maximum resident set size (a wrapper's ``RUSAGE_CHILDREN`` ``ru_maxrss``) of whole runs of 1 h and
   48 h of the same scene, with the run's own account of what grows (``--stats``:
   ``estimator_bytes``, the estimator's kept samples).
 
@@ -111,16 +111,20 @@ def layers_peak_rss(duration_s, rate_hz=1.0, window_s=100.0) -> tuple:
 
 
 def _peak_rss_of(cmd, env, tmp):
-    """Run ``cmd`` to its end; (ru_maxrss in MB, the last stderr line as JSON) or (None, {"error": ...})."""
+    """Run ``cmd`` to its end; (its peak RSS in MB, the last stderr line as JSON) or (None, {"error": ...}).
+
+    The command runs under a small wrapper process (:data:`~gyro_instrument.bench.streaming.MAXRSS_WRAPPER`,
+    ``getrusage(RUSAGE_CHILDREN)``): a child forked straight from this process inherits its high-water
+    RSS (Linux keeps it across ``execve``), which inside a whole ``bench`` run (~1.5 GB) hid every
+    run's own peak, and the run's own ``--stats`` figure with it."""
+    from gyro_instrument.bench.streaming import MAXRSS_WRAPPER
     with open(os.path.join(tmp, "out"), "w+") as out, open(os.path.join(tmp, "err"), "w+") as err:
-        p = subprocess.Popen(cmd, env=env, stdout=out, stderr=err)
-        _, status, usage = os.wait4(p.pid, 0)
-        p.returncode = os.waitstatus_to_exitcode(status)
+        p = subprocess.run([sys.executable, "-c", MAXRSS_WRAPPER, *cmd], env=env, stdout=out, stderr=err)
         err.seek(0)
         lines = err.read().strip().splitlines()
-    if p.returncode != 0 or not lines:
-        return None, {"error": lines[-1] if lines else f"exit {p.returncode}"}
-    return usage.ru_maxrss / 1024.0, json.loads(lines[-1])
+    if p.returncode != 0 or len(lines) < 2:
+        return None, {"error": lines[-2] if len(lines) > 1 else f"exit {p.returncode}"}
+    return int(lines[-1]) / 1024.0, json.loads(lines[-2])
 
 
 def import_time() -> float:

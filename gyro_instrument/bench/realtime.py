@@ -105,9 +105,9 @@ def measure_realtime(scene_name, name, overrides, target_cpu_s=3.0, probe_s=1.0,
     return inst, d, cpu, wall, nfev, integrator
 
 
-def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None) -> list:
+def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None, repeats=3) -> list:
     """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``),
-    the median of three runs that together take ~``target_cpu_s`` of CPU (default 3 s, 1 s with
+    the median of ``repeats`` runs that together take ~``target_cpu_s`` of CPU (default 3 s, 1 s with
     ``quick``; :func:`measure_realtime`)."""
     rows = []
     target = target_cpu_s or (1.0 if quick else 3.0)
@@ -116,7 +116,7 @@ def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None) -
     for scene_name, name, label, overrides in cases:
         progress(f"  real time: {scene_name}/{name} {label}")
         try:
-            inst, d, cpu, wall, nfev, integ = measure_realtime(scene_name, name, overrides, target)
+            inst, d, cpu, wall, nfev, integ = measure_realtime(scene_name, name, overrides, target, repeats=repeats)
         except SceneError as e:
             rows.append((scene_name, name, "", label, "", None, None, None, None, None, None, None,
                          f"refused by the scene checks: {e}"))

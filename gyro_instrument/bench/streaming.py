@@ -68,7 +68,7 @@ def _wrapped(d, period=math.pi):
 #: Runs argv[1:] and prints its maximum RSS (kB). A child forked from this (large) process would
 #: start with this process's pages resident and report them as its own ``ru_maxrss``; a small
 #: wrapper that forks the command gives the command's own peak.
-_MAXRSS_WRAPPER = ("import resource, subprocess, sys; rc = subprocess.call(sys.argv[1:]); "
+MAXRSS_WRAPPER = ("import resource, subprocess, sys; rc = subprocess.call(sys.argv[1:]); "
                    "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr); sys.exit(rc)")
 
 
@@ -82,7 +82,7 @@ def run_child(cmd, env=None) -> tuple:
         The child failed (its last stderr line).
     """
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-c", _MAXRSS_WRAPPER, *cmd], stdout=subprocess.DEVNULL,
+    p = subprocess.run([sys.executable, "-c", MAXRSS_WRAPPER, *cmd], stdout=subprocess.DEVNULL,
                        stderr=subprocess.PIPE, text=True, env=env)
     wall = time.perf_counter() - t0
     lines = p.stderr.strip().splitlines()
