@@ -6,8 +6,9 @@ work-precision study that chooses its integrators.
   combination the scene checks refuse is listed with the reason), and the free gimbal's harder
   variants (:data:`EXTRA_VARIANTS`), the simulated seconds per CPU
   second of ``simulate`` at the scene's sample rate and tolerance: the median of three runs that
-  together take about ``target_cpu_s`` of CPU (never beyond the scene's ``duration_s``), so slow and
-  fast variants are measured in one ``bench`` run. The goal is :data:`GOAL`.
+  together take about ``target_cpu_s`` of CPU (never beyond the scene's ``duration_s``), interleaved
+  across the configurations, so slow and fast variants are measured in one ``bench`` run. The goal
+  is :data:`GOAL`.
 * :func:`gimbal_work_precision_rows` — the two-ring gimbal's error against a tight reference versus
   CPU per simulated second, for the generic hinge chain (``solve_ivp`` DOP853) and the closed form
   (:mod:`gyro_instrument.instruments.gimbal.dynamics`) through three DOP853 drivers: Hairer's
@@ -85,42 +86,74 @@ def _timed_simulate(scene_name, name, overrides, duration_s):
     return inst, sim, time.process_time() - c0, time.perf_counter() - w0
 
 
-def measure_realtime(scene_name, name, overrides, target_cpu_s=3.0, probe_s=1.0, repeats=3) -> tuple:
-    """(instrument, simulated s, CPU s, wall s, nfev, integrator) of one configuration: a probe of
-    ``probe_s`` simulated seconds, then ``repeats`` runs each sized to ~``target_cpu_s / repeats`` of
-    CPU (at most the scene's ``duration_s``); the run of median CPU is returned (a shared 2-core
-    machine moved single runs' CPU time by up to ±30 %). Raises SceneError when the scene checks
-    refuse the configuration."""
+def _sized_duration(scene_name, name, overrides, each_cpu_s, probe_s):
+    """Simulated seconds of one run of ~``each_cpu_s`` CPU: a probe of ``probe_s`` simulated seconds,
+    scaled (at most the scene's ``duration_s``; the probe's length when it already costs half of it).
+    Raises SceneError when the scene checks refuse the configuration."""
     full = load_scene(scene_name, overrides).duration_s
     d = min(full, probe_s)
-    inst, sim, cpu, wall = _timed_simulate(scene_name, name, overrides, d)
-    each = target_cpu_s / repeats
-    if cpu < 0.5 * each and d < full:
-        d = min(full, d * each / max(cpu, 1e-3))
-    runs = [_timed_simulate(scene_name, name, overrides, d) for _ in range(repeats)]
-    inst, sim, cpu, wall = sorted(runs, key=lambda r: r[2])[len(runs) // 2]
+    _, _, cpu, _ = _timed_simulate(scene_name, name, overrides, d)
+    if cpu < 0.5 * each_cpu_s and d < full:
+        d = min(full, d * each_cpu_s / max(cpu, 1e-3))
+    return d
+
+
+def _timed_summary(scene_name, name, overrides, duration_s):
+    """One timed run, kept small: (instrument, CPU s, wall s, nfev, integrator); the samples are
+    dropped at once (a sweep holds three runs of every configuration)."""
+    inst, sim, cpu, wall = _timed_simulate(scene_name, name, overrides, duration_s)
     meta = sim.trajectory.meta if sim.trajectory is not None else {}
     integrator = meta.get("integrator") or meta.get("driver") or getattr(sim.trajectory, "method", "")
     nfev = sim.trajectory.nfev if sim.trajectory is not None else 0
+    return inst, cpu, wall, nfev, integrator
+
+
+def _median_run(runs, d):
+    """(instrument, simulated s, CPU s, wall s, nfev, integrator) of the run of median CPU."""
+    inst, cpu, wall, nfev, integrator = sorted(runs, key=lambda r: r[1])[len(runs) // 2]
     return inst, d, cpu, wall, nfev, integrator
 
 
+def measure_realtime(scene_name, name, overrides, target_cpu_s=3.0, probe_s=1.0, repeats=3) -> tuple:
+    """(instrument, simulated s, CPU s, wall s, nfev, integrator) of one configuration: a probe of
+    ``probe_s`` simulated seconds, then ``repeats`` runs each sized to ~``target_cpu_s / repeats`` of
+    CPU (at most the scene's ``duration_s``), back to back; the run of median CPU is returned.
+    Raises SceneError when the scene checks refuse the configuration."""
+    d = _sized_duration(scene_name, name, overrides, target_cpu_s / repeats, probe_s)
+    return _median_run([_timed_summary(scene_name, name, overrides, d) for _ in range(repeats)], d)
+
+
 def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None, repeats=3) -> list:
-    """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``),
+    """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``):
     the median of ``repeats`` runs that together take ~``target_cpu_s`` of CPU (default 3 s, 1 s with
-    ``quick``; :func:`measure_realtime`)."""
-    rows = []
+    ``quick``).
+
+    The repeats are interleaved: every configuration once, then every configuration again, so a
+    configuration's runs lie minutes apart. On the shared 2-core virtual machine a slow spell of the
+    host lasted ~2 minutes and made every row measured in it 1.5-2.4x slower (the plane gyroscopes
+    and pendulums too, not one instrument): back-to-back repeats all fell inside it."""
     target = target_cpu_s or (1.0 if quick else 3.0)
     cases = [(sc, *v) for sc in scenes or shipped_scene_names() for v in variants(sc)]
     cases += [v for v in EXTRA_VARIANTS if scenes is None or v[0] in scenes]
-    for scene_name, name, label, overrides in cases:
-        progress(f"  real time: {scene_name}/{name} {label}")
-        try:
-            inst, d, cpu, wall, nfev, integ = measure_realtime(scene_name, name, overrides, target, repeats=repeats)
-        except SceneError as e:
-            rows.append((scene_name, name, "", label, "", None, None, None, None, None, None, None,
-                         f"refused by the scene checks: {e}"))
+    sized, refused, runs = {}, {}, {i: [] for i in range(len(cases))}
+    for rep in range(repeats):
+        for i, (scene_name, name, label, overrides) in enumerate(cases):
+            if i in refused:
+                continue
+            progress(f"  real time ({rep + 1}/{repeats}): {scene_name}/{name} {label}")
+            if i not in sized:
+                try:
+                    sized[i] = _sized_duration(scene_name, name, overrides, target / repeats, 1.0)
+                except SceneError as e:
+                    refused[i] = f"refused by the scene checks: {e}"
+                    continue
+            runs[i].append(_timed_summary(scene_name, name, overrides, sized[i]))
+    rows = []
+    for i, (scene_name, name, label, overrides) in enumerate(cases):
+        if i in refused:
+            rows.append((scene_name, name, "", label, "", None, None, None, None, None, None, None, refused[i]))
             continue
+        inst, d, cpu, wall, nfev, integ = _median_run(runs[i], sized[i])
         rate = load_scene(scene_name, overrides).sample_rate_hz
         rtf = d / cpu if cpu > 0 else math.inf
         rows.append((scene_name, name, inst.type_name, label, integ, d, rate, cpu, wall, rtf, nfev, rtf >= GOAL, ""))
@@ -203,7 +236,7 @@ def summary_lines(rt, wp) -> list:
     below = [r for r in rt if r[11] is False]
     lines = ["## Real-time factor of every instrument configuration (simulated s per CPU s; goal >= 10)", "",
              f"Each shipped scene's instruments as shipped and with each other `configuration`, `integrator` "
-             f"and `model` choice, at the scene's sample rate and tolerance; the median of three runs of ~1 s of CPU each "
+             f"and `model` choice, at the scene's sample rate and tolerance; the median of three interleaved runs of ~1 s of CPU each "
              f"(load average {load:.1f} during the run). {len(below)} below the goal.", "",
              "| scene | instrument | variant | integrator | simulated s | CPU s | wall s | x real time | met |",
              "|---|---|---|---|---|---|---|---|---|"]
