@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed-stamp
 
-.PHONY: demo test setup bench clean
+.PHONY: demo test test-kernels setup bench clean
 
 $(STAMP): setup.py package.xml
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,12 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra --durations=25
+
+# the tests against shipped files under both OpenBLAS kernel choices of x86-64 machines of this kind
+# (AVX-512 where the CPU has it, Haswell's otherwise): their tolerances must hold on either
+test-kernels: $(STAMP)
+	env -u OPENBLAS_CORETYPE AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -q tests/test_bags.py
+	OPENBLAS_CORETYPE=Haswell AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -q tests/test_bags.py
 
 clean:
 	rm -rf $(VENV) build install log out .pytest_cache

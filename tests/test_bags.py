@@ -2,8 +2,10 @@
 gives the estimate recorded beside it (issue 4)."""
 
 import json
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gyro_instrument.cli import replay_bag
@@ -31,10 +33,91 @@ def test_independent_readers_decode_every_message(bag):
     assert n_rosbags == n_mcap == stats.message_count > 0
 
 
+EPS = float(np.finfo(float).eps)
+#: Point estimates. Another CPU's BLAS kernel (OpenBLAS picks AVX-512 or Haswell code by machine)
+#: sums in another order: a sum of N = 12 001 samples moves by <= log2(N) eps relative, the fits are
+#: backward stable and their column-scaled Jacobians are near-orthogonal (condition number 1.01-1.04
+#: measured on every shipped bag), and ~10 further operations lead to a reported number; 64 x that
+#: for headroom: 64 * 1.05 * log2(12001) * eps = 2.0e-13 relative (measured between the two
+#: kernels: <= 4.4e-16).
+REL = 64 * 1.05 * math.log2(12001) * EPS
+#: The profile likelihood's interval edges (σ, intervals, bounds of the latitude) are roots found
+#: by brentq to xtol = 1e-15 rad plus its 4 eps |γ| (estimators/latitude.py): two edges per width.
+EDGE_RAD = 2 * (1e-15 + 4 * EPS * math.pi / 2)
+#: σ(n) carries dn/dγ by a central difference of step dg = 1e-7 rad (latitude._earth_rate): n's
+#: rounding (a few eps |n| at each end) divided by 2 dg, times σ_γ.
+DG = 1e-7
+#: χ² (and Δχ²) is a sum of squared residuals of order 1e-5 σ each on values y ~ 2e6 σ: REL moves
+#: a residual by <= REL * 2e6 σ = 4e-7 σ; χ² is read only against 1 and 9.
+CHI2_ABS = 1e-6
+EDGE_KEYS = {"latitude_sigma_deg", "latitude_interval_deg", "latitude_interval_3sigma_deg"}
+
+
+def _tolerance(path, doc):
+    """Absolute tolerance of the number at ``path`` (keys) of the recorded estimate ``doc``."""
+    key = path[-1] if not isinstance(path[-1], int) else path[-2]
+    top = len(path) <= 2
+    sig_g = math.radians(doc.get("latitude_sigma_deg") or 0.0)
+    if key in ("chi2", "delta_chi2"):
+        return CHI2_ABS
+    if top and (key in EDGE_KEYS or path[:2] == ("crlb", "latitude_deg")):
+        return math.degrees(EDGE_RAD)
+    if top and (key == "earth_rate_sigma_rad_s" or path[:2] == ("crlb", "earth_rate_rad_s")):
+        if path[0] == "crlb":
+            sig_g = math.radians((doc.get("crlb") or {}).get("latitude_deg") or 0.0)
+        n = abs(doc.get("earth_rate_rad_s") or 0.0)
+        return 8 * EPS * n / (2 * DG) * sig_g + REL * abs(_at(doc, path))
+    return None
+
+
+def _at(doc, path):
+    for k in path:
+        doc = doc[k]
+    return doc
+
+
+def assert_estimate_close(got, want, doc=None, path=()):
+    """Equal structure, strings, integers and booleans; floats within the derived tolerances."""
+    doc = want if doc is None else doc
+    if isinstance(want, dict):
+        assert isinstance(got, dict) and got.keys() == want.keys(), (path, sorted(set(got) ^ set(want)))
+        for k in want:
+            assert_estimate_close(got[k], want[k], doc, path + (k,))
+    elif isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want), path
+        for i, (g, w) in enumerate(zip(got, want)):
+            assert_estimate_close(g, w, doc, path + (i,))
+    elif isinstance(want, float) and not isinstance(got, bool) and isinstance(got, (int, float)):
+        tol = _tolerance(path, doc)
+        tol = REL * abs(want) if tol is None else tol
+        assert abs(got - want) <= tol, (path, got, want, tol)
+    else:
+        assert got == want, (path, got, want)
+
+
 @pytest.mark.parametrize("bag", BAGS, ids=lambda b: b.stem)
 def test_replay_gives_the_recorded_estimate(bag):
+    # Issue 22: within tolerances derived above, not bit for bit: the committed JSON was written on
+    # one machine's BLAS kernels and the test runs on others (CI also runs it with
+    # OPENBLAS_CORETYPE=Haswell). Replay == live stays exact inside one run (test_ros).
     recorded = json.loads(bag.with_suffix(".estimate.json").read_text())
-    assert replay_bag(str(bag)) == recorded
+    assert_estimate_close(replay_bag(str(bag)), recorded)
+
+
+def test_the_tolerance_catches_a_real_change():
+    # the comparison is not vacuous: a latitude moved by 1e-12 relative, a σ by one part in 1e6, a
+    # changed note or a missing key all fail
+    recorded = json.loads((BAGS[0].parent / "quet_paris.estimate.json").read_text())
+    for path, change in ((("latitude_deg",), lambda v: v * (1 + 1e-12)),
+                         (("latitude_sigma_deg",), lambda v: v * (1 + 1e-6)),
+                         (("hemisphere_basis",), lambda v: v + "."),
+                         (("instruments", "gyro_horizontal", "swing_duration_s"), lambda v: v * (1 + 1e-12))):
+        damaged = json.loads(json.dumps(recorded))
+        parent = _at(damaged, path[:-1])
+        parent[path[-1]] = change(parent[path[-1]])
+        with pytest.raises(AssertionError):
+            assert_estimate_close(damaged, recorded)
+    assert_estimate_close(json.loads(json.dumps(recorded)), recorded)
 
 
 def test_replay_decodes_with_the_live_layouts_exactly_as_the_dynamic_decoder(monkeypatch):
