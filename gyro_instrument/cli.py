@@ -410,9 +410,12 @@ def print_estimate(r, stream=None) -> None:
         w(f"  hemisphere {r['hemisphere']} ({r.get('hemisphere_basis')})\n")
     for o in r.get("other_latitudes_deg") or ():
         w(f"  also consistent: latitude {o['latitude_deg']:.7f} deg (delta chi2 = {o['delta_chi2']:.3g})\n")
-    w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
-      f" ({deg_h(r['earth_rate_rad_s'])})"
-      f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
+    if r.get("earth_rate_known"):
+        w(f"  Earth rate {r['earth_rate_rad_s']:.9e} rad/s ({deg_h(r['earth_rate_rad_s'])}) {r['earth_rate_basis']}\n")
+    else:
+        w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
+          f" ({deg_h(r['earth_rate_rad_s'])})"
+          f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
     if r.get("method"):
         w(f"  method: {r['method']}\n")
     if r.get("reason"):

@@ -143,10 +143,13 @@ def test_inseparable_measurements_give_null_latitude_with_the_reason():
 
 
 def test_inseparable_scene_through_the_cli(capsys):
-    assert main(["estimate", "quet_gyroscopes", "--json", "--set", "instruments.gyro_meridian.plane=horizontal"]) == 0
+    # Issue 22: with estimator.earth_rate: estimate the two horizontal gyroscopes are refused as
+    # before; unset, n is taken as known instead (tests/test_earth_rate_known.py)
+    assert main(["estimate", "quet_gyroscopes", "--json", "--set", "instruments.gyro_meridian.plane=horizontal",
+                 "--set", "estimator.earth_rate=estimate"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert r["latitude_deg"] is None and r["latitude_sigma_deg"] is None
-    assert "cannot be separated" in r["reason"]
+    assert "cannot be separated" in r["reason"] and r["earth_rate_known"] is False
     json.dumps(r, allow_nan=False)
 
 

@@ -23,8 +23,12 @@ What the data cannot determine is stated, never hidden in a σ:
   with ``hemisphere = "not determined by these instruments"``, or the signed value under the
   user's explicit assumption (``estimator.hemisphere``). σ and the Cramér–Rao bound always come
   from the one mode reported.
-* **separability** — when every measurement has the same dependence on γ (two horizontal
-  gyroscopes: only n cos γ), n and γ cannot be separated: the latitude is null with that reason.
+* **separability** — when every measurement has the same dependence on γ (a pendulum alone: only
+  n sin γ; one horizontal gyroscope or two: only n cos γ), n and γ cannot be separated. Then n is
+  taken as known (IERS 7.292115e-5 rad/s, or the scene's value) and γ alone is fitted, and the
+  result says so (``earth_rate_known``, ``earth_rate_basis``); ``estimator.earth_rate: estimate``
+  refuses instead (latitude null with the reason) and ``known`` holds n even where it could be
+  estimated.
 * **local σ** — σ is the half-width of the mode's own Δχ² = 1 interval; when that interval reaches
   a boundary (a pole, or the equator for |γ|) the likelihood is not locally Gaussian there and σ is
   null, with the interval and the Δχ² = 9 interval reported instead.
@@ -79,14 +83,15 @@ class RateMeasurement:
         return float(np.max(np.abs(s - m))) > 1e-9 * max(float(np.max(np.abs(s))), 1e-300)
 
 
-def _chi2(gamma, meas, use_crlb=False):
+def _chi2(gamma, meas, use_crlb=False, n_known=None):
     """Profiled χ²(γ) and the best rates at γ, by the closed-form normal equations.
 
     Unknowns: n alone, or (n, G) when some gyroscope's gain is not trusted (its rows are
-    y = G s(γ), the pendulum's y = n sin γ). ``gamma`` may be an array (vectorised over a grid).
+    y = G s(γ), the pendulum's y = n sin γ); with ``n_known`` (rad/s) n is held at that value and
+    only G is fitted. ``gamma`` may be an array (vectorised over a grid).
     """
     if np.ndim(gamma) == 0:
-        return _chi2_scalar(float(gamma), meas, use_crlb)
+        return _chi2_scalar(float(gamma), meas, use_crlb, n_known)
     g = np.atleast_1d(np.asarray(gamma, dtype=float))
     two = any(m.kind == "gyro" and not m.gain_known for m in meas)
     # accumulate the 2x2 (or 1x1) normal equations Σ w a aᵀ θ = Σ w a y
@@ -103,7 +108,7 @@ def _chi2(gamma, meas, use_crlb=False):
         rows.append((w, s, j, m.value))
     # the two blocks decouple (each row has one nonzero coefficient)
     with np.errstate(divide="ignore", invalid="ignore"):
-        n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0)
+        n = np.where(S[0, 0] > 0, b[0] / S[0, 0], 0.0) if n_known is None else np.full(g.shape, n_known)
         G = np.where(S[1, 1] > 0, b[1] / S[1, 1], 0.0) if two else np.zeros_like(n)
     theta = np.array([n, G])
     # χ² from the residuals, not as Σ w y² − θ·b: those two terms are ~(y/σ)² ~ 1e12 here and
@@ -124,7 +129,7 @@ def _shape_scalar(m, gamma):
     return math.sqrt(max(1.0 - c * c, 0.0))
 
 
-def _chi2_scalar(gamma, meas, use_crlb):
+def _chi2_scalar(gamma, meas, use_crlb, n_known=None):
     """:func:`_chi2` at one latitude, on floats (same sums in the same order)."""
     two = any(m.kind == "gyro" and not m.gain_known for m in meas)
     S, b, rows = [0.0, 0.0], [0.0, 0.0], []
@@ -136,7 +141,8 @@ def _chi2_scalar(gamma, meas, use_crlb):
         S[j] += w * s * s
         b[j] += w * s * m.value
         rows.append((w, s, j, m.value))
-    theta = [b[0] / S[0] if S[0] > 0 else 0.0, (b[1] / S[1] if S[1] > 0 else 0.0) if two else 0.0]
+    theta = [(b[0] / S[0] if S[0] > 0 else 0.0) if n_known is None else n_known,
+             (b[1] / S[1] if S[1] > 0 else 0.0) if two else 0.0]
     chi2 = 0.0
     for w, s, j, y in rows:
         r = y - theta[j] * s
@@ -171,9 +177,15 @@ class LatitudeResult:
     other_modes: list = field(default_factory=list)
     domain: tuple = (-HALF_PI, HALF_PI)
     reason: str = None
+    earth_rate_known: bool = False
+    earth_rate_basis: str = ""
 
 
-def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None) -> LatitudeResult:
+EARTH_RATE_MODES = ("estimate", "known")
+
+
+def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain=None, earth_rate=None,
+                   n_known=None, n_source="") -> LatitudeResult:
     """Latitude and Earth rate from :class:`RateMeasurement` objects (profile likelihood).
 
     Parameters
@@ -192,6 +204,16 @@ def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain
     domain : (float, float), optional
         Force the search interval (rad); the Cramér–Rao solve passes the estimate's own ``domain``
         so that both describe the same mode.
+    earth_rate : {None, 'estimate', 'known'}
+        ``estimate``: n is fitted with γ (a latitude is null where they cannot be separated);
+        ``known``: n is held at ``n_known`` and γ alone is fitted; None (default): estimated where
+        the measurements separate n and γ, known where they do not (a pendulum alone: k = n sin γ;
+        one horizontal gyroscope: n cos γ) — the scene's ``estimator.earth_rate``.
+    n_known : float, optional
+        The known Earth rate, rad/s (the IERS conventional 7.292115e-5 or the scene's value);
+        without it n is always estimated.
+    n_source : str
+        Where ``n_known`` comes from, for ``earth_rate_basis``.
 
     Returns
     -------
@@ -204,10 +226,28 @@ def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain
     """
     if not meas:
         raise ValueError("need at least one measurement")
+    if earth_rate not in (None,) + EARTH_RATE_MODES:
+        raise ValueError(f"earth_rate = {earth_rate!r}; expected one of {EARTH_RATE_MODES} or None")
     reason = _inseparable(meas)
-    if reason:
-        return _inseparable_result(meas, use_crlb, reason)
-    res = _solve(meas, use_crlb, hemisphere, domain)
+    fixed, basis = None, "estimated with the latitude (profile likelihood)"
+    if n_known is not None and earth_rate != "estimate" and not (reason and reason.endswith("n is")):
+        if reason:
+            fixed = n_known
+            basis = (f"known, not estimated: {n_known:.9g} rad/s ({n_source or 'given'}); "
+                     f"{reason[0].lower() + reason[1:].split('; add ')[0]}, so the latitude is fitted with n "
+                     "known (estimator.earth_rate: estimate refuses instead)")
+        elif earth_rate == "known":
+            fixed = n_known
+            basis = (f"known, not estimated: {n_known:.9g} rad/s ({n_source or 'given'}), as the scene's "
+                     "estimator.earth_rate: known asks")
+    if reason and fixed is None:
+        if n_known is not None and earth_rate == "estimate" and not reason.endswith("n is"):
+            reason += " (estimator.earth_rate: estimate; unset it or set known to fit the latitude with n known)"
+        res = _inseparable_result(meas, use_crlb, reason)
+        res.earth_rate_basis = ("estimated: the measurements do not depend on the latitude" if res.earth_rate_rad_s
+                                is not None else "not determined: " + reason)
+        return res
+    res = _solve(meas, use_crlb, hemisphere, domain, fixed)
     has_pendulum = any(m.kind == "pendulum" for m in meas)
     dropped = {}
     for m in meas:
@@ -221,9 +261,14 @@ def solve_latitude(meas, use_crlb=False, hemisphere=None, flat_sigma=3.0, domain
             dropped[m.name] = (f"within {flat_sigma:g} sigma of the flat maximum of its directing factor "
                                f"(cos(latitude) ≈ 1 near the equator): no Gaussian latitude information")
     kept = [m for m in meas if m.name not in dropped]
-    if dropped and len(kept) >= 2 and not _inseparable(kept):
-        res = _solve(kept, use_crlb, hemisphere, domain)
+    if fixed is None:
+        resolvable = len(kept) >= 2 and not _inseparable(kept)
+    else:
+        resolvable = any(np.ptp(m.shape(GRID)) >= 1e-12 for m in kept)
+    if dropped and resolvable:
+        res = _solve(kept, use_crlb, hemisphere, domain, fixed)
     res.dropped = dropped
+    res.earth_rate_known, res.earth_rate_basis = fixed is not None, basis
     return res
 
 
@@ -332,10 +377,11 @@ def _hemisphere(f, vals, meas, hemisphere):
         note + "|latitude| reported; set estimator.hemisphere: north|south to sign it", True
 
 
-def _solve(meas, use_crlb=False, hemisphere=None, domain=None):
-    """Profile-likelihood latitude and Earth rate (see :func:`solve_latitude`)."""
-    f = lambda g: _chi2(g, meas, use_crlb)[0]  # noqa: E731
-    vals = _chi2(GRID, meas, use_crlb)[0]
+def _solve(meas, use_crlb=False, hemisphere=None, domain=None, n_known=None):
+    """Profile-likelihood latitude and Earth rate (see :func:`solve_latitude`); with ``n_known`` the
+    Earth rate is held there (its σ is then None)."""
+    f = lambda g: _chi2(g, meas, use_crlb, n_known)[0]  # noqa: E731
+    vals = _chi2(GRID, meas, use_crlb, n_known)[0]
     if domain is None:
         domain, side, basis, absolute = _hemisphere(f, vals, meas, hemisphere)
     else:
@@ -358,10 +404,14 @@ def _solve(meas, use_crlb=False, hemisphere=None, domain=None):
         sigma_reason = (f"the 3-sigma region reaches {where}: the likelihood is not locally Gaussian there, so "
                         "no sigma; see the 1- and 3-sigma intervals")
     others = _other_modes(f, vals, mask, c_min, (lo3, hi3), side == HEMISPHERE_UNDETERMINED and not absolute)
-    n_hat, sig_n, (gp, gm) = _earth_rate(meas, g_hat, sigma, (g_lo, g_hi), use_crlb)
+    if n_known is None:
+        n_hat, sig_n, (gp, gm) = _earth_rate(meas, g_hat, sigma, (g_lo, g_hi), use_crlb)
+    else:
+        n_hat, sig_n = float(n_known), None
+        gp, gm = min(g_hat + 1e-7, HALF_PI), max(g_hat - 1e-7, -HALF_PI)
     share = _information_share(meas, n_hat, gp, gm, use_crlb)
     has_gain = any(m.kind == "gyro" and not m.gain_known for m in meas)
-    dof = len(meas) - (2 + (1 if has_gain else 0))
+    dof = len(meas) - ((2 if n_known is None else 1) + (1 if has_gain else 0))
     res = LatitudeResult(g_hat, g_lo, g_hi, sigma, n_hat, sig_n, c_min, dof, share,
                          hemisphere=side, hemisphere_basis=basis, latitude_is_absolute=absolute,
                          sigma_reason=sigma_reason, interval_3sigma_rad=(lo3, hi3), other_modes=others,

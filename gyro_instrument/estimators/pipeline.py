@@ -338,7 +338,8 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
                                            "(no Earth-rate measurement from this instrument)"}
     # combined
     if meas:
-        result.update(_combined(meas, scene.estimator.get("hemisphere")))
+        result.update(_combined(meas, scene.estimator.get("hemisphere"), *known_earth_rate(scene, meas),
+                                earth_rate=scene.estimator.get("earth_rate")))
     else:
         result.update(_null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                      "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
@@ -346,12 +347,31 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     return result
 
 
-def _combined(meas, hemisphere=None):
+def known_earth_rate(scene, meas) -> tuple:
+    """(n, source): the Earth rate the estimator may take as known — the scene's
+    ``site.earth_rate_rad_s`` (IERS conventional 7.292115e-5 rad/s by default) — or (None, "") when
+    no measured instrument simulates ``earth_rotation`` (a non-rotating Earth has no known n)."""
+    from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
+    names = {m.name for m in meas}
+    rotating = any("earth_rotation" in scene.instruments[n][2] for n in names if n in scene.instruments)
+    if not rotating:
+        return None, ""
+    n = scene.site.earth_rate_rad_s
+    source = ("the IERS conventional value, the scene's site.earth_rate_rad_s" if n == SIDEREAL_RATE_RAD_S
+              else "the scene's site.earth_rate_rad_s")
+    return n, source
+
+
+def _combined(meas, hemisphere=None, n_known=None, n_source="", earth_rate=None):
     """The combined latitude and Earth rate (profile likelihood) with their Cramér–Rao bounds from
-    the same mode, and what the instruments cannot determine (hemisphere, separability)."""
-    sol = solve_latitude(meas, hemisphere=hemisphere)
+    the same mode, and what the instruments cannot determine (hemisphere, separability); Earth's
+    rate held at ``n_known`` where they cannot separate it from the latitude (or where
+    ``earth_rate`` = 'known'), said in ``earth_rate_basis``."""
+    how = {"earth_rate": earth_rate, "n_known": n_known, "n_source": n_source}
+    sol = solve_latitude(meas, hemisphere=hemisphere, **how)
     deg = lambda x: None if x is None else math.degrees(x)  # noqa: E731
     out = {"earth_rate_rad_s": sol.earth_rate_rad_s, "earth_rate_sigma_rad_s": sol.earth_rate_sigma_rad_s,
+           "earth_rate_known": sol.earth_rate_known, "earth_rate_basis": sol.earth_rate_basis,
            "hemisphere": sol.hemisphere, "hemisphere_basis": sol.hemisphere_basis}
     if sol.latitude_rad is None:
         out.update({"latitude_deg": None, "latitude_sigma_deg": None, "reason": sol.reason,
@@ -359,7 +379,7 @@ def _combined(meas, hemisphere=None):
                     "method": (f"weighted mean over {len(meas)} measurement(s) independent of the latitude"
                                if sol.earth_rate_rad_s is not None else None)})
         return out
-    crlb = solve_latitude(meas, use_crlb=True, domain=sol.domain)
+    crlb = solve_latitude(meas, use_crlb=True, domain=sol.domain, **how)
     out.update({"latitude_deg": math.degrees(sol.latitude_rad), "latitude_sigma_deg": deg(sol.latitude_sigma_rad),
                 "latitude_interval_deg": [math.degrees(sol.latitude_lo_rad), math.degrees(sol.latitude_hi_rad)],
                 "latitude_interval_3sigma_deg": [math.degrees(v) for v in sol.interval_3sigma_rad],
@@ -374,7 +394,8 @@ def _combined(meas, hemisphere=None):
         out["left_out_of_latitude"] = sol.dropped
     lead = max(sol.carried_by, key=sol.carried_by.get)
     kinds = "+".join(sorted({("pendulum" if m.kind == "pendulum" else "gyroscope") for m in meas}))
-    out["method"] = (f"profile least squares over {kinds} ({len(meas)} measurements); "
+    out["method"] = (f"{'least squares over the latitude with n known' if sol.earth_rate_known else 'profile least squares'}"
+                     f" over {kinds} ({len(meas)} measurement{'s' if len(meas) > 1 else ''}); "
                      f"latitude carried by {lead} ({100 * sol.carried_by[lead]:.1f} % of the information)")
     return out
 

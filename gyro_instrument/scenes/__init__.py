@@ -34,6 +34,11 @@ ESTIMATOR_PARAMS = (
           doc="the hemisphere to assume when no instrument can tell +latitude from -latitude (item 9 and "
               "the gimbal's T'/T'' fix cos(latitude) only); a measured sign (a pendulum) always wins. "
               "Unset: such an estimate reports |latitude| with hemisphere 'not determined by these instruments'"),
+    Param("earth_rate", kind="str", default=None, choices=("estimate", "known"),
+          doc="Earth's rate n: 'estimate' fits it with the latitude (the latitude is null where the instruments "
+              "cannot separate them), 'known' holds it at site.earth_rate_rad_s (IERS 7.292115e-5 rad/s by "
+              "default) and fits the latitude alone. Unset: estimated where the instruments separate n and the "
+              "latitude, known where they do not (a pendulum alone, one horizontal gyroscope)"),
 )
 
 

@@ -1,0 +1,92 @@
+"""Earth's rate as known where the instruments cannot separate it from the latitude (issue 22, item 3).
+
+A pendulum alone measures k = n sin γ (Quet sec. 2), one horizontal gyroscope y = n cos γ (sec. 4 §1,
+eq. 9 with s(γ) = cos γ): a product, from which neither n nor γ follows. With n known (IERS
+conventional 7.292115e-5 rad/s, or the scene's ``site.earth_rate_rad_s``) the latitude does, and
+the estimate says that n was taken, not measured. ``estimator.earth_rate: estimate`` refuses
+instead; ``known`` holds n even where it could be fitted.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gyro_instrument.cli import main
+from gyro_instrument.core.parallel import process_executor
+from gyro_instrument.estimators.latitude import HEMISPHERE_UNDETERMINED, RateMeasurement, solve_latitude
+from gyro_instrument.estimators.pipeline import seed_sweep
+
+N = 7.2921150e-5     # IERS conventional mean angular velocity of the Earth, rad/s
+#: γ̂ is located by Brent's bounded search (latitude._mode), whose termination is sqrt(eps)|γ| + xatol
+BRENT = math.sqrt(np.finfo(float).eps) * math.pi / 2
+
+
+@pytest.mark.parametrize("lat_deg", [48.8462, -77.8, 5.0])
+def test_pendulum_alone_gives_asin_k_over_n_and_the_hemisphere(lat_deg):
+    # γ = asin(k/n) exactly, with σ = σ_k / (n cos γ) (the χ² is quadratic to 3 σ here: σ_k is 1e-4 k);
+    # sin γ is odd, so k's sign decides the hemisphere, measured
+    g = math.radians(lat_deg)
+    k, sk = N * math.sin(g), 1e-4 * N * abs(math.sin(g))
+    r = solve_latitude([RateMeasurement("pendulum", "pendulum", k, sk, crlb_sigma=sk)], n_known=N, n_source="IERS")
+    assert r.earth_rate_known and r.earth_rate_rad_s == N and r.earth_rate_sigma_rad_s is None
+    assert r.latitude_rad == pytest.approx(g, abs=BRENT)
+    # the Δχ² = 1 half-width of a quadratic-to-1e-4 likelihood: σ_k/(n cos γ) to 1e-3 relative (the
+    # curvature of asin over ±σ: relative O(σ tan γ) <= 5e-4 at 77.8°)
+    assert r.latitude_sigma_rad == pytest.approx(sk / (N * math.cos(g)), rel=1e-3)
+    assert r.hemisphere == ("north" if lat_deg > 0 else "south") and r.hemisphere_basis.startswith("measured")
+    assert not r.latitude_is_absolute and "known, not estimated" in r.earth_rate_basis
+
+
+@pytest.mark.parametrize("lat_deg", [33.3, -60.0])
+def test_one_horizontal_gyroscope_gives_abs_latitude_acos_y_over_n(lat_deg):
+    # y = n cos γ: |γ| = acos(y/n), σ = σ_y / (n sin|γ|); cos is even: hemisphere not determined
+    g = math.radians(lat_deg)
+    y, sy = N * math.cos(g), 1e-5 * N
+    r = solve_latitude([RateMeasurement("gyro", "gyro", y, sy, crlb_sigma=sy)], n_known=N)
+    assert r.latitude_rad == pytest.approx(abs(g), abs=BRENT) and r.latitude_is_absolute
+    assert r.latitude_sigma_rad == pytest.approx(sy / (N * math.sin(abs(g))), rel=1e-3)
+    assert r.hemisphere == HEMISPHERE_UNDETERMINED
+    r = solve_latitude([RateMeasurement("gyro", "gyro", y, sy, crlb_sigma=sy)], n_known=N, hemisphere="south")
+    assert r.latitude_rad == pytest.approx(-abs(g), abs=BRENT)
+
+
+def test_modes_estimate_and_known():
+    g = math.radians(48.85)
+    pend = RateMeasurement("pendulum", "pendulum", N * math.sin(g), 1e-9, crlb_sigma=1e-9)
+    r = solve_latitude([pend], n_known=N, earth_rate="estimate")
+    assert r.latitude_rad is None and "cannot be separated" in r.reason and not r.earth_rate_known
+    # separable (item 9: horizontal + meridian): estimated by default, held at n under 'known'
+    h = RateMeasurement("h", "gyro", N * math.cos(g) * (1 + 2e-7), 1e-11, crlb_sigma=1e-11)
+    m = RateMeasurement("m", "gyro", N * (1 - 1e-7), 1e-11, (1, 0, 0), crlb_sigma=1e-11)
+    est = solve_latitude([h, m], n_known=N)
+    assert not est.earth_rate_known and est.earth_rate_sigma_rad_s > 0
+    assert est.earth_rate_rad_s == pytest.approx(N * (1 - 1e-7), rel=1e-12)   # the meridian alone fixes n
+    known = solve_latitude([h, m], n_known=N, earth_rate="known")
+    assert known.earth_rate_known and known.earth_rate_rad_s == N and known.dof == 1
+    # with n exact the horizontal alone sets γ: acos(y_h / n)
+    assert known.latitude_rad == pytest.approx(math.acos(N * math.cos(g) * (1 + 2e-7) / N), abs=BRENT)
+    with pytest.raises(ValueError):
+        solve_latitude([h, m], n_known=N, earth_rate="sometimes")
+
+
+def test_a_teacher_with_one_pendulum_gets_a_latitude(capsys):
+    # foucault_pantheon (one pendulum, 3600 s at 48.8462°): the headline is a latitude with its σ and
+    # the measured hemisphere, and the text says that n was taken as known
+    assert main(["estimate", "foucault_pantheon", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["earth_rate_known"] is True and r["earth_rate_rad_s"] == N and r["earth_rate_sigma_rad_s"] is None
+    assert abs(r["latitude_deg"] - 48.8462) < 4 * r["latitude_sigma_deg"]
+    assert r["hemisphere"] == "north" and r["hemisphere_basis"].startswith("measured")
+    assert main(["estimate", "foucault_pantheon"]) == 0
+    text = capsys.readouterr().out
+    assert "known, not estimated" in text and "latitude   null" not in text
+    json.dumps(r, allow_nan=False)
+
+
+def test_a_non_rotating_scene_does_not_take_n_as_known(capsys):
+    # without earth_rotation the pendulum cannot precess: no known n to divide by, latitude null
+    assert main(["estimate", "foucault_pantheon", "--json", "--set", "effects.earth_rotation=null"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["earth_rate_known"] is False and r["latitude_deg"] is None
