@@ -159,16 +159,18 @@ def _read_csv(path, field, separator):
     """(names, arrays, notes) of a CSV file (UTF-8, with or without a byte-order mark)."""
     notes = []
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__}; UTF-8 expected)") from None
-    first = next((line for line in text.splitlines() if line.strip()), "")
-    sep = _csv_separator(first, path, field, separator)
-    try:
-        rows = list(csv.reader(text.splitlines(), delimiter=sep))
-    except csv.Error as exc:
-        raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__})") from None
+        with open(path, newline="", encoding="utf-8-sig") as fh:     # the BOM, if any, is skipped
+            first = ""
+            for line in fh:
+                if line.strip():
+                    first = line
+                    break
+            sep = _csv_separator(first, path, field, separator)
+            fh.seek(0)
+            rows = list(csv.reader(fh, delimiter=sep))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        utf8 = "; UTF-8 expected" if isinstance(exc, UnicodeDecodeError) else ""
+        raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__}{utf8})") from None
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if not rows:
         raise SceneError(field, path, "is empty; expected a header row time_s,<instrument>.<channel>,...")
