@@ -581,7 +581,25 @@ def _add_scene_commands(sub):
                         "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
                         "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
                         "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
-                        "Missing values, NaN, irregular and out-of-order times are accepted and noted")
+                        "Missing values, NaN, gaps, irregular and out-of-order times are accepted and noted; a "
+                        "gyroscope without spin_rate takes the scene's constant spin (noted). CSV: UTF-8 (a "
+                        "byte-order mark is read), separator sniffed from the header (',' or ';' with decimal "
+                        "commas, or tab). Parquet: time_s may be a timestamp (seconds from the earliest sample) "
+                        "or a duration")
+    p.add_argument("--time-column", default="time_s", metavar="NAME",
+                   help="with --data: the table's time column (default time_s)")
+    p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
+                   help="with --data: unit of a numeric time column, converted to s (default s; not for a "
+                        "Parquet timestamp or duration, which carries its unit)")
+    p.add_argument("--angle-unit", default="rad", choices=["rad", "deg"],
+                   help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
+                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s)")
+    p.add_argument("--column", dest="columns", action="append", default=[], metavar="NAME=SOURCE",
+                   help="with --data: read the table's column SOURCE as the channel column NAME, e.g. "
+                        "--column gyro_horizontal.angle=Theta (repeatable)")
+    p.add_argument("--separator", default=None, choices=[",", ";", "tab"],
+                   help="with --data, CSV: the field separator (default: sniffed from the header line; ';' "
+                        "reads decimal commas)")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
 
 
@@ -778,9 +796,16 @@ def estimate_command(args) -> int:
     if scene_arg(args) is None:
         raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
     scene = scene_from_args(args)
+    table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
+                   "--angle-unit": (args.angle_unit, "rad"), "--column": (args.columns, []),
+                   "--separator": (args.separator, None)}
     if args.data:
-        from gyro_instrument.estimators.data_io import estimate_data
-        result = to_jsonable(estimate_data(scene, args.data))
+        from gyro_instrument.estimators.data_io import TableOptions, estimate_data
+        options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit, args.columns,
+                                          args.separator)
+        result = to_jsonable(estimate_data(scene, args.data, options=options))
+    elif given := [(flag, v) for flag, (v, default) in table_flags.items() if v != default]:
+        raise SceneError(*given[0], "reads a table: give --data FILE (or leave the flag out)")
     else:
         with terminal_progress("simulating"):
             truth = simulate_truth(scene)

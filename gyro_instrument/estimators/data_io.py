@@ -15,9 +15,16 @@ gyroscope with a directing line        its angle (``angle``; the gimbal: ``outer
 free gyroscope, Puiseux's body         nothing (not used by the estimator)
 =====================================  ==================================================================
 
-Samples may be missing (empty cell or ``nan``: left out, as a dropout), irregular, duplicated or
-out of order (sorted by time, stable; the fits drop duplicated stamps and say so). Times are
-taken from the first valid sample when it is not 0 (a note says so).
+A gyroscope without ``spin_rate`` takes the scene's constant spin (its ``spin_rate_rad_s``, the
+directing model's ρ0; noted). Samples may be missing (empty cell or ``nan``: left out, as a
+dropout), irregular, duplicated or out of order (sorted by time, stable; the fits drop duplicated
+stamps and say so); gaps and irregular sampling are noted (:func:`sampling_notes`). Times are
+taken from the first valid sample when it is not 0 (a note says so). Fewer than two distinct
+times is refused.
+
+:class:`TableOptions` says how to read a table as users have it (``--time-column``,
+``--time-unit``, ``--angle-unit``, ``--column NAME=SOURCE``, ``--separator``): see
+:func:`load_table` and msg_docs/csv.md.
 """
 
 import csv
@@ -25,12 +32,90 @@ import math
 import os
 import queue
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 
 TIME_COLUMN = "time_s"
+
+#: ``--time-unit``: how many of the unit make a second (divided by, so that a whole number of ms,
+#: us or ns becomes the double nearest the exact time: IEEE division is correctly rounded), or for
+#: minutes the seconds in one (multiplied by).
+TIME_UNITS = {"s": 1, "ms": 1000, "us": 1_000_000, "ns": 1_000_000_000, "min": 60}
+
+#: ``--angle-unit``: the channels read as angles (rad, or deg converted to rad). Not ``x_east`` /
+#: ``y_north`` (m) nor ``spin_rate`` (rad/s, a rate).
+ANGLE_CHANNELS = ("angle", "outer_angle", "inner_angle", "deflection_east", "deflection_north")
+ANGLE_UNITS = ("rad", "deg")
+
+#: ``--separator``: the CSV field separators; ``None`` sniffs it from the header line.
+SEPARATORS = {",": ",", ";": ";", "tab": "\t"}
+
+#: Arrow time units of a Parquet ``timestamp[...]`` / ``duration[...]`` column, per second.
+ARROW_TIME_UNITS = {"s": 1, "ms": 1000, "us": 1_000_000, "ns": 1_000_000_000}
+
+
+@dataclass(frozen=True)
+class TableOptions:
+    """How to read a measured table (``estimate --data`` flags).
+
+    Attributes
+    ----------
+    time_column : str
+        The table's time column (``--time-column``), read as ``time_s``.
+    time_unit : str or None
+        Unit of a numeric time column (``--time-unit``, a key of :data:`TIME_UNITS`); None: seconds,
+        or the unit a Parquet ``timestamp``/``duration`` column carries.
+    angle_unit : str
+        ``rad`` or ``deg`` (``--angle-unit``): unit of the :data:`ANGLE_CHANNELS` columns.
+    columns : tuple of (str, str)
+        ``(NAME, SOURCE)`` pairs (``--column NAME=SOURCE``): the table's column SOURCE is read as the
+        channel column NAME.
+    separator : str or None
+        CSV separator (``,``, ``;`` or ``tab``; ``--separator``); None sniffs it from the header.
+    """
+
+    time_column: str = TIME_COLUMN
+    time_unit: str | None = None
+    angle_unit: str = "rad"
+    columns: tuple = ()
+    separator: str | None = None
+
+    @classmethod
+    def from_flags(cls, time_column=TIME_COLUMN, time_unit=None, angle_unit="rad", columns=(),
+                   separator=None) -> "TableOptions":
+        """Options from the command-line strings, checked.
+
+        Raises
+        ------
+        SceneError
+            An unknown unit or separator, a ``--column`` without ``=`` or with an empty side, a NAME
+            given twice, a NAME that is ``time_s`` (use ``--time-column``).
+        """
+        if not time_column or not str(time_column).strip():
+            raise SceneError("--time-column", time_column, "must name a column of the table")
+        if time_unit is not None and time_unit not in TIME_UNITS:
+            raise SceneError("--time-unit", time_unit, f"must be one of {', '.join(TIME_UNITS)}")
+        if angle_unit not in ANGLE_UNITS:
+            raise SceneError("--angle-unit", angle_unit, f"must be one of {', '.join(ANGLE_UNITS)}")
+        if separator is not None and separator not in SEPARATORS:
+            raise SceneError("--separator", separator, f"must be one of {', '.join(SEPARATORS)}")
+        pairs, seen = [], set()
+        for spec in columns:
+            name, eq, source = str(spec).partition("=")
+            name, source = name.strip(), source.strip()
+            if not eq or not name or not source:
+                raise SceneError("--column", spec, "must be NAME=SOURCE, e.g. gyro_horizontal.angle=Theta "
+                                                   "(the table's column SOURCE read as the channel NAME)")
+            if name == TIME_COLUMN:
+                raise SceneError("--column", spec, f"names the time column: give --time-column {source} instead")
+            if name in seen:
+                raise SceneError("--column", spec, f"{name} is given twice; give each channel one source")
+            seen.add(name)
+            pairs.append((name, source))
+        return cls(str(time_column).strip(), time_unit, angle_unit, tuple(pairs), separator)
 
 
 def table_kind(path) -> str:
@@ -48,8 +133,201 @@ def _pyarrow():
     return pyarrow
 
 
-def read_table(path, field="--data") -> dict:
-    """Every column of a CSV or Parquet table as float arrays.
+def _refuse_duplicates(names, path, field):
+    seen = {}
+    for i, name in enumerate(names, start=1):
+        if name in seen:
+            raise SceneError(field, path, f"column {name} appears twice (columns {seen[name]} and {i}); "
+                                          f"rename one (a table's columns must be unique)")
+        seen[name] = i
+
+
+def _csv_separator(first_line, path, field, separator):
+    """The CSV separator: ``separator`` when given, else the one of ``,``, ``;``, tab the header holds
+    (``,`` when it holds none: a single column). SceneError when it holds several."""
+    if separator is not None:
+        return SEPARATORS[separator]
+    found = [s for s in (",", ";", "\t") if s in first_line]
+    if len(found) > 1:
+        shown = " and ".join("tab" if s == "\t" else repr(s) for s in found)
+        raise SceneError(field, path, f"the header line holds both {shown}: cannot tell the separator; "
+                                      f"pass --separator , or --separator ';' or --separator tab")
+    return found[0] if found else ","
+
+
+def _read_csv(path, field, separator):
+    """(names, arrays, notes) of a CSV file (UTF-8, with or without a byte-order mark)."""
+    notes = []
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:     # the BOM, if any, is skipped
+            first = ""
+            for line in fh:
+                if line.strip():
+                    first = line
+                    break
+            sep = _csv_separator(first, path, field, separator)
+            fh.seek(0)
+            rows = list(csv.reader(fh, delimiter=sep))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        utf8 = "; UTF-8 expected" if isinstance(exc, UnicodeDecodeError) else ""
+        raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__}{utf8})") from None
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if not rows:
+        raise SceneError(field, path, "is empty; expected a header row time_s,<instrument>.<channel>,...")
+    header = [h.strip() for h in rows[0]]
+    _refuse_duplicates(header, path, field)
+    decimal_comma = sep == ";"
+    if sep != ",":
+        notes.append(f"CSV separated by {'tab' if sep == chr(9) else repr(sep)}"
+                     + (" (decimal commas read as points)" if decimal_comma else ""))
+    cols = [np.full(len(rows) - 1, np.nan) for _ in header]
+    for i, row in enumerate(rows[1:], start=2):
+        for j, (h, cell) in enumerate(zip(header, row)):
+            cell = cell.strip()
+            if cell:
+                try:
+                    cols[j][i - 2] = float(cell)
+                except ValueError:
+                    if decimal_comma and cell.count(",") == 1 and "." not in cell:
+                        try:
+                            cols[j][i - 2] = float(cell.replace(",", "."))
+                            continue
+                        except ValueError:
+                            pass
+                    raise SceneError(field, path, f"line {i}, column {h}: {cell!r} is not a number") from None
+    return header, cols, notes
+
+
+def _arrow_time_seconds(pa, column, name, time_unit, path, field):
+    """Seconds (float64, NaN for nulls) of a ``timestamp``/``duration`` column, from its integer
+    count of its own unit: a timestamp from its earliest value (integer subtraction, exact), a
+    duration as it is; then divided by the unit's count per second (one correctly rounded division,
+    exact to the nearest double for spans below 2**53 units: 104 days in ns)."""
+    import pyarrow.compute as pc
+    typ = column.type
+    if time_unit is not None:
+        raise SceneError("--time-unit", time_unit, f"does not apply: column {name} is stored as {typ}, which "
+                                                   f"carries its unit; leave --time-unit out")
+    valid = np.asarray(column.is_valid().to_numpy(zero_copy_only=False), dtype=bool)
+    ints = np.asarray(pc.fill_null(column, pa.scalar(0, typ)).cast(pa.int64()).to_numpy(zero_copy_only=False),
+                      dtype=np.int64)
+    per = ARROW_TIME_UNITS[typ.unit]
+    note = None
+    if pa.types.is_timestamp(typ) and valid.any():
+        ref = int(ints[valid].min())
+        ints = ints - ref
+        first = pa.scalar(ref, typ)
+        note = f"{name} stored as {typ}: seconds from the earliest sample ({first})"
+    secs = ints / per
+    secs[~valid] = np.nan
+    return secs, note
+
+
+def _read_parquet(path, field, time_source, time_unit):
+    """(names, arrays, notes) of a Parquet file; the ``time_source`` column may be a timestamp or a
+    duration (converted to seconds), every other column must be numeric."""
+    pa = _pyarrow()
+    try:
+        # the schema first: read_table fails on a name twice (ArrowInvalid of its dataset layer)
+        names = list(pa.parquet.ParquetFile(path).schema_arrow.names)
+    except Exception as exc:        # pyarrow raises its own error classes for a bad file
+        raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
+    _refuse_duplicates(names, path, field)
+    try:
+        table = pa.parquet.read_table(path)
+    except Exception as exc:
+        raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
+    arrays, notes = [], []
+    for i, name in enumerate(names):
+        column = table.column(i)
+        typ = column.type
+        if name == time_source and (pa.types.is_timestamp(typ) or pa.types.is_duration(typ)):
+            secs, note = _arrow_time_seconds(pa, column, name, time_unit, path, field)
+            arrays.append(secs)
+            if note:
+                notes.append(note)
+            continue
+        if not (pa.types.is_integer(typ) or pa.types.is_floating(typ) or pa.types.is_decimal(typ)
+                or pa.types.is_null(typ)):
+            what = "a number, a timestamp or a duration" if name == time_source else "a number"
+            raise SceneError(field, path, f"column {name} is {typ}, not {what}")
+        try:
+            arrays.append(np.asarray(column.cast(pa.float64()).to_numpy(zero_copy_only=False), dtype=float))
+        except (TypeError, ValueError, pa.ArrowException):
+            raise SceneError(field, path, f"column {name} ({typ}) is not numeric") from None
+    return names, arrays, notes
+
+
+def load_table(path, field="--data", options=None) -> tuple:
+    """A CSV or Parquet table read as ``options`` say (:class:`TableOptions`; default: ``time_s`` in
+    seconds, angles in radians, CSV separator sniffed).
+
+    Returns
+    -------
+    cols : dict
+        column name -> float ndarray (NaN for empty or ``nan`` cells), in file order, with the time
+        column as ``time_s`` in seconds, ``--column`` sources under their channel names and the
+        :data:`ANGLE_CHANNELS` columns in radians.
+    notes : list of str
+        What was converted (separator, decimal commas, units, renamed columns, a timestamp's origin).
+
+    Raises
+    ------
+    SceneError
+        Missing or unreadable file, an empty table, a cell that is not a number, a non-numeric
+        Parquet column (the time column may be a timestamp or a duration), a column name twice, a
+        ``--column`` source missing or its name already a column, no time column.
+    """
+    opts = options or TableOptions()
+    if not os.path.isfile(path):
+        raise SceneError(field, path, "file not found" if not os.path.exists(path) else "is not a file")
+    if table_kind(path) == "csv":
+        names, arrays, notes = _read_csv(path, field, opts.separator)
+    else:
+        names, arrays, notes = _read_parquet(path, field, opts.time_column, opts.time_unit)
+    raw = dict(zip(names, arrays))
+
+    def shown(cols):
+        cols = list(cols)
+        return ", ".join(cols[:6]) + (", ..." if len(cols) > 6 else "") or "none"
+
+    if opts.time_column not in raw:
+        hint = "pass --time-column NAME or " if opts.time_column == TIME_COLUMN else ""
+        raise SceneError(field, path, f"has no time column '{opts.time_column}' (columns: {shown(raw)}); "
+                                      f"{hint}see msg_docs/csv.md")
+    sources = {src for _, src in opts.columns} | {opts.time_column}
+    for name, src in opts.columns:
+        if src not in raw:
+            raise SceneError("--column", f"{name}={src}", f"the table has no column {src!r} (columns: {shown(raw)})")
+        if name in raw and name not in sources:
+            raise SceneError("--column", f"{name}={src}", f"the table already has a column {name}; "
+                                                          f"rename one or leave out --column")
+    cols = {TIME_COLUMN: raw[opts.time_column]}
+    for name, src in opts.columns:
+        cols[name] = raw[src]
+    for name, arr in raw.items():
+        if name not in sources and name not in cols:
+            cols[name] = arr
+    if opts.time_column != TIME_COLUMN:
+        notes.append(f"time from column {opts.time_column}"
+                     + (f" (its column {TIME_COLUMN} not used)" if TIME_COLUMN in raw and TIME_COLUMN not in sources
+                        else ""))
+    if opts.columns:
+        notes.append("columns read as channels: " + ", ".join(f"{src} as {name}" for name, src in opts.columns))
+    if opts.time_unit not in (None, "s"):
+        k = TIME_UNITS[opts.time_unit]
+        cols[TIME_COLUMN] = cols[TIME_COLUMN] * k if opts.time_unit == "min" else cols[TIME_COLUMN] / k
+        notes.append(f"{opts.time_column} in {opts.time_unit}: converted to s")
+    if opts.angle_unit == "deg":
+        converted = [c for c in cols if "." in c and c.split(".", 1)[1] in ANGLE_CHANNELS]
+        for c in converted:
+            cols[c] = np.radians(cols[c])
+        notes.append("angles in degrees converted to rad: " + (", ".join(converted) or "no angle column"))
+    return cols, notes
+
+
+def read_table(path, field="--data", options=None) -> dict:
+    """Every column of a CSV or Parquet table as float arrays (:func:`load_table` without its notes).
 
     Returns
     -------
@@ -59,48 +337,9 @@ def read_table(path, field="--data") -> dict:
     Raises
     ------
     SceneError
-        Missing or unreadable file, an empty table, a cell that is not a number, no ``time_s``
-        column.
+        See :func:`load_table`.
     """
-    if not os.path.isfile(path):
-        raise SceneError(field, path, "file not found" if not os.path.exists(path) else "is not a file")
-    kind = table_kind(path)
-    if kind == "csv":
-        try:
-            with open(path, newline="", encoding="utf-8") as fh:
-                rows = list(csv.reader(fh))
-        except (OSError, UnicodeDecodeError, csv.Error) as exc:
-            raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__})") from None
-        rows = [r for r in rows if r and any(c.strip() for c in r)]
-        if not rows:
-            raise SceneError(field, path, "is empty; expected a header row time_s,<instrument>.<channel>,...")
-        header = [h.strip() for h in rows[0]]
-        cols = {h: np.full(len(rows) - 1, np.nan) for h in header}
-        for i, row in enumerate(rows[1:], start=2):
-            for h, cell in zip(header, row):
-                cell = cell.strip()
-                if cell:
-                    try:
-                        cols[h][i - 2] = float(cell)
-                    except ValueError:
-                        raise SceneError(field, path, f"line {i}, column {h}: {cell!r} is not a number") from None
-    else:
-        pa = _pyarrow()
-        try:
-            table = pa.parquet.read_table(path)
-        except Exception as exc:        # pyarrow raises its own error classes for a bad file
-            raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
-        cols = {}
-        for name in table.column_names:
-            try:
-                cols[name] = np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
-            except (TypeError, ValueError, pa.ArrowException):
-                raise SceneError(field, path, f"column {name} is not numeric") from None
-    if TIME_COLUMN not in cols:
-        shown = ", ".join(list(cols)[:6]) + (", ..." if len(cols) > 6 else "")
-        raise SceneError(field, path, f"has no time column '{TIME_COLUMN}' (columns: {shown or 'none'}); "
-                                      f"see msg_docs/csv.md")
-    return cols
+    return load_table(path, field, options)[0]
 
 
 #: Estimated bytes per value written, by format, for the disk check before a run
@@ -292,7 +531,69 @@ def _needs(inst):
     if not estimable(inst):
         return ()
     model = inst.directing_model()
+    if model.spin_rate_rad_s:        # spin_rate optional: the scene's constant spin without it
+        return ((model.angle_channel,),)
     return ((model.angle_channel, "spin_rate"),)
+
+
+#: A sampling interval more than this many times the median interval is a gap (noted).
+GAP_FACTOR = 3.0
+
+#: Intervals (gaps aside) spread by more than this fraction of the median are noted as irregular
+#: sampling: above the jitter of a clock stamped to a whole ms at a few Hz (333/334 ms: 0.3 %).
+IRREGULAR_SPREAD = 0.01
+
+
+def sampling_notes(t) -> list:
+    """Notes on the sampling of the sorted distinct times ``t`` (s): gaps (an interval above
+    :data:`GAP_FACTOR` times the median interval: how many, the longest and where) and irregular
+    sampling (the other intervals spread by more than :data:`IRREGULAR_SPREAD` of the median).
+    [] for regular sampling."""
+    dt = np.diff(np.asarray(t, dtype=float))
+    if dt.size < 2:
+        return []
+    med = float(np.median(dt))
+    notes = []
+    gaps = dt > GAP_FACTOR * med
+    if gaps.any():
+        g = int(np.argmax(np.where(gaps, dt, -np.inf)))
+        n = int(gaps.sum())
+        notes.append(f"{n} gap{'s' if n > 1 else ''} longer than {GAP_FACTOR:g}x the median interval "
+                     f"({med:.6g} s): {'longest ' if n > 1 else ''}{dt[g]:.6g} s at t = {t[g]:.6g} s "
+                     f"(from the first sample)")
+    rest = dt[~gaps]
+    if rest.size and float(rest.max() - rest.min()) > IRREGULAR_SPREAD * med:
+        notes.append(f"irregular sampling: intervals from {rest.min():.6g} to {rest.max():.6g} s "
+                     f"(median {med:.6g} s{', gaps aside' if gaps.any() else ''}; spread above "
+                     f"{IRREGULAR_SPREAD:.0%} of the median)")
+    return notes
+
+
+def _table_times(cols, path, field, notes) -> tuple:
+    """The time column sorted and from its first sample: ``(t, keep, order, distinct)``, ``keep``
+    the rows with a finite time, ``order`` their stable sort, ``distinct`` the sorted distinct
+    times as read; the notes (rows left out, re-ordering, gaps and irregular sampling, time origin)
+    appended to ``notes``."""
+    t = np.asarray(cols[TIME_COLUMN], dtype=float)
+    bad_t = ~np.isfinite(t)
+    if bad_t.all():
+        raise SceneError(field, path, f"column {TIME_COLUMN} holds no finite time")
+    if bad_t.any():
+        notes.append(f"{int(bad_t.sum())} rows without a finite {TIME_COLUMN} left out")
+    keep = ~bad_t
+    t = t[keep]
+    distinct = np.unique(t)         # fewer than 2: refused once the columns are known to match the scene
+    order = np.argsort(t, kind="stable")
+    if np.any(np.diff(order) < 0):
+        reverse = bool(np.all(np.diff(t) <= 0))
+        notes.append(f"rows {'in decreasing' if reverse else 'out of'} time order: sorted by {TIME_COLUMN}")
+    t = t[order]
+    notes.extend(sampling_notes(distinct - distinct[0]))
+    t0 = float(t[0])
+    if t0 != 0.0:
+        notes.append(f"times taken from the first sample ({TIME_COLUMN} = {t0!r} s)")
+        t = t - t0
+    return t, keep, order, distinct
 
 
 def records_from_table(insts, cols, path="data", field="--data") -> tuple:
@@ -314,22 +615,7 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         data: wrong type, or columns missing), or no instrument the estimator uses has its columns.
     """
     notes = []
-    t = np.asarray(cols[TIME_COLUMN], dtype=float)
-    bad_t = ~np.isfinite(t)
-    if bad_t.all():
-        raise SceneError(field, path, f"column {TIME_COLUMN} holds no finite time")
-    if bad_t.any():
-        notes.append(f"{int(bad_t.sum())} rows without a finite {TIME_COLUMN} left out")
-    keep = ~bad_t
-    t = t[keep]
-    order = np.argsort(t, kind="stable")
-    if np.any(np.diff(order) < 0):
-        notes.append(f"rows out of time order: sorted by {TIME_COLUMN}")
-    t = t[order]
-    t0 = float(t[0])
-    if t0 != 0.0:
-        notes.append(f"times taken from the first sample ({TIME_COLUMN} = {t0!r} s)")
-        t = t - t0
+    t, keep, order, distinct = _table_times(cols, path, field, notes)
 
     def col(name):
         return np.asarray(cols[name], dtype=float)[keep][order]
@@ -367,7 +653,14 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
             for chan in inst.MEASURED_CHANNELS:
                 if f"{name}.{chan}" in cols:
                     rec[chan] = col(f"{name}.{chan}")
-            rec["spin_rate"] = col(f"{name}.spin_rate")
+            if f"{name}.spin_rate" in cols:
+                rec["spin_rate"] = col(f"{name}.spin_rate")
+                used.add(f"{name}.spin_rate")
+            else:
+                spin = inst.directing_model().spin_rate_rad_s
+                rec["spin_rate"] = np.full(t.size, spin)
+                notes.append(f"{name}: no {name}.spin_rate column: the scene's constant spin "
+                             f"{spin!r} rad/s used (spin_rate_rad_s)")
             rec["angle"] = rec[full[0]]
         n_nan = int(sum((~np.isfinite(rec[c])).sum() for c in rec if c not in ("t", "angle")))
         if n_nan:
@@ -377,6 +670,10 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         raise SceneError(field, path, "does not match the scene: no instrument's columns found; expected "
                                       + "; ".join(wanted) if wanted else
                                       "the scene has no instrument the estimator uses")
+    if distinct.size < 2:
+        raise SceneError(field, path, f"column {TIME_COLUMN} never increases: its {t.size} finite "
+                                      f"time{'s are all' if t.size > 1 else ' is'} {float(distinct[0])!r}; "
+                                      f"at least two distinct times are needed (a wrong --time-column?)")
     # columns the instrument writes but the estimator does not read (angle_rate, swing_azimuth ...)
     # are passed over silently; columns of no instrument or channel of the scene are noted
     known = {f"{n}.{c.name}" for n, inst in insts.items() for c in getattr(inst, "COLUMNS", ())}
@@ -388,20 +685,22 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
     return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
 
 
-def estimate_data(scene, path, field="--data") -> dict:
-    """The ``estimate`` JSON object from a CSV or Parquet table of measured channels, with
-    ``data`` (the file), ``observation_s`` (the data's span) and ``data_notes``.
+def estimate_data(scene, path, field="--data", options=None) -> dict:
+    """The ``estimate`` JSON object from a CSV or Parquet table of measured channels, read as
+    ``options`` say (:class:`TableOptions`), with ``data`` (the file), ``observation_s`` (the
+    data's span) and ``data_notes`` (what reading converted, then what the records dropped).
 
     Raises
     ------
     SceneError
-        See :func:`read_table` and :func:`records_from_table`.
+        See :func:`load_table` and :func:`records_from_table`.
     """
     from gyro_instrument.estimators.pipeline import estimate_records
     from gyro_instrument.scenes import build_instruments
     insts = build_instruments(scene)
-    cols = read_table(path, field)
+    cols, read_notes = load_table(path, field, options)
     records, notes, span = records_from_table(insts, cols, path, field)
+    notes = read_notes + notes
     result = estimate_records(scene, {n: insts[n] for n in records}, records)
     result["observation_s"] = span
     result["data"] = os.path.basename(path)
