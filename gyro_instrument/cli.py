@@ -418,6 +418,7 @@ def print_estimate(r, stream=None) -> None:
           f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
     if r.get("method"):
         w(f"  method: {r['method']}\n")
+    print_checks(r.get("checks"), w)
     if r.get("reason"):
         w(f"  reason: {r['reason']}\n")
     print_damage(r, w)
@@ -443,6 +444,18 @@ def print_estimate(r, stream=None) -> None:
              if m.get("earth_rate_rad_s") is not None else "")
           + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
           + "\n")
+
+
+def print_checks(checks, w) -> None:
+    """One line for the adequacy checks that passed, one per check that did not (estimators/adequacy.py)."""
+    if not checks:
+        return
+    passed = [c for c in checks if c["status"] == "passed"]
+    w(f"  checks: {len(passed)} of {len(checks)} passed"
+      f" ({', '.join(sorted({c['check'] for c in passed}))})\n" if passed else "  checks: none passed\n")
+    for c in checks:
+        if c["status"] != "passed":
+            w(f"  check {c['check']} of {c['instrument']}: {c['status']}: {c['detail']}\n")
 
 
 def print_damage(r, w) -> None:

@@ -222,6 +222,8 @@ def _estimate(scene, insts, records):
         # gyroscopes alone measure cos(latitude), which is even: the profile's minimum may land in
         # either hemisphere, so compare |latitude| (item 9 assumes the northern one likewise)
         lat, lat_src = abs(lat), "combined profile fit, |latitude| (hemisphere not determined)"
+    if r.get("earth_rate_known"):   # taken as known, not measured: not this data's Earth rate
+        r = dict(r, earth_rate_rad_s=None, reason=f"Earth rate not estimable from these data: {r['earth_rate_basis']}")
     n, n_src, n_why = pick("earth_rate_rad_s", "combined profile fit",
                            (("item8_eq10", "eq. (10)"), ("foucault", "Foucault k/sin(latitude)")), "reason_earth_rate")
     return lat, lat_src, n, n_src, lat_why, n_why

@@ -8,6 +8,7 @@ For the directing-plane gyroscope this is the term (μ − 1) n² sin² ω cos u
 eqs. (1)–(3) of sec. 4 §1 drop; its relative size is n / (μ ρ0).
 """
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -28,6 +29,8 @@ class Centrifugal(Effect):
         if scales.get("gyro_rate_rad_s"):
             return n / scales["gyro_rate_rad_s"], "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
         w0 = scales["restoring_rate_rad_s"]
+        if not w0:
+            return math.inf, "(n / omega0)^2 with no restoring rate (omega0 = 0): nothing for it to be small against"
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
 
     def point_mass_term(self, omega_enu) -> Callable:

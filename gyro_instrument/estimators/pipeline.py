@@ -14,6 +14,8 @@ import numpy as np
 
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
+from gyro_instrument.estimators.adequacy import (check_before_fit, check_fit, check_period, detection_snr,
+                                                 signal_entry)
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import (HEMISPHERE_UNDETERMINED, RateMeasurement, item9_cos_latitude,
                                                  solve_latitude)
@@ -246,8 +248,12 @@ def _gyro_measurement(inst, model, T0, sig_T0, crlb_T0, rho_mean, out):
                            True, y_val * 2 * crlb_T0 / T0)
 
 
-def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
-    """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline."""
+def _gyro_estimate(inst, rec, corrections=CORRECTIONS, checks=None, sensor=None):
+    """Fit one gyroscope record: swing duration, small-amplitude conversion, counting baseline.
+
+    ``checks`` (list) receives the ``signal``, ``period`` and ``fit`` checks (:mod:`.adequacy`, with
+    ``sensor`` the scene's :class:`SensorModel`); raises :class:`.adequacy.InadequateData`."""
+    checks = [] if checks is None else checks
     t, y = rec["t"], rec["angle"]
     out = {"type": inst.type_name}
     model = inst.directing_model()
@@ -268,11 +274,18 @@ def _gyro_estimate(inst, rec, corrections=CORRECTIONS):
         fit, warp = _fit_swing(t, y, warp, env, ratio, corrections)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {model.null_reason}"}
-    snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
+    snr = detection_snr(fit.amplitude, fit.n_samples, fit.residual_rms)
+    checks.append(signal_entry(inst.name, snr, DETECTION_SNR))
     if snr < DETECTION_SNR:
         return out | {"swing_duration_s": None,
                       "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {model.null_reason}"}
+    entry = check_period(inst.name, inst, 2.0 * math.pi / fit.omega_rad_s)
+    if entry:
+        checks.append(entry)
     fit = _with_damping(t, y, fit, warp, env, notes)
+    if sensor is not None:
+        checks.append(check_fit(inst.name, fit.residual_rms, fit.n_samples - (2 + 2 * 2 + bool(fit.damping_per_s)),
+                                sensor))
     a = fit.amplitude
     if fit.damping_per_s:
         tau = (t - np.mean(t))
@@ -308,10 +321,14 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     meas = []
     gyros = {}
     pend = None
+    checks = []
+    sensor = SensorModel.from_scene(scene)
     for name, inst in insts.items():
         rec = records[name]
+        if ("angle" in rec and inst.directing_model() is not None) or "deflection_east" in rec:
+            checks += check_before_fit(name, inst, rec)
         if "angle" in rec and inst.directing_model() is not None:
-            est = _gyro_estimate(inst, rec, corrections)
+            est = _gyro_estimate(inst, rec, corrections, checks, sensor)
             m = est.pop("_measurement", None)
             if m is not None:
                 meas.append(m)
@@ -327,11 +344,20 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
                        "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
                        "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
                        "notes": f.notes}
+                checks.append({"instrument": name, "check": "signal", "status": "passed", "value": None,
+                               "expected": DETECTION_SNR, "detail": f"swing detected (A^2 N / (4 sigma^2) >= "
+                                                                   f"{DETECTION_SNR:g}; estimators/foucault.py)"})
+                entry = check_period(name, inst, f.period_s)
+                if entry:
+                    checks.append(entry)
                 m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=f.crlb_k_rad_s)
                 meas.append(m)
                 pend = (inst, est, m)
             except EstimationError as exc:
                 est = {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}
+                if "no swing" in str(exc):
+                    checks.append({"instrument": name, "check": "signal", "status": "no_signal", "value": None,
+                                   "expected": DETECTION_SNR, "detail": str(exc)})
             result["instruments"][name] = est
         else:
             result["instruments"][name] = {"type": inst.type_name, "reason": "not used by the estimator "
@@ -344,6 +370,7 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
         result.update(_null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                      "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
     _classic_methods(result, gyros, pend)
+    result["checks"] = checks
     return result
 
 

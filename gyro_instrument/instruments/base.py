@@ -108,6 +108,26 @@ class DirectingModel:
     spin_rate_rad_s: float = 0.0
 
 
+@dataclass(frozen=True)
+class ExpectedSwing:
+    """The scene's prediction of an instrument's measured oscillation.
+
+    Attributes
+    ----------
+    period_s : float
+        Full period of the measured angle, s (a gyroscope's 2 T0, Quet sec. 4 §1 eq. 9; a
+        pendulum's four quarter periods, sec. 2 eq. 42 exact form).
+    amplitude_rad : float
+        Amplitude of the measured angle at release, rad (the swing angle; a pendulum's deflection).
+    source : str
+        Which parameters set them, for messages ("mu, spin_rate_rad_s, latitude").
+    """
+
+    period_s: float
+    amplitude_rad: float
+    source: str
+
+
 @dataclass
 class Simulation:
     """What an instrument's ``simulate`` returns.
@@ -249,6 +269,13 @@ class Instrument:
     def directing_model(self) -> "DirectingModel | None":
         """The :class:`DirectingModel` of a gyroscope with a directing line, or None (the default:
         the instrument measures no Earth rate through a swing duration)."""
+        return None
+
+    def expected_swing(self) -> "ExpectedSwing | None":
+        """What the scene predicts its measured oscillation to be (:class:`ExpectedSwing`: full
+        period and amplitude of the measured angle), against which the estimator checks measured
+        data before it believes them (``estimators/adequacy.py``); None (the default) when the
+        instrument measures no swing or the scene predicts none (e.g. without ``earth_rotation``)."""
         return None
 
     def chosen_integrator(self, duration_s=None) -> "tuple | None":

@@ -37,8 +37,8 @@ from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORI
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.parareal import dense_output, hermite_rows
 from gyro_instrument.core.params import Param
-from gyro_instrument.instruments.base import (Column, Instrument, Simulation, check_period_count, run_span,
-                                              with_notes)
+from gyro_instrument.instruments.base import (Column, ExpectedSwing, Instrument, Simulation, check_period_count,
+                                              run_span, with_notes)
 from gyro_instrument.instruments.chain import HingeChain, Link
 
 PENDULUM_COLUMNS = (
@@ -282,6 +282,13 @@ class SphericalPendulum(Instrument):
     def pendulum_length_m(self) -> float:
         """The rod length l, m."""
         return self.l
+
+    def expected_swing(self) -> "ExpectedSwing":
+        """Four exact quarter periods of a plane swing (sec. 2 eq. 42 without its series:
+        :func:`quarter_period_s`) and the release deflection θ0 (the Earth's k changes neither
+        by more than (k/ω0)², below 1e-8 for any pendulum)."""
+        return ExpectedSwing(4.0 * quarter_period_s(self.l, self.g, self.theta0, 0.0), abs(self.theta0),
+                             "length_m, initial_deflection_deg and the site's gravity")
 
     def initial_state(self) -> tuple:
         """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
@@ -697,6 +704,12 @@ class CompoundPendulum(Instrument):
     def pendulum_length_m(self) -> float:
         """The pivot–centre-of-mass distance l, m (the deflections are those of the centre of mass)."""
         return self.lc
+
+    def expected_swing(self) -> "ExpectedSwing":
+        """Four quarter periods of the simple pendulum of the equivalent length λ (sec. 3 §VI eq. 57)
+        and the release deflection θ0."""
+        return ExpectedSwing(4.0 * quarter_period_s(self.equivalent_length_m, self.site.gravity_m_s2, self.theta0, 0.0),
+                             abs(self.theta0), "the body's inertia, mass, centre of mass and initial deflection")
 
     def predictions(self) -> dict:
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without

@@ -35,7 +35,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN
-from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, run_span, with_notes
+from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 
 
@@ -151,6 +151,14 @@ class PlaneGyroscope(Instrument):
         R, _ = plane_frame(self.normal, self.site)
         u = np.asarray(position)[:, 0]
         return np.cos(u)[:, None] * R[:, 0] + np.sin(u)[:, None] * R[:, 1]
+
+    def expected_swing(self) -> "ExpectedSwing | None":
+        """Period 2 T0 of eq. (9) at the scene's spin and latitude (times the finite-amplitude factor
+        when simulated) and amplitude u0; None without a directing torque."""
+        T = self.predictions()["swing_duration_s"]
+        if not (math.isfinite(T) and T > 0):
+            return None
+        return ExpectedSwing(2.0 * T, abs(self.u0), "inertia_ratio, spin_rate_rad_s, plane and the site's latitude")
 
     def directing_model(self) -> DirectingModel | None:
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with

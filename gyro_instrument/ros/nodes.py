@@ -42,6 +42,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from gyro_instrument.cli import damage_line
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
@@ -796,6 +797,12 @@ class EstimatorNode(SceneNode):
         """Estimate and publish; returns the result dict."""
         try:
             self.result = self.estimate()
+        except InadequateData as exc:  # the data fail an adequacy check: said on /diagnostics, no number
+            self.get_logger().error(str(exc))
+            self.pubs["diagnostics"].publish(m.diagnostics(
+                self.stamp_ns(), "gyro_instrument/estimator", False, str(exc),
+                {"refused_by_check": exc.field, "rejected_messages": self.rejected}))
+            return None
         except Exception as exc:  # the estimator must never take the node down
             self.get_logger().error(f"estimation failed: {exc.__class__.__name__}: {exc}")
             return None

@@ -67,7 +67,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation, with_notes
+from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link
 from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs,
                                                          rigid_body_coefficients)
@@ -340,6 +340,15 @@ class GimbalGyroscope(Instrument):
             raise SceneError(f"{name}.integrator", "closed_form",
                              "needs rigid-body effect terms of first and second order in the Earth rate "
                              "(earth_rotation, centrifugal); use auto or hinge_chain with these effects")
+
+    def expected_swing(self) -> "ExpectedSwing | None":
+        """Period 2 T of the configured swing (T' locked, T'' outer ring fixed; Quet sec. 4 §IV) and
+        the release angle of the swinging ring; None when it does not swing (no directing torque)."""
+        T = self.predictions()["swing_duration_small_s"]
+        if not (math.isfinite(T) and T > 0):
+            return None
+        amp = self.outer0 if self.configuration != "outer_fixed" else self.inner0
+        return ExpectedSwing(2.0 * T, abs(amp), "configuration, the inertias, spin_rate_rad_s and the site's latitude")
 
     def directing_model(self) -> DirectingModel | None:
         """What an estimator may know: K = (π/T0)² = gain · n ρ · s(γ) for the configured swing, or

@@ -1,0 +1,244 @@
+"""Adequacy: the data are checked against the scene and against themselves before a number is reported.
+
+One mechanism for every estimate (a scene's simulation, a table, a bag, the live estimator node):
+:func:`~gyro_instrument.estimators.pipeline.estimate_records` calls these checks on each
+instrument's record, and each check's outcome goes into the estimate's ``checks`` list (and the
+text). A check that fails in a way no estimate can survive raises :class:`InadequateData` (a
+:class:`~gyro_instrument.core.errors.SceneError`: exit 2, one line naming the check, both numbers
+and the likely cause); a softer failure is ``flagged`` with its figure.
+
+The checks, per instrument whose class predicts its swing (:meth:`Instrument.expected_swing`):
+
+``amplitude``
+    The record's swing amplitude (half the 0.5–99.5 % range of a gyroscope's angle; the 99.5 %
+    point of a pendulum's deflection) against the scene's release amplitude: more than
+    :data:`AMPLITUDE_FACTOR` times it, or beyond π (no swing angle or deflection can exceed a half
+    turn), is refused — "angles look like degrees" when the ratio is within a factor 4 of 180/π
+    or the angle exceeds π. Smaller swings are legitimate (a gentler release); ``signal`` judges them.
+``sampling``
+    Samples per predicted period, P / Δt (Δt the median interval): below
+    :data:`MIN_SAMPLES_PER_PERIOD` the swing aliases and a fit would find the alias, so the
+    estimate is refused (never fitted). First the time unit is tried: when the record's own
+    dominant period is a unit factor (10³, 10⁶, 10⁹, 1/60) times P within a factor 2 and is
+    itself sampled well, the refusal says "time looks like milliseconds" instead.
+``period``
+    The fitted period against the scene's: beyond a factor :data:`PERIOD_FACTOR` (a directing
+    torque K ∝ s(γ) ρ: a factor 4 in period is 16 in K, far beyond any latitude or spin error a
+    scene could hold for a real instrument) it is refused, naming a unit when the ratio is one.
+``signal``
+    Detection: A² N / (4 σ²) ≥ :data:`~gyro_instrument.estimators.period.DETECTION_SNR` with σ the
+    fit's residual but never below :data:`ROUNDOFF_RAD` — the resolution of a double-precision
+    angle — so a pendulum at rest read from a file (deflections of 1e-17 rad) is "no swing" as it
+    is when the scene adds its sensor noise: the same rule for files and scenes.
+``fit``
+    χ²/dof = residual² / (σ_noise² + q²/12) with the scene's sensor model: outside
+    1 ± 5 √(2/dof) it is ``flagged`` with the figure; above :data:`CHI2_WITHHOLD` (a residual 10×
+    the sensor's noise: the model does not describe the signal) the estimate is withheld
+    (refused). Not applicable when the scene's sensor has no noise model.
+"""
+
+import math
+
+import numpy as np
+
+from gyro_instrument.core.errors import SceneError
+
+#: Fewest samples per predicted period that a fit may use: the Nyquist limit is 2; 2.5 leaves room
+#: for the period's uncertainty (a scene's latitude and spin) and for irregular sampling.
+MIN_SAMPLES_PER_PERIOD = 2.5
+
+#: A fitted period more than this factor from the scene's prediction is refused (see ``period``).
+PERIOD_FACTOR = 4.0
+
+#: A swing amplitude more than this factor above the scene's release amplitude is refused. 30 is
+#: below 180/π = 57.3 (angles in degrees) by a factor 1.9 and allows a release 30× the scene's.
+AMPLITUDE_FACTOR = 30.0
+
+#: The resolution of an angle stored as a double: 8 ulp of π (5.6e-15 rad); no residual is smaller.
+ROUNDOFF_RAD = 8.0 * float(np.finfo(float).eps) * math.pi
+
+#: χ²/dof above which the fit is withheld: a residual rms 10× the sensor model's noise.
+CHI2_WITHHOLD = 100.0
+
+#: Time units a user's clock may have written under ``time_s``: (factor of the period in those
+#: units over seconds, the unit's name, its ``--time-unit`` value).
+TIME_UNITS = ((1e3, "milliseconds", "ms"), (1e6, "microseconds", "us"), (1e9, "nanoseconds", "ns"),
+              (1.0 / 60.0, "minutes", "min"))
+
+
+class InadequateData(SceneError):
+    """The data fail a check no estimate can survive: exit 2, one line.
+
+    Attributes
+    ----------
+    field : str
+        ``<instrument>.<check>``.
+    check : dict
+        The check's entry (as in the estimate's ``checks``).
+    """
+
+    def __init__(self, entry) -> None:
+        self.check = entry
+        self.field = f"{entry['instrument']}.{entry['check']}"
+        self.value = entry.get("value")
+        self.valid = entry["detail"]
+        ValueError.__init__(self, f"estimate refused by the {entry['check']} check of {entry['instrument']}: "
+                                  f"{entry['detail']}")
+
+
+def _entry(name, check, status, detail, value=None, expected=None) -> dict:
+    return {"instrument": name, "check": check, "status": status, "value": value, "expected": expected,
+            "detail": detail}
+
+
+def _unit_for(ratio):
+    """The time unit whose factor is within a factor 2 of ``ratio`` (measured over predicted period)."""
+    for factor, unit, flag in TIME_UNITS:
+        if abs(math.log(ratio / factor)) < math.log(2.0):
+            return unit, flag
+    return None
+
+
+def _time_unit_refusal(name, ratio, period_data, expected):
+    unit, flag = _unit_for(ratio)
+    return InadequateData(_entry(
+        name, "time_unit", "refused",
+        f"the record's swing period is {period_data:.6g} time units against the scene's predicted "
+        f"{expected.period_s:.6g} s (ratio {ratio:.4g}): time looks like {unit}; pass --time-unit {flag}",
+        ratio, 1.0))
+
+
+def swing_amplitude(rec, pendulum) -> float:
+    """The record's swing amplitude, rad: a pendulum's 99.5 % deflection, a gyroscope's half 0.5–99.5 % range."""
+    if pendulum:
+        r = np.hypot(rec["deflection_east"], rec["deflection_north"])
+        r = r[np.isfinite(r)]
+        return float(np.percentile(r, 99.5)) if r.size else math.nan
+    y = np.asarray(rec["angle"], dtype=float)
+    y = y[np.isfinite(y)]
+    return float(0.5 * (np.percentile(y, 99.5) - np.percentile(y, 0.5))) if y.size else math.nan
+
+
+def check_before_fit(name, inst, rec) -> list:
+    """The ``amplitude`` and ``sampling`` checks of one record; raises :class:`InadequateData`.
+
+    Parameters
+    ----------
+    name : str
+    inst : Instrument
+        Its :meth:`expected_swing` gives the prediction; None: no check applies.
+    rec : dict
+        The measured record (``t`` and the channels, as :func:`pipeline.measure` makes them).
+
+    Returns
+    -------
+    list of dict
+        The checks' entries.
+    """
+    expected = inst.expected_swing()
+    if expected is None:
+        return [_entry(name, "sampling", "not_applicable", "the scene predicts no swing for this instrument")]
+    out = []
+    a = swing_amplitude(rec, inst.IS_PENDULUM)
+    if math.isfinite(a):
+        ratio = a / expected.amplitude_rad if expected.amplitude_rad > 0 else math.inf
+        if a > math.pi or ratio > AMPLITUDE_FACTOR:
+            deg = a > math.pi or abs(math.log(ratio / math.degrees(1.0))) < math.log(4.0)
+            cause = ("angles look like degrees; pass --angle-unit deg" if deg else
+                     f"the scene's release amplitude does not describe this record (set it from {expected.source})")
+            raise InadequateData(_entry(name, "amplitude", "refused",
+                                        f"swing amplitude {a:.6g} rad is {ratio:.3g}x the scene's {expected.amplitude_rad:.6g} "
+                                        f"rad (at most {AMPLITUDE_FACTOR:g}x, and never beyond pi): {cause}",
+                                        a, expected.amplitude_rad))
+        out.append(_entry(name, "amplitude", "passed", f"swing amplitude {a:.4g} rad, scene's {expected.amplitude_rad:.4g} rad",
+                          a, expected.amplitude_rad))
+    t = np.asarray(rec["t"], dtype=float)
+    t = np.unique(t[np.isfinite(t)])
+    if t.size < 3:
+        return out
+    dt = float(np.median(np.diff(t)))
+    spp = expected.period_s / dt
+    if spp < MIN_SAMPLES_PER_PERIOD:
+        _refuse_undersampled(name, inst, rec, t, dt, spp, expected)
+    out.append(_entry(name, "sampling", "passed",
+                      f"{spp:.4g} samples per predicted period of {expected.period_s:.6g} s (at least "
+                      f"{MIN_SAMPLES_PER_PERIOD:g})", spp, MIN_SAMPLES_PER_PERIOD))
+    return out
+
+
+def _refuse_undersampled(name, inst, rec, t, dt, spp, expected):
+    """Raise for a record with fewer than :data:`MIN_SAMPLES_PER_PERIOD` samples per predicted
+    period: as a time unit when the record's own period says so, else as an alias."""
+    from gyro_instrument.estimators.period import EstimationError, fft_guess
+    y = rec["deflection_east"] if inst.IS_PENDULUM else rec["angle"]
+    if inst.IS_PENDULUM and np.nanvar(rec["deflection_north"]) > np.nanvar(y):
+        y = rec["deflection_north"]
+    ok = np.isfinite(rec["t"]) & np.isfinite(y)
+    try:
+        period_data = 2.0 * math.pi / fft_guess(np.asarray(rec["t"])[ok], np.asarray(y)[ok], min_cycles=2.0)
+    except (EstimationError, ValueError, ZeroDivisionError):
+        period_data = math.nan
+    if math.isfinite(period_data) and period_data / dt >= MIN_SAMPLES_PER_PERIOD \
+            and _unit_for(period_data / expected.period_s):
+        raise _time_unit_refusal(name, period_data / expected.period_s, period_data, expected)
+    raise InadequateData(_entry(
+        name, "sampling", "refused",
+        f"{spp:.3g} samples per predicted period of {expected.period_s:.6g} s (one every {dt:.6g} s); below "
+        f"{MIN_SAMPLES_PER_PERIOD:g} the swing aliases and a fit would find the alias: sample at least "
+        f"{MIN_SAMPLES_PER_PERIOD / expected.period_s:.3g} Hz", spp, MIN_SAMPLES_PER_PERIOD))
+
+
+def check_period(name, inst, period_s) -> dict | None:
+    """The ``period`` check of a fitted full period (s); raises :class:`InadequateData`."""
+    expected = inst.expected_swing()
+    if expected is None or not (period_s and math.isfinite(period_s)):
+        return None
+    ratio = period_s / expected.period_s
+    if _unit_for(ratio) and not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
+        raise _time_unit_refusal(name, ratio, period_s, expected)
+    if not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
+        raise InadequateData(_entry(
+            name, "period", "refused",
+            f"the fitted period {period_s:.6g} s is {ratio:.4g}x the scene's predicted {expected.period_s:.6g} s "
+            f"(within a factor {PERIOD_FACTOR:g} is accepted): the scene does not describe this instrument "
+            f"(check {expected.source})", ratio, 1.0))
+    return _entry(name, "period", "passed", f"fitted period {period_s:.6g} s, predicted {expected.period_s:.6g} s "
+                                            f"(ratio {ratio:.6g})", ratio, 1.0)
+
+
+def detection_snr(amplitude, n_samples, residual_rms) -> float:
+    """A² N / (4 σ²), σ the residual rms but at least :data:`ROUNDOFF_RAD` (see ``signal``)."""
+    sigma = max(float(residual_rms), ROUNDOFF_RAD)
+    return float(amplitude) ** 2 * n_samples / (4.0 * sigma * sigma)
+
+
+def signal_entry(name, snr, threshold) -> dict:
+    """The ``signal`` check's entry (``no_signal``: the instrument's estimate is null with a reason)."""
+    ok = snr >= threshold
+    return _entry(name, "signal", "passed" if ok else "no_signal",
+                  f"detection A^2 N / (4 sigma^2) = {snr:.4g} ({'>=' if ok else '<'} {threshold:g})", snr, threshold)
+
+
+def check_fit(name, residual_rms, dof, sensor) -> dict:
+    """The ``fit`` check: χ²/dof of the residual against the sensor model; raises :class:`InadequateData`
+    above :data:`CHI2_WITHHOLD`."""
+    var = sensor.noise_rad ** 2 + sensor.quantization_rad ** 2 / 12.0
+    if var <= 0.0:
+        return _entry(name, "fit", "not_applicable", "the scene's sensor has no noise model (noise_rad = 0): "
+                                                     "chi2/dof cannot be formed")
+    chi2 = float(residual_rms) ** 2 / var
+    band = 5.0 * math.sqrt(2.0 / max(dof, 1))
+    if chi2 > CHI2_WITHHOLD:
+        raise InadequateData(_entry(
+            name, "fit", "refused",
+            f"chi2/dof = {chi2:.4g}: the residual rms {residual_rms:.4g} rad is {math.sqrt(chi2):.3g}x the sensor "
+            f"model's {math.sqrt(var):.4g} rad, so the model does not describe this record (another instrument, "
+            f"a disturbance, or a sensor noisier than sensor.noise_rad says); estimate withheld", chi2, 1.0))
+    if abs(chi2 - 1.0) > band:
+        how = "above" if chi2 > 1.0 else "below"
+        return _entry(name, "fit", "flagged",
+                      f"chi2/dof = {chi2:.4g}, {how} 1 +/- {band:.2g}: the residual rms {residual_rms:.4g} rad against "
+                      f"the sensor model's {math.sqrt(var):.4g} rad" + (" (data smoother than the sensor model: a "
+                                                                         "noise-free simulation?)" if chi2 < 1 else ""),
+                      chi2, 1.0)
+    return _entry(name, "fit", "passed", f"chi2/dof = {chi2:.4g} (1 +/- {band:.2g})", chi2, 1.0)
