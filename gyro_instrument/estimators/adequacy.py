@@ -141,9 +141,10 @@ def check_before_fit(name, inst, rec) -> list:
     out = []
     a = swing_amplitude(rec, inst.IS_PENDULUM)
     if math.isfinite(a):
-        ratio = a / expected.amplitude_rad if expected.amplitude_rad > 0 else math.inf
+        # a scene released at rest predicts no amplitude to compare with: only the half-turn limit applies
+        ratio = a / expected.amplitude_rad if expected.amplitude_rad > 0 else 0.0
         if a > math.pi or ratio > AMPLITUDE_FACTOR:
-            deg = a > math.pi or abs(math.log(ratio / math.degrees(1.0))) < math.log(4.0)
+            deg = a > math.pi or abs(math.log(max(ratio, 1e-300) / math.degrees(1.0))) < math.log(4.0)
             cause = ("angles look like degrees; pass --angle-unit deg" if deg else
                      f"the scene's release amplitude does not describe this record (set it from {expected.source})")
             raise InadequateData(_entry(name, "amplitude", "refused",
