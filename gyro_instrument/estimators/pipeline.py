@@ -320,14 +320,17 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
         elif "deflection_east" in rec:
             try:
                 f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"],
-                                      correct_ellipse="ellipse_precession" in corrections)
+                                      correct_ellipse="ellipse_precession" in corrections,
+                                      noise_rad=SensorModel.from_scene(scene).effective_sigma_rad())
                 est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
                        "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
                        "measured_plane_rate_rad_s": f.measured_rate_rad_s,
                        "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
                        "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
                        "notes": f.notes}
-                m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=f.crlb_k_rad_s)
+                # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
+                m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s,
+                                    crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
                 meas.append(m)
                 pend = (inst, est, m)
             except EstimationError as exc:
