@@ -299,9 +299,26 @@ def _angles_figure(plt, series, names, axis, title):
     return fig
 
 
+def _apse_rate(scene, name):
+    """The scene pendulum ``name``'s predicted apse-line rate, rad/s (``apsidal_rate_from_rest_rad_s``
+    of its predictions: the exact elliptic-integral rate, :func:`~gyro_instrument.instruments.pendulum.
+    apsidal_rate_from_rest_exact_rad_s`, the one ``describe`` prints and the estimator inverts), or
+    None without a scene or such a pendulum."""
+    if scene is None:
+        return None
+    try:
+        from gyro_instrument.scenes import build_instruments
+        inst = build_instruments(scene).get(name)
+        rate = inst.predictions().get("apsidal_rate_from_rest_rad_s") if inst is not None else None
+    except Exception:                   # noqa: BLE001 - a scene that does not build draws the k line
+        return None
+    return float(rate) if rate is not None else None
+
+
 def _swing_azimuth_figure(plt, series, pend, scene, axis):
-    """The ``swing_azimuth`` view: the swing plane's azimuth per swing with the k = n sin γ line
-    (the scene's, or fitted); returns (figure, residual rows of the azimuth less the line)."""
+    """The ``swing_azimuth`` view: the swing plane's azimuth per swing with the line of the scene
+    pendulum's exact apse-line rate (:func:`_apse_rate`; k = n sin γ for a scene without that
+    pendulum, or fitted without a scene); returns (figure, residual rows of the azimuth less the line)."""
     scale, tlabel = axis
     residual_rows = []
     k_info = _k_line(scene)
@@ -313,7 +330,12 @@ def _swing_azimuth_figure(plt, series, pend, scene, axis):
         if tc.size < 2:
             ax.text(0.5, 0.5, "no swing measured", ha="center", transform=ax.transAxes)
             continue
-        if k_info is not None:
+        rate = _apse_rate(scene, n)
+        if rate is not None:
+            k, lat = rate, k_info[1]
+            label = (f"apse line {k:.4e} rad/s (exact, k = n sin γ = {k_info[0]:.4e} rad/s at γ = {lat:.4f}°, "
+                     f"with the ellipse precession)")
+        elif k_info is not None:
             k, lat, nrate = k_info
             label = f"k = n sin γ = {k:.4e} rad/s (γ = {lat:.4f}°)"
         else:

@@ -8,21 +8,21 @@ measures them. Method:
    (compass, modulo π) and the shoelace sum gives the mean areal velocity
    H = ⟨θ_n θ̇_e − θ_e θ̇_n⟩ = ⟨sin²θ ψ̇⟩ (Quet sec. 2 eq. 27's left-hand side, Earth frame);
 3. a least-squares line through ψ_i gives the measured rate m;
-4. the ellipse precession (3/8) ω0 α β (Airy; Quet sec. 2 §III–IV) uses the areal constant of
-   the comparison pendulum H_c = α β ω0 = ⟨H⟩ − k ⟨θ²⟩ (eq. 27: sin²θ (ψ̇ − k) is conserved), so
-   m = k + (3/8)(⟨H⟩ − k ⟨θ²⟩) and
+4. the ellipse correction is exact (Quet sec. 2 (26)–(27), §III–IV; the elliptic-integral
+   apsidal angle of :func:`~gyro_instrument.instruments.pendulum.apsidal_rate_exact_rad_s`): the
+   area constant c = ⟨H⟩ − k⟨sin²θ⟩ ((27): sin²θ (ψ̇ − k) is conserved), the amplitude α from
+   ⟨sin²θ⟩ (:func:`mean_sin2_deflection`) and ω0 from the swing period give the apse rate
+   m = k + sgn(c)(Φ − π/2)/T, solved for k (:func:`invert_apse_rate`) for any swing, planar or
+   not. For small swings this is k = (m − (3/8)⟨H⟩)/(1 − (3/8)⟨θ²⟩) (Airy); at 30° on 1 m that
+   series was 85σ off on noise-free data. H per sample uses 6th-order central differences.
 
-       k = (m − (3/8) ⟨H⟩) / (1 − (3/8) ⟨θ²⟩).
+The horizontal Earth-rate component n cos γ enters through c (which ⟨H⟩ measures); given c the
+law holds to ~1.6e-6 k at 30° on 1 m (tests/test_apsidal_rate.py).
 
-   Released from rest this removes exactly Quet's (3/8) θ0 sin θ0 cos(θ0/2) lag (to O(θ0⁴)).
-
-The horizontal Earth-rate component n cos γ leaves a swing-direction-dependent residual of
-~2e-5 k for north–south swings (the k' = n cos γ terms of Quet sec. 2 eq. 21), not corrected
-here; it is far below the noise of any record shorter than days.
-
-Cramér–Rao bound for the rate of a plane swinging with amplitude α (rad) in white noise σ on each
-component, N samples over T_obs: var(k̂) ≥ 24 σ² / (α² N T_obs²) (the information
-Σ (α cos ω0 t · t)² / σ² with the phase origin free).
+Cramér–Rao bound (``crlb_k_rad_s``) from white noise σ on each component — the sensor model's
+√(σ² + q²/12) passed as ``noise_rad``, else estimated from 6th differences of the samples (blind to
+the swing and its precession): var(m̂) ≥ 12σ²/(⟨sin²θ⟩ N T²) (24σ²/(α² N T²) for a small swing) and
+var⟨H⟩ ≥ 4σ²⟨θ̇²⟩/N, through the inversion's slopes ∂k/∂m, ∂k/∂⟨H⟩. σ = 0 gives 0.
 """
 
 import math
@@ -30,7 +30,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipk
+
+from gyro_instrument.estimators.adequacy import detection_snr
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, fit_oscillation
+from gyro_instrument.instruments.pendulum import (apsidal_angle, areal_constant_over_omega0,
+                                                  min_deflection_for_areal_constant)
 
 
 @dataclass
@@ -50,8 +56,13 @@ class FoucaultEstimate:
     notes: list = field(default_factory=list)
 
 
-def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True) -> FoucaultEstimate:
+def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None) -> FoucaultEstimate:
     """Estimate the Foucault rate from deflection samples; see module docstring.
+
+    ``noise_rad``: the standard deviation of the white noise on each deflection component when the
+    sensor model is known (√(σ² + q²/12) with quantization q: ``SensorModel.effective_sigma_rad``);
+    ``None`` estimates it from the data (:func:`noise_from_differences`, blind to the swing and its
+    precession). It sets the Cramér–Rao bound ``crlb_k_rad_s`` (0 for noise-free data).
 
     Raises
     ------
@@ -63,7 +74,7 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True) -> FoucaultEsti
         raise EstimationError(f"too few valid pendulum samples ({t.size})")
     main = e if np.var(e) >= np.var(nn) else nn
     fit = fit_oscillation(t, main)
-    snr = fit.amplitude ** 2 * fit.n_samples / (4 * max(fit.residual_rms, 1e-300) ** 2)
+    snr = detection_snr(fit.amplitude, fit.n_samples, fit.residual_rms)   # the same rule as a gyroscope's
     if snr < DETECTION_SNR:
         raise EstimationError(f"no swing detected (SNR {snr:.3g} < {DETECTION_SNR:g}): a bob at rest has no "
                               f"swing plane, so no Foucault rate")
@@ -71,23 +82,198 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True) -> FoucaultEsti
     n_win = int((t[-1] - t[0]) // period)
     if n_win < 3:
         raise EstimationError(f"record holds {n_win} swing periods; need at least 3 to fit a precession")
+    if noise_rad is None:
+        sigma_noise = noise_from_differences(t, e, nn)
+        notes.append(f"noise {sigma_noise:.3g} rad estimated from 6th differences of the samples (no sensor model)")
+    else:
+        sigma_noise = float(noise_rad)
     psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win)
     if len(psi) < 3:
         raise EstimationError("fewer than 3 complete swing periods with samples")
     m, sig_m = _plane_rate(psi, tc)
-    Hm = float(np.average(H, weights=w))
-    H_se = float(np.std(H, ddof=1) / math.sqrt(len(H))) if len(H) > 1 else 0.0
-    r2m = float(np.average(r2, weights=w))
+    ok = np.isfinite(H)
+    Hm = float(np.average(np.asarray(H)[ok], weights=np.asarray(w)[ok])) if ok.any() else 0.0
+    # σ of ⟨H⟩ from the noise: per sample the noise enters as 2 θ̇ × (noise across the swing) once
+    # the derivative's noise is summed by parts, var ⟨H⟩ = 4σ²⟨θ̇²⟩/N — also the Cramér–Rao bound
+    # of the areal velocity (the minor axis b of a thin swing α cos ωt: σ_b² = 2σ²/N, H = α b ω).
+    # (Window-to-window scatter overstates it: adjacent windows share the summed-by-parts edges.)
+    _, v2 = areal_velocity(t, e, nn, speed2=True)
+    v2 = v2[np.isfinite(v2)]
+    step = float(np.median(np.diff(t)))
+    v2m = max(float(np.mean(v2)) - 2.0 * sigma_noise ** 2 * float(_DERIV6 @ _DERIV6) / step ** 2, 0.0) \
+        if v2.size else 0.0
+    H_se = 2.0 * sigma_noise * math.sqrt(v2m / max(v2.size, 1))
+    # ⟨sin²θ⟩ less the noise's share 2σ² (both components)
+    r2m = max(float(np.average(r2, weights=w)) - 2.0 * sigma_noise ** 2, 0.0)
     alpha = float(np.mean(amp))
+    dk_dm = 1.0
     if correct_ellipse:
-        k = (m - 0.375 * Hm) / (1.0 - 0.375 * r2m)
-        sig_k = math.hypot(sig_m, 0.375 * H_se) / (1.0 - 0.375 * r2m)
+        k = invert_apse_rate(m, Hm, r2m, period)
+        hm = 1e-6 * max(abs(m), abs(Hm), 1e-12)
+        dk_dm = (invert_apse_rate(m + hm, Hm, r2m, period) - invert_apse_rate(m - hm, Hm, r2m, period)) / (2 * hm)
+        dk_dH = (invert_apse_rate(m, Hm + hm, r2m, period) - invert_apse_rate(m, Hm - hm, r2m, period)) / (2 * hm)
+        sig_k = math.hypot(dk_dm * sig_m, dk_dH * H_se)
     else:
         k, sig_k = m, sig_m
-    sigma_noise = fit.residual_rms
     span = float(t[-1] - t[0])
-    crlb = math.sqrt(24.0 * sigma_noise ** 2 / (alpha ** 2 * t.size * span ** 2)) if alpha > 0 else math.inf
+    crlb = foucault_crlb_rad_s(sigma_noise, r2m, t.size, span, dk_dm)
+    if correct_ellipse:
+        crlb = math.hypot(crlb, dk_dH * H_se)
     return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes)
+
+
+def foucault_crlb_rad_s(sigma_rad, mean_sin2, n_samples, span_s, dk_dm=1.0) -> float:
+    """Cramér–Rao bound on the Foucault rate from white noise σ on each deflection component:
+    the swing plane's rate m moves the components by sin θ per radian of azimuth, so its Fisher
+    information is Σ sin²θ_i (t_i − t̄)²/σ² ≈ N ⟨sin²θ⟩ T²/(12σ²): var(m̂) ≥ 12σ²/(⟨sin²θ⟩ N T²)
+    (= 24σ²/(α² N T²) for a small swing of amplitude α, ⟨sin²θ⟩ = α²/2), and k's bound is
+    |∂k/∂m| times it (the ellipse correction's slope, :func:`invert_apse_rate`). 0 for σ = 0."""
+    if sigma_rad == 0.0:
+        return 0.0
+    if not (mean_sin2 > 0.0 and n_samples > 0 and span_s > 0.0):
+        return math.inf
+    return abs(dk_dm) * math.sqrt(12.0 * sigma_rad ** 2 / (mean_sin2 * n_samples * span_s ** 2))
+
+
+def foucault_crlb_small_swing_rad_s(sigma_rad, alpha_rad, omega_rad_s, n_samples, span_s) -> float:
+    """The estimator's bound (:func:`estimate_foucault`) for a small swing α cos ωt planned from a
+    sensor model (the planner): ⟨sin²θ⟩ = α²/2, ⟨θ̇²⟩ = α²ω²/2, the ellipse correction's slopes
+    ∂k/∂m = −∂k/∂⟨H⟩/(3/8) = 1/(1 − (3/8)⟨sin²θ⟩) (Airy's (3/8) c), so
+    σ_k² = (∂k/∂m)² [12σ²/(⟨sin²θ⟩ N T²) + (3/8)² 4σ²⟨θ̇²⟩/N]."""
+    if sigma_rad == 0.0:
+        return 0.0
+    r2 = 0.5 * alpha_rad ** 2
+    if not (r2 > 0.0 and n_samples > 0 and span_s > 0.0):
+        return math.inf
+    dk_dm = 1.0 / (1.0 - 0.375 * r2)
+    h_se = 2.0 * sigma_rad * math.sqrt(r2 * omega_rad_s ** 2 / n_samples)
+    return math.hypot(foucault_crlb_rad_s(sigma_rad, r2, n_samples, span_s, dk_dm), 0.375 * dk_dm * h_se)
+
+
+#: 6th-difference stencil: the binomial coefficients with alternating signs; white noise of σ gives
+#: a variance of σ² Σc² = 924 σ², a smooth swing of ω Δt a relative (ω Δt)⁶ (1e-5 at 40 samples a period).
+_DIFF6 = np.array([1.0, -6.0, 15.0, -20.0, 15.0, -6.0, 1.0])
+
+
+def noise_from_differences(t, e, nn) -> float:
+    """White-noise σ of the deflection components estimated without a model of the swing: the rms
+    of their 6th differences over runs of 7 uniformly spaced samples, / √924 (the swing and its
+    precession are smooth: their 6th difference is (ωΔt)⁶ of them). Both components pooled."""
+    d = _uniform_stencil(t, _DIFF6, centred=False)
+    vals = [np.convolve(x, _DIFF6[::-1], mode="valid")[d] for x in (e, nn)]
+    v = np.concatenate(vals)
+    return float(math.sqrt(np.mean(v * v) / float(_DIFF6 @ _DIFF6))) if v.size else 0.0
+
+
+def _uniform_stencil(t, stencil, centred=True):
+    """Mask over np.convolve(x, stencil, 'valid') outputs: True where the len(stencil) samples are
+    uniformly spaced (no dropout or gap inside)."""
+    L = len(stencil)
+    if t.size < L:
+        return np.zeros(0, bool)
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    good = np.abs(dt - step) <= 1e-6 * step
+    c = np.convolve(good.astype(float), np.ones(L - 1), mode="valid")
+    return c >= L - 1 - 0.5
+
+
+#: 6th-order central first derivative (weights of x[i−3..i+3] / Δt): error (ωΔt)⁶/140 of a harmonic.
+_DERIV6 = np.array([-1.0 / 60.0, 3.0 / 20.0, -0.75, 0.0, 0.75, -3.0 / 20.0, 1.0 / 60.0])
+
+
+def areal_velocity(t, e, nn, speed2=False) -> "np.ndarray | tuple":
+    """sin²θ ψ̇ = θ_n θ̇_e − θ_e θ̇_n per sample (compass sense, the Earth frame's eq. (27) left side),
+    with 6th-order central differences (a polygon's shoelace sum is short by (ωΔt)²/6 of it: 4e-3
+    at 40 samples a period, which on a 30° swing is a 10σ bias); NaN where the 7 samples about a
+    sample are not uniformly spaced, and at the ends. With ``speed2`` also θ̇_e² + θ̇_n² per sample."""
+    out = np.full(t.size, np.nan)
+    v2 = np.full(t.size, np.nan)
+    if t.size < 7:
+        return (out, v2) if speed2 else out
+    step = float(np.median(np.diff(t)))
+    ok = _uniform_stencil(t, _DERIV6)
+    de = np.convolve(e, _DERIV6[::-1], mode="valid") / step
+    dn = np.convolve(nn, _DERIV6[::-1], mode="valid") / step
+    h = nn[3:-3] * de - e[3:-3] * dn
+    out[3:-3] = np.where(ok, h, np.nan)
+    v2[3:-3] = np.where(ok, de * de + dn * dn, np.nan)
+    return (out, v2) if speed2 else out
+
+def mean_sin2_deflection(alpha_rad, beta_rad) -> float:
+    """Time mean of sin²θ over the spherical pendulum's orbit with apsides α ≥ β (exact).
+
+    With z = cos θ, ż² = 2ω0²(z − z1)(z − z2)(z3 − z) (Quet (26)–(27)); the mean of z̈ = f'(z)/2 over
+    a period vanishes, so ⟨3z² − 2 s1 z − 1⟩ = 0 (s1 = z1 + z2 + z3, z1z2 + z1z3 + z2z3 = −1), and
+    ⟨z⟩ = z1 + (z3 − z1) E(m)/K(m), m = (z3 − z2)/(z3 − z1): ⟨sin²θ⟩ = (2/3)(1 − s1 ⟨z⟩).
+    """
+    z2, z3 = math.cos(alpha_rad), math.cos(beta_rad)
+    z1 = -(1.0 + z2 * z3) / (z2 + z3)
+    m = (z3 - z2) / (z3 - z1)
+    zbar = z1 + (z3 - z1) * float(ellipe(m)) / float(ellipk(m))
+    return 2.0 / 3.0 * (1.0 - (z1 + z2 + z3) * zbar)
+
+
+#: ⟨sin²θ⟩ grows with the amplitude α up to α ≈ 1.92 rad (110°; beyond, the bob lingers near the top):
+#: the estimator inverts it for swings up to 1.9 rad.
+MAX_SWING_RAD = 1.9
+
+
+def swing_orbit(mean_sin2, areal_abs_rad_s, period_s) -> tuple:
+    """(α, β, ω0): the orbit whose time means are the measured ⟨sin²θ⟩ and |c| = |⟨sin²θ (ψ̇ − k)⟩|
+    and whose swing period (two radial periods, 4T) is ``period_s`` — α from
+    :func:`mean_sin2_deflection`, ω0 = 4 (ω0 T)/P (:func:`~gyro_instrument.instruments.pendulum.
+    apsidal_angle`), β from |c|/ω0; fixed-point on β (it moves α and ω0 only at O(β²))."""
+    beta, omega0 = 0.0, 2.0 * math.pi / period_s
+    alpha = 0.0
+    for _ in range(30):
+        hi = max(min(MAX_SWING_RAD, math.pi - beta - 1e-6), beta)
+        f = lambda a: mean_sin2_deflection(a, beta) - mean_sin2
+        if f(hi) < 0.0:
+            raise EstimationError(f"mean squared deflection {mean_sin2:.6g} beyond a swing of "
+                                  f"{math.degrees(MAX_SWING_RAD):.0f} degrees (the largest this estimator inverts)")
+        alpha = brentq(f, beta, hi, xtol=1e-16, rtol=1e-15) if f(beta) < 0.0 else beta
+        omega0 = 4.0 * apsidal_angle(alpha, beta)[1] / period_s
+        new = min(min_deflection_for_areal_constant(alpha, areal_abs_rad_s / omega0), alpha)
+        if abs(new - beta) <= 1e-15 * max(alpha, 1e-300):
+            beta = new
+            break
+        beta = new
+    return alpha, beta, omega0
+
+
+def ellipse_rate_rad_s(mean_sin2, areal_rad_s, period_s) -> float:
+    """The apse line's turn relative to k, (apse rate) − k = sgn(c)(Φ − π/2)/T (exact, see
+    :func:`~gyro_instrument.instruments.pendulum.apsidal_rate_exact_rad_s`), from the measured
+    ⟨sin²θ⟩, area constant c and swing period."""
+    if areal_rad_s == 0.0:
+        return 0.0
+    alpha, beta, omega0 = swing_orbit(mean_sin2, abs(areal_rad_s), period_s)
+    if beta == 0.0:
+        return 0.0
+    phi, w0T = apsidal_angle(alpha, beta)
+    return math.copysign((phi - 0.5 * math.pi) * omega0 / w0T, areal_rad_s)
+
+
+def invert_apse_rate(m_rad_s, mean_H_rad_s, mean_sin2, period_s) -> float:
+    """k from the measured apse-line rate m, mean areal velocity ⟨H⟩ = ⟨sin²θ ψ̇⟩ (Earth frame,
+    compass), ⟨sin²θ⟩ and the swing period: the root of k + A(⟨H⟩ − k ⟨sin²θ⟩) = m, A the exact
+    :func:`ellipse_rate_rad_s` (area constant c = ⟨H⟩ − k ⟨sin²θ⟩ from (27)). Any swing, planar or
+    not: nothing assumes a release from rest. Fixed point (A changes by ≈ (3/8)⟨sin²θ⟩ per unit k:
+    a contraction), then secant steps."""
+    def F(k):
+        return k + ellipse_rate_rad_s(mean_sin2, mean_H_rad_s - k * mean_sin2, period_s) - m_rad_s
+    k0 = m_rad_s
+    k1 = m_rad_s - ellipse_rate_rad_s(mean_sin2, mean_H_rad_s - k0 * mean_sin2, period_s)
+    f0, f1 = F(k0), F(k1)
+    for _ in range(60):
+        if f1 == 0.0 or f1 == f0:
+            break
+        k0, k1 = k1, k1 - f1 * (k1 - k0) / (f1 - f0)
+        f0, f1 = f1, F(k1)
+        if abs(k1 - k0) <= 1e-14 * max(abs(k1), abs(m_rad_s), 1e-300):
+            break
+    return k1
 
 
 def _clean_deflections(t, theta_e, theta_n):
@@ -111,6 +297,7 @@ def _swing_windows(t, e, nn, period, n_win):
     centre time, the areal velocity H, the mean squared deflection r², the major and minor
     semi-axes of the swing ellipse (second moments) and the sample count (lists)."""
     psi, tc, H, r2, amp, minor, w = [], [], [], [], [], [], []
+    hv = areal_velocity(t, e, nn)
     edges = t[0] + period * np.arange(n_win + 1)
     idx = np.searchsorted(t, edges)
     for i in range(n_win):
@@ -124,7 +311,8 @@ def _swing_windows(t, e, nn, period, n_win):
         lam = np.linalg.eigvalsh(np.array([[mee, men], [men, mnn]]))
         amp.append(math.sqrt(2 * max(lam[1], 0.0)))
         minor.append(math.sqrt(2 * max(lam[0], 0.0)))
-        H.append(np.sum(en[:-1] * np.diff(ee) - ee[:-1] * np.diff(en)) / (t[b - 1] - t[a]))
+        hw = hv[a:b][np.isfinite(hv[a:b])]
+        H.append(float(np.mean(hw)) if hw.size else math.nan)
         r2.append(mee + mnn)
         w.append(b - a)
     return psi, tc, H, r2, amp, minor, w

@@ -22,8 +22,10 @@ from a bisection in log T. Sources and conventions:
   when the record holds at least :data:`CLOSED_FORM_CYCLES` cycles (the offset and the third
   harmonic then change the bound by < 1e-3 relative); with fewer cycles the exact sums are taken
   on a thinned grid (≥ 2000 points per cycle, information scaled by the stride).
-* **pendulums**: the Foucault rate's bound var(k̂) ≥ 24 σ² / (α² N T²) (:mod:`.foucault`), α the
-  swing amplitude (sin of the release deflection), σ on each deflection component.
+* **pendulums**: the Foucault rate's bound of the estimator (:func:`.foucault.foucault_crlb_small_swing_rad_s`):
+  the plane's rate, var(m̂) ≥ 24 σ² / (α² N T²), and the areal velocity the ellipse correction
+  needs, var⟨H⟩ ≥ 2σ²α²ω²/N, through k = (m − (3/8)⟨H⟩)/(1 − (3/8)α²/2); α the swing amplitude
+  (sin of the release deflection), σ on each deflection component.
 * **short records**: the bounds are computed, not assumed, below two cycles too (there the
   amplitude and phase are not separated from ω and the bound grows faster than T^-3/2); the
   estimator itself needs two cycles of every gyroscope (``fit_oscillation``) and three periods of a
@@ -249,7 +251,8 @@ def instrument_sigma(m, T, sensor) -> tuple:
         if n < 3 or m.amplitude <= 0:
             return math.inf, "too few samples"
         span = (samples(T, sensor.rate_hz) - 1) / sensor.rate_hz
-        return math.sqrt(24.0 * sigma ** 2 / (m.amplitude ** 2 * n * span ** 2)), "Foucault rate bound"
+        from gyro_instrument.estimators.foucault import foucault_crlb_small_swing_rad_s
+        return foucault_crlb_small_swing_rad_s(sigma, m.amplitude, m.omega, n, span), "Foucault rate bound"
     var_w, var_a, cov_wa, how = sine_fit_covariance(T, sensor.rate_hz, m.omega, m.coef, sigma, keep)
     if not math.isfinite(var_w):
         return math.inf, how
