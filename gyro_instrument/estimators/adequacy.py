@@ -31,10 +31,12 @@ The checks, per instrument whose class predicts its swing (:meth:`Instrument.exp
     angle — so a pendulum at rest read from a file (deflections of 1e-17 rad) is "no swing" as it
     is when the scene adds its sensor noise: the same rule for files and scenes.
 ``fit``
-    χ²/dof = residual² / (σ_noise² + q²/12) with the scene's sensor model: outside
+    A gyroscope: χ²/dof = residual² / (σ_noise² + q²/12) with the scene's sensor model: outside
     1 ± 5 √(2/dof) it is ``flagged`` with the figure; above :data:`CHI2_WITHHOLD` (a residual 10×
     the sensor's noise: the model does not describe the signal) the estimate is withheld
-    (refused). Not applicable when the scene's sensor has no noise model.
+    (refused). Not applicable when the scene's sensor has no noise model. A pendulum: the χ²/dof
+    of the swing-plane azimuths about their line against the scatter the record's own noise
+    explains; flagged beyond the same band, σ then from the scatter.
 """
 
 import math
@@ -243,3 +245,18 @@ def check_fit(name, residual_rms, dof, sensor) -> dict:
                                                                          "noise-free simulation?)" if chi2 < 1 else ""),
                       chi2, 1.0)
     return _entry(name, "fit", "passed", f"chi2/dof = {chi2:.4g} (1 +/- {band:.2g})", chi2, 1.0)
+
+
+def plane_fit_entry(name, chi2, dof, noise_rad) -> dict:
+    """The pendulum's ``fit`` check: χ²/dof of the swing-plane azimuths about their line against the
+    scatter the record's own noise explains (estimators/foucault.py); flagged beyond 1 + 5 √(2/dof)
+    (σ is then taken from the scatter, never withheld: the line is still the best rate)."""
+    band = 5.0 * math.sqrt(2.0 / max(dof, 1))
+    if not math.isfinite(chi2):
+        return _entry(name, "fit", "flagged", f"the record shows no noise ({noise_rad:.3g} rad): the swing-plane "
+                                              "azimuths' scatter sets sigma", None, 1.0)
+    status = "passed" if chi2 <= 1.0 + band else "flagged"
+    return _entry(name, "fit", status,
+                  f"swing-plane azimuths about their line: chi2/dof = {chi2:.4g} over {dof} swings (1 + {band:.2g} at "
+                  f"most) for the noise {noise_rad:.3g} rad" + ("" if status == "passed" else
+                                                                 ": sigma from their scatter"), chi2, 1.0)

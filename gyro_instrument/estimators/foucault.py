@@ -54,6 +54,9 @@ class FoucaultEstimate:
     crlb_k_rad_s: float
     observation_s: float
     notes: list = field(default_factory=list)
+    noise_rad: float = math.nan
+    plane_chi2_per_dof: float = math.nan
+    plane_dof: int = 0
 
 
 def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None) -> FoucaultEstimate:
@@ -82,15 +85,17 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     n_win = int((t[-1] - t[0]) // period)
     if n_win < 3:
         raise EstimationError(f"record holds {n_win} swing periods; need at least 3 to fit a precession")
+    # σ (a local uncertainty) from the record's own noise; the bound from the sensor model's
+    noise_data = noise_from_differences(t, e, nn)
     if noise_rad is None:
-        sigma_noise = noise_from_differences(t, e, nn)
+        sigma_noise = noise_data
         notes.append(f"noise {sigma_noise:.3g} rad estimated from 6th differences of the samples (no sensor model)")
     else:
         sigma_noise = float(noise_rad)
     psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win)
     if len(psi) < 3:
         raise EstimationError("fewer than 3 complete swing periods with samples")
-    m, sig_m = _plane_rate(psi, tc)
+    m, sig_scatter = _plane_rate(psi, tc)
     ok = np.isfinite(H)
     Hm = float(np.average(np.asarray(H)[ok], weights=np.asarray(w)[ok])) if ok.any() else 0.0
     # σ of ⟨H⟩ from the noise: per sample the noise enters as 2 θ̇ × (noise across the swing) once
@@ -102,9 +107,23 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     step = float(np.median(np.diff(t)))
     v2m = max(float(np.mean(v2)) - 2.0 * sigma_noise ** 2 * float(_DERIV6 @ _DERIV6) / step ** 2, 0.0) \
         if v2.size else 0.0
-    H_se = 2.0 * sigma_noise * math.sqrt(v2m / max(v2.size, 1))
+    H_se = 2.0 * noise_data * math.sqrt(v2m / max(v2.size, 1))
+    H_bound = 2.0 * sigma_noise * math.sqrt(v2m / max(v2.size, 1))
     # ⟨sin²θ⟩ less the noise's share 2σ² (both components)
     r2m = max(float(np.average(r2, weights=w)) - 2.0 * sigma_noise ** 2, 0.0)
+    # the plane rate's σ from the noise the record shows (the window estimator is efficient: its
+    # scatter matches this bound over seeds), unless the windows' azimuths scatter more than that
+    # noise explains (χ²/dof of the line beyond 1 + 5 √(2/dof): the swing is disturbed or the
+    # model misses an effect) — then their scatter is the honest σ, and a note says so
+    span = float(t[-1] - t[0])
+    sig_noise_m = foucault_crlb_rad_s(noise_data, r2m, t.size, span)
+    dof = max(len(psi) - 2, 1)
+    chi2 = (sig_scatter / sig_noise_m) ** 2 if sig_noise_m > 0 else math.inf
+    sig_m = sig_noise_m
+    if not chi2 <= 1.0 + 5.0 * math.sqrt(2.0 / dof):
+        sig_m = sig_scatter
+        notes.append(f"swing-plane azimuths scatter {math.sqrt(chi2):.3g}x what the noise explains "
+                     f"(chi2/dof {chi2:.3g} over {dof}): sigma from their scatter")
     alpha = float(np.mean(amp))
     dk_dm = 1.0
     if correct_ellipse:
@@ -115,11 +134,11 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
         sig_k = math.hypot(dk_dm * sig_m, dk_dH * H_se)
     else:
         k, sig_k = m, sig_m
-    span = float(t[-1] - t[0])
     crlb = foucault_crlb_rad_s(sigma_noise, r2m, t.size, span, dk_dm)
     if correct_ellipse:
-        crlb = math.hypot(crlb, dk_dH * H_se)
-    return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes)
+        crlb = math.hypot(crlb, dk_dH * H_bound)
+    return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes,
+                            noise_data, chi2, dof)
 
 
 def foucault_crlb_rad_s(sigma_rad, mean_sin2, n_samples, span_s, dk_dm=1.0) -> float:

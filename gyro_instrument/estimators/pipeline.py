@@ -15,7 +15,7 @@ import numpy as np
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.adequacy import (check_before_fit, check_fit, check_period, detection_snr,
-                                                 signal_entry)
+                                                 plane_fit_entry, signal_entry)
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import (HEMISPHERE_UNDETERMINED, RateMeasurement, item9_cos_latitude,
                                                  solve_latitude)
@@ -351,9 +351,7 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
                 entry = check_period(name, inst, f.period_s)
                 if entry:
                     checks.append(entry)
-                checks.append({"instrument": name, "check": "fit", "status": "not_applicable", "value": None,
-                               "expected": None, "detail": "the Foucault estimator fits second moments per swing, "
-                                                           "not a residual model: no chi2 to form"})
+                checks.append(plane_fit_entry(name, f.plane_chi2_per_dof, f.plane_dof, f.noise_rad))
                 # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
                 m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s,
                                     crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
