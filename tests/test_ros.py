@@ -336,3 +336,18 @@ def test_bad_parameters_are_refused_and_the_node_stays_up(ctx):
                         parameter_overrides=[Parameter("overrides", value=["instruments.gyro_meridian.inertia_ratio=-1"])])
     assert bad.scene is None and bad.samples == 0 and not bad.publish_step()
     bad.destroy_node()
+
+
+def test_the_live_estimator_refuses_an_aliased_record_as_the_cli_does(tmp_path):
+    # Issue 22: one adequacy mechanism for every estimate. quet_paris sampled at 0.07 Hz holds
+    # 25.6 s x 0.07 = 1.79 samples per period of its horizontal gyroscope (< 2.5): the estimator node
+    # publishes no number, says the refusal on /diagnostics (recorded), and run_suite raises it (exit 2)
+    from gyro_instrument.estimators.adequacy import InadequateData
+    bag = str(tmp_path / "alias.mcap")
+    with pytest.raises(InadequateData) as exc:
+        run_suite("quet_paris", ["sample_rate_hz=0.07"], 300.0, bag)
+    assert exc.value.field == "gyro_horizontal.sampling"
+    diag = [data for topic, _, _, data in read_messages(bag) if topic == "/diagnostics"]
+    assert len(diag) == 1 and b"sampling check of gyro_horizontal" in bytes(diag[0])
+    with pytest.raises(InadequateData):        # and a replay of the bag says the same
+        replay_bag(bag)

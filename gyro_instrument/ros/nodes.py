@@ -635,6 +635,7 @@ class EstimatorNode(SceneNode):
         self.rejected = {}
         self.wrong_types = {}
         self.result = None
+        self.refusal = None     # the InadequateData of a refused estimate (estimators/adequacy.py)
         self.pubs = {}
         self.timers_ = []
         self.clock_sub = None
@@ -798,6 +799,7 @@ class EstimatorNode(SceneNode):
         try:
             self.result = self.estimate()
         except InadequateData as exc:  # the data fail an adequacy check: said on /diagnostics, no number
+            self.refusal = exc
             self.get_logger().error(str(exc))
             self.pubs["diagnostics"].publish(m.diagnostics(
                 self.stamp_ns(), "gyro_instrument/estimator", False, str(exc),

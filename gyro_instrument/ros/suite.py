@@ -465,11 +465,18 @@ def _finalize(est, rec, ex, timeout_s):
     base = rec.received() if rec else 0
     result = est.finalize()
     if rec:
-        want = base + (len([t for t in rec.counts if t not in rec.sample_topics]) if result is not None else 0)
+        # the estimate's messages, or the refusal's one /diagnostics status
+        want = base + (len([t for t in rec.counts if t not in rec.sample_topics]) if result is not None
+                       else int(est.refusal is not None))
         t_wait = time.monotonic() + timeout_s
         while rec.received() < want and time.monotonic() < t_wait:
             ex.spin_once(timeout_sec=0.001)
-        rec.close({"estimate_json": json.dumps(result, default=str) if result else ""}, name="gyro_instrument_estimate")
+        meta = {"estimate_json": json.dumps(result, default=str) if result else ""}
+        if est.refusal is not None:
+            meta["refused"] = str(est.refusal)
+        rec.close(meta, name="gyro_instrument_estimate")
+    if est.refusal is not None:     # the data failed an adequacy check: exit 2 with its one line
+        raise est.refusal
     return result
 
 
