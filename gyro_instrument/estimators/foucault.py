@@ -89,7 +89,8 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     noise_data = noise_from_differences(t, e, nn)
     if noise_rad is None:
         sigma_noise = noise_data
-        notes.append(f"noise {sigma_noise:.3g} rad estimated from 6th differences of the samples (no sensor model)")
+        notes.append(f"noise {sigma_noise:.3g} rad estimated from 6th divided differences of the samples (no sensor "
+                     "model)")
     else:
         sigma_noise = float(noise_rad)
     psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win)
@@ -102,11 +103,9 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     # the derivative's noise is summed by parts, var ⟨H⟩ = 4σ²⟨θ̇²⟩/N — also the Cramér–Rao bound
     # of the areal velocity (the minor axis b of a thin swing α cos ωt: σ_b² = 2σ²/N, H = α b ω).
     # (Window-to-window scatter overstates it: adjacent windows share the summed-by-parts edges.)
-    _, v2 = areal_velocity(t, e, nn, speed2=True)
-    v2 = v2[np.isfinite(v2)]
-    step = float(np.median(np.diff(t)))
-    v2m = max(float(np.mean(v2)) - 2.0 * sigma_noise ** 2 * float(_DERIV6 @ _DERIV6) / step ** 2, 0.0) \
-        if v2.size else 0.0
+    _, v2 = areal_segments(t, e, nn, 2.0 * math.pi / period, speed2=True)
+    # less the noise's share: each interval's |Δθ|² holds 4σ² of it
+    v2m = max(float(np.mean(v2 - 4.0 * noise_data ** 2 / np.diff(t) ** 2)), 0.0) if v2.size else 0.0
     H_se = 2.0 * noise_data * math.sqrt(v2m / max(v2.size, 1))
     H_bound = 2.0 * sigma_noise * math.sqrt(v2m / max(v2.size, 1))
     # ⟨sin²θ⟩ less the noise's share 2σ² (both components)
@@ -169,55 +168,71 @@ def foucault_crlb_small_swing_rad_s(sigma_rad, alpha_rad, omega_rad_s, n_samples
     return math.hypot(foucault_crlb_rad_s(sigma_rad, r2, n_samples, span_s, dk_dm), 0.375 * dk_dm * h_se)
 
 
-#: 6th-difference stencil: the binomial coefficients with alternating signs; white noise of σ gives
-#: a variance of σ² Σc² = 924 σ², a smooth swing of ω Δt a relative (ω Δt)⁶ (1e-5 at 40 samples a period).
-_DIFF6 = np.array([1.0, -6.0, 15.0, -20.0, 15.0, -6.0, 1.0])
+#: Samples in one divided-difference stencil of the noise estimate (a polynomial of degree 5 is
+#: annihilated: a smooth swing of ω Δt leaves a relative (ω Δt)⁶ of it, 1e-5 at 40 samples a period).
+_STENCIL = 7
+
+#: A stencil spanning more than this many median intervals (a gap in the record) is not used: the
+#: swing's 6th derivative over a long span would pass for noise.
+_MAX_STENCIL_STEPS = 12.0
 
 
 def noise_from_differences(t, e, nn) -> float:
-    """White-noise σ of the deflection components estimated without a model of the swing: the rms
-    of their 6th differences over runs of 7 uniformly spaced samples, / √924 (the swing and its
-    precession are smooth: their 6th difference is (ωΔt)⁶ of them). Both components pooled."""
-    d = _uniform_stencil(t, _DIFF6, centred=False)
-    vals = [np.convolve(x, _DIFF6[::-1], mode="valid")[d] for x in (e, nn)]
-    v = np.concatenate(vals)
-    return float(math.sqrt(np.mean(v * v) / float(_DIFF6 @ _DIFF6))) if v.size else 0.0
-
-
-def _uniform_stencil(t, stencil, centred=True):
-    """Mask over np.convolve(x, stencil, 'valid') outputs: True where the len(stencil) samples are
-    uniformly spaced (no dropout or gap inside)."""
-    L = len(stencil)
+    """White-noise σ of the deflection components estimated without a model of the swing, for any
+    sampling (dropouts, gaps, clock jitter): over every run of 7 consecutive samples the 6th divided
+    difference Σ w_j y_j, w_j = 1/Π_(k≠j)(τ_j − τ_k), annihilates any polynomial of degree 5 (the
+    swing and its precession are smooth), and white noise gives it a variance σ² Σ w_j²; so
+    σ² = mean((Σ w_j y_j)² / Σ w_j²). For uniform spacing this is the 6th difference / √924. Both
+    components pooled; runs spanning more than :data:`_MAX_STENCIL_STEPS` median intervals skipped."""
+    L = _STENCIL
     if t.size < L:
-        return np.zeros(0, bool)
-    dt = np.diff(t)
-    step = float(np.median(dt))
-    good = np.abs(dt - step) <= 1e-6 * step
-    c = np.convolve(good.astype(float), np.ones(L - 1), mode="valid")
-    return c >= L - 1 - 0.5
-
-
-#: 6th-order central first derivative (weights of x[i−3..i+3] / Δt): error (ωΔt)⁶/140 of a harmonic.
-_DERIV6 = np.array([-1.0 / 60.0, 3.0 / 20.0, -0.75, 0.0, 0.75, -3.0 / 20.0, 1.0 / 60.0])
-
-
-def areal_velocity(t, e, nn, speed2=False) -> "np.ndarray | tuple":
-    """sin²θ ψ̇ = θ_n θ̇_e − θ_e θ̇_n per sample (compass sense, the Earth frame's eq. (27) left side),
-    with 6th-order central differences (a polygon's shoelace sum is short by (ωΔt)²/6 of it: 4e-3
-    at 40 samples a period, which on a 30° swing is a 10σ bias); NaN where the 7 samples about a
-    sample are not uniformly spaced, and at the ends. With ``speed2`` also θ̇_e² + θ̇_n² per sample."""
-    out = np.full(t.size, np.nan)
-    v2 = np.full(t.size, np.nan)
-    if t.size < 7:
-        return (out, v2) if speed2 else out
+        return 0.0
     step = float(np.median(np.diff(t)))
-    ok = _uniform_stencil(t, _DERIV6)
-    de = np.convolve(e, _DERIV6[::-1], mode="valid") / step
-    dn = np.convolve(nn, _DERIV6[::-1], mode="valid") / step
-    h = nn[3:-3] * de - e[3:-3] * dn
-    out[3:-3] = np.where(ok, h, np.nan)
-    v2[3:-3] = np.where(ok, de * de + dn * dn, np.nan)
-    return (out, v2) if speed2 else out
+    idx = np.arange(t.size - L + 1)[:, None] + np.arange(L)
+    tau = (t[idx] - t[idx[:, L // 2]][:, None]) / step
+    keep = (tau[:, -1] - tau[:, 0]) <= _MAX_STENCIL_STEPS
+    tau = tau[keep]
+    diff = tau[:, :, None] - tau[:, None, :]
+    diff[:, np.arange(L), np.arange(L)] = 1.0
+    w = 1.0 / np.prod(diff, axis=2)
+    w2 = np.sum(w * w, axis=1)
+    vals = [np.sum(w * x[idx[keep]], axis=1) ** 2 / w2 for x in (e, nn)]
+    v = np.concatenate(vals)
+    return float(math.sqrt(np.mean(v))) if v.size else 0.0
+
+
+def areal_segments(t, e, nn, omega_rad_s, speed2=False) -> "np.ndarray | tuple":
+    """The area swept in each sampling interval per second, θ_n θ̇_e − θ_e θ̇_n averaged over it
+    (compass sense: sin²θ ψ̇, the Earth frame's eq. (27) left side), for any spacing.
+
+    The shoelace term θ_n,i θ_e,i+1 − θ_e,i θ_n,i+1 is the chord's area, short of the arc's by
+    D ≈ κ h³/6 (h = Δt, κ the curve's r' × r'': (ωh)²/6 of it on an ellipse, 4e-3 at 40 samples a
+    period — a 10σ bias on a 30° swing). Over two consecutive intervals h1, h2 the triangle of the
+    three samples is the difference of the two chords' and the long chord's deficits,
+    κ[(h1 + h2)³ − h1³ − h2³]/6, so each interval's deficit follows from the triangles it belongs to
+    (Richardson's step halving generalised to unequal steps; exact for any smooth curve to
+    O(h⁴), harmonics included). The noise still telescopes over consecutive samples: var ⟨H⟩ ≈
+    4σ²⟨θ̇²⟩/N. With ``speed2`` also |Δθ|²/Δt² / sinc²(ωΔt/2) per interval (the speed at its middle
+    for a swing of phase rate ω, noise not removed). Arrays of length N − 1."""
+    h = np.diff(t)
+    de, dn = np.diff(e), np.diff(nn)
+    chord = e[:-1] * nn[1:] - nn[:-1] * e[1:]                  # r_i × r_(i+1), r = (θ_e, θ_n)
+    tri = de[:-1] * dn[1:] - dn[:-1] * de[1:]                  # (r_(i+1) − r_i) × (r_(i+2) − r_(i+1))
+    h1, h2 = h[:-1], h[1:]
+    scale = tri / (3.0 * (h1 + h2))
+    corr = np.zeros_like(chord)
+    count = np.zeros_like(chord)
+    corr[:-1] += scale * h1 * h1 / h2                           # interval i as the triangle's first
+    corr[1:] += scale * h2 * h2 / h1                            # interval i + 1 as its second
+    count[:-1] += 1.0
+    count[1:] += 1.0
+    area = chord + corr / np.maximum(count, 1.0)
+    out = -area / h                                             # compass sense (clockwise from above)
+    if not speed2:
+        return out
+    half = np.sinc(0.5 * omega_rad_s * h / math.pi)
+    return out, (de * de + dn * dn) / (h * half) ** 2
+
 
 def mean_sin2_deflection(alpha_rad, beta_rad) -> float:
     """Time mean of sin²θ over the spherical pendulum's orbit with apsides α ≥ β (exact).
@@ -316,8 +331,11 @@ def _swing_windows(t, e, nn, period, n_win):
     centre time, the areal velocity H, the mean squared deflection r², the major and minor
     semi-axes of the swing ellipse (second moments) and the sample count (lists)."""
     psi, tc, H, r2, amp, minor, w = [], [], [], [], [], [], []
-    hv = areal_velocity(t, e, nn)
+    # the swept area as a function of time (each interval's at its constant mean rate), so that
+    # every window's H is the mean over exactly one period, whatever the sampling
+    swept = np.concatenate([[0.0], np.cumsum(areal_segments(t, e, nn, 2.0 * math.pi / period) * np.diff(t))])
     edges = t[0] + period * np.arange(n_win + 1)
+    swept_at = np.interp(edges, t, swept)
     idx = np.searchsorted(t, edges)
     for i in range(n_win):
         a, b = idx[i], idx[i + 1]
@@ -330,8 +348,7 @@ def _swing_windows(t, e, nn, period, n_win):
         lam = np.linalg.eigvalsh(np.array([[mee, men], [men, mnn]]))
         amp.append(math.sqrt(2 * max(lam[1], 0.0)))
         minor.append(math.sqrt(2 * max(lam[0], 0.0)))
-        hw = hv[a:b][np.isfinite(hv[a:b])]
-        H.append(float(np.mean(hw)) if hw.size else math.nan)
+        H.append(float((swept_at[i + 1] - swept_at[i]) / period))
         r2.append(mee + mnn)
         w.append(b - a)
     return psi, tc, H, r2, amp, minor, w
