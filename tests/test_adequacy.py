@@ -217,3 +217,58 @@ def test_estimate_records_refuses_for_every_path():
         estimate_records(scene, truth[1], measure(scene, truth))
     assert exc.value.field == "gyro_horizontal.sampling" and exc.value.check["status"] == "refused"
     assert AMPLITUDE_FACTOR < math.degrees(1.0)
+
+
+def _pendulum_table(tmp_path, scale=1.0, swap=False, rate_hz=None):
+    """A noisy Foucault record of foucault_pantheon (67 m, 2°, 20 Hz, 1e-4 rad) as x_east, y_north in
+    metres (times ``scale``), optionally with the columns swapped or decimated to ``rate_hz``."""
+    scene = load_scene("foucault_pantheon", ["duration_s=1200"])
+    truth = simulate_truth(scene)
+    rec = measure(scene, truth)["pendulum"]
+    l = build_instruments(scene)["pendulum"].pendulum_length_m()
+    x, y = rec["deflection_east"] * l * scale, rec["deflection_north"] * l * scale
+    data = np.column_stack([rec["t"], y, x] if swap else [rec["t"], x, y])
+    if rate_hz:
+        data = data[::int(round(20 / rate_hz))]
+    return write(tmp_path / "p.csv", ["time_s", "pendulum.x_east", "pendulum.y_north"], data)
+
+
+@pytest.mark.parametrize("scale,unit", [(100.0, "centimetres"), (1000.0, "millimetres")])
+def test_positions_in_another_length_unit_are_named_as_such(tmp_path, capsys, scale, unit):
+    # x_east/y_north are metres divided by length_m: 100x or 1000x the release is a length unit (no
+    # flag converts it), not degrees
+    code, out, err = run(capsys, "estimate", "--data", _pendulum_table(tmp_path, scale), "--scene", "foucault_pantheon")
+    assert code == 2 and f"look like {unit}, not metres" in err and "degrees" not in err
+
+
+def test_a_pendulum_needs_eight_samples_per_swing_period(tmp_path, capsys):
+    # its swing plane comes from second moments over each period: 16.42 s at 0.4 Hz is 6.6 samples
+    code, out, err = run(capsys, "estimate", "--data", _pendulum_table(tmp_path, rate_hz=0.4),
+                         "--scene", "foucault_pantheon")
+    assert code == 2 and "sampling check of pendulum" in err and "below 8" in err
+    # in a scene of several instruments the refusal says how to leave the failing one out
+    code, out, err = run(capsys, "estimate", "quet_paris", "--set", "sample_rate_hz=0.4", "--duration-s", "300")
+    assert code == 2 and "--set instruments.pendulum=null" in err
+
+
+def test_swapped_east_and_north_are_flagged_against_the_scene(tmp_path, capsys):
+    # swapping x and y mirrors the swing: the plane turns the other way, the measured hemisphere
+    # becomes the south's at Paris — flagged, not hidden behind the large Δχ² of the sign
+    import json
+    code, out, err = run(capsys, "estimate", "--data", _pendulum_table(tmp_path, swap=True),
+                         "--scene", "foucault_pantheon", "--json")
+    r = json.loads(out)
+    flag = [c for c in r["checks"] if c["check"] == "hemisphere"]
+    assert code == 0 and r["hemisphere"] == "south" and flag and flag[0]["status"] == "flagged"
+    code, out, err = run(capsys, "estimate", "--data", _pendulum_table(tmp_path), "--scene", "foucault_pantheon",
+                         "--json")
+    assert [c["status"] for c in json.loads(out)["checks"] if c["check"] == "hemisphere"] == ["passed"]
+
+
+def test_earth_rate_estimate_also_holds_for_the_foucault_method(capsys):
+    import json
+    code, out, err = run(capsys, "estimate", "foucault_pantheon", "--duration-s", "1200", "--json",
+                         "--set", "estimator.earth_rate=estimate")
+    r = json.loads(out)
+    assert r["latitude_deg"] is None and r["methods"]["foucault"]["latitude_deg"] is None
+    assert "estimator.earth_rate: estimate" in r["methods"]["foucault"]["reason"]

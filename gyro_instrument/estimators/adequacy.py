@@ -18,7 +18,8 @@ The checks, per instrument whose class predicts its swing (:meth:`Instrument.exp
 ``sampling``
     Samples per predicted period, P / Δt (Δt the median interval): below
     :data:`MIN_SAMPLES_PER_PERIOD` the swing aliases and a fit would find the alias, so the
-    estimate is refused (never fitted). First the time unit is tried: when the record's own
+    estimate is refused (never fitted); an instrument whose observation needs more says so
+    (``ExpectedSwing.min_samples_per_period``: a pendulum's 8 per swing period). First the time unit is tried: when the record's own
     dominant period is a unit factor (10³, 10⁶, 10⁹, 1/60) times P within a factor 2 and is
     itself sampled well, the refusal says "time looks like milliseconds" instead.
 ``period``
@@ -84,8 +85,15 @@ class InadequateData(SceneError):
         self.field = f"{entry['instrument']}.{entry['check']}"
         self.value = entry.get("value")
         self.valid = entry["detail"]
-        ValueError.__init__(self, f"estimate refused by the {entry['check']} check of {entry['instrument']}: "
-                                  f"{entry['detail']}")
+        ValueError.__init__(self, self._text())
+
+    def _text(self):
+        return f"estimate refused by the {self.check['check']} check of {self.check['instrument']}: {self.valid}"
+
+    def add_hint(self, hint) -> None:
+        """Append ``hint`` (what else the user can do) to the one-line message."""
+        self.valid = f"{self.valid}; {hint}"
+        self.args = (self._text(),)
 
 
 def _entry(name, check, status, detail, value=None, expected=None) -> dict:
@@ -161,15 +169,16 @@ def check_before_fit(name, inst, rec) -> list:
         return out
     dt = float(np.median(np.diff(t)))
     spp = expected.period_s / dt
-    if spp < MIN_SAMPLES_PER_PERIOD:
-        _refuse_undersampled(name, inst, rec, t, dt, spp, expected)
+    need = max(MIN_SAMPLES_PER_PERIOD, expected.min_samples_per_period)
+    if spp < need:
+        _refuse_undersampled(name, inst, rec, t, dt, spp, expected, need)
     out.append(_entry(name, "sampling", "passed",
                       f"{spp:.4g} samples per predicted period of {expected.period_s:.6g} s (at least "
-                      f"{MIN_SAMPLES_PER_PERIOD:g})", spp, MIN_SAMPLES_PER_PERIOD))
+                      f"{need:g})", spp, need))
     return out
 
 
-def _refuse_undersampled(name, inst, rec, t, dt, spp, expected):
+def _refuse_undersampled(name, inst, rec, t, dt, spp, expected, need):
     """Raise for a record with fewer than :data:`MIN_SAMPLES_PER_PERIOD` samples per predicted
     period: as a time unit when the record's own period says so, else as an alias."""
     from gyro_instrument.estimators.period import EstimationError, fft_guess
@@ -187,8 +196,7 @@ def _refuse_undersampled(name, inst, rec, t, dt, spp, expected):
     raise InadequateData(_entry(
         name, "sampling", "refused",
         f"{spp:.3g} samples per predicted period of {expected.period_s:.6g} s (one every {dt:.6g} s); below "
-        f"{MIN_SAMPLES_PER_PERIOD:g} the swing aliases and a fit would find the alias: sample at least "
-        f"{MIN_SAMPLES_PER_PERIOD / expected.period_s:.3g} Hz", spp, MIN_SAMPLES_PER_PERIOD))
+        f"{need:g} {expected.sampling_reason}: sample at least {need / expected.period_s:.3g} Hz", spp, need))
 
 
 def check_period(name, inst, period_s) -> dict | None:
@@ -236,7 +244,8 @@ def check_fit(name, residual_rms, dof, sensor) -> dict:
             name, "fit", "refused",
             f"chi2/dof = {chi2:.4g}: the residual rms {residual_rms:.4g} rad is {math.sqrt(chi2):.3g}x the sensor "
             f"model's {math.sqrt(var):.4g} rad, so the model does not describe this record (another instrument, "
-            f"a disturbance, or a sensor noisier than sensor.noise_rad says); estimate withheld", chi2, 1.0))
+            f"a disturbance, or a sensor noisier than the scene says: if so, set its noise, --set "
+            f"sensor.noise_rad={residual_rms:.2g}); estimate withheld", chi2, 1.0))
     if abs(chi2 - 1.0) > band:
         how = "above" if chi2 > 1.0 else "below"
         return _entry(name, "fit", "flagged",
@@ -252,11 +261,28 @@ def plane_fit_entry(name, chi2, dof, noise_rad) -> dict:
     scatter the record's own noise explains (estimators/foucault.py); flagged beyond 1 + 5 √(2/dof)
     (σ is then taken from the scatter, never withheld: the line is still the best rate)."""
     band = 5.0 * math.sqrt(2.0 / max(dof, 1))
-    if not math.isfinite(chi2):
-        return _entry(name, "fit", "flagged", f"the record shows no noise ({noise_rad:.3g} rad): the swing-plane "
-                                              "azimuths' scatter sets sigma", None, 1.0)
+    if not math.isfinite(chi2) or (noise_rad < 1e-9 and chi2 > 1.0 + band):
+        return _entry(name, "fit", "flagged", f"the record shows almost no noise ({noise_rad:.3g} rad: a noise-free "
+                                              "simulation?), so the swing-plane azimuths' own scatter sets sigma",
+                      None if not math.isfinite(chi2) else chi2, 1.0)
     status = "passed" if chi2 <= 1.0 + band else "flagged"
     return _entry(name, "fit", status,
                   f"swing-plane azimuths about their line: chi2/dof = {chi2:.4g} over {dof} swings (1 + {band:.2g} at "
                   f"most) for the noise {noise_rad:.3g} rad" + ("" if status == "passed" else
                                                                  ": sigma from their scatter"), chi2, 1.0)
+
+
+def hemisphere_entry(hemisphere, basis, scene_latitude_deg) -> dict | None:
+    """The ``hemisphere`` check: a hemisphere measured by the data (a pendulum's sign of k) against
+    the scene's latitude; a contradiction is ``flagged`` (east and north swapped, a mirrored axis,
+    or the wrong scene). None when the data do not measure the hemisphere or the scene is at the equator."""
+    if hemisphere not in ("north", "south") or not basis.startswith("measured") or scene_latitude_deg == 0.0:
+        return None
+    scene_side = "north" if scene_latitude_deg > 0 else "south"
+    if hemisphere == scene_side:
+        return _entry("combined", "hemisphere", "passed", f"measured {hemisphere}, as the scene's latitude "
+                                                          f"{scene_latitude_deg:g} deg", hemisphere, scene_side)
+    return _entry("combined", "hemisphere", "flagged",
+                  f"the data measure the {hemisphere}ern hemisphere but the scene's latitude is {scene_latitude_deg:g} "
+                  "deg: east and north swapped, an axis mirrored (a pendulum's sense of turning reversed), or the "
+                  "wrong scene", hemisphere, scene_side)

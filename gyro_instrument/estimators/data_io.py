@@ -218,6 +218,8 @@ def _arrow_time_seconds(pa, column, name, time_unit, path, field):
         ints = ints - ref
         first = pa.scalar(ref, typ)
         note = f"{name} stored as {typ}: seconds from the earliest sample ({first})"
+    elif pa.types.is_duration(typ):
+        note = f"{name} stored as {typ}: converted to seconds (exactly, from whole {typ.unit})"
     secs = ints / per
     secs[~valid] = np.nan
     return secs, note
@@ -685,6 +687,29 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
     return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
 
 
+#: Length units a logger may have written under ``x_east``/``y_north`` (metres): factor, name.
+LENGTH_UNITS = ((100.0, "centimetres"), (1000.0, "millimetres"))
+
+
+def _name_a_length_unit(exc, insts, cols) -> None:
+    """A pendulum's amplitude refusal read from positions (``x_east``/``y_north``, metres divided by
+    the scene's length): a ratio near 100 or 1000 is a length unit, not degrees — say that instead
+    (there is no flag for it: the columns must be converted to metres)."""
+    from gyro_instrument.estimators.adequacy import AMPLITUDE_FACTOR
+    name, check = exc.check["instrument"], exc.check["check"]
+    inst = insts.get(name)
+    if check != "amplitude" or inst is None or not inst.IS_PENDULUM or f"{name}.x_east" not in cols:
+        return
+    ratio = exc.check["value"] / exc.check["expected"] if exc.check.get("expected") else math.inf
+    unit = next((u for f, u in LENGTH_UNITS if abs(math.log(ratio / f)) < math.log(2.0)), None)
+    cause = (f"{name}.x_east/y_north look like {unit}, not metres: convert them to metres" if unit else
+             f"{name}.x_east/y_north are metres divided by the scene's length_m ({inst.pendulum_length_m():g} m): "
+             "check the length and the columns' unit")
+    exc.valid = (f"deflection amplitude {exc.check['value']:.6g} rad (positions / length_m) is {ratio:.3g}x the "
+                 f"scene's release {exc.check['expected']:.6g} rad (at most {AMPLITUDE_FACTOR:g}x): {cause}")
+    exc.args = (exc._text(),)
+
+
 def estimate_data(scene, path, field="--data", options=None) -> dict:
     """The ``estimate`` JSON object from a CSV or Parquet table of measured channels, read as
     ``options`` say (:class:`TableOptions`), with ``data`` (the file), ``observation_s`` (the
@@ -695,13 +720,18 @@ def estimate_data(scene, path, field="--data", options=None) -> dict:
     SceneError
         See :func:`load_table` and :func:`records_from_table`.
     """
+    from gyro_instrument.estimators.adequacy import InadequateData
     from gyro_instrument.estimators.pipeline import estimate_records
     from gyro_instrument.scenes import build_instruments
     insts = build_instruments(scene)
     cols, read_notes = load_table(path, field, options)
     records, notes, span = records_from_table(insts, cols, path, field)
     notes = read_notes + notes
-    result = estimate_records(scene, {n: insts[n] for n in records}, records)
+    try:
+        result = estimate_records(scene, {n: insts[n] for n in records}, records)
+    except InadequateData as exc:
+        _name_a_length_unit(exc, insts, cols)
+        raise
     result["observation_s"] = span
     result["data"] = os.path.basename(path)
     if notes:

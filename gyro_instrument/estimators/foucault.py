@@ -35,7 +35,7 @@ from scipy.special import ellipe, ellipk
 
 from gyro_instrument.estimators.adequacy import detection_snr
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, fit_oscillation
-from gyro_instrument.instruments.pendulum import (apsidal_angle, areal_constant_over_omega0,
+from gyro_instrument.instruments.pendulum import (SWING_WINDOW_MIN_SAMPLES, apsidal_angle, areal_constant_over_omega0,
                                                   min_deflection_for_areal_constant)
 
 
@@ -339,7 +339,7 @@ def _swing_windows(t, e, nn, period, n_win):
     idx = np.searchsorted(t, edges)
     for i in range(n_win):
         a, b = idx[i], idx[i + 1]
-        if b - a < 8:
+        if b - a < SWING_WINDOW_MIN_SAMPLES:
             continue
         ee, en = e[a:b], nn[a:b]
         mee, mnn, men = np.mean(ee * ee), np.mean(en * en), np.mean(ee * en)

@@ -14,8 +14,8 @@ import numpy as np
 
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.estimators.adequacy import (check_before_fit, check_fit, check_period, detection_snr,
-                                                 plane_fit_entry, signal_entry)
+from gyro_instrument.estimators.adequacy import (InadequateData, check_before_fit, check_fit, check_period,
+                                                 detection_snr, hemisphere_entry, plane_fit_entry, signal_entry)
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import (HEMISPHERE_UNDETERMINED, RateMeasurement, item9_cos_latitude,
                                                  solve_latitude)
@@ -309,73 +309,88 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     """The ``estimate`` JSON object (see module docstring) from measured records.
 
     ``corrections`` — the subset of :data:`CORRECTIONS` to apply (all by default); a study of
-    what a correction is worth passes fewer."""
+    what a correction is worth passes fewer.
+
+    Raises
+    ------
+    gyro_instrument.estimators.adequacy.InadequateData
+        The data fail a check no estimate can survive (estimators/adequacy.py): one line naming
+        the check, and, in a scene of several instruments, how to leave the failing one out.
+    """
     unknown = set(corrections) - CORRECTIONS
     if unknown:
         raise ValueError(f"unknown corrections {sorted(unknown)}; known: {sorted(CORRECTIONS)}")
     site = scene.site
-    n_true = site.earth_rate_rad_s
     result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
-              "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": n_true},
+              "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": site.earth_rate_rad_s},
               "instruments": {}, "methods": {}}
-    meas = []
-    gyros = {}
-    pend = None
-    checks = []
+    meas, gyros, pend, checks = [], {}, None, []
     sensor = SensorModel.from_scene(scene)
     for name, inst in insts.items():
-        rec = records[name]
-        if ("angle" in rec and inst.directing_model() is not None) or "deflection_east" in rec:
-            checks += check_before_fit(name, inst, rec)
-        if "angle" in rec and inst.directing_model() is not None:
-            est = _gyro_estimate(inst, rec, corrections, checks, sensor)
-            m = est.pop("_measurement", None)
-            if m is not None:
-                meas.append(m)
-                gyros[name] = (inst, est, m)
-            result["instruments"][name] = est
-        elif "deflection_east" in rec:
-            try:
-                f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"],
-                                      correct_ellipse="ellipse_precession" in corrections,
-                                      noise_rad=SensorModel.from_scene(scene).effective_sigma_rad())
-                est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
-                       "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
-                       "measured_plane_rate_rad_s": f.measured_rate_rad_s,
-                       "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
-                       "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
-                       "notes": f.notes}
-                checks.append({"instrument": name, "check": "signal", "status": "passed", "value": None,
-                               "expected": DETECTION_SNR, "detail": f"swing detected (A^2 N / (4 sigma^2) >= "
-                                                                   f"{DETECTION_SNR:g}; estimators/foucault.py)"})
-                entry = check_period(name, inst, f.period_s)
-                if entry:
-                    checks.append(entry)
-                checks.append(plane_fit_entry(name, f.plane_chi2_per_dof, f.plane_dof, f.noise_rad))
-                # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
-                m = RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s,
-                                    crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
-                meas.append(m)
+        try:
+            est, m = _instrument_estimate(name, inst, records[name], corrections, checks, sensor)
+        except InadequateData as exc:
+            if len(insts) > 1:
+                exc.add_hint(f"or leave {name} out: --set instruments.{name}=null")
+            raise
+        result["instruments"][name] = est
+        if m is not None:
+            meas.append(m)
+            if m.kind == "pendulum":
                 pend = (inst, est, m)
-            except EstimationError as exc:
-                est = {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}
-                if "no swing" in str(exc):
-                    checks.append({"instrument": name, "check": "signal", "status": "no_signal", "value": None,
-                                   "expected": DETECTION_SNR, "detail": str(exc)})
-            result["instruments"][name] = est
-        else:
-            result["instruments"][name] = {"type": inst.type_name, "reason": "not used by the estimator "
-                                           "(no Earth-rate measurement from this instrument)"}
-    # combined
+            else:
+                gyros[name] = (inst, est, m)
     if meas:
         result.update(_combined(meas, scene.estimator.get("hemisphere"), *known_earth_rate(scene, meas),
                                 earth_rate=scene.estimator.get("earth_rate")))
     else:
         result.update(_null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                      "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
-    _classic_methods(result, gyros, pend)
-    result["checks"] = checks
+    _classic_methods(result, gyros, pend, scene.estimator.get("earth_rate"))
+    entry = hemisphere_entry(result.get("hemisphere"), result.get("hemisphere_basis", ""), site.latitude_deg)
+    result["checks"] = checks + ([entry] if entry else [])
     return result
+
+
+def _instrument_estimate(name, inst, rec, corrections, checks, sensor):
+    """(the instrument's entry of the estimate, its RateMeasurement or None); appends its checks."""
+    if ("angle" in rec and inst.directing_model() is not None) or "deflection_east" in rec:
+        checks += check_before_fit(name, inst, rec)
+    if "angle" in rec and inst.directing_model() is not None:
+        est = _gyro_estimate(inst, rec, corrections, checks, sensor)
+        return est, est.pop("_measurement", None)
+    if "deflection_east" in rec:
+        return _pendulum_estimate(name, inst, rec, corrections, checks, sensor)
+    return {"type": inst.type_name, "reason": "not used by the estimator (no Earth-rate measurement from this "
+                                              "instrument)"}, None
+
+
+def _pendulum_estimate(name, inst, rec, corrections, checks, sensor):
+    """The Foucault rate of one pendulum record (estimators/foucault.py) and its checks."""
+    try:
+        f = estimate_foucault(rec["t"], rec["deflection_east"], rec["deflection_north"],
+                              correct_ellipse="ellipse_precession" in corrections,
+                              noise_rad=sensor.effective_sigma_rad())
+    except EstimationError as exc:
+        if "no swing" in str(exc):
+            checks.append({"instrument": name, "check": "signal", "status": "no_signal", "value": None,
+                           "expected": DETECTION_SNR, "detail": str(exc)})
+        return {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}, None
+    est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
+           "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
+           "measured_plane_rate_rad_s": f.measured_rate_rad_s,
+           "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
+           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
+           "notes": f.notes}
+    checks.append({"instrument": name, "check": "signal", "status": "passed", "value": None,
+                   "expected": DETECTION_SNR, "detail": f"swing detected (A^2 N / (4 sigma^2) >= "
+                                                       f"{DETECTION_SNR:g}; estimators/foucault.py)"})
+    entry = check_period(name, inst, f.period_s)
+    if entry:
+        checks.append(entry)
+    checks.append(plane_fit_entry(name, f.plane_chi2_per_dof, f.plane_dof, f.noise_rad))
+    # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
+    return est, RateMeasurement(name, "pendulum", f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
 
 
 def known_earth_rate(scene, meas) -> tuple:
@@ -437,8 +452,9 @@ def _null_combined(reason):
             "hemisphere": HEMISPHERE_UNDETERMINED, "method": None, "reason": reason}
 
 
-def _classic_methods(result, gyros, pend):
-    """Quet's item 9 and eq. (10), and the pendulum-only results, side by side."""
+def _classic_methods(result, gyros, pend, earth_rate=None):
+    """Quet's item 9 and eq. (10), and the pendulum-only results, side by side (the pendulum's
+    asin(k/n) with the nominal n only where ``earth_rate`` (``estimator.earth_rate``) allows a known n)."""
     methods = result["methods"]
     hor = [g for g in gyros.values() if g[0].directing_model().label == "horizontal"]
     mer = [g for g in gyros.values() if g[0].directing_model().label == "meridian"]
@@ -455,7 +471,7 @@ def _classic_methods(result, gyros, pend):
                                  "formula": "n = pi^2 / (mu rho0 T_m^2) (eq. 10; item 8's printed pi/(mu rho0 T^2) is a misprint)",
                                  "gain": model.gain}
     if pend is not None and pend[1].get("foucault_rate_rad_s") is not None:
-        methods["foucault"] = _foucault_method(result, pend)
+        methods["foucault"] = _foucault_method(result, pend, earth_rate)
 
 
 def _item9(result, hor, mer, pend):
@@ -502,18 +518,24 @@ def _item9(result, hor, mer, pend):
     methods["item9"] = entry
 
 
-def _foucault_method(result, pend):
+def _foucault_method(result, pend, earth_rate=None):
     """The pendulum alone: latitude from k / n (n from eq. (10) when a meridian gyroscope gave it,
     else the nominal sidereal rate) and n = k / sin(latitude from item 9)."""
     methods = result["methods"]
     k, sk = pend[1]["foucault_rate_rad_s"], pend[1]["foucault_rate_sigma_rad_s"]
     entry = {"foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk}
     n_ref = methods.get("item8_eq10", {}).get("earth_rate_rad_s")
-    if n_ref is None:
+    if n_ref is None and earth_rate == "estimate":
+        entry.update({"latitude_deg": None, "reason": "asin(k / n) needs n: no meridian gyroscope measures it, and "
+                                                      "estimator.earth_rate: estimate forbids taking it as known"})
+        n_ref = math.nan
+    elif n_ref is None:
         n_ref = result["truth"]["earth_rate_rad_s"]
         entry["note"] = "latitude from k / n with the nominal sidereal n (no meridian gyroscope)"
     x = k / n_ref
-    if abs(x) <= 1.0 + 3 * sk / n_ref:
+    if not math.isfinite(x):
+        pass
+    elif abs(x) <= 1.0 + 3 * sk / n_ref:
         xc = max(min(x, 1.0), -1.0)
         lo = math.degrees(math.asin(max(xc - sk / n_ref, -1.0)))
         hi = math.degrees(math.asin(min(xc + sk / n_ref, 1.0)))

@@ -121,11 +121,19 @@ class ExpectedSwing:
         Amplitude of the measured angle at release, rad (the swing angle; a pendulum's deflection).
     source : str
         Which parameters set them, for messages ("mu, spin_rate_rad_s, latitude").
+    min_samples_per_period : float
+        Fewest samples per period the instrument's observation can use: 2.5 for a sine fit (the
+        Nyquist limit 2, with room for the period's uncertainty); more where the estimator needs
+        them (a pendulum's second moments per swing period).
+    sampling_reason : str
+        Why, for the refusal.
     """
 
     period_s: float
     amplitude_rad: float
     source: str
+    min_samples_per_period: float = 2.5
+    sampling_reason: str = "below it the swing aliases and a fit would find the alias"
 
 
 @dataclass

@@ -58,6 +58,16 @@ PENDULUM_MEASURED = ("deflection_east", "deflection_north")
 PENDULUM_JOINTS = PENDULUM_MEASURED + ("deflection", "azimuth")
 
 
+#: Fewest samples in one swing period for the Foucault estimator's second moments of the deflections
+#: over that period (estimators/foucault.py): fewer leave windows it cannot use.
+SWING_WINDOW_MIN_SAMPLES = 8
+
+#: What a pendulum's observation needs of the sampling (:class:`ExpectedSwing`'s last two fields).
+WINDOW_SAMPLING = (float(SWING_WINDOW_MIN_SAMPLES),
+                   "the swing plane is measured from second moments of the deflections over each swing "
+                   "period, which needs that many samples in it")
+
+
 def quarter_period_s(length_m, gravity_m_s2, alpha_rad, beta_rad=0.0) -> float:
     """Exact time from maximum deflection α to minimum deflection β of a spherical pendulum.
 
@@ -429,7 +439,7 @@ class SphericalPendulum(Instrument):
         :func:`quarter_period_s`) and the release deflection θ0 (the Earth's k changes neither
         by more than (k/ω0)², below 1e-8 for any pendulum)."""
         return ExpectedSwing(4.0 * quarter_period_s(self.l, self.g, self.theta0, 0.0), abs(self.theta0),
-                             "length_m, initial_deflection_deg and the site's gravity")
+                             "length_m, initial_deflection_deg and the site's gravity", *WINDOW_SAMPLING)
 
     def initial_state(self) -> tuple:
         """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
@@ -856,7 +866,8 @@ class CompoundPendulum(Instrument):
         """Four quarter periods of the simple pendulum of the equivalent length λ (sec. 3 §VI eq. 57)
         and the release deflection θ0."""
         return ExpectedSwing(4.0 * quarter_period_s(self.equivalent_length_m, self.site.gravity_m_s2, self.theta0, 0.0),
-                             abs(self.theta0), "the body's inertia, mass, centre of mass and initial deflection")
+                             abs(self.theta0), "the body's inertia, mass, centre of mass and initial deflection",
+                             *WINDOW_SAMPLING)
 
     def predictions(self) -> dict:
         """Sec. 3 §VI: equivalent length λ = A/(M l) (eq. 57), k = n sin γ (0 without
