@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
 EXIT_INTERRUPTED = 130
+EXIT_CLOSED_PIPE = 141
 
 
 def add_scene_arguments(parser, positional=True) -> None:
@@ -320,7 +321,7 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     by block, every k-th sample (:func:`output_step`), after checking that it fits on the disk
     (:func:`check_disk`). Returns (rows written, columns, nfev, integration wall s)."""
     from gyro_instrument.core.memory import sample_count
-    from gyro_instrument.estimators.data_io import TableWriter
+    from gyro_instrument.estimators.data_io import TableWriter, scene_yaml_text, table_kind, table_metadata
     from gyro_instrument.scenes import build_instruments
     k = output_step(scene, output_rate_hz)
     names = [f"{n}.{c.name}" for n, i in build_instruments(scene).items() for c in i.COLUMNS]
@@ -328,7 +329,9 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     check_disk(out, (n - 1) // k + 1, len(names) + 1)
     first = 0                                  # index of the block's first sample in the run
     nfev = wall = 0.0
-    with TableWriter(out, names) as writer:
+    text = scene_yaml_text(scene)
+    meta = table_metadata(text, scene.name, scene.seed) if table_kind(out) == "parquet" else None
+    with TableWriter(out, names, metadata=meta) as writer:
         with terminal_progress("  simulating", enabled=progress is not None):
             for t, columns, sims in stream_scene(scene, progress=progress):
                 keep = slice((-first) % k, None, k)
@@ -336,7 +339,21 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
                 first += t.size
                 nfev = sum(s.trajectory.nfev for s in sims.values())
                 wall = sum(s.trajectory.wall_time_s for s in sims.values())
+    if meta is None:
+        write_scene_sidecar(out, text)
     return writer.rows, len(names) + 1, int(nfev), wall
+
+
+def write_scene_sidecar(table, scene_yaml) -> str:
+    """Write ``<name>.scene.yaml`` beside the CSV ``table`` (atomically: an interrupted write leaves
+    no partial file); return its path."""
+    from gyro_instrument.estimators.data_io import scene_sidecar_path
+    path = scene_sidecar_path(table)
+    with replaced_atomically(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(f"# the scene gyro-instrument simulate ran for {os.path.basename(table)} (seed and overrides "
+                 f"applied)\n")
+        fh.write(scene_yaml)
+    return path
 
 
 @contextmanager
@@ -579,7 +596,9 @@ def _add_scene_commands(sub):
                         "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV (full precision); "
                         "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
                         "leaves no partial file); refused before the run when it would not fit on the disk; "
-                        "an existing file is refused unless --overwrite; never the scene file")
+                        "an existing file is refused unless --overwrite; never the scene file. The scene (YAML, seed, "
+                        "units, package version) goes into Parquet's key-value metadata (gyro_instrument.scene_yaml, "
+                        "...) or, for a CSV, into <name>.scene.yaml beside it (same overwrite rule)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--output-rate-hz", type=float, default=None, metavar="HZ",
                    help="write every k-th sample, k = sample_rate_hz / HZ (a whole number; HZ <= sample_rate_hz): "
@@ -593,7 +612,8 @@ def _add_scene_commands(sub):
                    help="estimate from this table of measured channels instead of simulating: time_s and "
                         "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
                         "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
-                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
+                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values "
+                        "(without --scene: the scene the table carries, written by simulate, noted on stderr). "
                         "Missing values, NaN, gaps, irregular and out-of-order times are accepted and noted; a "
                         "gyroscope without spin_rate takes the scene's constant spin (noted). CSV: UTF-8 (a "
                         "byte-order mark is read), separator sniffed from the header (',' or ';' with decimal "
@@ -716,7 +736,8 @@ def main(argv=None) -> int:
 def guarded(body, process=False) -> int:
     """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
 
-    SceneError -> 2, IntegrationError -> 3, KeyboardInterrupt (wherever it lands: imports,
+    SceneError -> 2, IntegrationError -> 3, a closed stdout pipe -> 141 quietly (:func:`closed_pipe`),
+    KeyboardInterrupt (wherever it lands: imports,
     integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
     exception is a bug and keeps its traceback. ``process``: this is the process's entry point
     (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
@@ -731,11 +752,25 @@ def guarded(body, process=False) -> int:
         except IntegrationError as exc:
             print(f"gyro-instrument: integration failed: {one_line(exc)}", file=sys.stderr)
             return EXIT_INTEGRATION_FAILED
+        except BrokenPipeError:
+            return closed_pipe()
     except KeyboardInterrupt:
         return interrupted(process)
     finally:
         if process:
             _ignore_sigint()
+
+
+def closed_pipe() -> int:
+    """The reader of stdout went away (``describe SCENE | head -2``): stop quietly with 141 (128 +
+    SIGPIPE, what a shell reports for a command its pipe closed), stdout pointed at /dev/null so
+    that Python's final flush cannot print a BrokenPipeError either."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):   # a stdout without a file descriptor (a test's)
+        pass
+    return EXIT_CLOSED_PIPE
 
 
 def one_line(exc) -> str:
@@ -791,7 +826,11 @@ def describe_command(args) -> int:
 
 def simulate_command(args) -> int:
     """``gyro-instrument simulate``: every instrument channel to CSV or Parquet (``--out``)."""
+    from gyro_instrument.estimators.data_io import scene_sidecar_path, table_kind
     check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    if table_kind(args.out) == "csv":        # its scene beside it, under the same rule
+        side = scene_sidecar_path(args.out)
+        check_output(side, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{side}.partial",))
     scene = scene_from_args(args)
     print_scene_notes(scene)
     progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
@@ -806,9 +845,12 @@ def estimate_command(args) -> int:
     """``gyro-instrument estimate``: simulate through the sensors (or read ``--data``) and estimate."""
     from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import scene_notes
-    if scene_arg(args) is None:
-        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
-    scene = scene_from_args(args)
+    scene = data_scene(args) if scene_arg(args) is None and args.data else None
+    if scene is None and scene_arg(args) is None:
+        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'"
+                                        + (f" ({args.data} carries none: no Parquet metadata 'gyro_instrument."
+                                           f"scene_yaml', no .scene.yaml beside it)" if args.data else ""))
+    scene = scene or scene_from_args(args)
     table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
                    "--angle-unit": (args.angle_unit, "rad"), "--column": (args.columns, []),
                    "--separator": (args.separator, None)}
@@ -831,6 +873,18 @@ def estimate_command(args) -> int:
     else:
         print_estimate(result)
     return 0
+
+
+def data_scene(args) -> "Scene | None":
+    """The scene ``estimate --data FILE`` takes when no scene is given: the one the table carries
+    (written by ``simulate``), with ``--set`` applied and a note on stderr; None when it carries none."""
+    from gyro_instrument.estimators.data_io import scene_of_table
+    found = scene_of_table(args.data, args.overrides)
+    if found is None:
+        return None
+    scene, where = found
+    print(f"gyro-instrument: note: no --scene given: using the scene {scene.name!r} from {where}", file=sys.stderr)
+    return scene
 
 
 def bench_command(args) -> int:
