@@ -177,10 +177,52 @@ def describe(scene) -> dict:
     return to_jsonable(out)
 
 
+#: Printed text is wrapped at this width (continuation lines indented under their first).
+TEXT_WIDTH = 100
+
+
+def wrapped_writer(stream) -> tuple:
+    """(write, flush): ``write`` gathers text; ``flush`` writes it to ``stream`` with every line
+    longer than :data:`TEXT_WIDTH` wrapped at spaces, continuations indented 4 more than the line."""
+    import textwrap
+    parts = []
+
+    def flush():
+        for line in "".join(parts).splitlines():
+            lead = line[:len(line) - len(line.lstrip())]
+            stream.write(textwrap.fill(line, TEXT_WIDTH, subsequent_indent=lead + "    ", break_long_words=False,
+                                       break_on_hyphens=False) + "\n" if len(line) > TEXT_WIDTH else line + "\n")
+    return parts.append, flush
+
+
+def _hemisphere(lat) -> str:
+    return f"{abs(lat):.4f}° {'N' if lat > 0 else 'S'}" if lat else "0° (equator)"
+
+
+def description_headline(d) -> list:
+    """What a person asks first, as lines: the latitude and, per pendulum, the swing plane's turn in
+    °/h (the exact finite-amplitude rate when it has one) and a full turn in hours."""
+    lines = [f"latitude {_hemisphere(d['site']['latitude_deg'])}"]
+    for name, inst in d["instruments"].items():
+        p = inst["predictions"]
+        rate = p.get("apsidal_rate_from_rest_rad_s", p.get("foucault_rate_rad_s"))
+        if rate is None or "foucault_rate_rad_s" not in p:
+            continue
+        turn = f"a full turn in {2 * math.pi / abs(rate) / 3600.0:.1f} h" if rate else "it does not turn"
+        sense = "clockwise" if rate > 0 else "counter-clockwise"
+        lines.append(f"{name}: the swing plane turns {math.degrees(rate) * 3600.0:.3f} °/h {sense} seen from above, "
+                     f"{turn}" + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p else ""))
+    return lines
+
+
 def print_description(d, stream=None) -> None:
-    w = (stream or sys.stdout).write
+    """``describe``'s text: the answer first (:func:`description_headline`), then the site, each
+    instrument's effects, predictions (one a line) and columns; lines wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
     s = d["site"]
     w(f"scene {d['scene']}: {d['description']}\n")
+    for line in description_headline(d):
+        w(f"  {line}\n")
     w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s "
       f"({deg_h(s['earth_rate_rad_s'])}), "
       f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
@@ -196,11 +238,14 @@ def print_description(d, stream=None) -> None:
             size = e["relative_size"]
             size_txt = f"{size:.3g}" if size is not None else "n/a"
             w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
-        preds = ", ".join(labelled(k, v) for k, v in inst["predictions"].items() if k != "notes")
-        w(f"    predictions: {preds}\n")
+        w("    predictions:\n")
+        for k, v in inst["predictions"].items():
+            if k != "notes":
+                w(f"      {labelled(k, v)}\n")
         for note in inst["predictions"].get("notes", []):
             w(f"    prediction note: {note}\n")
         w(f"    columns: {', '.join(inst['columns'])}\n")
+    flush()
 
 
 # ----------------------------------------------------------------------------- simulate
@@ -405,8 +450,36 @@ def without_rotation_reason(result, scene) -> None:
 
 
 def print_estimate(r, stream=None) -> None:
-    """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
-    w = (stream or sys.stdout).write
+    """Human-readable estimate: the answer first (:func:`estimate_headline`), then the recovered
+    latitude and Earth rate next to the truth, the checks, each instrument and method; lines
+    wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
+    for line in estimate_headline(r):
+        w(f"{line}\n")
+    _print_estimate_body(r, w)
+    flush()
+
+
+def estimate_headline(r) -> list:
+    """The estimate's answer as lines: the latitude (or why there is none) and each pendulum's
+    measured swing-plane rate in °/h with its full turn in hours."""
+    lat = r.get("latitude_deg")
+    if lat is None:
+        lines = [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
+    else:
+        sig = r.get("latitude_sigma_deg")
+        lines = [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
+                 f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
+    for name, e in r.get("instruments", {}).items():
+        k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
+        if k:
+            lines.append(f"{name}: the swing plane turns {math.degrees(k) * 3600.0:.3f} °/h "
+                         f"{'clockwise' if k > 0 else 'counter-clockwise'} seen from above, a full turn in "
+                         f"{2 * math.pi / abs(k) / 3600.0:.1f} h")
+    return lines
+
+
+def _print_estimate_body(r, w):
     tr = r["truth"]
     if r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
         w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
@@ -650,18 +723,30 @@ def _add_bag_commands(sub):
                         "(/<instrument>/joint_states, sensor_msgs/msg/JointState, joints as in msg_docs/topics.md); "
                         "the JSON gains 'topics' (matched, unmatched with the reason, unused)",
                      topics_help="read this instrument's JointState from another topic (repeatable)")
-    p = sub.add_parser("plot", help="draw the standard views of a table or a bag to PNG: angles over time, the "
-                                    "swing-plane azimuth with the k = n sin(latitude) line, the bob's path seen "
-                                    "from above, the fit residuals (needs matplotlib: pip install "
-                                    "'gyro_instrument[plot]')")
+    p = sub.add_parser("plot", help="draw the standard views of a table or a bag: angles over time (degrees), "
+                                    "the swing-plane azimuth with its expected line from the release (rate in "
+                                    "deg/h, full turn in hours), the rosette (the bob seen from above, coloured by "
+                                    "time), the fit residuals; --animate adds animation.gif (needs matplotlib: pip "
+                                    "install 'gyro_instrument[plot]')")
     p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
     p.add_argument("--out", default=None, metavar="DIR",
-                   help="directory for angles.png, swing_azimuth.png, bob_path.png, residuals.png (default: "
-                        "<file name>_plots beside the current directory); PNGs already there are refused unless "
-                        "--overwrite")
-    p.add_argument("--overwrite", action="store_true", help="replace the view PNGs already in --out")
+                   help="directory for angles, swing_azimuth, bob_path (the rosette) and residuals .png/.svg/.pdf "
+                        "(default: <file name>_plots in the current directory); files already there are refused "
+                        "unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace the view files already in --out")
+    p.add_argument("--format", dest="fmt", default="png", choices=["png", "svg", "pdf"],
+                   help="file format of the views (default png)")
+    p.add_argument("--dpi", type=float, default=110, help="resolution of a PNG (default 110: 1760 px wide)")
+    p.add_argument("--window", default=None, metavar="START:END",
+                   help="the rosette's time window, seconds since release (default: the whole record; either "
+                        "side may be empty, e.g. 0:600)")
+    p.add_argument("--animate", action="store_true",
+                   help="also write animation.gif: the bob's path and turning swing plane seen from above (a "
+                        "gyroscope: its axis swinging about the meridian), a day in about 20 s, with a clock and "
+                        "the latitude")
     add_scene_option(p, "the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
-                        "k line's latitude). A bag written by this package carries its own",
+                        "expected line's latitude). A bag written by this package carries its own, and so does "
+                        "a table written by 'simulate' (used when --scene is absent, noted)",
                      set_help="override a value of the --scene scene",
                      topics_help="a foreign bag's topic for an instrument (as for replay)")
 
@@ -932,12 +1017,17 @@ def plot_command(args) -> int:
     """``gyro-instrument plot``: the standard views of a table or a bag to PNG."""
     import time
     from gyro_instrument.views import plot_file
+    from gyro_instrument.views.rosette import parse_window
     out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
     t0 = time.perf_counter()
-    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
+    window = parse_window(args.window)
+    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite,
+                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate)
     for note in notes:
         print(f"gyro-instrument: note: {note}", file=sys.stderr)
-    print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
+    views = [p for p in pngs if not p.endswith(".gif")]
+    print(f"wrote {len(views)} views" + (" and an animation" if len(views) < len(pngs) else "")
+          + f" in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
     return 0
 
 
