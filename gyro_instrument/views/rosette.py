@@ -108,7 +108,7 @@ def _turn_arrow(ax, t, e, nn):
     # from the end of the plane nearer the top toward where it turned to (compass: east = sin, north = cos)
     a0 = float(az[0]) % math.pi
     a0 = a0 if math.cos(a0) >= 0 else a0 - math.pi
-    a1 = a0 + math.copysign(max(abs(turned), math.radians(25.0)), turned)   # a small turn: its sense still shown
+    a1 = a0 + math.copysign(min(max(abs(turned), math.radians(25.0)), math.radians(90.0)), turned)  # the sense
     p0, p1 = (r * math.sin(a0), r * math.cos(a0)), (r * math.sin(a1), r * math.cos(a1))
     arc = 0.35 * (1 if turned > 0 else -1) * min(1.0, abs(turned))
     ax.add_patch(FancyArrowPatch(p0, p1, connectionstyle=f"arc3,rad={-arc}", arrowstyle="-|>",
