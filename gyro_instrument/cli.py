@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
 EXIT_INTERRUPTED = 130
+EXIT_CLOSED_PIPE = 141
 
 
 def add_scene_arguments(parser, positional=True) -> None:
@@ -176,10 +177,52 @@ def describe(scene) -> dict:
     return to_jsonable(out)
 
 
+#: Printed text is wrapped at this width (continuation lines indented under their first).
+TEXT_WIDTH = 100
+
+
+def wrapped_writer(stream) -> tuple:
+    """(write, flush): ``write`` gathers text; ``flush`` writes it to ``stream`` with every line
+    longer than :data:`TEXT_WIDTH` wrapped at spaces, continuations indented 4 more than the line."""
+    import textwrap
+    parts = []
+
+    def flush():
+        for line in "".join(parts).splitlines():
+            lead = line[:len(line) - len(line.lstrip())]
+            stream.write(textwrap.fill(line, TEXT_WIDTH, subsequent_indent=lead + "    ", break_long_words=False,
+                                       break_on_hyphens=False) + "\n" if len(line) > TEXT_WIDTH else line + "\n")
+    return parts.append, flush
+
+
+def _hemisphere(lat) -> str:
+    return f"{abs(lat):.4f}° {'N' if lat > 0 else 'S'}" if lat else "0° (equator)"
+
+
+def description_headline(d) -> list:
+    """What a person asks first, as lines: the latitude and, per pendulum, the swing plane's turn in
+    °/h (the exact finite-amplitude rate when it has one) and a full turn in hours."""
+    lines = [f"latitude {_hemisphere(d['site']['latitude_deg'])}"]
+    for name, inst in d["instruments"].items():
+        p = inst["predictions"]
+        rate = p.get("apsidal_rate_from_rest_rad_s", p.get("foucault_rate_rad_s"))
+        if rate is None or "foucault_rate_rad_s" not in p:
+            continue
+        turn = f"a full turn in {2 * math.pi / abs(rate) / 3600.0:.1f} h" if rate else "it does not turn"
+        sense = "clockwise" if rate > 0 else "counter-clockwise"
+        lines.append(f"{name}: the swing plane turns {math.degrees(rate) * 3600.0:.3f} °/h {sense} seen from above, "
+                     f"{turn}" + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p else ""))
+    return lines
+
+
 def print_description(d, stream=None) -> None:
-    w = (stream or sys.stdout).write
+    """``describe``'s text: the answer first (:func:`description_headline`), then the site, each
+    instrument's effects, predictions (one a line) and columns; lines wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
     s = d["site"]
     w(f"scene {d['scene']}: {d['description']}\n")
+    for line in description_headline(d):
+        w(f"  {line}\n")
     w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s "
       f"({deg_h(s['earth_rate_rad_s'])}), "
       f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
@@ -195,11 +238,14 @@ def print_description(d, stream=None) -> None:
             size = e["relative_size"]
             size_txt = f"{size:.3g}" if size is not None else "n/a"
             w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
-        preds = ", ".join(labelled(k, v) for k, v in inst["predictions"].items() if k != "notes")
-        w(f"    predictions: {preds}\n")
+        w("    predictions:\n")
+        for k, v in inst["predictions"].items():
+            if k != "notes":
+                w(f"      {labelled(k, v)}\n")
         for note in inst["predictions"].get("notes", []):
             w(f"    prediction note: {note}\n")
         w(f"    columns: {', '.join(inst['columns'])}\n")
+    flush()
 
 
 # ----------------------------------------------------------------------------- simulate
@@ -320,7 +366,7 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     by block, every k-th sample (:func:`output_step`), after checking that it fits on the disk
     (:func:`check_disk`). Returns (rows written, columns, nfev, integration wall s)."""
     from gyro_instrument.core.memory import sample_count
-    from gyro_instrument.estimators.data_io import TableWriter
+    from gyro_instrument.estimators.data_io import TableWriter, scene_yaml_text, table_kind, table_metadata
     from gyro_instrument.scenes import build_instruments
     k = output_step(scene, output_rate_hz)
     names = [f"{n}.{c.name}" for n, i in build_instruments(scene).items() for c in i.COLUMNS]
@@ -328,7 +374,9 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     check_disk(out, (n - 1) // k + 1, len(names) + 1)
     first = 0                                  # index of the block's first sample in the run
     nfev = wall = 0.0
-    with TableWriter(out, names) as writer:
+    text = scene_yaml_text(scene)
+    meta = table_metadata(text, scene.name, scene.seed) if table_kind(out) == "parquet" else None
+    with TableWriter(out, names, metadata=meta) as writer:
         with terminal_progress("  simulating", enabled=progress is not None):
             for t, columns, sims in stream_scene(scene, progress=progress):
                 keep = slice((-first) % k, None, k)
@@ -336,7 +384,21 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
                 first += t.size
                 nfev = sum(s.trajectory.nfev for s in sims.values())
                 wall = sum(s.trajectory.wall_time_s for s in sims.values())
+    if meta is None:
+        write_scene_sidecar(out, text)
     return writer.rows, len(names) + 1, int(nfev), wall
+
+
+def write_scene_sidecar(table, scene_yaml) -> str:
+    """Write ``<name>.scene.yaml`` beside the CSV ``table`` (atomically: an interrupted write leaves
+    no partial file); return its path."""
+    from gyro_instrument.estimators.data_io import scene_sidecar_path
+    path = scene_sidecar_path(table)
+    with replaced_atomically(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(f"# the scene gyro-instrument simulate ran for {os.path.basename(table)} (seed and overrides "
+                 f"applied)\n")
+        fh.write(scene_yaml)
+    return path
 
 
 @contextmanager
@@ -388,8 +450,36 @@ def without_rotation_reason(result, scene) -> None:
 
 
 def print_estimate(r, stream=None) -> None:
-    """Human-readable estimate: recovered latitude and Earth rate next to the truth."""
-    w = (stream or sys.stdout).write
+    """Human-readable estimate: the answer first (:func:`estimate_headline`), then the recovered
+    latitude and Earth rate next to the truth, the checks, each instrument and method; lines
+    wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
+    for line in estimate_headline(r):
+        w(f"{line}\n")
+    _print_estimate_body(r, w)
+    flush()
+
+
+def estimate_headline(r) -> list:
+    """The estimate's answer as lines: the latitude (or why there is none) and each pendulum's
+    measured swing-plane rate in °/h with its full turn in hours."""
+    lat = r.get("latitude_deg")
+    if lat is None:
+        lines = [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
+    else:
+        sig = r.get("latitude_sigma_deg")
+        lines = [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
+                 f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
+    for name, e in r.get("instruments", {}).items():
+        k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
+        if k:
+            lines.append(f"{name}: the swing plane turns {math.degrees(k) * 3600.0:.3f} °/h "
+                         f"{'clockwise' if k > 0 else 'counter-clockwise'} seen from above, a full turn in "
+                         f"{2 * math.pi / abs(k) / 3600.0:.1f} h")
+    return lines
+
+
+def _print_estimate_body(r, w):
     tr = r["truth"]
     if r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
         w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
@@ -579,7 +669,9 @@ def _add_scene_commands(sub):
                         "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV (full precision); "
                         "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
                         "leaves no partial file); refused before the run when it would not fit on the disk; "
-                        "an existing file is refused unless --overwrite; never the scene file")
+                        "an existing file is refused unless --overwrite; never the scene file. The scene (YAML, seed, "
+                        "units, package version) goes into Parquet's key-value metadata (gyro_instrument.scene_yaml, "
+                        "...) or, for a CSV, into <name>.scene.yaml beside it (same overwrite rule)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--output-rate-hz", type=float, default=None, metavar="HZ",
                    help="write every k-th sample, k = sample_rate_hz / HZ (a whole number; HZ <= sample_rate_hz): "
@@ -593,7 +685,8 @@ def _add_scene_commands(sub):
                    help="estimate from this table of measured channels instead of simulating: time_s and "
                         "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
                         "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
-                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values. "
+                        "gives the instruments (types, lengths, inertia ratios) and the site's nominal values "
+                        "(without --scene: the scene the table carries, written by simulate, noted on stderr). "
                         "Missing values, NaN, gaps, irregular and out-of-order times are accepted and noted; a "
                         "gyroscope without spin_rate takes the scene's constant spin (noted). CSV: UTF-8 (a "
                         "byte-order mark is read), separator sniffed from the header (',' or ';' with decimal "
@@ -630,18 +723,30 @@ def _add_bag_commands(sub):
                         "(/<instrument>/joint_states, sensor_msgs/msg/JointState, joints as in msg_docs/topics.md); "
                         "the JSON gains 'topics' (matched, unmatched with the reason, unused)",
                      topics_help="read this instrument's JointState from another topic (repeatable)")
-    p = sub.add_parser("plot", help="draw the standard views of a table or a bag to PNG: angles over time, the "
-                                    "swing-plane azimuth with the k = n sin(latitude) line, the bob's path seen "
-                                    "from above, the fit residuals (needs matplotlib: pip install "
-                                    "'gyro_instrument[plot]')")
+    p = sub.add_parser("plot", help="draw the standard views of a table or a bag: angles over time (degrees), "
+                                    "the swing-plane azimuth with its expected line from the release (rate in "
+                                    "deg/h, full turn in hours), the rosette (the bob seen from above, coloured by "
+                                    "time), the fit residuals; --animate adds animation.gif (needs matplotlib: pip "
+                                    "install 'gyro_instrument[plot]')")
     p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
     p.add_argument("--out", default=None, metavar="DIR",
-                   help="directory for angles.png, swing_azimuth.png, bob_path.png, residuals.png (default: "
-                        "<file name>_plots beside the current directory); PNGs already there are refused unless "
-                        "--overwrite")
-    p.add_argument("--overwrite", action="store_true", help="replace the view PNGs already in --out")
+                   help="directory for angles, swing_azimuth, bob_path (the rosette) and residuals .png/.svg/.pdf "
+                        "(default: <file name>_plots in the current directory); files already there are refused "
+                        "unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace the view files already in --out")
+    p.add_argument("--format", dest="fmt", default="png", choices=["png", "svg", "pdf"],
+                   help="file format of the views (default png)")
+    p.add_argument("--dpi", type=float, default=110, help="resolution of a PNG (default 110: 1760 px wide)")
+    p.add_argument("--window", default=None, metavar="START:END",
+                   help="the rosette's time window, seconds since release (default: the whole record; either "
+                        "side may be empty, e.g. 0:600)")
+    p.add_argument("--animate", action="store_true",
+                   help="also write animation.gif: the bob's path and turning swing plane seen from above (a "
+                        "gyroscope: its axis swinging about the meridian), a day in about 20 s, with a clock and "
+                        "the latitude")
     add_scene_option(p, "the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
-                        "k line's latitude). A bag written by this package carries its own",
+                        "expected line's latitude). A bag written by this package carries its own, and so does "
+                        "a table written by 'simulate' (used when --scene is absent, noted)",
                      set_help="override a value of the --scene scene",
                      topics_help="a foreign bag's topic for an instrument (as for replay)")
 
@@ -716,7 +821,8 @@ def main(argv=None) -> int:
 def guarded(body, process=False) -> int:
     """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
 
-    SceneError -> 2, IntegrationError -> 3, KeyboardInterrupt (wherever it lands: imports,
+    SceneError -> 2, IntegrationError -> 3, a closed stdout pipe -> 141 quietly (:func:`closed_pipe`),
+    KeyboardInterrupt (wherever it lands: imports,
     integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
     exception is a bug and keeps its traceback. ``process``: this is the process's entry point
     (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
@@ -731,11 +837,25 @@ def guarded(body, process=False) -> int:
         except IntegrationError as exc:
             print(f"gyro-instrument: integration failed: {one_line(exc)}", file=sys.stderr)
             return EXIT_INTEGRATION_FAILED
+        except BrokenPipeError:
+            return closed_pipe()
     except KeyboardInterrupt:
         return interrupted(process)
     finally:
         if process:
             _ignore_sigint()
+
+
+def closed_pipe() -> int:
+    """The reader of stdout went away (``describe SCENE | head -2``): stop quietly with 141 (128 +
+    SIGPIPE, what a shell reports for a command its pipe closed), stdout pointed at /dev/null so
+    that Python's final flush cannot print a BrokenPipeError either."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):   # a stdout without a file descriptor (a test's)
+        pass
+    return EXIT_CLOSED_PIPE
 
 
 def one_line(exc) -> str:
@@ -791,7 +911,11 @@ def describe_command(args) -> int:
 
 def simulate_command(args) -> int:
     """``gyro-instrument simulate``: every instrument channel to CSV or Parquet (``--out``)."""
+    from gyro_instrument.estimators.data_io import scene_sidecar_path, table_kind
     check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    if table_kind(args.out) == "csv":        # its scene beside it, under the same rule
+        side = scene_sidecar_path(args.out)
+        check_output(side, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{side}.partial",))
     scene = scene_from_args(args)
     print_scene_notes(scene)
     progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
@@ -806,9 +930,12 @@ def estimate_command(args) -> int:
     """``gyro-instrument estimate``: simulate through the sensors (or read ``--data``) and estimate."""
     from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import scene_notes
-    if scene_arg(args) is None:
-        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'")
-    scene = scene_from_args(args)
+    scene = data_scene(args) if scene_arg(args) is None and args.data else None
+    if scene is None and scene_arg(args) is None:
+        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'"
+                                        + (f" ({args.data} carries none: no Parquet metadata 'gyro_instrument."
+                                           f"scene_yaml', no .scene.yaml beside it)" if args.data else ""))
+    scene = scene or scene_from_args(args)
     table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
                    "--angle-unit": (args.angle_unit, "rad"), "--column": (args.columns, []),
                    "--separator": (args.separator, None)}
@@ -831,6 +958,18 @@ def estimate_command(args) -> int:
     else:
         print_estimate(result)
     return 0
+
+
+def data_scene(args) -> "Scene | None":
+    """The scene ``estimate --data FILE`` takes when no scene is given: the one the table carries
+    (written by ``simulate``), with ``--set`` applied and a note on stderr; None when it carries none."""
+    from gyro_instrument.estimators.data_io import scene_of_table
+    found = scene_of_table(args.data, args.overrides)
+    if found is None:
+        return None
+    scene, where = found
+    print(f"gyro-instrument: note: no --scene given: using the scene {scene.name!r} from {where}", file=sys.stderr)
+    return scene
 
 
 def bench_command(args) -> int:
@@ -878,12 +1017,17 @@ def plot_command(args) -> int:
     """``gyro-instrument plot``: the standard views of a table or a bag to PNG."""
     import time
     from gyro_instrument.views import plot_file
+    from gyro_instrument.views.rosette import parse_window
     out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
     t0 = time.perf_counter()
-    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite)
+    window = parse_window(args.window)
+    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite,
+                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate)
     for note in notes:
         print(f"gyro-instrument: note: {note}", file=sys.stderr)
-    print(f"wrote {len(pngs)} views in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
+    views = [p for p in pngs if not p.endswith(".gif")]
+    print(f"wrote {len(views)} views" + (" and an animation" if len(views) < len(pngs) else "")
+          + f" in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
     return 0
 
 

@@ -29,7 +29,7 @@ def _check_pngs(out, views=("angles", "swing_azimuth", "bob_path", "residuals"))
         p = out / f"{v}.png"
         assert p.stat().st_size > 5000 and p.read_bytes()[:8] == PNG
         h, w, _ = mpimg.imread(p).shape
-        assert h > 200 and w > 200
+        assert h > 200 and w >= 1600          # readable on a slide (issue 26)
 
 
 @pytest.mark.parametrize("source", ["csv", "csv with scene", "parquet", "bag"])
@@ -50,6 +50,7 @@ def test_default_output_directory_and_no_overwrite(tmp_path, capsys, tables, mon
     out = tmp_path / "q_plots"
     _check_pngs(out)
     before = (out / "angles.png").read_bytes()
+    capsys.readouterr()      # the first run's note (the scene taken from q.scene.yaml)
     assert core_main(["plot", str(tables / "q.csv")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "already holds angles.png" in err[0] and "--overwrite" in err[0]

@@ -608,7 +608,7 @@ def _speed_studies(out_dir, wp, quick, progress) -> tuple:
     tg.append((f"plot {hours:g} h of pendulum data at 20 Hz ({n} samples, Parquet, 4 views to PNG), wall time",
                secs if secs is not None else float("nan"), "s" + ("" if secs is not None else
                                                                    " (matplotlib or pyarrow missing)"),
-               "<= 30", secs is not None and secs <= 30.0))
+               "<= 10", secs is not None and secs <= 10.0))
     _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
     progress("streaming: whole simulate process against the textbook script, peak memory, output throughput")
     from gyro_instrument.bench.streaming import streaming_rows

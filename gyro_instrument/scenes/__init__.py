@@ -68,8 +68,11 @@ def load_scene(name_or_path, overrides=()) -> Scene:
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=path)
 
 
-def scene_from_data(data, source="recorded") -> Scene:
-    """Validate an already-read scene mapping (e.g. the one stored in a bag)."""
+def scene_from_data(data, source="recorded", overrides=()) -> Scene:
+    """Validate an already-read scene mapping (e.g. the one stored in a bag or beside a table),
+    with ``--set`` ``overrides`` applied first."""
+    if overrides:
+        data = apply_overrides(data, overrides, effect_names=tuple(EFFECTS))
     return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=source)
 
 

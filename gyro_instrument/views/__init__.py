@@ -1,0 +1,142 @@
+"""``gyro-instrument plot FILE``: the standard views of a run or a measurement (PNG, SVG or PDF).
+
+FILE is a CSV or Parquet table (msg_docs/csv.md) or a bag (an ``.mcap`` or a rosbag2 directory;
+a bag recorded by another tool needs ``--scene``). A table written by ``simulate`` carries its
+scene (Parquet metadata, ``<name>.scene.yaml`` beside a CSV), used when ``--scene`` is absent.
+Views, one file each in the output directory:
+
+``angles``
+    every measured angle over time in degrees (a gyroscope's swing angles, a pendulum's two-axis
+    deflection), from the first to the last sample; more than 20000 samples are drawn as their
+    min-max envelope over bins of at least 4 periods (no aliasing), gaps left empty. A pendulum
+    whose length is unknown (no scene) is drawn as its bob's position in metres.
+``swing_azimuth``
+    each pendulum's swing-plane azimuth (compass degrees, one point per swing period) with the
+    expected line anchored at the release at the scene pendulum's exact finite-amplitude rate
+    (``apsidal_rate_from_rest_rad_s``), its rate in °/h, the full turn in hours and the latitude
+    written on the plot; without a scene, the fitted line and the latitude it implies.
+``bob_path``
+    the rosette: each pendulum's bob seen from above (metres) over ``--window``, coloured by time,
+    the start marked, an arrow for the sense and size of the swing plane's turn.
+``residuals``
+    a gyroscope's angle less its fitted oscillation; a swing azimuth less its line (a slope there
+    is a rate difference, written beside it).
+
+``--animate`` adds ``animation.gif`` (:mod:`.animate`). matplotlib is an optional extra (``pip
+install 'gyro_instrument[plot]'``); without it the command exits 2 saying so.
+"""
+
+import os
+
+import numpy as np
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.views.measure import SIDEREAL_RATE_RAD_S, oscillation_residuals, swing_azimuth  # noqa: F401
+from gyro_instrument.views.series import load_series, record_span  # noqa: F401
+
+VIEWS = ("angles", "swing_azimuth", "bob_path", "residuals")
+FORMATS = ("png", "svg", "pdf")
+#: Default resolution: a 16 in wide figure is 1760 px.
+DPI = 110
+
+
+def pyplot() -> "object":
+    """matplotlib.pyplot on the Agg backend.
+
+    Raises
+    ------
+    SceneError
+        matplotlib is not installed (says how to install it).
+    """
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise SceneError("plot", "matplotlib", "is not installed: pip install 'gyro_instrument[plot]' "
+                                               "(or: pip install matplotlib)") from None
+    return plt
+
+
+def draw_views(series, scene, out_dir, title="", fmt="png", dpi=DPI, window=None) -> list:
+    """Write the views of :data:`VIEWS` that apply (swing azimuth and bob path need a pendulum) as
+    ``<view>.<fmt>``; return their paths."""
+    from gyro_instrument.views.figures import STYLE, angles_figure, azimuth_figure, residuals_figure, time_axis
+    from gyro_instrument.views.measure import expected_line
+    from gyro_instrument.views.rosette import rosette_figure
+    plt = pyplot()
+    os.makedirs(out_dir, exist_ok=True)
+    written = []
+    lo, hi = record_span(series)
+    axis = time_axis(hi - lo if hi > lo else 0.0)
+    pend = [n for n in series if "east" in series[n]]
+
+    def save(fig, view):
+        p = os.path.join(out_dir, f"{view}.{fmt}")
+        fig.savefig(p, dpi=dpi)
+        plt.close(fig)
+        written.append(p)
+
+    with plt.rc_context(STYLE):
+        fig = angles_figure(plt, series, axis, title)
+        fig.tight_layout()
+        save(fig, "angles")
+        rows = []
+        if pend:
+            fig, rows = azimuth_figure(plt, series, pend, {n: expected_line(scene, n) for n in pend}, axis)
+            save(fig, "swing_azimuth")
+            save(rosette_figure(plt, series, pend, window, axis), "bob_path")
+        rows += gyroscope_residual_rows(series)
+        if rows:
+            save(residuals_figure(plt, rows, axis), "residuals")
+    return written
+
+
+def gyroscope_residual_rows(series) -> list:
+    """Residual rows (name, label, t, degrees, note, span) of every non-pendulum angle that an
+    oscillation can be fitted to."""
+    rows = []
+    for n, s in series.items():
+        if "east" in s:
+            continue
+        t = np.asarray(s["t"], float)
+        for label, y, unit in s["channels"]:
+            r = oscillation_residuals(t, np.radians(np.asarray(y, float)))
+            if r is not None:
+                rows.append((n, f"{label} less its fitted oscillation (degrees)", r[0], np.degrees(r[1]),
+                             "what the fit (fundamental and third harmonic) leaves: sensor noise, damping, the "
+                             "period's change with amplitude", (float(np.nanmin(t)), float(np.nanmax(t)))))
+    return rows
+
+
+def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False, fmt="png", dpi=DPI,
+              window=None, animate=False) -> tuple:
+    """Read ``path`` (table or bag), draw the views into ``out_dir`` (and ``animation.gif`` with
+    ``animate``); return (paths written, notes).
+
+    Raises
+    ------
+    SceneError
+        matplotlib missing; unreadable input; a bad ``fmt``, ``dpi`` or ``window``; a view's file
+        already in ``out_dir`` without ``overwrite`` (nothing is written then); ``out_dir`` is a file.
+    """
+    pyplot()
+    if fmt not in FORMATS:
+        raise SceneError("--format", fmt, f"must be one of {', '.join(FORMATS)}")
+    if not (isinstance(dpi, (int, float)) and 20 <= dpi <= 1200):
+        raise SceneError("--dpi", dpi, "must be a number in [20, 1200]")
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise SceneError("--out", out_dir, "is a file; give a directory for the views")
+    names = [f"{v}.{fmt}" for v in VIEWS] + (["animation.gif"] if animate else [])
+    if not overwrite:
+        existing = [v for v in names if os.path.exists(os.path.join(out_dir, v))]
+        if existing:
+            raise SceneError("--out", out_dir, f"already holds {', '.join(existing)}; pass "
+                                               f"--overwrite to replace them, or give a new directory")
+    series, scene, notes = load_series(path, scene_arg, overrides, topics)
+    title = f"({os.path.basename(str(path).rstrip('/'))})"
+    written = draw_views(series, scene, out_dir, title, fmt, dpi, window)
+    if animate:
+        from gyro_instrument.views.animate import write_animation
+        written.append(write_animation(series, scene, os.path.join(out_dir, "animation.gif")))
+    return written, notes
