@@ -481,7 +481,10 @@ def estimate_headline(r) -> list:
 
 def _print_estimate_body(r, w):
     tr = r["truth"]
-    if r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
+    truth = "scene's" if r.get("data") else "truth"    # measured data: the scene's values are nominal, not a truth
+    if r.get("data"):
+        w(f"data {r['data']} read with scene {r['scene']}, {_fmt(r.get('observation_s'), 'g')} s of samples\n")
+    elif r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
         w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
           f"read per instrument (recording cut: {r['recording_cut']})\n")
     else:
@@ -490,7 +493,7 @@ def _print_estimate_body(r, w):
         w(f"  note: {note}\n")
     label = "|latitude|" if r.get("latitude_is_absolute") else "latitude  "
     w(f"  {label} {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
-      f"   truth {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
+      f"   {truth} {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
     if r.get("latitude_sigma_reason"):
         lo, hi = r["latitude_interval_deg"]
         lo3, hi3 = r["latitude_interval_3sigma_deg"]
@@ -505,7 +508,7 @@ def _print_estimate_body(r, w):
     else:
         w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
           f" ({deg_h(r['earth_rate_rad_s'])})"
-          f"   truth {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
+          f"   {truth} {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
     if r.get("method"):
         w(f"  method: {r['method']}\n")
     print_checks(r.get("checks"), w)
