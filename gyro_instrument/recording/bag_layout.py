@@ -321,7 +321,7 @@ class BagDirectoryWriter:
             raise err
 
     @property
-    def failed(self):
+    def failed(self) -> "OSError | None":
         """The DiskFull that stopped the current file, or None."""
         return getattr(self._cur, "failed", None)
 
