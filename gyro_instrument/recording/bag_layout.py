@@ -7,9 +7,12 @@ complete, indexed MCAP after every commit); a new file starts when the current o
 ``max_bag_size`` bytes or holds ``max_bag_duration`` of log time. Every file registers every topic
 known so far and repeats the metadata records added before it (the scene), so each file can be
 read alone. ``metadata.yaml`` (rosbag2 version 9, the fields ``rosbag2.Writer`` of rosbags and
-rosbag2 jazzy write) is written atomically when the bag is opened, at every split and at close, so
-a recording killed between them still has a ``metadata.yaml`` naming every file; its counts are
-then those of the last split (the files themselves hold what was committed).
+rosbag2 jazzy write) is written atomically when the bag is opened, at each of the first
+:data:`METADATA_EVERY_SPLIT` splits, then at every doubling of the file count, and at close (so
+rewriting it costs O(files) over a run, never O(files²)); a recording killed between them still has a
+``metadata.yaml`` naming its first files, and the reader takes the files it does not list too, with
+a note. Split limits below :data:`MIN_BAG_SIZE` and :data:`MIN_BAG_DURATION_S` are refused. A full
+disk leaves every file as its last commit made it (a split that could not be started is removed).
 
 Reading (:func:`bag_files`, :func:`scan_path`): a bare ``.mcap``, a bag directory, or a split bag.
 Every file is read through :func:`~gyro_instrument.recording.bag_scan.scan_bag`, so every CRC is
@@ -34,6 +37,14 @@ if TYPE_CHECKING:      # annotations only
 
 METADATA = "metadata.yaml"
 ROSBAG2_VERSION = 9
+#: the smallest split limits accepted: below them a file would be mostly its repeated start (header,
+#: scene record, schemas, channels) and summary (~60 kB for quet_paris), and a run would make
+#: thousands of files (``--max-bag-size 1`` made 548 files for 5 s)
+MIN_BAG_SIZE = 1 << 20
+MIN_BAG_DURATION_S = 1.0
+#: ``metadata.yaml`` is rewritten at every split while a bag has at most this many files, then at
+#: every doubling of their count (and at close), so rewriting it costs O(files) over a run
+METADATA_EVERY_SPLIT = 16
 FORMATS = ("mcap", "rosbag2")
 
 _HISTORY = {0: "system_default", 1: "keep_last", 2: "keep_all", 3: "unknown"}
@@ -66,6 +77,39 @@ def bag_format(path, fmt=None, max_bag_size=0, max_bag_duration_s=0.0, field="--
     return "mcap"
 
 
+def check_split_limits(max_bag_size=0, max_bag_duration_s=0.0, size_field="--max-bag-size",
+                       duration_field="--max-bag-duration") -> None:
+    """Refuse split limits below their floors (:data:`MIN_BAG_SIZE` bytes, :data:`MIN_BAG_DURATION_S`
+    s); 0 means no limit.
+
+    Raises
+    ------
+    SceneError
+        One line naming the field, the value and the valid range.
+    """
+    import math
+    size = float(max_bag_size or 0)
+    if size and (not math.isfinite(size) or not size.is_integer() or size < MIN_BAG_SIZE):
+        raise SceneError(size_field, max_bag_size, f"must be 0 (no limit) or a whole number of bytes >= "
+                                                   f"{MIN_BAG_SIZE} (the floor: 1 MiB)")
+    dur = float(max_bag_duration_s or 0.0)
+    if dur != 0.0 and not (math.isfinite(dur) and dur >= MIN_BAG_DURATION_S):
+        raise SceneError(duration_field, max_bag_duration_s, f"must be 0 (no limit) or a duration in s >= "
+                                                            f"{MIN_BAG_DURATION_S:g} (the floor) and finite")
+
+
+def restart_path(path, k) -> str:
+    """The ``k``-th (1, 2, ...) file or bag directory of a recording whose clock went back: ``q.mcap``
+    -> ``q_run1.mcap``, ``bag/`` -> ``bag_run1/``; the next free name (nothing is written over)."""
+    d = path.rstrip("/" + os.sep) or path
+    stem, ext = os.path.splitext(d) if d.endswith(".mcap") else (d, "")
+    while True:
+        out = f"{stem}_run{k}{ext}"
+        if not os.path.lexists(out):
+            return out + (os.sep if d != path else "")
+        k += 1
+
+
 def _bag_dir_contents_ok(path):
     """True when a directory holds only what a bag directory holds (metadata.yaml, .mcap files)."""
     return all(n == METADATA or n.endswith((".mcap", ".yaml.partial")) for n in os.listdir(path))
@@ -85,10 +129,7 @@ def check_bag_output(path, fmt, field="--bag", inputs=(), overwrite=False, max_b
         One line naming ``field``, the path and why.
     """
     from gyro_instrument.core.files import check_output, same_file
-    if max_bag_size and (max_bag_size < 0 or not float(max_bag_size).is_integer()):
-        raise SceneError("--max-bag-size", max_bag_size, "must be a whole number of bytes >= 0 (0: no limit)")
-    if max_bag_duration_s and not max_bag_duration_s > 0:
-        raise SceneError("--max-bag-duration", max_bag_duration_s, "must be > 0 s (0: no limit)")
+    check_split_limits(max_bag_size, max_bag_duration_s)
     if fmt != "rosbag2":
         return check_output(path, field, inputs, overwrite)
     d = path.rstrip("/" + os.sep) or path
@@ -184,15 +225,26 @@ class BagDirectoryWriter:
 
     # -------------------------------------------------------------- files
     def _open_next(self):
-        from gyro_instrument.recording.mcap_io import BagWriter
+        from gyro_instrument.recording.mcap_io import BagWriter, DiskFull
         name = f"{self.name}_{len(self.files)}.mcap"
-        self._cur = BagWriter(os.path.join(self.path, name), **self._kwargs)
+        full = os.path.join(self.path, name)
+        try:
+            self._cur = BagWriter(full, **self._kwargs)
+            for rec_name, data in self._carried:
+                self._cur.add_metadata(rec_name, data)
+            for topic, (type_name, qos) in self._topics.items():
+                self._cur.add_topic(topic, type_name, qos)
+        except DiskFull:
+            # a split that could not even hold its start holds nothing: removed, so the bag
+            # directory is the files before it, each closed (status 'split')
+            if os.path.exists(full):
+                os.unlink(full)
+            self.closed = True
+            raise
         self.files.append({"path": name, "start": None, "end": None, "count": 0})
-        for rec_name, data in self._carried:
-            self._cur.add_metadata(rec_name, data)
-        for topic, (type_name, qos) in self._topics.items():
-            self._cur.add_topic(topic, type_name, qos)
-        self.write_metadata()
+        n = len(self.files)
+        if n <= METADATA_EVERY_SPLIT or n & (n - 1) == 0:
+            self.write_metadata()
 
     def _close_current(self, state, **fields):
         self._cur.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(self.bag_information(),
@@ -251,10 +303,27 @@ class BagDirectoryWriter:
     def close(self, state="complete", **fields) -> None:
         """Finish the last file with status ``state`` (and the recorder's ``fields``: per-topic counts,
         late messages; see :meth:`BagWriter.close`) and write the final ``metadata.yaml``."""
-        if not self.closed:
+        if self.closed:
+            return
+        self.closed = True
+        from gyro_instrument.recording.mcap_io import DiskFull
+        err = None
+        try:
             self._close_current(state, **fields)
+        except DiskFull as exc:       # the file is left as its last commit made it: still listed
+            err = exc
+        try:
             self.write_metadata()
-            self.closed = True
+        except OSError:
+            if err is None:
+                raise
+        if err is not None:
+            raise err
+
+    @property
+    def failed(self) -> "OSError | None":
+        """The DiskFull that stopped the current file, or None."""
+        return getattr(self._cur, "failed", None)
 
     # -------------------------------------------------------------- metadata.yaml
     def bag_information(self) -> dict:
@@ -286,12 +355,18 @@ class BagDirectoryWriter:
         }
 
     def write_metadata(self) -> None:
-        """Write ``metadata.yaml`` atomically (temporary file, then rename)."""
+        """Write ``metadata.yaml`` atomically (temporary file, then rename); on a full disk the
+        previous one stays (the temporary file is removed)."""
         target = os.path.join(self.path, METADATA)
         tmp = target + ".partial"
-        with open(tmp, "w", encoding="utf-8") as fh:
-            yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, fh, sort_keys=False)
-        os.replace(tmp, target)
+        try:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, fh, sort_keys=False)
+            os.replace(tmp, target)
+        except OSError:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
 
 
 def _type_hash(type_name):
@@ -303,9 +378,28 @@ def _type_hash(type_name):
 
 
 # ----------------------------------------------------------------------------- input
-def _split_key(name):
-    m = re.search(r"_(\d+)\.mcap$", name)
-    return (0, int(m.group(1)), name) if m else (1, 0, name)
+def split_order(names) -> list:
+    """File names of one bag in split order: by the numeric index rosbag2 puts in them, compared as
+    numbers (0, 1, ..., 10, 11, never lexically) — a trailing ``_<n>.mcap`` (``bag_0.mcap``, jazzy and
+    earlier) or a leading ``<n>_`` (``0_bag_2025_12_17-10_00_00.mcap``, the index+name+timestamp names
+    of later rosbag2) — whichever numbers the files apart; by name when neither does."""
+    names = list(names)
+
+    def lead(n):
+        m = re.match(r"(\d+)_", os.path.basename(n))
+        return int(m.group(1)) if m else None
+
+    def trail(n):
+        m = re.search(r"_(\d+)\.mcap$", n)
+        return int(m.group(1)) if m else None
+    for key in (lead, trail):
+        ks = [key(n) for n in names]
+        if None not in ks and len(set(ks)) == len(ks):
+            return [n for _, n in sorted(zip(ks, names))]
+    for key in (trail, lead):
+        if any(key(n) is not None for n in names):
+            return sorted(names, key=lambda n: (key(n) is None, key(n) or 0, n))
+    return sorted(names)
 
 
 def _listed_files(path, field, found, notes):
@@ -323,6 +417,8 @@ def _listed_files(path, field, found, notes):
         info = doc["rosbag2_bagfile_information"]
         listed = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
         storage = info.get("storage_identifier", "mcap")
+        if storage in ("", None) and listed and all(n.endswith(".mcap") for n in listed):
+            storage = "mcap"      # empty (a reindexed Humble bag): the files say MCAP
         mode = str(info.get("compression_mode") or "").lower()
     except (OSError, yaml.YAMLError, TypeError, KeyError, AttributeError) as exc:
         raise SceneError(field, path, f"{METADATA} is not a rosbag2 metadata file "
@@ -340,8 +436,7 @@ def _listed_files(path, field, found, notes):
     if extra:
         notes.append(f"{', '.join(extra)} not listed in {METADATA} (a recording killed before it was "
                      f"rewritten?): read too")
-    names = sorted(set(listed) | set(extra), key=lambda n: (listed.index(n) if n in listed else len(listed),
-                                                              _split_key(n)))
+    names = list(listed) + split_order(extra)
     if not names:
         raise SceneError(field, path, f"is a directory with no bag in it ({METADATA} lists no file and "
                                       f"there is no .mcap file)")
@@ -373,22 +468,31 @@ def bag_files(path, field="bag") -> tuple:
     if not os.path.isdir(path):
         check_mcap(path, field)
         return [path], []
-    found = sorted((n for n in os.listdir(path) if n.endswith(".mcap") and os.path.isfile(os.path.join(path, n))),
-                   key=_split_key)
+    found = split_order(n for n in os.listdir(path) if n.endswith(".mcap") and os.path.isfile(os.path.join(path, n)))
     meta_path = os.path.join(path, METADATA)
     notes = []
     if not os.path.exists(meta_path):
         if not found:
             raise SceneError(field, path, "is a directory with no bag in it (no metadata.yaml, no .mcap file); "
                                           "expected an MCAP file or a rosbag2 bag directory")
-        notes.append(f"no {METADATA}: read the {len(found)} .mcap file(s) found, in split order "
-                     f"({', '.join(found)})")
+        notes.append(f"no {METADATA}: read the {len(found)} .mcap file(s) found, in the order of the split index "
+                     f"in their names ({', '.join(found)})")
         files = [os.path.join(path, n) for n in found]
     else:
         files = _listed_files(path, field, found, notes)
+    if not os.path.isdir(path):
+        return files, notes
+    good = []
     for f in files:
-        check_mcap(f, field)
-    return files, notes
+        try:
+            check_mcap(f, field)
+            good.append(f)
+        except SceneError as exc:
+            # an empty or cut split (a full disk, a copy stopped early) is skipped; the rest is read
+            notes.append(f"{os.path.basename(f)} skipped: {exc.valid}")
+    if not good:
+        raise SceneError(field, path, f"holds no readable MCAP file ({'; '.join(notes[-len(files):])})")
+    return good, notes
 
 
 def bag_inputs(path) -> tuple:

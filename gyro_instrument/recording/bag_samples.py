@@ -15,12 +15,61 @@ class MessageDecoder:
     def __init__(self):
         from mcap_ros2.decoder import DecoderFactory
         self._factory, self._decoders = DecoderFactory(), {}
+        self.notes = []          # what was noticed about the schemas (an empty definition...)
 
     def __call__(self, schema, channel, data):
         dec = self._decoders.get(schema.id)
         if dec is None:
-            dec = self._decoders[schema.id] = self._factory.decoder_for(channel.message_encoding, schema)
+            dec = self._decoders[schema.id] = self._decoder(schema, channel)
+        if isinstance(dec, Exception):
+            raise dec
         return dec(data)
+
+    def _decoder(self, schema, channel):
+        """A decoder for the schema; a schema with an empty definition (a writer that stored none)
+        is decoded with the installed definition of its type, noted; without one installed, the
+        error names the missing definition as the cause."""
+        import dataclasses
+        from gyro_instrument.recording.definitions import concatenated_definition
+        if not bytes(schema.data or b"").strip():
+            try:
+                text = concatenated_definition(schema.name)
+            except (OSError, ValueError, KeyError, RuntimeError):
+                why = ValueError(f"schema {schema.name} (topic {channel.topic}) has an empty message definition "
+                                 f"and no definition of that type is installed: its messages cannot be decoded")
+                self.notes.append(str(why))
+                return why
+            self.notes.append(f"schema {schema.name} (topic {channel.topic}) has an empty message definition (the "
+                              f"writer stored none): decoded with the installed {schema.name} definition")
+            schema = dataclasses.replace(schema, data=text.encode())
+        try:
+            return self._factory.decoder_for(channel.message_encoding, schema)
+        except Exception as exc:  # a definition the decoder cannot parse: its messages are undecodable
+            why = ValueError(f"schema {schema.name} (topic {channel.topic}): definition not usable "
+                             f"({exc.__class__.__name__}: {exc})")
+            self.notes.append(str(why))
+            return why
+
+
+def skipped_topics(scan, used_types=("sensor_msgs/msg/JointState",)) -> list:
+    """One note per topic of the bag whose message type is not installed here (no definition under
+    the share directories) and not one that is read: skipped, the rest used."""
+    from gyro_instrument.recording.definitions import msg_text
+    out = []
+    for ch in sorted(scan.channels.values(), key=lambda c: c.topic):
+        sc = scan.schemas.get(ch.schema_id)
+        type_name = sc.name if sc else ""
+        if type_name in used_types:
+            continue
+        try:
+            if type_name.count("/") != 2:
+                raise ValueError(type_name)
+            msg_text(type_name)
+            continue
+        except (OSError, ValueError):
+            out.append(f"topic {ch.topic} skipped: its type {type_name or '(none)'} is not installed here "
+                       f"(unknown message type); the other topics are used")
+    return out
 
 
 def samples_from_bag(path, scan=None) -> tuple:
@@ -54,14 +103,16 @@ def samples_from_bag(path, scan=None) -> tuple:
     scan = scan or scan_path(path)
     meta = scan.metadata_record("gyro_instrument")
     notes = list(scan.notes) + [f"before recovery: {n}" for n in scan.recorded_notes]
-    out, count, undecodable = joint_samples(scan, EPOCH_NS)
+    notes += skipped_topics(scan)
+    out, count, undecodable, why = joint_samples(scan, EPOCH_NS, with_notes=True)
+    notes += why
     if undecodable:
         notes.append(f"{undecodable} joint messages did not decode and were left out")
     notes += status_notes(scan, count)
     return meta, out, notes, scan.damage_dicts(EPOCH_NS)
 
 
-def joint_samples(scan, epoch_ns) -> tuple:
+def joint_samples(scan, epoch_ns, with_notes=False) -> tuple:
     """Every ``[/<namespace>]/<instrument>/joint_states`` JointState of the intact records of ``scan``:
     ({instrument: (t_ns from ``epoch_ns``, position (m, j), velocity (m, j))}, messages read,
     messages that did not decode).
@@ -104,6 +155,8 @@ def joint_samples(scan, epoch_ns) -> tuple:
         rows.setdefault(name, []).append(entry)
         count += 1
     out = {name: _arrays(entries) for name, entries in rows.items()}
+    if with_notes:
+        return out, count, undecodable, list(decode.notes)
     return out, count, undecodable
 
 

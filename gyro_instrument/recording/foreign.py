@@ -96,8 +96,10 @@ def foreign_samples(scan, insts, remaps=None) -> tuple:
         by_topic.setdefault(ch.topic, set()).add(sc.name if sc else "")
     report = {"matched": {}, "unmatched": {}, "unused": {}}
     wanted = _match_topics(insts, remaps or {}, by_topic, report)
-    rows, undecodable = _read_rows(scan, wanted, report)
-    notes = [f"{undecodable} joint messages did not decode and were left out"] if undecodable else []
+    from gyro_instrument.recording.bag_samples import skipped_topics
+    rows, undecodable, why = _read_rows(scan, wanted, report)
+    notes = skipped_topics(scan) + why
+    notes += [f"{undecodable} joint messages did not decode and were left out"] if undecodable else []
     samples = _arrays(wanted, rows, report, notes)
     used = set(report["matched"].values())
     report["unused"] = {tp: ", ".join(sorted(ty)) for tp, ty in sorted(by_topic.items()) if tp not in used}
@@ -128,7 +130,7 @@ def _match_topics(insts, remaps, by_topic, report):
 def _read_rows(scan, wanted, report):
     """Decode the wanted topics' intact JointState records: ({name: (stamps, log times, positions,
     velocities)} as lists in ``Instrument.JOINTS`` order, NaN for joints not recorded; the number of
-    messages that did not decode). A topic lacking a required joint goes to ``report["unmatched"]``."""
+    messages that did not decode; the decoder's notes about the schemas). A topic lacking a required joint goes to ``report["unmatched"]``."""
     from gyro_instrument.recording.bag_samples import MessageDecoder
     decode = MessageDecoder()
     rows = {name: ([], [], [], []) for name, _, _ in wanted.values()}     # stamps, log times, pos, vel
@@ -162,7 +164,7 @@ def _read_rows(scan, wanted, report):
         ls.append(message.log_time)
         ps.append([pos[c] if c is not None and c < len(pos) else np.nan for c in cols])
         vs.append([vel[c] if c is not None and c < len(vel) else np.nan for c in cols])
-    return rows, undecodable
+    return rows, undecodable, list(decode.notes)
 
 
 def _arrays(wanted, rows, report, notes):

@@ -48,10 +48,12 @@ class _TailKeepingFile:
     after every commit, and a SIGKILL loses only what was not yet committed."""
 
     def __init__(self, path):
+        self.path = path
         self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         self._pos = 0              # end of the committed data section
         self._pending = bytearray()
         self._end = 0              # end of what is on disk
+        self._tail = b""           # the provisional end on disk now
 
     def write(self, data):
         self._pending += data
@@ -64,20 +66,60 @@ class _TailKeepingFile:
         pass
 
     def commit(self, tail=b""):
-        """Write the pending records and then ``tail`` (not part of the data: overwritten next time)."""
+        """Write the pending records and then ``tail`` (not part of the data: overwritten next time).
+
+        When the write fails (ENOSPC: the disk is full, EDQUOT, EFBIG...) the file is put back as
+        the last commit left it (the extension cut off, the previous provisional end written back
+        into the space it already had), so it stays a complete, indexed MCAP; the error is raised
+        as :class:`DiskFull` with the bytes needed and free."""
         buf = memoryview(bytes(self._pending) + tail)
+        need = len(buf)
         at = self._pos
-        while buf:                 # one syscall in practice; loop for short writes
-            k = os.pwrite(self._fd, buf, at)
-            buf, at = buf[k:], at + k
+        try:
+            while buf:             # one syscall in practice; loop for short writes
+                k = os.pwrite(self._fd, buf, at)
+                buf, at = buf[k:], at + k
+        except OSError as exc:
+            self._restore()
+            raise DiskFull(self.path, need, exc) from None
+        self._tail = bytes(tail)
         self._pos += len(self._pending)
         self._pending.clear()
         if at < self._end:         # never happens with a growing summary; keep the file exact anyway
             os.ftruncate(self._fd, at)
         self._end = at
 
+    def _restore(self):
+        try:
+            os.ftruncate(self._fd, self._end)
+            tail, at = memoryview(self._tail), self._pos
+            while tail:
+                k = os.pwrite(self._fd, tail, at)
+                tail, at = tail[k:], at + k
+        except OSError:
+            pass                   # nothing better to do: the reader reads up to the last complete record
+
     def close(self):
         os.close(self._fd)
+
+
+class DiskFull(OSError):
+    """A bag write failed for lack of space; the file is left as its last commit made it.
+    ``needed``: bytes the failed write needed; ``free``: bytes free on that file system then."""
+
+    def __init__(self, path, needed, cause):
+        super().__init__(cause.errno, cause.strerror)
+        self.path, self.needed, self.cause = path, int(needed), cause
+        try:
+            st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")
+            self.free = st.f_bavail * st.f_frsize
+        except OSError:
+            self.free = None
+
+    def line(self, field="--bag") -> str:
+        free = "unknown" if self.free is None else f"{self.free}"
+        return (f"{field} {self.path}: {self.cause.strerror or 'write failed'} (errno {self.errno}): the next write "
+                f"needs {self.needed} bytes, {free} bytes free; the bag is closed readable up to its last commit")
 
 
 class BagWriter:
@@ -104,6 +146,7 @@ class BagWriter:
 
     def __init__(self, path, chunk_size=256 * 1024, compression="zstd", commit_period_s=0.5) -> None:
         self.path = path
+        self.failed = None
         self._fh = _TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
         # chunks are closed here (flush), never by mcap's own size test
@@ -116,6 +159,7 @@ class BagWriter:
         self.chunk_size = int(chunk_size)
         self.commit_period_s = float(commit_period_s)
         self._bytes = 0
+        self._chunk = []       # messages of the chunk in progress, added to the MCAP writer in log-time order
         self._last_commit = time.monotonic()
         self.commits = 0
         self._commit()
@@ -135,12 +179,14 @@ class BagWriter:
         return cid
 
     def write(self, topic, log_time_ns, data, publish_time_ns=None) -> None:
-        """Append one CDR message on a registered topic."""
+        """Append one CDR message on a registered topic (nothing once closed)."""
+        if self.closed:
+            return
         cid = self._channels[topic]
         data = bytes(data)
-        self._w.add_message(channel_id=cid, log_time=int(log_time_ns),
-                            publish_time=int(log_time_ns if publish_time_ns is None else publish_time_ns),
-                            data=data, sequence=self.counts[topic])
+        t = int(log_time_ns)
+        self._chunk.append((t, len(self._chunk), cid, int(t if publish_time_ns is None else publish_time_ns),
+                            data, self.counts[topic]))
         self.counts[topic] += 1
         self._bytes += len(data) + 31          # message record overhead
         if self._bytes >= self.chunk_size or time.monotonic() - self._last_commit >= self.commit_period_s:
@@ -155,17 +201,34 @@ class BagWriter:
         return time.monotonic() - self._last_commit
 
     def add_metadata(self, name, data) -> None:
-        """A metadata record (str -> str mapping), committed to disk at once."""
+        """A metadata record (str -> str mapping), committed to disk at once (nothing once closed)."""
+        if self.closed:
+            return
+        self._add_chunk()
         self._w.add_metadata(name, {str(k): str(v) for k, v in data.items()})
         self.commit()
 
     def commit(self) -> None:
-        """Close the chunk in progress and make the file on disk a complete MCAP holding it."""
+        """Close the chunk in progress and make the file on disk a complete MCAP holding it.
+
+        The chunk's messages are added in log-time order (a message that arrived late is written
+        at its own log time; the chunk index records each chunk's time range, so readers that read
+        in log-time order merge overlapping chunks)."""
+        if self.closed:
+            return
+        self._add_chunk()
         self._w.flush()
         self._commit()
 
+    def _add_chunk(self):
+        if self._chunk:
+            self._chunk.sort()
+            for t, _, cid, pt, data, seq in self._chunk:
+                self._w.add_message(channel_id=cid, log_time=t, publish_time=pt, data=data, sequence=seq)
+            self._chunk = []
+
     def _commit(self):
-        self._fh.commit(self._provisional_end())
+        self._write_out(self._provisional_end())
         self._bytes = 0
         self._last_commit = time.monotonic()
         self.commits += 1
@@ -194,11 +257,23 @@ class BagWriter:
         if not self.closed:
             status = {"state": state, "messages": str(sum(self.counts.values()))}
             status.update({str(k): str(v) for k, v in fields.items()})
+            self._add_chunk()
             self._w.add_metadata(STATUS_RECORD, status)
             self._w.finish()
-            self._fh.commit()
+            self._write_out(b"")
             self._fh.close()
             self.closed = True
+
+    def _write_out(self, tail):
+        """Commit to disk; on a full disk the file is left as the last commit made it (see
+        :meth:`_TailKeepingFile.commit`), this writer is closed (``failed``) and DiskFull raised."""
+        try:
+            self._fh.commit(tail)
+        except DiskFull as exc:
+            self.failed = exc
+            self.closed = True
+            self._fh.close()
+            raise
 
 
 class _Sink:

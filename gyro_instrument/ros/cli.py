@@ -31,10 +31,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: rosbag2 when --bag ends in '/' or splitting is asked for, else mcap)")
     p.add_argument("--max-bag-size", type=float, default=0, metavar="BYTES",
                    help="rosbag2 layout: start a new .mcap file when the current one reaches this many bytes "
-                        "(0, default: no limit)")
+                        "(0, default: no limit; else >= 1048576, the floor)")
     p.add_argument("--max-bag-duration", type=float, default=0, metavar="S",
                    help="rosbag2 layout: start a new .mcap file when the current one spans this many seconds of "
-                        "log time (0, default: no limit)")
+                        "log time (0, default: no limit; else >= 1, the floor)")
     p.add_argument("--real-time-factor", type=float, default=0.0,
                    help="1.0 paces to the wall clock, 0 (default) runs as fast as possible")
     p.add_argument("--window-s", type=float, default=10.0, metavar="S",

@@ -123,8 +123,9 @@ def _set_points(mk, pts):
 def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, half_length_m, size_m,
                      reuse=None) -> "MarkerArray":
     """visualization_msgs/MarkerArray of a pendulum in ``site_enu``: the bob (sphere), the wire,
-    the bob's recent trail and the swing plane (a line through the point below the pivot along
-    the compass azimuth ``plane_azimuth``). ``reuse``: a MarkerArray this function returned
+    the bob's recent trail (a LINE_STRIP, left out while the trail has fewer than two points: a line
+    strip of one point is invalid) and the swing plane (a line through the point below the pivot
+    along the compass azimuth ``plane_azimuth``). ``reuse``: a MarkerArray this function returned
     before, updated in place."""
     from visualization_msgs.msg import Marker, MarkerArray
     pivot = np.asarray(pivot_enu, dtype=float)
@@ -134,17 +135,25 @@ def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, h
     arr = reuse or MarkerArray(markers=[
         _marker(t_ns, name, 0, Marker.SPHERE, (0.9, 0.6, 0.1, 1.0), (size_m,) * 3),
         _marker(t_ns, name, 1, Marker.LINE_LIST, (0.7, 0.7, 0.7, 1.0), (size_m / 10, 0, 0)),
-        _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0)),
         _marker(t_ns, name, 3, Marker.LINE_LIST, (1.0, 0.2, 0.2, 1.0), (size_m / 5, 0, 0)),
     ])
+    trail = pivot + np.asarray(trail_enu, dtype=float).reshape(-1, 3)
+    strip = next((mk for mk in arr.markers if mk.id == 2), None)
+    if trail.shape[0] >= 2 and strip is None:      # a line strip needs two points: left out until then
+        strip = _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0))
+        arr.markers.insert(2, strip)
+    elif trail.shape[0] < 2 and strip is not None:
+        arr.markers.remove(strip)
+        strip = None
     st = stamp(t_ns)
     for mk in arr.markers:
         mk.header.stamp = st
     pos = arr.markers[0].pose.position
     pos.x, pos.y, pos.z = float(bob[0]), float(bob[1]), float(bob[2])
     _set_points(arr.markers[1], [pivot, bob])
-    _set_points(arr.markers[2], pivot + np.asarray(trail_enu, dtype=float).reshape(-1, 3))
-    _set_points(arr.markers[3], [foot - d, foot + d])
+    if strip is not None:
+        _set_points(strip, trail)
+    _set_points(arr.markers[-1], [foot - d, foot + d])
     return arr
 
 

@@ -842,8 +842,14 @@ class RecorderNode(SceneNode):
 
     SPECS = P.RECORDER
     RESTART_ON = ()
-    #: wall time (s) after which held messages are written even if a topic lags (it then writes late)
+    #: wall time (s) without any message after which held messages are written although a sample
+    #: topic lags, when no publisher of that topic is left (its messages then written at their own
+    #: stamps, out of file order: MCAP indexes each chunk's time range)
     HOLD_S = 2.0
+    #: ... and the longest hold while a lagging topic still has a publisher (a stalled simulator)
+    HOLD_MAX_S = 30.0
+    #: messages held at most before they are written anyway (memory bound)
+    HOLD_MAX_MESSAGES = 500_000
 
     def __init__(self, name="recorder", reorder=True, **kwargs):
         super().__init__(name, **kwargs)
@@ -860,6 +866,12 @@ class RecorderNode(SceneNode):
         self._last_arrival = time.monotonic()
         self.late = 0
         self.done = False
+        self.failed = None           # the DiskFull that stopped the recording
+        self.runs = []               # [(path, state)] of recordings closed because the clock went back
+        self._topic_last = {}        # topic -> last stamp seen (a stamp going back: the run restarted)
+        self._topic_run = {}         # topic -> run index its messages belong to
+        self.run_index = 0
+        self._old = {}               # run index -> (writer, counts) of a run closed by a restart
         if self.load():
             self.prepare()
 
@@ -873,15 +885,18 @@ class RecorderNode(SceneNode):
             return
         types = scene_topics(self.insts)
         wanted = self._wanted_topics(types)
+        self._out, self._fmt, self._types = out, fmt, types
         self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
                                       overwrite=bool(self.value("overwrite", False)))
         # the scene first, so that a recording cut short still says what it holds (replay needs it)
-        self.writer.add_metadata("gyro_instrument", {"scene_yaml": json.dumps(dict(self.scene.raw)),
-                                                     "scene": self.scene.name, "seed": self.scene.seed,
-                                                     "command": self.value("command", "recorder node")})
+        self.writer.add_metadata("gyro_instrument", self._scene_record())
         self._record_topics(wanted, types)
         if self.reorder:
             self.create_timer(0.5, self._control, clock=STEADY)
+
+    def _scene_record(self):
+        return {"scene_yaml": json.dumps(dict(self.scene.raw)), "scene": self.scene.name, "seed": self.scene.seed,
+                "command": self.value("command", "recorder node")}
 
     def _output_format(self, out):
         """Check the ``output`` path for the bag layout the parameters give (``format``,
@@ -943,9 +958,11 @@ class RecorderNode(SceneNode):
         self.marker_topics = set()
         self.sample_topics = set()
         self.rank = {}
+        self._topic_types = {}
         for topic in wanted:
             name = self.resolve_topic_name(topic)         # namespace and remapping applied
             self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
+            self._topic_types[name] = types[topic]
             self.counts[name] = 0
             self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
             if types[topic] == "visualization_msgs/msg/MarkerArray":
@@ -975,8 +992,24 @@ class RecorderNode(SceneNode):
     def _on_raw(self, topic, data):
         # Header-first types and Clock carry their sim time; Float64 takes the latest sim time
         # received (never wall time), so one bag has one time base.
+        if self.writer is None or self.writer.closed:
+            return
         st = m.cdr_stamp_ns(data) if topic in self.stamped else \
             m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
+        if st is not None and topic in self.sample_topics:
+            # each publisher sends its topic in stamp order: a stamp going back means its run
+            # restarted (a scene change on the clock owner restarts sim time at 0)
+            last = self._topic_last.get(topic)
+            self._topic_last[topic] = st
+            run = self._topic_run.get(topic, self.run_index)
+            if last is not None and st < last:
+                run += 1
+            self._topic_run[topic] = run
+            if run > self.run_index:
+                self._new_run(topic, last, st)
+            elif run < self.run_index:      # the rest of a run closed by a restart: into its own file
+                self._write_old(run, topic, st, data)
+                return
         if st is None:
             st = self.max_ns
         self.counts[topic] += 1
@@ -994,11 +1027,78 @@ class RecorderNode(SceneNode):
             self._flush(self._watermark())
 
     def _write(self, topic, st, data):
-        if st < self.last_ns:            # arrived after later stamps were written: logged at that time
+        if self.writer.closed:           # stopped by a full disk
+            return
+        if st < self.last_ns:            # arrived after later stamps were written: still logged at its stamp
             self.late += 1
-            st = self.last_ns
-        self.last_ns = st
-        self.writer.write(topic, st, data)
+        self.last_ns = max(self.last_ns, st)
+        try:
+            self.writer.write(topic, st, data)
+        except OSError as exc:
+            self._disk_full(exc)
+
+    def _disk_full(self, exc):
+        """A write failed (ENOSPC...): the bag stays as its last commit made it (readable); the
+        recorder stops recording, logs one line and keeps the error for ``run`` to report."""
+        from gyro_instrument.recording.mcap_io import DiskFull
+        if not isinstance(exc, DiskFull):
+            raise exc
+        self.failed = exc
+        self._held = []
+        if self.standalone:          # in 'run' the one line is the command's error
+            self.get_logger().error(exc.line("output"))
+        try:
+            self.writer.close(state="disk full")
+        except OSError:
+            pass
+        self.done = True
+
+    def _new_run(self, topic, last, st):
+        """The stamps of ``topic`` went back (``last`` -> ``st``): close this recording (everything
+        held written first) and record the new run to a new file (:func:`restart_path`); messages of
+        the old run that still arrive go to the old file, kept open until close."""
+        from gyro_instrument.recording.bag_layout import restart_path
+        self._flush(math.inf)
+        old_path = self.writer.path
+        self.run_index += 1
+        new_out = restart_path(self._out, self.run_index)
+        self.get_logger().warning(
+            f"{topic}: sim time went back from {(last - m.EPOCH_NS) / 1e9:.9g} s to {(st - m.EPOCH_NS) / 1e9:.9g} s "
+            f"(the clock owner restarted its run): {old_path} closed, recording continues in {new_out}")
+        self._old[self.run_index - 1] = (self.writer, self.counts, dict(self._topic_last), new_out)
+        self.counts = {tp: 0 for tp in self.counts}
+        self._last_in, self.last_ns, self.max_ns, self.late = {}, 0, 0, 0
+        self.done = False
+        self.writer = open_bag_writer(new_out, self._fmt, self.value("max_bag_size", 0),
+                                      self.value("max_bag_duration", 0.0))
+        rec = self._scene_record()
+        rec["continues"] = os.path.basename(old_path.rstrip("/"))
+        self.writer.add_metadata("gyro_instrument", rec)
+        for name in self.counts:
+            self.writer.add_topic(name, self._topic_types[name], qos_yaml(reliable=True, keep_all=False, depth=1000))
+
+    def _write_old(self, run, topic, st, data):
+        writer, counts, _, _ = self._old[run]
+        counts[topic] = counts.get(topic, 0) + 1
+        if not writer.closed:
+            try:
+                writer.write(topic, st, data)
+            except OSError as exc:
+                self._disk_full(exc)
+
+    def _close_old(self):
+        for run, (writer, counts, _, new_out) in sorted(self._old.items()):
+            if writer.closed:
+                continue
+            topics = {tp: [counts[tp], n] for tp, n in self.expected.items()}
+            state = "incomplete" if any(counts[tp] < n for tp, n in self.expected.items()) else "complete"
+            try:
+                writer.close(state=state, topics=json.dumps(topics), restarted=json.dumps(
+                    {"continues_in": os.path.basename(new_out.rstrip("/")),
+                     "reason": "sim time went back: the clock owner restarted its run"}))
+            except OSError:
+                pass
+            self.runs.append((writer.path, state))
 
     def _watermark(self):
         """Stamps up to here are complete on every sample topic still publishing."""
@@ -1023,11 +1123,19 @@ class RecorderNode(SceneNode):
         so far: the suite skips it before quick integrations when the last commit is recent.)"""
         if self.writer is not None and not self.writer.closed and self.writer.pending() \
                 and self.writer.since_commit_s() >= older_than_s:
-            self.writer.commit()
+            try:
+                self.writer.commit()
+            except OSError as exc:
+                self._disk_full(exc)
 
     def _control(self):
-        if self._held and time.monotonic() - self._last_arrival > self.HOLD_S:
-            self._flush(math.inf)        # a topic lags or stopped: write what is held
+        if self._held:
+            quiet = time.monotonic() - self._last_arrival
+            lagging = [tp for tp in self.sample_topics if self.counts[tp] < self.expected[tp]]
+            alive = any(self.count_publishers(tp) for tp in lagging)
+            if (quiet > self.HOLD_S and not alive) or quiet > self.HOLD_MAX_S \
+                    or len(self._held) > self.HOLD_MAX_MESSAGES:
+                self._flush(math.inf)    # a topic stopped: write what is held (late ones: at their stamps)
         self.commit()
         if self.value("stop_when_complete", False) and self.writer is not None and not self.done \
                 and self.missing() == {}:
@@ -1044,10 +1152,17 @@ class RecorderNode(SceneNode):
         ``complete`` when every topic holds what the scene publishes, ``incomplete`` otherwise;
         with the per-topic counts (``topics``: {topic: [recorded, expected]}) and ``late`` (messages
         that arrived after later stamps were written and carry that later log time)."""
+        self._close_old()
         if self.writer is not None and not self.writer.closed:
             self._flush(math.inf)
+            if self.writer.closed:       # the disk filled while writing what was held
+                return
             if metadata:
-                self.writer.add_metadata(name, metadata)
+                try:
+                    self.writer.add_metadata(name, metadata)
+                except OSError as exc:
+                    self._disk_full(exc)
+                    return
             missing = self.missing()
             if state is None:
                 state = "incomplete" if missing else "complete"
@@ -1055,7 +1170,14 @@ class RecorderNode(SceneNode):
                     self.get_logger().warning("recording incomplete: " + ", ".join(
                         f"{tp} {k} of {n}" for tp, (k, n) in missing.items()))
             topics = {tp: [self.counts[tp], n] for tp, n in self.expected.items()}
-            self.writer.close(state=state, topics=json.dumps(topics), late=self.late)
+            fields = {"topics": json.dumps(topics), "late": self.late}
+            if self.run_index:
+                fields["restart"] = json.dumps({"run": self.run_index, "continues": os.path.basename(
+                    self._old[self.run_index - 1][0].path.rstrip("/"))})
+            try:
+                self.writer.close(state=state, **fields)
+            except OSError as exc:
+                self._disk_full(exc)
 
 
 class PlayerNode(SceneNode):

@@ -188,6 +188,14 @@ QUICK_S = 0.25
 MIN_WINDOW_S, MAX_WINDOW_S = 1.0e-3, 1.0e6
 
 
+class BagWriteError(SceneError):
+    """The bag could not be written (a full disk): :meth:`DiskFull.line` as the one line."""
+
+    def __init__(self, line) -> None:
+        ValueError.__init__(self, line)
+        self.field, self.value, self.valid = "--bag", None, line
+
+
 def check_window(window_s, field="--window-s") -> None:
     """Refuse a window that cannot work: not a number, not finite, or outside [:data:`MIN_WINDOW_S`,
     :data:`MAX_WINDOW_S`] (below a millisecond every block is one sample and the run crawls).
@@ -310,6 +318,10 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         published, first_message_s, wall = _stream(
             sims, rec, ex, lockstep, sim_pubs, n_samples, dt, batch, real_time_factor, timeout_s, progress,
             stop, t_start)
+        if rec is not None and rec.failed is not None:
+            # the disk filled: the bag is left readable up to its last commit; one line, exit 2
+            rec.close(state="disk full")
+            raise BagWriteError(rec.failed.line("--bag"))
         # the process's peak so far: the streaming part of the run, before the estimate's work arrays
         peak_streaming_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         result = _finalize(est, rec, ex, timeout_s)
@@ -422,6 +434,8 @@ def _stream(sims, rec, ex, lockstep, sim_pubs, n_samples, dt, batch, real_time_f
     while i < n_samples:
         if stop:
             raise KeyboardInterrupt
+        if rec is not None and rec.failed is not None:
+            break
         integrating = not all(s.block_ready(batch) for s in sims)
         if rec is not None and integrating:
             # on disk before the next integration: always after a slow one (it may be as slow);
