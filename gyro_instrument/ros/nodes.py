@@ -556,6 +556,8 @@ class SimulatorNode(SceneNode):
             if reason is not None:
                 self.get_logger().error(f"publish_clock refused: {reason}; not running (stop the other owner, "
                                         f"or start this node with publish_clock:=false to follow it)")
+                self.destroy_publisher(self.clock_pub)      # not counted as an owner by the next one
+                self.clock_pub = None
                 self.state = "refused"
                 return
         self.state = "running"
