@@ -336,7 +336,7 @@ def test_estimator_restarts_latches_and_speaks_when_its_input_stops(ctx):
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from std_msgs.msg import Float64
     latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    est = start("estimator", "-p", "scene:=foucault_pantheon", "-p", "duration_s:=60", "-p", "input_timeout_s:=2")
+    est = start("estimator", "-p", "scene:=foucault_pantheon", "-p", "duration_s:=60", "-p", "input_timeout_s:=4")
     sim = start("pendulum_sim", "-p", "scene:=foucault_pantheon", "-p", "duration_s:=60", "-p", "publish_clock:=true",
                 "-p", "wait_for:=['estimator']", "-p", "real_time_factor:=0")
     node = Node("estimate_user", context=ctx)
@@ -344,7 +344,7 @@ def test_estimator_restarts_latches_and_speaks_when_its_input_stops(ctx):
     node.create_subscription(DiagnosticArray, "/diagnostics", lambda msg: diags.append(msg.status[0]), latched)
     try:
         assert spin_until(node, lambda: len(diags) >= 1, 60), "no first estimate"
-        assert diags[0].level == DiagnosticStatus.OK, diags[0]
+        assert diags[0].level == DiagnosticStatus.OK, (diags[0].message, out_of(est))
         late = []
         node.create_subscription(Float64, "/estimator/latitude_rad", lambda msg: late.append(msg.data), latched)
         assert spin_until(node, lambda: late, 10), "a late TRANSIENT_LOCAL subscriber got no estimate"
@@ -355,7 +355,7 @@ def test_estimator_restarts_latches_and_speaks_when_its_input_stops(ctx):
             assert call(node, SetParameters, "/pendulum_sim/set_parameters", req).results[0].successful
         set_("seed", type=ParameterType.PARAMETER_INTEGER, integer_value=3)
         assert spin_until(node, lambda: len(diags) >= 2, 60), "no estimate after the run restarted"
-        assert diags[1].level == DiagnosticStatus.OK, diags[1]
+        assert diags[1].level == DiagnosticStatus.OK, (diags[1].message, out_of(est))
         set_("real_time_factor", type=ParameterType.PARAMETER_DOUBLE, double_value=1.0)
         set_("seed", type=ParameterType.PARAMETER_INTEGER, integer_value=4)
         spin_until(node, lambda: False, 1.5)
@@ -366,7 +366,12 @@ def test_estimator_restarts_latches_and_speaks_when_its_input_stops(ctx):
     finally:
         node.destroy_node()
         out_sim, out_est = stop(sim), stop(est)
-    assert 1.5 < waited < 5.0, waited
+    assert 3.5 < waited < 7.0, waited
     assert diags[2].level == DiagnosticStatus.WARN and "no joint sample or clock tick" in diags[2].message, diags[2]
     assert out_est.count("the clock went back from") == 2 and "run 3 begins" in out_est, out_est
     assert "[WARN]" in out_est and "estimate from the samples received" in out_est, out_est
+
+
+def out_of(p):
+    """What a node logged so far (it is stopped to read it)."""
+    return stop(p)

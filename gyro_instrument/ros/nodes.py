@@ -668,6 +668,21 @@ class JointBuffer:
         n = self._n
         return self._t[:n], self._pos[:n], self._vel[:n]
 
+    def split_run(self) -> tuple:
+        """(the samples before the last place the stamps go back, those after it: a new run's that
+        arrived before its first clock tick) as two buffers; all before when they never go back."""
+        t, pos, vel = self.arrays()
+        back = np.flatnonzero(t[1:] < t[:-1])
+        k = int(back[-1]) + 1 if back.size else t.size
+        parts = []
+        for a, z in ((0, k), (k, t.size)):
+            out = JointBuffer(self.layout, keep=self.keep)
+            if z > a:
+                out._append(t[a:z].copy(), pos[a:z].copy(), vel[a:z].copy())
+                out.count = z - a
+            parts.append(out)
+        return tuple(parts)
+
     def nbytes(self) -> int:
         """Bytes held (the arrays' capacity and the serialized messages not yet decoded)."""
         return self._t.nbytes + self._pos.nbytes + self._vel.nbytes + sum(len(d) for d in self._raw)
@@ -737,13 +752,15 @@ class EstimatorNode(SceneNode):
     def new_run(self, why) -> None:
         """The run restarted (the clock went back: a scene change or restart of the clock owner):
         an estimate not yet published for the run so far is published first (WARN), then the
-        samples are dropped and a new estimate starts."""
+        samples are dropped and a new estimate starts (with the new run's samples that came before
+        its first clock tick)."""
+        split = {name: buf.split_run() for name, buf in self.buffers.items()}
+        self.buffers = {name: old for name, (old, _) in split.items()}
         if not self.final and self.received():
             self._final(f"{why}; the run so far ended early")
         self.runs += 1
         self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
-        for name, buf in self.buffers.items():
-            self.buffers[name] = JointBuffer(buf.layout, keep=buf.keep)
+        self.buffers = {name: new for name, (_, new) in split.items()}
         self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
 
     def restart(self) -> None:
@@ -779,8 +796,9 @@ class EstimatorNode(SceneNode):
             return
         timeout = float(self.value("input_timeout_s", 5.0))
         now = time.monotonic()
-        if self._clock_done_at is not None and now - self._clock_done_at > timeout:
-            self._final(f"the clock reached the end {timeout:g} s ago (input_timeout_s)")
+        if self._clock_done_at is not None and now - max(self._clock_done_at, self._last_input or 0.0) > timeout:
+            # samples still arriving (a slow subscriber's queue) keep it waiting
+            self._final(f"the clock reached the end and no sample came for {timeout:g} s (input_timeout_s)")
         elif self._last_input is not None and now - self._last_input > timeout:
             self._final(f"no joint sample or clock tick for {now - self._last_input:.1f} s (input_timeout_s = "
                         f"{timeout:g})")
