@@ -1,10 +1,12 @@
 """Entry points of the nodes (``ros2 run gyro_instrument <node>``), Jazzy ``main()`` pattern, each
 with ``--help`` (parameters with their descriptors, topics, an example) before ``--ros-args``."""
 
+import signal
 import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 from rclpy._rclpy_pybind11 import RCLError
 
 from gyro_instrument.ros import params as P
@@ -59,12 +61,39 @@ def _wants_help(name, args):
     return False
 
 
+class _Stop:
+    """SIGINT / SIGTERM ask the spin loop to stop; the context stays valid until the node's last
+    words (the recorder's status, a final log line) are out and the node is destroyed, so no log
+    message goes to a dead ``/rosout`` publisher ("publisher's context is invalid")."""
+
+    def __init__(self):
+        self.asked = False
+        self.previous = {}
+
+    def install(self):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            self.previous[sig] = signal.signal(sig, self._handler)
+
+    def _handler(self, signum, frame):
+        if self.asked:              # a second Ctrl-C: the default behaviour
+            raise KeyboardInterrupt
+        self.asked = True
+
+    def restore(self):
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
+
+
+_STOP = _Stop()
+
+
 def _spin(node, on_exit=None):
-    """Spin until shutdown (SIGINT/SIGTERM) or until the node says it is ``done``."""
+    """Spin until SIGINT/SIGTERM (or an external shutdown) or until the node says it is ``done``;
+    then the node's exit work, the node destroyed, and only then the context shut down."""
     ex = SingleThreadedExecutor(context=node.context)
     ex.add_node(node)
     try:
-        while node.context.ok() and not getattr(node, "done", False):
+        while node.context.ok() and not _STOP.asked and not getattr(node, "done", False):
             try:
                 ex.spin_once(timeout_sec=0.1)
             except RCLError:
@@ -74,17 +103,22 @@ def _spin(node, on_exit=None):
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        if on_exit:
-            on_exit()
-        ex.remove_node(node)
-        node.destroy_node()
-        rclpy.try_shutdown()
+        try:
+            if on_exit:
+                on_exit()
+        finally:
+            ex.remove_node(node)
+            ex.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown()
+            _STOP.restore()
 
 
 def _run(name, make, args=None, on_exit=None):
     if _wants_help(name, args):
         return 0
-    rclpy.init(args=args)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    _STOP.install()
     node = make()
     node.start()
     _spin(node, on_exit=(lambda: on_exit(node)) if on_exit else None)

@@ -37,7 +37,7 @@ from rclpy.clock import Clock as RclClock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 
 from gyro_instrument.cli import damage_line
@@ -52,7 +52,7 @@ from gyro_instrument.recording.mcap_io import qos_yaml, read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.instruments import simulator_kinds
-from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, TRAIL, axis_topic, visual_every,
+from gyro_instrument.ros.topics import (CLOCK, ESTIMATOR_TOPICS, TRAIL, axis_topic, resolve, visual_every,
                                         bob_topic, contact_point_topic, joint_topic, markers_topic, scene_topics,
                                         swing_plane_topic)
 from gyro_instrument.recording.visual import SwingPlaneStream, axis_directions
@@ -60,6 +60,10 @@ from gyro_instrument.scenes import build_instruments, load_scene
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: the estimator's results: latched (the last estimate kept for subscribers that ask for
+#: TRANSIENT_LOCAL; a VOLATILE subscriber, the recorder's, still matches and gets new ones)
+LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: publishers of a node run alone: a sample is kept until every matched subscriber has it, however
 #: far ahead of a slow subscriber the publisher runs (real-time factor 0), so nothing is overwritten
 PUBLISH_ALL = RELIABLE_ALL
@@ -186,6 +190,44 @@ class SceneNode(Node):
         """Topics with a subscription the graph knows of that a publisher has not matched yet."""
         return [pub.topic_name for pub in pubs
                 if pub.get_subscription_count() < len(self.get_subscriptions_info_by_topic(pub.topic_name))]
+
+    # ---- one clock per namespace -------------------------------------------------------------------
+
+    def clock_remap_note(self, topic) -> str:
+        """What sim-time consumers need when this node's clock is not ``/clock``: rclpy's time source
+        subscribes to the absolute ``/clock`` whatever the node's namespace."""
+        if topic == "/clock":
+            return ""
+        return (f"; a use_sim_time node reads this clock only when started with -r /clock:={topic} (rclpy's time "
+                f"source listens on the absolute /clock)")
+
+    def watch_clock(self, topic) -> None:
+        """Before owning ``topic``: count the ticks another node publishes on it (:meth:`other_clock_owner`)."""
+        self._foreign_ticks = 0
+
+        def tick(_data):
+            self._foreign_ticks += 1
+        self._clock_watch = self.create_subscription(m.Clock, topic, tick, RELIABLE_ALL, raw=True)
+
+    def other_clock_owner(self, topic) -> str | None:
+        """Why this node must not publish ``topic`` (None when it may): another node publishes it and
+        either ticks were seen from it while this node waited, or it is named before this one (two
+        owners started together: the first name keeps the clock). Stops the watch."""
+        watch = getattr(self, "_clock_watch", None)
+        if watch is not None:
+            self.destroy_subscription(watch)
+            self._clock_watch = None
+        me = resolve(self.get_namespace(), self.get_name())
+        others = sorted({resolve(i.node_namespace, i.node_name) for i in self.get_publishers_info_by_topic(topic)}
+                        - {me})
+        if not others:
+            return None
+        ticks = getattr(self, "_foreign_ticks", 0)
+        if ticks or others[0] < me:
+            seen = f"{ticks} ticks seen from it" if ticks else f"it was named first ({others[0]} < {me})"
+            return (f"another node already publishes {topic}: {', '.join(others)} ({seen}); one clock owner per "
+                    f"namespace, so this node does not publish it (no duplicate or backwards ticks)")
+        return None
 
 
 class SimulatorNode(SceneNode):
@@ -327,9 +369,10 @@ class SimulatorNode(SceneNode):
             if t is not None:
                 self.destroy_timer(t)
         self.timer = None
-        if self.clock_sub is not None:
-            self.destroy_subscription(self.clock_sub)
-            self.clock_sub = None
+        for attr in ("clock_sub", "_clock_watch"):
+            if getattr(self, attr, None) is not None:
+                self.destroy_subscription(getattr(self, attr))
+                setattr(self, attr, None)
         for pub in list(self.pubs.values()) + ([self.clock_pub] if self.clock_pub is not None else []):
             self.destroy_publisher(pub)
         self.pubs, self.layouts, self.streams, self.clock_pub, self.visual = {}, {}, {}, None, {}
@@ -477,6 +520,7 @@ class SimulatorNode(SceneNode):
         pubs = ", ".join(f"{pub.topic_name} ({pub.msg_type.__module__.split('.')[0]}/msg/{pub.msg_type.__name__})"
                          for pub in self.publishers())
         clock = ("owns the clock (publish_clock = true): publishes " + self.clock_pub.topic_name
+                 + self.clock_remap_note(self.clock_pub.topic_name)
                  if self.clock_pub is not None else "follows the clock another node publishes (publish_clock = false)")
         return (f"scene {self.scene.name}: {self.samples} samples at {self.scene.sample_rate_hz:g} Hz; publishes "
                 f"{pubs}; {clock}")
@@ -485,6 +529,8 @@ class SimulatorNode(SceneNode):
         self.get_logger().info(self.startup_line())
         self.state = "waiting"
         self._wait_t0 = time.monotonic()
+        if self.clock_pub is not None:
+            self.watch_clock(self.clock_pub.topic_name)
         exp = self.expected_subscribers()
         if exp:
             self.get_logger().info(f"waiting up to {self.value('wait_timeout_s'):g} s for {', '.join(exp)} "
@@ -505,6 +551,15 @@ class SimulatorNode(SceneNode):
         self._begin()
 
     def _begin(self):
+        if self.clock_pub is not None:
+            reason = self.other_clock_owner(self.clock_pub.topic_name)
+            if reason is not None:
+                self.get_logger().error(f"publish_clock refused: {reason}; not running (stop the other owner, "
+                                        f"or start this node with publish_clock:=false to follow it)")
+                self.destroy_publisher(self.clock_pub)      # not counted as an owner by the next one
+                self.clock_pub = None
+                self.state = "refused"
+                return
         self.state = "running"
         if self.clock_owner:
             self._rtf = None
@@ -613,6 +668,21 @@ class JointBuffer:
         n = self._n
         return self._t[:n], self._pos[:n], self._vel[:n]
 
+    def split_run(self) -> tuple:
+        """(the samples before the last place the stamps go back, those after it: a new run's that
+        arrived before its first clock tick) as two buffers; all before when they never go back."""
+        t, pos, vel = self.arrays()
+        back = np.flatnonzero(t[1:] < t[:-1])
+        k = int(back[-1]) + 1 if back.size else t.size
+        parts = []
+        for a, z in ((0, k), (k, t.size)):
+            out = JointBuffer(self.layout, keep=self.keep)
+            if z > a:
+                out._append(t[a:z].copy(), pos[a:z].copy(), vel[a:z].copy())
+                out.count = z - a
+            parts.append(out)
+        return tuple(parts)
+
     def nbytes(self) -> int:
         """Bytes held (the arrays' capacity and the serialized messages not yet decoded)."""
         return self._t.nbytes + self._pos.nbytes + self._vel.nbytes + sum(len(d) for d in self._raw)
@@ -643,6 +713,8 @@ class EstimatorNode(SceneNode):
         self.expected = 0
         self.final = False
         self._clock_done_at = None
+        self._last_input = None
+        self.runs = 0
         if self.load():
             self.prepare()
 
@@ -661,7 +733,7 @@ class EstimatorNode(SceneNode):
         # sim time from the clock: the stamp of an estimate that used no sample
         self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
         for topic, type_name in ESTIMATOR_TOPICS.items():
-            self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, RELIABLE_1000)
+            self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, LATCHED)
         period = float(self.get_parameter("publish_period_s").value)
         if period > 0:
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
@@ -675,6 +747,21 @@ class EstimatorNode(SceneNode):
             self.destroy_publisher(pub)
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
+        self._last_input = None
+
+    def new_run(self, why) -> None:
+        """The run restarted (the clock went back: a scene change or restart of the clock owner):
+        an estimate not yet published for the run so far is published first (WARN), then the
+        samples are dropped and a new estimate starts (with the new run's samples that came before
+        its first clock tick)."""
+        split = {name: buf.split_run() for name, buf in self.buffers.items()}
+        self.buffers = {name: old for name, (old, _) in split.items()}
+        if not self.final and self.received():
+            self._final(f"{why}; the run so far ended early")
+        self.runs += 1
+        self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
+        self.buffers = {name: new for name, (_, new) in split.items()}
+        self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
 
     def restart(self) -> None:
         super().restart()
@@ -686,8 +773,9 @@ class EstimatorNode(SceneNode):
                 self.get_logger().info(self.startup_line())
 
     def start(self) -> None:
-        """Run alone: publish once every expected sample has arrived (or 5 s of wall time after the
-        clock reached the last sample, with what there is)."""
+        """Run alone: publish once every expected sample has arrived, or with what there is (WARN)
+        ``input_timeout_s`` of wall time after the clock reached the last sample or after the input
+        (joint samples and clock) went silent; a new run (the clock going back) starts a new estimate."""
         self.standalone = True
         self.create_timer(0.5, self._control, clock=STEADY)
         if self.scene is not None:
@@ -696,23 +784,34 @@ class EstimatorNode(SceneNode):
     def startup_line(self) -> str:
         subs = ", ".join(self.subs) or "no joint states (nothing estimable in this scene)"
         pubs = ", ".join(pub.topic_name for pub in self.pubs.values())
-        return (f"scene {self.scene.name}: expects {self.expected} samples on {subs}; publishes {pubs} once "
-                f"they have arrived")
+        return (f"scene {self.scene.name}: expects {self.expected} samples on {subs}; publishes {pubs} "
+                f"(TRANSIENT_LOCAL, depth 1: a late subscriber asking for TRANSIENT_LOCAL gets the last estimate) "
+                f"once they have arrived, or from what it has when the input is silent for input_timeout_s = "
+                f"{self.value('input_timeout_s'):g} s")
 
     def _control(self):
         if self._restart:
             self.restart()
         if self.final or self.scene is None:
             return
-        if self._clock_done_at is not None and time.monotonic() - self._clock_done_at > 5.0:
-            have = {n: len(b) for n, b in self.buffers.items()}
-            self.get_logger().warning(f"the clock reached the end 5 s ago; estimating from the samples received "
-                                      f"{have} of {self.expected} each")
-            self._final()
+        timeout = float(self.value("input_timeout_s", 5.0))
+        now = time.monotonic()
+        if self._clock_done_at is not None and now - max(self._clock_done_at, self._last_input or 0.0) > timeout:
+            # samples still arriving (a slow subscriber's queue) keep it waiting
+            self._final(f"the clock reached the end and no sample came for {timeout:g} s (input_timeout_s)")
+        elif self._last_input is not None and now - self._last_input > timeout:
+            self._final(f"no joint sample or clock tick for {now - self._last_input:.1f} s (input_timeout_s = "
+                        f"{timeout:g})")
 
-    def _final(self):
+    def _final(self, short=None):
+        """Estimate and publish; ``short``: why the estimate comes before every expected sample (a
+        WARN, and the diagnostic status WARN with that reason)."""
         self.final = True
-        r = self.finalize()
+        if short is not None:
+            have = {n: len(b) for n, b in self.buffers.items()}
+            short = f"{short}: estimate from the samples received {have} of {self.expected} each"
+            self.get_logger().warning(short)
+        r = self.finalize(short)
         if r is not None:
             self.get_logger().info(f"estimate published: latitude {r.get('latitude_deg')} deg, Earth rate "
                                    f"{r.get('earth_rate_rad_s')} rad/s ({r.get('method') or r.get('reason', '')})")
@@ -723,7 +822,11 @@ class EstimatorNode(SceneNode):
                 self._final()
 
     def _on_clock(self, data):
-        self.last_clock_ns = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        self._last_input = time.monotonic()
+        if self.standalone and self.last_clock_ns is not None and t < self.last_clock_ns and self.scene is not None:
+            self.new_run(f"the clock went back from {self.last_clock_ns / 1e9:g} s to {t / 1e9:g} s")
+        self.last_clock_ns = t
         if self.standalone and self._clock_done_at is None and self.expected and self.scene is not None \
                 and self.last_clock_ns >= self.last_stamp_ns:
             self._clock_done_at = time.monotonic()
@@ -757,6 +860,7 @@ class EstimatorNode(SceneNode):
         """A serialized JointState: kept as bytes when it has the layout the simulators publish
         (the common case, no Python message object), otherwise decoded and checked as any other."""
         buf = self.buffers[name]
+        self._last_input = time.monotonic()
         if buf.layout.matches(data):
             buf.add_raw(data)
             if self.standalone and len(buf) >= self.expected:
@@ -794,8 +898,9 @@ class EstimatorNode(SceneNode):
             t = self.last_clock_ns
         return 0 if t is None else max(int(t), 0)
 
-    def finalize(self) -> dict | None:
-        """Estimate and publish; returns the result dict."""
+    def finalize(self, short=None) -> dict | None:
+        """Estimate and publish; returns the result dict. ``short``: why the input is incomplete (the
+        diagnostic status is then WARN with that text before the method)."""
         try:
             self.result = self.estimate()
         except InadequateData as exc:  # the data fail an adequacy check: said on /diagnostics, no number
@@ -815,9 +920,10 @@ class EstimatorNode(SceneNode):
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
         self.pubs["estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        text = r.get("method") or r.get("reason", "")
         self.pubs["diagnostics"].publish(m.diagnostics(
-            t, "gyro_instrument/estimator", r.get("method") is not None,
-            r.get("method") or r.get("reason", ""),
+            t, "gyro_instrument/estimator", r.get("method") is not None and short is None,
+            text if short is None else f"{short}; {text}",
             {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
              "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
              "rejected_messages": self.rejected, "wrong_topic_types": self.check_topic_types()}))
@@ -1182,10 +1288,14 @@ class RecorderNode(SceneNode):
 
 class PlayerNode(SceneNode):
     """Republishes a bag on its topics (relative names), driving ``clock`` from the log times; waits
-    for its subscribers, exits at the end (``done``) or loops."""
+    for its subscribers (topic by topic), counts what reached a subscriber, exits at the end
+    (``done``) or loops."""
 
     SPECS = P.PLAYER
     RESTART_ON = ()
+    #: the subscriptions the graph shows on the bag's topics must be unchanged (and all matched) for
+    #: this long (wall time, s) before playing: a subscriber's topics are discovered one by one
+    SETTLE_S = 0.5
 
     def __init__(self, name="player", **kwargs):
         super().__init__(name, **kwargs)
@@ -1196,9 +1306,11 @@ class PlayerNode(SceneNode):
         self.queue = []
         self.index = 0
         self.damaged = []
+        self.skipped = {}
         self.done = False
         self.state = "idle"
         self.has_clock = False
+        self.timer = None
         bag = self.get_parameter("bag").value
         if not bag or not os.path.exists(bag):
             self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file or rosbag2 bag directory")
@@ -1213,44 +1325,107 @@ class PlayerNode(SceneNode):
             self.get_logger().warning(f"bag {bag}: damaged: {damage_line(d)}; those messages are not published")
         for note in scan.notes:
             self.get_logger().warning(f"bag {bag}: {note}")
-        self.queue = [(tp.lstrip("/"), ty, t, data) for tp, ty, t, data in read_messages(bag, scan=scan)]
-        self.has_clock = any(tp.split("/")[-1] == CLOCK for tp, *_ in self.queue)
+        classes = {}
+        queue = []
+        for tp, ty, t, data in read_messages(bag, scan=scan):
+            topic = tp.lstrip("/")
+            if topic not in classes:
+                classes[topic] = self._message_class(bag, tp, ty)
+            if classes[topic] is None:
+                self.skipped[tp] = self.skipped.get(tp, 0) + 1
+            else:
+                queue.append((topic, ty, t, data))
+        self.queue = queue
+        for tp, n in self.skipped.items():
+            self.get_logger().warning(f"bag {bag}: {tp}: {n} messages not played (type not installed)")
+        clock_topics = {tp for tp, *_ in self.queue if tp.split("/")[-1] == CLOCK}
+        self.has_clock = bool(clock_topics)
         for topic, type_name, _, _ in self.queue:
             if topic not in self.pubs:
-                self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, self.pub_qos)
+                self.pubs[topic] = self.create_publisher(classes[topic], topic, self.pub_qos)
         if not self.has_clock:
             self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, self.pub_qos)
+            clock_topics = {CLOCK}
+        self.clock_topics = sorted(self.pubs[tp].topic_name for tp in clock_topics)
         self._last_clock = None
+        self.sent = {tp: [0, 0, 0] for tp in self.pubs}     # sent, sent to >= 1 subscriber, deliveries
+        self._first_sent = set()
+        self._wait_topics = []
+        self._hold_topic = self._hold_t0 = None
+
+    def _message_class(self, bag, topic, type_name):
+        """The message class of ``type_name``, or None (logged) when its package is not installed or
+        has no such type: that topic is skipped, the rest played."""
+        try:
+            return m.message_class(type_name)
+        except (ImportError, AttributeError, ValueError) as exc:
+            self.get_logger().warning(f"bag {bag}: {topic} has type {type_name!r}, which is not installed here "
+                                      f"({exc.__class__.__name__}): that topic is skipped, the others are played")
+            return None
 
     def load(self) -> bool:
         return False
 
-    def publish_next(self) -> bool:
-        """Publish the next message (and a clock tick when the bag has none); False when done."""
+    def publish_next(self, counts=None) -> bool:
+        """Publish the next message (and a clock tick when the bag has none); False when done.
+        ``counts`` {topic: matched subscribers} is what :attr:`sent` counts as delivered."""
         if self.index >= len(self.queue):
             return False
         topic, _, log_ns, data = self.queue[self.index]
         if not self.has_clock and log_ns != self._last_clock:
-            self.pubs[CLOCK].publish(m.CLOCK_LAYOUT.encode([log_ns - m.EPOCH_NS])[0])
+            self._send(CLOCK, m.CLOCK_LAYOUT.encode([log_ns - m.EPOCH_NS])[0], counts)
             self._last_clock = log_ns
-        self.pubs[topic].publish(data)
+        self._send(topic, data, counts)
         self.index += 1
         return True
 
+    def _send(self, topic, data, counts):
+        pub = self.pubs[topic]
+        n = counts[topic] if counts is not None else pub.get_subscription_count()
+        pub.publish(data)
+        c = self.sent[topic]
+        c[0] += 1
+        c[1] += n > 0
+        c[2] += n
+        self._first_sent.add(topic)
+
     def start(self) -> None:
-        """Wait for the subscribers (``wait_for``, ``min_subscribers``, at most ``wait_timeout_s``),
-        then play."""
+        """Wait for the subscribers (``wait_topics``, ``wait_for``, ``min_subscribers``; every
+        subscription the graph shows matched and unchanged for :attr:`SETTLE_S`; at most
+        ``wait_timeout_s``), then play."""
         self.standalone = True
         if not self.queue:
             self.done = True
             return
-        self.get_logger().info(f"publishes {len(self.queue)} messages on "
-                               f"{', '.join(p.topic_name for p in self.pubs.values())}; waiting for "
-                               f"{self.value('min_subscribers')} subscriber(s)"
-                               + (f" and {', '.join(self.value('wait_for'))}" if self.value("wait_for") else ""))
+        wt = self._wait_topics = self.wait_topics()
+        self.get_logger().info(
+            f"publishes {len(self.queue)} messages on {', '.join(p.topic_name for p in self.pubs.values())}"
+            f"{self.clock_remap_note(self.clock_topics[0])}; waiting up to {self.value('wait_timeout_s'):g} s for "
+            f"{self.value('min_subscribers')} subscriber(s) on topics other than the clock"
+            + (f", a subscriber on each of {', '.join(wt)} (wait_topics)" if wt else "")
+            + (f" and {', '.join(self.value('wait_for'))}" if self.value("wait_for") else "")
+            + f", and every subscription seen matched for {self.SETTLE_S:g} s")
         self.state = "waiting"
         self._wait_t0 = time.monotonic()
+        self._graph, self._graph_t = None, time.monotonic()
+        for tp in self.clock_topics:
+            self.watch_clock(tp)
         self.timer = self.create_timer(0.002, self._tick, clock=STEADY)
+
+    def wait_topics(self) -> list:
+        """Resolved names of the topics that must each have a matched subscription before playing."""
+        want = list(self.value("wait_topics", []) or [])
+        by_name = {p.topic_name: p.topic_name for p in self.pubs.values()}
+        if "*" in want:
+            return sorted(by_name)
+        out = []
+        for tp in want:
+            name = self.resolve_topic_name(tp)
+            if name not in by_name:
+                self.get_logger().warning(f"wait_topics: {tp!r} is not a topic of the bag; not waited for")
+                continue
+            out.append(name)
+        return out
 
     def _ready(self):
         pubs = list(self.pubs.values())
@@ -1260,8 +1435,17 @@ class PlayerNode(SceneNode):
         missing = [n for n in missing if not any(
             i.node_name == n and i.node_namespace == self.get_namespace()
             for t in topics for i in self.get_subscriptions_info_by_topic(t))]
-        few = sum(p.get_subscription_count() for p in pubs) < self.value("min_subscribers", 1)
-        return missing + (["min_subscribers"] if few else []) + self._unmatched(pubs)
+        # every sim-time node subscribes to the clock: only the other topics count as subscribers
+        few = sum(p.get_subscription_count() for p in pubs
+                  if p.topic_name not in self.clock_topics) < self.value("min_subscribers", 1)
+        alone = [p.topic_name for p in pubs if p.topic_name in self._wait_topics and p.get_subscription_count() == 0]
+        # subscriptions are discovered topic by topic: wait until what the graph shows stops changing
+        graph = tuple(len(self.get_subscriptions_info_by_topic(t)) for t in topics)
+        now = time.monotonic()
+        if graph != self._graph:
+            self._graph, self._graph_t = graph, now
+        settling = ["the graph to settle"] if now - self._graph_t < self.SETTLE_S else []
+        return missing + (["min_subscribers"] if few else []) + alone + self._unmatched(pubs) + settling
 
     def _tick(self):
         if self.state == "waiting":
@@ -1270,31 +1454,89 @@ class PlayerNode(SceneNode):
                 if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
                     return
                 self.get_logger().warning(f"wait_timeout_s passed without {', '.join(missing)}: playing anyway")
+            for tp in self.clock_topics:
+                reason = self.other_clock_owner(tp)
+                if reason is not None:
+                    self.get_logger().error(f"not playing: {reason}")
+                    self.timer.cancel()
+                    self.state = "refused"
+                    self.done = True
+                    return
             self.state = "playing"
             self._rtf = None
+            self._hold_t0 = None
         if self.state != "playing":
+            return
+        counts = {tp: p.get_subscription_count() for tp, p in self.pubs.items()}
+        if self._held(counts):
             return
         rtf = float(self.value("real_time_factor", 1.0))
         if rtf <= 0:
             for _ in range(FLOW_BATCH):
-                if not self.publish_next():
+                if self._first_of_topic() or not self.publish_next(counts):
                     break
         else:
             now = time.monotonic()
-            if rtf != self._rtf or self.index == 0:
+            if rtf != self._rtf:
                 self._rtf, self._w0, self._t0 = rtf, now, self.queue[min(self.index, len(self.queue) - 1)][2]
             k = 0
             while k < FLOW_BATCH and self.index < len(self.queue) and \
                     (self.queue[self.index][2] - self._t0) <= (now - self._w0) * rtf * 1e9:
-                self.publish_next()
+                if self._first_of_topic():
+                    break
+                self.publish_next(counts)
                 k += 1
         if self.index >= len(self.queue):
             _acked(self, self.pubs.values())
+            line = self.summary()
             if self.value("loop", False):
-                self.get_logger().info(f"played {len(self.queue)} messages; looping")
+                self.get_logger().info(f"{line}; looping")
                 self.index, self._rtf, self._last_clock = 0, None, None
             else:
-                self.get_logger().info(f"played {len(self.queue)} messages; exiting")
+                self.get_logger().info(f"{line}; exiting")
                 self.timer.cancel()
                 self.state = "done"
                 self.done = True
+
+    def _first_of_topic(self) -> bool:
+        """True (stop the batch) when the next message is its topic's first and the graph shows a
+        subscription on that topic not matched yet: it is held (:meth:`_held`)."""
+        if self.index >= len(self.queue):
+            return False
+        topic = self.queue[self.index][0]
+        if topic in self._first_sent or not self._unmatched([self.pubs[topic]]):
+            return False
+        self._hold_topic = topic
+        return True
+
+    def _held(self, counts) -> bool:
+        """A topic's first message waits (at most ``wait_timeout_s``) for a subscription the graph
+        shows on it to match; paced play then resumes from that message."""
+        topic = getattr(self, "_hold_topic", None)
+        if topic is None:
+            return False
+        if self._unmatched([self.pubs[topic]]):
+            if self._hold_t0 is None:
+                self._hold_t0 = time.monotonic()
+            if time.monotonic() - self._hold_t0 < self.value("wait_timeout_s"):
+                return True
+            self.get_logger().warning(f"{self.pubs[topic].topic_name}: a subscription seen in the graph did not match "
+                                      f"within wait_timeout_s; playing on")
+            self._first_sent.add(topic)
+        self._hold_topic, self._hold_t0, self._rtf = None, None, None      # paced play re-anchors here
+        counts[topic] = self.pubs[topic].get_subscription_count()
+        return False
+
+    def summary(self) -> str:
+        """What was played and what reached a subscriber (matched when the message was sent)."""
+        sent = sum(c[0] for c in self.sent.values())
+        to_one = sum(c[1] for c in self.sent.values())
+        deliveries = sum(c[2] for c in self.sent.values())
+        short = [f"{self.pubs[tp].topic_name} {c[1]} of {c[0]}" for tp, c in self.sent.items() if c[1] < c[0]]
+        line = (f"played {len(self.queue)} messages ({sent} published with the clock ticks added); {to_one} reached "
+                f"at least one matched subscriber, {deliveries} deliveries in all")
+        if short:
+            line += "; sent with no subscriber matched: " + ", ".join(short)
+        if self.skipped:
+            line += "; skipped (type not installed): " + ", ".join(f"{tp} {n}" for tp, n in self.skipped.items())
+        return line

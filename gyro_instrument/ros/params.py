@@ -87,7 +87,10 @@ class Spec:
         bad = f"{self.name} = {v!r} is invalid: must be {self._must()}"
         if self.type == "double" and t == Parameter.Type.INTEGER:
             v, t = float(v), want
-        if self.type == "string[]" and t in _ARRAYS and len(v) == 0:
+        # an empty array carries no element type: `overrides: []` in a params file (what `ros2 param
+        # dump` writes) and -p "overrides:=[]" arrive as NOT_SET / None, `ros2 param set ... "[]"` as
+        # another array type; all of them are the empty list
+        if self.type == "string[]" and (t == Parameter.Type.NOT_SET or (t in _ARRAYS and len(v) == 0)):
             v, t = [], want
         if t != want:
             return None, bad
@@ -130,6 +133,10 @@ SIMULATOR = SCENE + [
          "the clock owner also waits for the scene's other simulators", read_only=True),
 ] + WAIT
 ESTIMATOR = SCENE + [
+    Spec("input_timeout_s", "double", 5.0, "wall time (s) without a joint sample or clock tick after input began "
+                                           "(or after the clock reached the run's end) before the estimator "
+                                           "publishes an estimate from what it has, with a WARN and a WARN "
+                                           "diagnostic status", 0.1, 86400.0),
     Spec("publish_period_s", "double", 0.0, "also publish the estimate every this many s of wall time; 0: once, "
                                             "when every expected sample (or the last clock tick) has arrived",
          0.0, 86400.0, read_only=True),
@@ -160,8 +167,11 @@ PLAYER = [
     Spec("loop", "bool", False, "start again at the end instead of exiting"),
     Spec("wait_for", "string[]", [], "nodes (same namespace) that must subscribe to one of the bag's topics before "
                                      "playing", read_only=True),
-    Spec("min_subscribers", "int", 1, "subscriptions that must be matched on the bag's topics before playing",
-         0, 1000, read_only=True),
+    Spec("min_subscribers", "int", 1, "subscriptions that must be matched on the bag's topics other than the "
+                                      "clock (every sim-time node subscribes to it) before playing", 0, 1000,
+         read_only=True),
+    Spec("wait_topics", "string[]", [], "topics of the bag (relative names; '*': every one) that must each have a "
+                                        "matched subscription before playing", read_only=True),
 ] + WAIT
 
 NODE_SPECS = {"gyrocompass_sim": SIMULATOR, "pendulum_sim": SIMULATOR, "top_sim": SIMULATOR,
