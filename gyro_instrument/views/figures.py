@@ -3,6 +3,7 @@ rosette (the bob seen from above), the residuals. Every figure is 16 in wide (16
 the default dpi) with text of 12 pt and more: readable on a slide."""
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -172,6 +173,10 @@ def _azimuth_panel(ax, n, t, tc, az, line, scale):
 SIDEREAL = 7.2921150e-5
 
 
+#: Characters per line of a note inside a panel of the figure's width at 12 pt.
+NOTE_CHARS = 140
+
+
 def residuals_figure(plt, rows, axis) -> "object":
     """The ``residuals`` view: one panel per (instrument, label, t, residual in degrees, note, span)
     row, with its rms and what a trend in it means."""
@@ -183,7 +188,9 @@ def residuals_figure(plt, rows, axis) -> "object":
         rms = float(np.sqrt(np.mean(rr ** 2))) if rr.size else float("nan")
         ax.set_title(f"{n}: {label}, rms {rms:.3g}°")
         ax.set_ylabel("degrees")
-        ax.text(0.01, 0.04, note, transform=ax.transAxes, fontsize=12, color="0.25")
+        # wrapped to the panel's width (a line running past the figure made tight_layout shrink the panel)
+        ax.text(0.01, 0.04, textwrap.fill(note, NOTE_CHARS), transform=ax.transAxes, fontsize=12, color="0.25",
+                bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "ec": "none"})
         ax.set_xlabel(tlabel)
     fig.tight_layout()
     return fig
