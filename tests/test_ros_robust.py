@@ -375,3 +375,30 @@ def test_estimator_restarts_latches_and_speaks_when_its_input_stops(ctx):
 def out_of(p):
     """What a node logged so far (it is stopped to read it)."""
     return stop(p)
+
+
+def test_a_recorder_refused_at_start_up_records_once_corrected_and_then_holds_its_file(ctx, tmp_path):
+    # The recorder refuses an existing output without overwrite (the file is kept as it is); setting
+    # overwrite:=true at runtime starts the recording; once recording, its scene and output are
+    # fixed (a change is refused with the reason, the node stays up).
+    from rcl_interfaces.msg import Parameter as ParamMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    out = tmp_path / "kept.mcap"
+    out.write_bytes(b"precious")
+    rec = start("recorder", "-p", f"output:={out}", "-p", "scene:=foucault_pantheon")
+    node = Node("fixer", context=ctx)
+    try:
+        assert out.read_bytes() == b"precious"
+        req = SetParameters.Request(parameters=[ParamMsg(name="overwrite", value=ParameterValue(
+            type=ParameterType.PARAMETER_BOOL, bool_value=True))])
+        assert call(node, SetParameters, "/recorder/set_parameters", req).results[0].successful
+        req = SetParameters.Request(parameters=[ParamMsg(name="scene", value=ParameterValue(
+            type=ParameterType.PARAMETER_STRING, string_value="quet_paris"))])
+        res = call(node, SetParameters, "/recorder/set_parameters", req).results[0]
+        assert not res.successful and "while recording" in res.reason
+    finally:
+        node.destroy_node()
+        log = stop(rec)
+    assert "overwrite" in log and "parameters corrected: recording to" in log, log
+    assert out.read_bytes()[:8] != b"precious" and out.read_bytes().startswith(b"\x89MCAP")
+    assert ROSOUT_DEAD not in log

@@ -948,6 +948,8 @@ class RecorderNode(SceneNode):
 
     SPECS = P.RECORDER
     RESTART_ON = ()
+    #: parameters that may be corrected until the recording starts (then they are fixed)
+    RETRY_ON = tuple(spec.name for spec in P.RECORDER if spec.description.endswith(P.RECORDING_FIXED))
     #: wall time (s) without any message after which held messages are written although a sample
     #: topic lags, when no publisher of that topic is left (its messages then written at their own
     #: stamps, out of file order: MCAP indexes each chunk's time range)
@@ -980,6 +982,24 @@ class RecorderNode(SceneNode):
         self._old = {}               # run index -> (writer, counts) of a run closed by a restart
         if self.load():
             self.prepare()
+
+    def _check_params(self, params):
+        if self.writer is not None and any(p.name in self.RETRY_ON for p in params):
+            names = ", ".join(p.name for p in params if p.name in self.RETRY_ON)
+            reason = f"{names} cannot change while recording to {self.writer.path}: a recording has one scene and " \
+                     "one file (stop the recorder and start it again)"
+            self.get_logger().error(f"parameter refused: {reason}")
+            return SetParametersResult(successful=False, reason=reason)
+        return super()._check_params(params)
+
+    def _after_set(self, params):
+        super()._after_set(params)
+        if self.writer is None and any(p.name in self.RETRY_ON for p in params):
+            # a value refused at start-up, corrected: start recording now
+            if self.load():
+                self.prepare()
+            if self.writer is not None:
+                self.get_logger().info(f"parameters corrected: recording to {self.writer.path}")
 
     def prepare(self) -> None:
         out = self.get_parameter("output").value

@@ -141,20 +141,24 @@ ESTIMATOR = SCENE + [
                                             "when every expected sample (or the last clock tick) has arrived",
          0.0, 86400.0, read_only=True),
 ]
-RECORDER = [Spec(s.name, s.type, s.default, s.description + " (read-only: a recording has one scene)",
-                 s.lo, s.hi, True) for s in SCENE] + [
+#: The recorder's parameters that may be set until its recording starts (a value refused at start-up
+#: corrected at runtime starts it), and are refused once it records (a recording has one scene and
+#: one file).
+RECORDING_FIXED = " (fixed once recording starts: a recording has one scene and one file)"
+RECORDER = [Spec(s.name, s.type, s.default, s.description + RECORDING_FIXED, s.lo, s.hi) for s in SCENE] + [
     Spec("output", "string", "", ".mcap path to record to (refused if its directory is missing or not writable, "
-                                 "if it is the scene file, or if it exists and overwrite is false)", read_only=True),
-    Spec("overwrite", "bool", False, "replace an existing output file", read_only=True),
+                                 "if it is the scene file, or if it exists and overwrite is false)" + RECORDING_FIXED),
+    Spec("overwrite", "bool", False, "replace an existing output file" + RECORDING_FIXED),
     Spec("format", "string", "", "mcap: one bare .mcap file; rosbag2: a bag directory (metadata.yaml + "
                                  "<dir>_0.mcap ...); empty: rosbag2 when output ends in '/' or splitting is asked "
-                                 "for, else mcap", read_only=True),
-    Spec("max_bag_size", "int", 0, "rosbag2 layout: start a new .mcap file at this many bytes (0: no limit)",
-         0, 2 ** 62, read_only=True),
+                                 "for, else mcap" + RECORDING_FIXED),
+    Spec("max_bag_size", "int", 0, "rosbag2 layout: start a new .mcap file at this many bytes (0: no limit; "
+                                   "else at least 1 MiB = 1048576, the floor)" + RECORDING_FIXED, 0, 2 ** 62),
     Spec("max_bag_duration", "double", 0.0, "rosbag2 layout: start a new .mcap file when the current one spans "
-                                            "this many s of log time (0: no limit)", 0.0, 1.0e9, read_only=True),
+                                            "this many s of log time (0: no limit; else at least 1 s, the floor)"
+                                            + RECORDING_FIXED, 0.0, 1.0e9),
     Spec("topics", "string[]", [], "topics to record (relative names, e.g. 'pendulum/joint_states'); empty: every "
-                                   "topic of the scene", read_only=True),
+                                   "topic of the scene" + RECORDING_FIXED),
     Spec("command", "string", "recorder node", "command line stored in the bag's metadata", read_only=True),
     Spec("stop_when_complete", "bool", False, "finish the file and exit once every expected message is recorded "
                                               "(every sample of every topic, one estimate)", read_only=True),
