@@ -125,9 +125,11 @@ def test_replay_of_a_cut_bag_says_how_much_was_read(tmp_path, capsys):
     assert 0 < r["observation_read_s"] < r["observation_s"] == 600.0
     assert "no summary" in r["recording_cut"]
     assert main(["replay", str(cut)]) == 0
-    first = capsys.readouterr().out.splitlines()[0]
-    assert first.startswith(f"scene foucault_pantheon (seed 1), {r['observation_read_s']:g} s of 600 s read per "
-                            f"instrument (recording cut: bag has no summary")
+    # the text leads with the answer (issue 26); the line after the headline says how much was read
+    # (long lines are wrapped, continuation lines indented: read them joined)
+    text = " ".join(line.strip() for line in capsys.readouterr().out.splitlines())
+    assert (f"scene foucault_pantheon (seed 1), {r['observation_read_s']:g} s of 600 s read per instrument "
+            f"(recording cut: bag has no summary") in text
     whole = replay_bag(src)
     # a whole recording reads as the live run did (replay equals live): no cut keys
     assert "observation_read_s" not in whole and "recording_cut" not in whole
