@@ -123,16 +123,17 @@ def measure_realtime(scene_name, name, overrides, target_cpu_s=3.0, probe_s=1.0,
     return _median_run([_timed_summary(scene_name, name, overrides, d) for _ in range(repeats)], d)
 
 
-def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None, repeats=3) -> list:
+def realtime_rows(quick=False, progress=print, scenes=None, target_cpu_s=None, repeats=None) -> list:
     """Rows of :data:`REALTIME_HEADER` for every configuration of every shipped scene (or ``scenes``):
-    the median of ``repeats`` runs that together take ~``target_cpu_s`` of CPU (default 3 s, 1 s with
-    ``quick``).
+    the median of ``repeats`` runs (default 3; 1 with ``quick``, a smoke run of the study) that
+    together take ~``target_cpu_s`` of CPU (default 3 s; 0.3 s with ``quick``).
 
     The repeats are interleaved: every configuration once, then every configuration again, so a
     configuration's runs lie minutes apart. On the shared 2-core virtual machine a slow spell of the
     host lasted ~2 minutes and made every row measured in it 1.5-2.4x slower (the plane gyroscopes
     and pendulums too, not one instrument): back-to-back repeats all fell inside it."""
-    target = target_cpu_s or (1.0 if quick else 3.0)
+    target = target_cpu_s or (0.3 if quick else 3.0)
+    repeats = repeats or (1 if quick else 3)
     cases = [(sc, *v) for sc in scenes or shipped_scene_names() for v in variants(sc)]
     cases += [v for v in EXTRA_VARIANTS if scenes is None or v[0] in scenes]
     sized, refused, runs = {}, {}, {i: [] for i in range(len(cases))}
@@ -288,7 +289,7 @@ def main(argv=None) -> int:
     CSVs and ``realtime.md`` in ``DIR``); ``gyro-instrument bench`` runs it with the others."""
     import argparse
     ap = argparse.ArgumentParser(prog="python -m gyro_instrument.bench.realtime", description=main.__doc__)
-    ap.add_argument("--quick", action="store_true", help="shorter runs (~1 s of CPU each)")
+    ap.add_argument("--quick", action="store_true", help="one short run (~0.3 s of CPU) per configuration")
     ap.add_argument("--out", default="bench_out", help="output directory (default: bench_out)")
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)

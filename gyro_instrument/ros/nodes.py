@@ -954,8 +954,10 @@ class RecorderNode(SceneNode):
     #: topic lags, when no publisher of that topic is left (its messages then written at their own
     #: stamps, out of file order: MCAP indexes each chunk's time range)
     HOLD_S = 2.0
-    #: ... and the longest hold while a lagging topic still has a publisher (a stalled simulator)
-    HOLD_MAX_S = 30.0
+    #: ... and the longest hold while a lagging topic still has a publisher (a stalled simulator, or
+    #: one that has published all it will): holding only keeps the file's order sorted — a message
+    #: arriving later is still logged at its own stamp — so a few seconds suffice
+    HOLD_MAX_S = 6.0
     #: messages held at most before they are written anyway (memory bound)
     HOLD_MAX_MESSAGES = 500_000
 
