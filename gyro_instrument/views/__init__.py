@@ -94,18 +94,22 @@ def draw_views(series, scene, out_dir, title="", fmt="png", dpi=DPI, window=None
 
 def gyroscope_residual_rows(series) -> list:
     """Residual rows (name, label, t, degrees, note, span) of every non-pendulum angle that an
-    oscillation can be fitted to."""
+    oscillation can be fitted to (not an azimuth: a turning direction has no centre to swing about)."""
+    from gyro_instrument.views.figures import is_azimuth
     rows = []
     for n, s in series.items():
         if "east" in s:
             continue
         t = np.asarray(s["t"], float)
         for label, y, unit in s["channels"]:
+            if is_azimuth(label):
+                continue
             r = oscillation_residuals(t, np.radians(np.asarray(y, float)))
             if r is not None:
                 rows.append((n, f"{label} less its fitted oscillation (degrees)", r[0], np.degrees(r[1]),
-                             "what the fit (fundamental and third harmonic) leaves: sensor noise, damping, the "
-                             "period's change with amplitude", (float(np.nanmin(t)), float(np.nanmax(t)))))
+                             "what one oscillation (fundamental and third harmonic) does not describe: sensor "
+                             "noise, damping, the period's change with amplitude, and other modes (a nutation, a "
+                             "body on a plane's two frequencies)", (float(np.nanmin(t)), float(np.nanmax(t)))))
     return rows
 
 

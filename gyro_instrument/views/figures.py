@@ -79,18 +79,51 @@ def angles_figure(plt, series, axis, title) -> "object":
     for ax, n in zip(axes[:, 0], names):
         s = series[n]
         units = sorted({u for _, _, u in s["channels"]})
-        for label, y in ((lab, v) for lab, v, _ in s["channels"]):
-            trace(ax, np.asarray(s["t"], float), np.asarray(y, float), scale, label,
-                  dominant_period(s["t"], y))
+        swings = [(lab, v) for lab, v, _ in s["channels"] if not is_azimuth(lab)]
+        turns = [(lab, v) for lab, v, _ in s["channels"] if is_azimuth(lab)]
+        for label, y in swings:
+            trace(ax, np.asarray(s["t"], float), np.asarray(y, float), scale, label, dominant_period(s["t"], y))
+        handles = ax.get_legend_handles_labels()
+        if turns:      # turning azimuths on their own axis, continuous (not a ±180° sawtooth)
+            tw = ax.twinx() if swings else ax
+            for i, (label, y) in enumerate(turns):
+                y = unwrapped_deg(y)
+                n_lines, n_fills = len(tw.lines), len(tw.collections)
+                trace(tw, np.asarray(s["t"], float), y, scale, f"{label} (unwrapped, right axis, dashed)" if swings
+                      else f"{label} (unwrapped)", dominant_period(s["t"], y))
+                colour = f"C{len(swings) + i}"      # a twin axis restarts the colour cycle
+                for ln in tw.lines[n_lines:]:
+                    ln.set_color(colour)
+                    ln.set_linestyle("--" if swings else "-")
+                for band in tw.collections[n_fills:]:
+                    band.set_facecolor(colour)
+            tw.set_ylabel("azimuth (degrees, unwrapped)")
+            if swings:
+                more = tw.get_legend_handles_labels()
+                handles = (handles[0] + more[0], handles[1] + more[1])
         what = "position (m)" if units == ["m"] else "angle (degrees)"
-        ax.set_ylabel(what)
+        ax.set_ylabel(what if swings or not turns else "azimuth (degrees, unwrapped)")
         ax.set_title(f"{n} ({(s['type'] or 'type unknown').replace('_', ' ')})"
                      + (": length unknown, bob position in metres" if units == ["m"] else ""))
-        ax.legend(loc="upper right")
+        ax.legend(*handles, loc="upper right")
         _say_why_flat(ax, s)
     axes[-1, 0].set_xlabel(tlabel)
     fig.suptitle(f"angles over time {title}".strip())
     return fig
+
+
+def is_azimuth(label) -> bool:
+    """A channel that measures a direction turning about the vertical (``*azimuth``): it wraps
+    at ±180° and does not oscillate about a centre."""
+    return "azimuth" in label
+
+
+def unwrapped_deg(y_deg) -> np.ndarray:
+    """Degrees unwrapped across ±180° jumps, NaN kept where they were."""
+    y = np.asarray(y_deg, float).copy()
+    ok = np.isfinite(y)
+    y[ok] = np.degrees(np.unwrap(np.radians(y[ok])))
+    return y
 
 
 def _say_why_flat(ax, s):
