@@ -207,10 +207,10 @@ def throughput_rows(rows, progress=print) -> list:
 
 def streaming_rows(wp_rows, reference, quick=False, progress=print) -> list:
     """Every streaming row (:func:`whole_process_rows`, :func:`peak_memory_rows`,
-    :func:`throughput_rows`); quick: 1 h against the textbook, 1 h vs 4 h of memory, 2e5 rows."""
+    :func:`throughput_rows`); quick: 1 h against the textbook, 1 h vs 2 h of memory, 2e5 rows."""
     day = 86164.0989
     rows = whole_process_rows(wp_rows, reference, 3600.0 if quick else day, progress)
-    rows += peak_memory_rows(3600.0, (4.0 if quick else 48.0) * 3600.0, None if quick else 24.0 * 3600.0,
+    rows += peak_memory_rows(3600.0, (2.0 if quick else 48.0) * 3600.0, None if quick else 24.0 * 3600.0,
                              progress)
     rows += throughput_rows(200_001 if quick else int(math.floor(day * 20.0)) + 1, progress)
     return rows

@@ -185,7 +185,7 @@ def work_precision(quick=False, progress=print) -> list:
         fr = foucault_work_precision(3600.0, (1e-6, 1e-8, 1e-10, 1e-12), ((24, 1e-7), (48, 1e-9)),
                                      progress=progress)
         gr = gyroscope_work_precision(600.0, (1e-6, 1e-9), progress=progress)
-        gr += other_work_precision(60.0, (1e-6, 1e-9), progress=progress)
+        gr += other_work_precision(20.0, (1e-6, 1e-9), progress=progress)
     else:
         fr = foucault_work_precision(day, (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12),
                                      ((16, 1e-6), (24, 1e-7), (32, 1e-9), (48, 1e-9), (64, 1e-12)),
