@@ -52,3 +52,13 @@ def make(cls, site, effects=(), **params):
 @pytest.fixture
 def build():
     return make
+
+
+@pytest.fixture
+def ctx():
+    """A private rclpy context for one test (the ROS tests' nodes in this process), shut down after."""
+    import rclpy
+    context = rclpy.Context()
+    rclpy.init(context=context, args=[])
+    yield context
+    rclpy.shutdown(context=context)

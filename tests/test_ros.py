@@ -217,14 +217,6 @@ def test_estimate_topics_are_typed_and_plottable(live_run):
     assert got["/diagnostics"].status[0].name == "gyro_instrument/estimator"
 
 
-@pytest.fixture
-def ctx():
-    context = rclpy.Context()
-    rclpy.init(context=context, args=[])
-    yield context
-    rclpy.shutdown(context=context)
-
-
 def test_joint_state_conversion_fills_every_array():
     # Fast-CDR pads an empty float64[]; independent readers reject it: position, velocity and
     # effort are always filled.

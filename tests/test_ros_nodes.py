@@ -69,14 +69,6 @@ def status(bag):
     return st["state"], json.loads(st.get("topics", "{}"))
 
 
-@pytest.fixture
-def ctx():
-    context = rclpy.Context()
-    rclpy.init(context=context, args=[])
-    yield context
-    rclpy.shutdown(context=context)
-
-
 def spin_until(node, cond, timeout, ex=None):
     from rclpy.executors import SingleThreadedExecutor
     if ex is None:

@@ -48,14 +48,6 @@ def stop(p, sig=signal.SIGINT, timeout=30):
     return out
 
 
-@pytest.fixture
-def ctx():
-    context = rclpy.Context()
-    rclpy.init(context=context, args=[])
-    yield context
-    rclpy.shutdown(context=context)
-
-
 def spin_until(node, cond, timeout):
     from rclpy.executors import SingleThreadedExecutor
     ex = SingleThreadedExecutor(context=node.context)
