@@ -1034,6 +1034,8 @@ def sweep_command(args) -> int:
         raise SceneError("--timeout", args.timeout, "must be a finite number of seconds > 0")
     check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
     grid(args.vary)                                   # a bad --vary stops here, before any scheduler is asked
+    if args.seeds < 1:
+        raise SceneError("--seeds", args.seeds, "must be an integer >= 1")
     overrides = list(args.overrides) + ([f"duration_s={args.duration_s!r}"] if args.duration_s is not None else [])
     progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
     if args.scheduler:

@@ -46,6 +46,7 @@ def test_two_latitudes_three_seeds_through_the_process_pool(tmp_path, capsys):
     ("site.latitude_deg=a:1:1", ["START", "'a'"]),
     ("site.latitud_deg=0:10:10", ["latitud"]),
     ("site.latitude_deg=0:100:50", ["site.latitude_deg", "100", "[-90, 90]"]),
+    ("seed=0:3:1", ["--seeds"]),
 ])
 def test_bad_vary_specs_exit_2_with_one_line(tmp_path, capsys, spec, words):
     out = tmp_path / "bad.parquet"
@@ -64,13 +65,13 @@ def test_grid_includes_stop_only_on_the_grid():
 
 
 def test_no_scheduler_and_no_workers_exit_2(tmp_path, capsys):
-    assert main(["sweep", "quet_gyroscopes", "--vary", "seed=1:1:1", "--out", str(tmp_path / "x.parquet"),
+    assert main(["sweep", "quet_gyroscopes", "--vary", "site.latitude_deg=1:1:1", "--out", str(tmp_path / "x.parquet"),
                  "--scheduler", "tcp://127.0.0.1:9", "--timeout", "2"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no Dask scheduler answered" in err[0]
     from dask.distributed import LocalCluster
     with LocalCluster(host="127.0.0.1", n_workers=0, processes=True, dashboard_address=None) as cluster:
-        assert main(["sweep", "quet_gyroscopes", "--vary", "seed=1:1:1", "--out", str(tmp_path / "x.parquet"),
+        assert main(["sweep", "quet_gyroscopes", "--vary", "site.latitude_deg=1:1:1", "--out", str(tmp_path / "x.parquet"),
                      "--scheduler", cluster.scheduler_address, "--timeout", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "no workers" in err[0] and "has no workers after 1 s" in err[-1] and "Traceback" not in "".join(err)

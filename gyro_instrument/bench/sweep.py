@@ -91,6 +91,9 @@ def grid(specs) -> tuple:
         raise SceneError("--vary", None, "give at least one --vary " + VARY_FORM[5:])
     parsed = [parse_vary(s) for s in specs]
     keys = [k for k, _ in parsed]
+    if "seed" in keys:
+        raise SceneError("--vary", "seed", "is the scene's seed; the sensor seeds of every point are --seeds N "
+                                           "(0..N-1, the 'seed' column)")
     for i, k in enumerate(keys):
         if k in keys[:i]:
             raise SceneError("--vary", k, "is varied twice; give each key once")
