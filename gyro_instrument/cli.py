@@ -771,6 +771,7 @@ def _add_study_commands(sub):
                         "scheduler is at ADDRESS (tcp://HOST:8786; its workers need gyro_instrument installed) "
                         "instead of local processes; needs the 'cluster' extra (pip install "
                         "'gyro_instrument[cluster]')")
+    _add_sweep_command(sub)
     p = sub.add_parser("plan", help="how long must I observe? the observation time per configuration each "
                                     "--target needs (Cramer-Rao bound of the scene's sensor model), its dependence "
                                     "on the time, the systematic floor, the effect of the sensor's noise and "
@@ -794,6 +795,32 @@ def _add_study_commands(sub):
                         "print the achieved rms next to the target")
     p.add_argument("--seeds", type=int, default=100, help="seeds for --verify (default 100)")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/plan.md)")
+
+
+def _add_sweep_command(sub):
+    """sweep: any scene over a grid of values, seeds on each point, one Parquet row per (point, seed)."""
+    p = sub.add_parser("sweep", help="run a scene over a grid of values (--vary, repeatable: the product) with "
+                                     "--seeds seeds measured on one simulation per grid point; one Parquet row "
+                                     "per (point, seed): the varied values (columns named by their keys), seed, "
+                                     "every field of the estimate JSON flattened (nested as dotted names, lists "
+                                     "as JSON text, the truth as truth.*) and error (a refused estimate, or a "
+                                     "task that failed twice: a dead worker's task is retried once)")
+    add_scene_arguments(p)
+    p.add_argument("--vary", dest="vary", action="append", default=[], metavar="KEY=START:STOP:STEP",
+                   help="a scene key over START, START+STEP, ... up to STOP (included when it lands on the grid "
+                        "within 1e-9 of a STEP), e.g. --vary site.latitude_deg=-60:60:30 (repeatable; at most "
+                        "10000 grid points; every point's scene is checked before anything runs)")
+    p.add_argument("--seeds", type=int, default=10, help="sensor seeds 0..N-1 per grid point (default 10)")
+    p.add_argument("--out", required=True, metavar="FILE.parquet",
+                   help="the Parquet table to write; an existing file is refused unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the grid points on the Dask cluster whose scheduler is at ADDRESS (tcp://HOST:8786; "
+                        "its workers need gyro_instrument installed) instead of a local process pool; needs the "
+                        "'cluster' extra")
+    p.add_argument("--timeout", type=float, default=10.0, metavar="S",
+                   help="with --scheduler: seconds to wait for the scheduler to answer and, when it has no "
+                        "workers, for one to join, before exit 2 (default 10)")
 
 
 def _add_recover_command(sub):
@@ -997,6 +1024,32 @@ def bench_command(args) -> int:
     return 0
 
 
+def sweep_command(args) -> int:
+    """``gyro-instrument sweep``: :func:`gyro_instrument.bench.sweep.run_sweep` into ``--out``."""
+    from gyro_instrument.bench.sweep import grid, run_sweep
+    from gyro_instrument.estimators.data_io import table_kind
+    if table_kind(args.out) != "parquet":
+        raise SceneError("--out", args.out, "must be a Parquet file (name ending .parquet or .pq)")
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise SceneError("--timeout", args.timeout, "must be a finite number of seconds > 0")
+    check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    grid(args.vary)                                   # a bad --vary stops here, before any scheduler is asked
+    if args.seeds < 1:
+        raise SceneError("--seeds", args.seeds, "must be an integer >= 1")
+    overrides = list(args.overrides) + ([f"duration_s={args.duration_s!r}"] if args.duration_s is not None else [])
+    progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    if args.scheduler:
+        from gyro_instrument.core.parallel import dask_executor
+        with dask_executor(args.scheduler, args.timeout, need_workers=True, progress=progress) as ex:
+            progress(f"sweep on the Dask scheduler {args.scheduler}")
+            r = run_sweep(args.scene, overrides, args.vary, args.seeds, args.out, executor=ex, progress=progress)
+    else:
+        r = run_sweep(args.scene, overrides, args.vary, args.seeds, args.out, progress=progress)
+    print(f"wrote {r['path']}: {r['rows']} rows x {r['columns']} columns ({r['points']} grid points, "
+          f"{r['errors']} with an error) in {r['wall_s']:.1f} s ({r['rows_per_s']:.3g} rows/s)")
+    return 0
+
+
 def recover_command(args) -> int:
     """``gyro-instrument recover``: rewrite a damaged or cut bag's intact records (``--out``)."""
     from gyro_instrument.core.scene import EPOCH_NS
@@ -1071,6 +1124,7 @@ COMMANDS = {
     "estimate": estimate_command,
     "bench": bench_command,
     "plan": plan_command,
+    "sweep": sweep_command,
     "recover": recover_command,
     "plot": plot_command,
     "replay": replay_command,

@@ -53,16 +53,18 @@ def process_executor(max_workers=None) -> ProcessPoolExecutor:
 
 
 @contextmanager
-def dask_executor(address, timeout_s=10.0) -> Iterator:
+def dask_executor(address, timeout_s=10.0, need_workers=False, progress=None) -> Iterator:
     """A ``dask.distributed`` client's ``concurrent.futures`` executor on the scheduler at
     ``address`` (``tcp://host:8786``); the client is closed on exit. The cluster's workers need
-    this package installed (the tasks are its picklable sweep functions).
+    this package installed (the tasks are its picklable sweep functions). ``need_workers``: a
+    scheduler without workers is waited for up to ``timeout_s`` (said through ``progress``), then
+    refused.
 
     Raises
     ------
     SceneError
         Dask is not installed (the ``cluster`` extra), or no scheduler answers at ``address``
-        within ``timeout_s``.
+        within ``timeout_s``, or (``need_workers``) it has no worker after ``timeout_s``.
     """
     from gyro_instrument.core.errors import SceneError
     try:
@@ -76,6 +78,22 @@ def dask_executor(address, timeout_s=10.0) -> Iterator:
         raise SceneError("--scheduler", address, f"no Dask scheduler answered ({exc.__class__.__name__}): "
                                                  f"give tcp://HOST:PORT of a running scheduler") from None
     try:
+        if need_workers:
+            _wait_for_workers(client, address, timeout_s, progress)
         yield client.get_executor()
     finally:
         client.close()
+
+
+def _wait_for_workers(client, address, timeout_s, progress) -> None:
+    from gyro_instrument.core.errors import SceneError
+    if client.scheduler_info().get("workers"):
+        return
+    if progress:
+        progress(f"the Dask scheduler {address} has no workers: waiting up to {timeout_s:g} s (--timeout) for one")
+    try:
+        client.wait_for_workers(1, timeout=timeout_s)
+    except (TimeoutError, OSError) as exc:
+        raise SceneError("--scheduler", address, f"has no workers after {timeout_s:g} s "
+                                                 f"({exc.__class__.__name__}): start some with "
+                                                 f"'dask worker {address}'") from None
