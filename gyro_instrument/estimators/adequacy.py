@@ -90,13 +90,18 @@ class InadequateData(SceneError):
     def _text(self):
         return f"estimate refused by the {self.check['check']} check of {self.check['instrument']}: {self.valid}"
 
-    def add_hint(self, hint) -> None:
-        """Append ``hint`` (what else the user can do) to the one-line message."""
-        self.valid = f"{self.valid}; {hint}"
+    def restate(self, detail) -> None:
+        """Replace the check's detail (what failed and the likely cause) in the one-line message."""
+        self.valid = detail
         self.args = (self._text(),)
 
+    def add_hint(self, hint) -> None:
+        """Append ``hint`` (what else the user can do) to the one-line message."""
+        self.restate(f"{self.valid}; {hint}")
 
-def _entry(name, check, status, detail, value=None, expected=None) -> dict:
+
+def check_entry(name, check, status, detail, value=None, expected=None) -> dict:
+    """One entry of an estimate's ``checks``: instrument, check, status, value, expected, detail."""
     return {"instrument": name, "check": check, "status": status, "value": value, "expected": expected,
             "detail": detail}
 
@@ -111,7 +116,7 @@ def _unit_for(ratio):
 
 def _time_unit_refusal(name, ratio, period_data, expected):
     unit, flag = _unit_for(ratio)
-    return InadequateData(_entry(
+    return InadequateData(check_entry(
         name, "time_unit", "refused",
         f"the record's swing period is {period_data:.6g} time units against the scene's predicted "
         f"{expected.period_s:.6g} s (ratio {ratio:.4g}): time looks like {unit}; pass --time-unit {flag}",
@@ -147,7 +152,7 @@ def check_before_fit(name, inst, rec) -> list:
     """
     expected = inst.expected_swing()
     if expected is None:
-        return [_entry(name, "sampling", "not_applicable", "the scene predicts no swing for this instrument")]
+        return [check_entry(name, "sampling", "not_applicable", "the scene predicts no swing for this instrument")]
     out = []
     a = swing_amplitude(rec, inst.IS_PENDULUM)
     if math.isfinite(a):
@@ -157,11 +162,11 @@ def check_before_fit(name, inst, rec) -> list:
             deg = a > math.pi or abs(math.log(max(ratio, 1e-300) / math.degrees(1.0))) < math.log(4.0)
             cause = ("angles look like degrees; pass --angle-unit deg" if deg else
                      f"the scene's release amplitude does not describe this record (set it from {expected.source})")
-            raise InadequateData(_entry(name, "amplitude", "refused",
+            raise InadequateData(check_entry(name, "amplitude", "refused",
                                         f"swing amplitude {a:.6g} rad is {ratio:.3g}x the scene's {expected.amplitude_rad:.6g} "
                                         f"rad (at most {AMPLITUDE_FACTOR:g}x, and never beyond pi): {cause}",
                                         a, expected.amplitude_rad))
-        out.append(_entry(name, "amplitude", "passed", f"swing amplitude {a:.4g} rad, scene's {expected.amplitude_rad:.4g} rad",
+        out.append(check_entry(name, "amplitude", "passed", f"swing amplitude {a:.4g} rad, scene's {expected.amplitude_rad:.4g} rad",
                           a, expected.amplitude_rad))
     t = np.asarray(rec["t"], dtype=float)
     t = np.unique(t[np.isfinite(t)])
@@ -171,14 +176,14 @@ def check_before_fit(name, inst, rec) -> list:
     spp = expected.period_s / dt
     need = max(MIN_SAMPLES_PER_PERIOD, expected.min_samples_per_period)
     if spp < need:
-        _refuse_undersampled(name, inst, rec, t, dt, spp, expected, need)
-    out.append(_entry(name, "sampling", "passed",
+        _refuse_undersampled(name, inst, rec, dt, spp, expected, need)
+    out.append(check_entry(name, "sampling", "passed",
                       f"{spp:.4g} samples per predicted period of {expected.period_s:.6g} s (at least "
                       f"{need:g})", spp, need))
     return out
 
 
-def _refuse_undersampled(name, inst, rec, t, dt, spp, expected, need):
+def _refuse_undersampled(name, inst, rec, dt, spp, expected, need):
     """Raise for a record with fewer than :data:`MIN_SAMPLES_PER_PERIOD` samples per predicted
     period: as a time unit when the record's own period says so, else as an alias."""
     from gyro_instrument.estimators.period import EstimationError, fft_guess
@@ -193,7 +198,7 @@ def _refuse_undersampled(name, inst, rec, t, dt, spp, expected, need):
     if math.isfinite(period_data) and period_data / dt >= MIN_SAMPLES_PER_PERIOD \
             and _unit_for(period_data / expected.period_s):
         raise _time_unit_refusal(name, period_data / expected.period_s, period_data, expected)
-    raise InadequateData(_entry(
+    raise InadequateData(check_entry(
         name, "sampling", "refused",
         f"{spp:.3g} samples per predicted period of {expected.period_s:.6g} s (one every {dt:.6g} s); below "
         f"{need:g} {expected.sampling_reason}: sample at least {need / expected.period_s:.3g} Hz", spp, need))
@@ -208,12 +213,12 @@ def check_period(name, inst, period_s) -> dict | None:
     if _unit_for(ratio) and not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
         raise _time_unit_refusal(name, ratio, period_s, expected)
     if not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
-        raise InadequateData(_entry(
+        raise InadequateData(check_entry(
             name, "period", "refused",
             f"the fitted period {period_s:.6g} s is {ratio:.4g}x the scene's predicted {expected.period_s:.6g} s "
             f"(within a factor {PERIOD_FACTOR:g} is accepted): the scene does not describe this instrument "
             f"(check {expected.source})", ratio, 1.0))
-    return _entry(name, "period", "passed", f"fitted period {period_s:.6g} s, predicted {expected.period_s:.6g} s "
+    return check_entry(name, "period", "passed", f"fitted period {period_s:.6g} s, predicted {expected.period_s:.6g} s "
                                             f"(ratio {ratio:.6g})", ratio, 1.0)
 
 
@@ -226,7 +231,7 @@ def detection_snr(amplitude, n_samples, residual_rms) -> float:
 def signal_entry(name, snr, threshold) -> dict:
     """The ``signal`` check's entry (``no_signal``: the instrument's estimate is null with a reason)."""
     ok = snr >= threshold
-    return _entry(name, "signal", "passed" if ok else "no_signal",
+    return check_entry(name, "signal", "passed" if ok else "no_signal",
                   f"detection A^2 N / (4 sigma^2) = {snr:.4g} ({'>=' if ok else '<'} {threshold:g})", snr, threshold)
 
 
@@ -235,12 +240,12 @@ def check_fit(name, residual_rms, dof, sensor) -> dict:
     above :data:`CHI2_WITHHOLD`."""
     var = sensor.noise_rad ** 2 + sensor.quantization_rad ** 2 / 12.0
     if var <= 0.0:
-        return _entry(name, "fit", "not_applicable", "the scene's sensor has no noise model (noise_rad = 0): "
+        return check_entry(name, "fit", "not_applicable", "the scene's sensor has no noise model (noise_rad = 0): "
                                                      "chi2/dof cannot be formed")
     chi2 = float(residual_rms) ** 2 / var
     band = 5.0 * math.sqrt(2.0 / max(dof, 1))
     if chi2 > CHI2_WITHHOLD:
-        raise InadequateData(_entry(
+        raise InadequateData(check_entry(
             name, "fit", "refused",
             f"chi2/dof = {chi2:.4g}: the residual rms {residual_rms:.4g} rad is {math.sqrt(chi2):.3g}x the sensor "
             f"model's {math.sqrt(var):.4g} rad, so the model does not describe this record (another instrument, "
@@ -248,12 +253,12 @@ def check_fit(name, residual_rms, dof, sensor) -> dict:
             f"sensor.noise_rad={residual_rms:.2g}); estimate withheld", chi2, 1.0))
     if abs(chi2 - 1.0) > band:
         how = "above" if chi2 > 1.0 else "below"
-        return _entry(name, "fit", "flagged",
+        return check_entry(name, "fit", "flagged",
                       f"chi2/dof = {chi2:.4g}, {how} 1 +/- {band:.2g}: the residual rms {residual_rms:.4g} rad against "
                       f"the sensor model's {math.sqrt(var):.4g} rad" + (" (data smoother than the sensor model: a "
                                                                          "noise-free simulation?)" if chi2 < 1 else ""),
                       chi2, 1.0)
-    return _entry(name, "fit", "passed", f"chi2/dof = {chi2:.4g} (1 +/- {band:.2g})", chi2, 1.0)
+    return check_entry(name, "fit", "passed", f"chi2/dof = {chi2:.4g} (1 +/- {band:.2g})", chi2, 1.0)
 
 
 def plane_fit_entry(name, chi2, dof, noise_rad) -> dict:
@@ -262,11 +267,11 @@ def plane_fit_entry(name, chi2, dof, noise_rad) -> dict:
     (σ is then taken from the scatter, never withheld: the line is still the best rate)."""
     band = 5.0 * math.sqrt(2.0 / max(dof, 1))
     if not math.isfinite(chi2) or (noise_rad < 1e-9 and chi2 > 1.0 + band):
-        return _entry(name, "fit", "flagged", f"the record shows almost no noise ({noise_rad:.3g} rad: a noise-free "
+        return check_entry(name, "fit", "flagged", f"the record shows almost no noise ({noise_rad:.3g} rad: a noise-free "
                                               "simulation?), so the swing-plane azimuths' own scatter sets sigma",
                       None if not math.isfinite(chi2) else chi2, 1.0)
     status = "passed" if chi2 <= 1.0 + band else "flagged"
-    return _entry(name, "fit", status,
+    return check_entry(name, "fit", status,
                   f"swing-plane azimuths about their line: chi2/dof = {chi2:.4g} over {dof} swings (1 + {band:.2g} at "
                   f"most) for the noise {noise_rad:.3g} rad" + ("" if status == "passed" else
                                                                  ": sigma from their scatter"), chi2, 1.0)
@@ -280,9 +285,9 @@ def hemisphere_entry(hemisphere, basis, scene_latitude_deg) -> dict | None:
         return None
     scene_side = "north" if scene_latitude_deg > 0 else "south"
     if hemisphere == scene_side:
-        return _entry("combined", "hemisphere", "passed", f"measured {hemisphere}, as the scene's latitude "
+        return check_entry("combined", "hemisphere", "passed", f"measured {hemisphere}, as the scene's latitude "
                                                           f"{scene_latitude_deg:g} deg", hemisphere, scene_side)
-    return _entry("combined", "hemisphere", "flagged",
+    return check_entry("combined", "hemisphere", "flagged",
                   f"the data measure the {hemisphere}ern hemisphere but the scene's latitude is {scene_latitude_deg:g} "
                   "deg: east and north swapped, an axis mirrored (a pendulum's sense of turning reversed), or the "
                   "wrong scene", hemisphere, scene_side)

@@ -772,9 +772,8 @@ def _name_a_length_unit(exc, insts, cols) -> None:
     cause = (f"{name}.x_east/y_north look like {unit}, not metres: convert them to metres" if unit else
              f"{name}.x_east/y_north are metres divided by the scene's length_m ({inst.pendulum_length_m():g} m): "
              "check the length and the columns' unit")
-    exc.valid = (f"deflection amplitude {exc.check['value']:.6g} rad (positions / length_m) is {ratio:.3g}x the "
+    exc.restate(f"deflection amplitude {exc.check['value']:.6g} rad (positions / length_m) is {ratio:.3g}x the "
                  f"scene's release {exc.check['expected']:.6g} rad (at most {AMPLITUDE_FACTOR:g}x): {cause}")
-    exc.args = (exc._text(),)
 
 
 def estimate_data(scene, path, field="--data", options=None) -> dict:

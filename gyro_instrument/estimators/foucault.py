@@ -34,7 +34,7 @@ from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from gyro_instrument.estimators.adequacy import detection_snr
-from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, fit_oscillation
+from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal, fit_oscillation
 from gyro_instrument.instruments.pendulum import (SWING_WINDOW_MIN_SAMPLES, apsidal_angle, areal_constant_over_omega0,
                                                   min_deflection_for_areal_constant)
 
@@ -79,7 +79,7 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     fit = fit_oscillation(t, main)
     snr = detection_snr(fit.amplitude, fit.n_samples, fit.residual_rms)   # the same rule as a gyroscope's
     if snr < DETECTION_SNR:
-        raise EstimationError(f"no swing detected (SNR {snr:.3g} < {DETECTION_SNR:g}): a bob at rest has no "
+        raise NoSignal(f"no swing detected (SNR {snr:.3g} < {DETECTION_SNR:g}): a bob at rest has no "
                               f"swing plane, so no Foucault rate")
     period = 2 * math.pi / fit.omega_rad_s
     n_win = int((t[-1] - t[0]) // period)

@@ -80,6 +80,10 @@ class EstimationError(ValueError):
     """The record cannot give the requested quantity (too short, no oscillation, ...)."""
 
 
+class NoSignal(EstimationError):
+    """No oscillation detected above the noise (the ``signal`` check's ``no_signal``)."""
+
+
 def crlb_omega(sigma, amplitude, dt, n) -> float:
     """Cramér–Rao bound on σ(ω̂) for a sinusoid of amplitude A in white noise σ, N samples Δt apart:
     √(24 σ² / (A² Δt² N (N² − 1)))."""

@@ -14,12 +14,13 @@ import numpy as np
 
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.estimators.adequacy import (InadequateData, check_before_fit, check_fit, check_period,
-                                                 detection_snr, hemisphere_entry, plane_fit_entry, signal_entry)
+from gyro_instrument.estimators.adequacy import (InadequateData, check_before_fit, check_entry, check_fit,
+                                                 check_period, detection_snr, hemisphere_entry, plane_fit_entry,
+                                                 signal_entry)
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import (HEMISPHERE_UNDETERMINED, RateMeasurement, item9_cos_latitude,
                                                  solve_latitude)
-from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, count_oscillations, fit_oscillation
+from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal, count_oscillations, fit_oscillation
 from gyro_instrument.scenes import build_instruments, load_scene
 from gyro_instrument.sensors import SensorModel, scene_rng
 
@@ -372,9 +373,8 @@ def _pendulum_estimate(name, inst, rec, corrections, checks, sensor):
                               correct_ellipse="ellipse_precession" in corrections,
                               noise_rad=sensor.effective_sigma_rad())
     except EstimationError as exc:
-        if "no swing" in str(exc):
-            checks.append({"instrument": name, "check": "signal", "status": "no_signal", "value": None,
-                           "expected": DETECTION_SNR, "detail": str(exc)})
+        if isinstance(exc, NoSignal):
+            checks.append(check_entry(name, "signal", "no_signal", str(exc), expected=DETECTION_SNR))
         return {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}, None
     est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
            "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
@@ -382,9 +382,8 @@ def _pendulum_estimate(name, inst, rec, corrections, checks, sensor):
            "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
            "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
            "notes": f.notes}
-    checks.append({"instrument": name, "check": "signal", "status": "passed", "value": None,
-                   "expected": DETECTION_SNR, "detail": f"swing detected (A^2 N / (4 sigma^2) >= "
-                                                       f"{DETECTION_SNR:g}; estimators/foucault.py)"})
+    checks.append(check_entry(name, "signal", "passed", f"swing detected (A^2 N / (4 sigma^2) >= {DETECTION_SNR:g}; "
+                                                       "estimators/foucault.py)", expected=DETECTION_SNR))
     entry = check_period(name, inst, f.period_s)
     if entry:
         checks.append(entry)
