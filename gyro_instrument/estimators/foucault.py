@@ -93,7 +93,8 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
                      "model)")
     else:
         sigma_noise = float(noise_rad)
-    psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win)
+    h_seg, v2 = areal_segments(t, e, nn, 2.0 * math.pi / period, speed2=True)
+    psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win, h_seg)
     if len(psi) < 3:
         raise EstimationError("fewer than 3 complete swing periods with samples")
     m, sig_scatter = _plane_rate(psi, tc)
@@ -103,7 +104,6 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     # the derivative's noise is summed by parts, var ⟨H⟩ = 4σ²⟨θ̇²⟩/N — also the Cramér–Rao bound
     # of the areal velocity (the minor axis b of a thin swing α cos ωt: σ_b² = 2σ²/N, H = α b ω).
     # (Window-to-window scatter overstates it: adjacent windows share the summed-by-parts edges.)
-    _, v2 = areal_segments(t, e, nn, 2.0 * math.pi / period, speed2=True)
     # less the noise's share: each interval's |Δθ|² holds 4σ² of it
     v2m = max(float(np.mean(v2 - 4.0 * noise_data ** 2 / np.diff(t) ** 2)), 0.0) if v2.size else 0.0
     H_se = 2.0 * noise_data * math.sqrt(v2m / max(v2.size, 1))
@@ -326,14 +326,17 @@ def _clean_deflections(t, theta_e, theta_n):
     return t[keep], e[keep], nn[keep], notes
 
 
-def _swing_windows(t, e, nn, period, n_win):
+def _swing_windows(t, e, nn, period, n_win, areal_rate=None):
     """Per swing period (windows of 8 samples or more): the swing-plane azimuth ψ, the window's
     centre time, the areal velocity H, the mean squared deflection r², the major and minor
-    semi-axes of the swing ellipse (second moments) and the sample count (lists)."""
+    semi-axes of the swing ellipse (second moments) and the sample count (lists). ``areal_rate``:
+    :func:`areal_segments` of the record when the caller has it."""
     psi, tc, H, r2, amp, minor, w = [], [], [], [], [], [], []
     # the swept area as a function of time (each interval's at its constant mean rate), so that
     # every window's H is the mean over exactly one period, whatever the sampling
-    swept = np.concatenate([[0.0], np.cumsum(areal_segments(t, e, nn, 2.0 * math.pi / period) * np.diff(t))])
+    if areal_rate is None:
+        areal_rate = areal_segments(t, e, nn, 2.0 * math.pi / period)
+    swept = np.concatenate([[0.0], np.cumsum(areal_rate * np.diff(t))])
     edges = t[0] + period * np.arange(n_win + 1)
     swept_at = np.interp(edges, t, swept)
     idx = np.searchsorted(t, edges)
