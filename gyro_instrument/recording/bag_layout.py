@@ -480,8 +480,6 @@ def bag_files(path, field="bag") -> tuple:
         files = [os.path.join(path, n) for n in found]
     else:
         files = _listed_files(path, field, found, notes)
-    if not os.path.isdir(path):
-        return files, notes
     good = []
     for f in files:
         try:

@@ -949,7 +949,7 @@ class RecorderNode(SceneNode):
     SPECS = P.RECORDER
     RESTART_ON = ()
     #: parameters that may be corrected until the recording starts (then they are fixed)
-    RETRY_ON = tuple(spec.name for spec in P.RECORDER if spec.description.endswith(P.RECORDING_FIXED))
+    RETRY_ON = P.RECORDING_FIXED_NAMES
     #: wall time (s) without any message after which held messages are written although a sample
     #: topic lags, when no publisher of that topic is left (its messages then written at their own
     #: stamps, out of file order: MCAP indexes each chunk's time range)
@@ -1013,7 +1013,7 @@ class RecorderNode(SceneNode):
             return
         types = scene_topics(self.insts)
         wanted = self._wanted_topics(types)
-        self._out, self._fmt, self._types = out, fmt, types
+        self._out, self._fmt = out, fmt
         self.writer = open_bag_writer(out, fmt, self.value("max_bag_size", 0), self.value("max_bag_duration", 0.0),
                                       overwrite=bool(self.value("overwrite", False)))
         # the scene first, so that a recording cut short still says what it holds (replay needs it)
@@ -1193,7 +1193,7 @@ class RecorderNode(SceneNode):
         self.get_logger().warning(
             f"{topic}: sim time went back from {(last - m.EPOCH_NS) / 1e9:.9g} s to {(st - m.EPOCH_NS) / 1e9:.9g} s "
             f"(the clock owner restarted its run): {old_path} closed, recording continues in {new_out}")
-        self._old[self.run_index - 1] = (self.writer, self.counts, dict(self._topic_last), new_out)
+        self._old[self.run_index - 1] = (self.writer, self.counts, new_out)
         self.counts = {tp: 0 for tp in self.counts}
         self._last_in, self.last_ns, self.max_ns, self.late = {}, 0, 0, 0
         self.done = False
@@ -1206,7 +1206,7 @@ class RecorderNode(SceneNode):
             self.writer.add_topic(name, self._topic_types[name], qos_yaml(reliable=True, keep_all=False, depth=1000))
 
     def _write_old(self, run, topic, st, data):
-        writer, counts, _, _ = self._old[run]
+        writer, counts, _ = self._old[run]
         counts[topic] = counts.get(topic, 0) + 1
         if not writer.closed:
             try:
@@ -1215,7 +1215,7 @@ class RecorderNode(SceneNode):
                 self._disk_full(exc)
 
     def _close_old(self):
-        for run, (writer, counts, _, new_out) in sorted(self._old.items()):
+        for run, (writer, counts, new_out) in sorted(self._old.items()):
             if writer.closed:
                 continue
             topics = {tp: [counts[tp], n] for tp, n in self.expected.items()}

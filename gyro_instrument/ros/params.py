@@ -145,6 +145,7 @@ ESTIMATOR = SCENE + [
 #: corrected at runtime starts it), and are refused once it records (a recording has one scene and
 #: one file).
 RECORDING_FIXED = " (fixed once recording starts: a recording has one scene and one file)"
+RECORDING_FIXED_NAMES = SCENE_NAMES + ("output", "overwrite", "format", "max_bag_size", "max_bag_duration", "topics")
 RECORDER = [Spec(s.name, s.type, s.default, s.description + RECORDING_FIXED, s.lo, s.hi) for s in SCENE] + [
     Spec("output", "string", "", ".mcap path to record to (refused if its directory is missing or not writable, "
                                  "if it is the scene file, or if it exists and overwrite is false)" + RECORDING_FIXED),

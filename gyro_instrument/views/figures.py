@@ -7,6 +7,8 @@ import textwrap
 
 import numpy as np
 
+from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
+
 from gyro_instrument.views.measure import (anchored, deg_per_h, dominant_period, latitude_words, sense_words,
                                            swing_azimuth)
 from gyro_instrument.views.series import finite
@@ -82,7 +84,7 @@ def angles_figure(plt, series, axis, title) -> "object":
         swings = [(lab, v) for lab, v, _ in s["channels"] if not is_azimuth(lab)]
         turns = [(lab, v) for lab, v, _ in s["channels"] if is_azimuth(lab)]
         for label, y in swings:
-            trace(ax, np.asarray(s["t"], float), np.asarray(y, float), scale, label, dominant_period(s["t"], y))
+            trace(ax, np.asarray(s["t"], float), np.asarray(y, float), scale, label, _band_period(s["t"], y))
         handles = ax.get_legend_handles_labels()
         if turns:      # turning azimuths on their own axis, continuous (not a ±180° sawtooth)
             tw = ax.twinx() if swings else ax
@@ -90,7 +92,7 @@ def angles_figure(plt, series, axis, title) -> "object":
                 y = unwrapped_deg(y)
                 n_lines, n_fills = len(tw.lines), len(tw.collections)
                 trace(tw, np.asarray(s["t"], float), y, scale, f"{label} (unwrapped, right axis, dashed)" if swings
-                      else f"{label} (unwrapped)", dominant_period(s["t"], y))
+                      else f"{label} (unwrapped)", _band_period(s["t"], y))
                 colour = f"C{len(swings) + i}"      # a twin axis restarts the colour cycle
                 for ln in tw.lines[n_lines:]:
                     ln.set_color(colour)
@@ -110,6 +112,11 @@ def angles_figure(plt, series, axis, title) -> "object":
     axes[-1, 0].set_xlabel(tlabel)
     fig.suptitle(f"angles over time {title}".strip())
     return fig
+
+
+def _band_period(t, y) -> float | None:
+    """The dominant period (an FFT) only where :func:`trace` draws a band, which needs it."""
+    return dominant_period(t, y) if finite(np.asarray(t, float), np.asarray(y, float))[0].size > LINE_SAMPLES else None
 
 
 def is_azimuth(label) -> bool:
@@ -180,7 +187,7 @@ def _azimuth_panel(ax, n, t, tc, az, line, scale):
     else:
         rate = measured
         t0, a0 = float(tc[0]), float(np.mean(az - rate * (tc - tc[0])))
-        lat = math.degrees(math.asin(max(-1.0, min(1.0, rate / SIDEREAL))))
+        lat = math.degrees(math.asin(max(-1.0, min(1.0, rate / SIDEREAL_RATE_RAD_S))))
         text = (f"fitted: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)} (no scene: no expected line)\n"
                 f"the latitude it implies: {latitude_words(lat)} (rate = Earth's sidereal rate · sin(latitude))")
         label = "fitted line (no scene)"
@@ -202,8 +209,6 @@ def _azimuth_panel(ax, n, t, tc, az, line, scale):
     return n, "swing-plane azimuth less the " + ("expected" if line else "fitted") + " line (degrees)", tc, resid, \
         note, (t_ends[0], t_ends[1])
 
-
-SIDEREAL = 7.2921150e-5
 
 
 #: Characters per line of a note inside a panel of the figure's width at 12 pt.

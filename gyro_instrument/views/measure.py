@@ -5,9 +5,8 @@ import math
 
 import numpy as np
 
+from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S  # noqa: F401  (the IERS value, re-exported by views)
 from gyro_instrument.views.series import finite
-
-SIDEREAL_RATE_RAD_S = 7.2921150e-5
 
 
 def dominant_period(t, y) -> float | None:
