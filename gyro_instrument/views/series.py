@@ -80,18 +80,11 @@ def _table_series(path, field, scene, overrides=()):
     return series, scene, notes
 
 
-def _release(inst):
-    """(deflection, compass azimuth) of a scene pendulum's release, rad; None without one."""
-    if inst is None or not inst.IS_PENDULUM or not hasattr(inst, "psi0"):
-        return None
-    return float(inst.theta0), float(inst.psi0)
-
-
 def _pendulum_series(t, ch, inst):
     """A pendulum's series from its table channels: deflections in degrees when its length is known
     (from the scene), else positions in metres; never angles it cannot know."""
     length = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
-    s = {"type": inst.type_name if inst is not None else "pendulum", "t": t, "release": _release(inst)}
+    s = {"type": inst.type_name if inst is not None else "pendulum", "t": t}
     if {"x_east", "y_north"} <= set(ch):
         s["east"], s["north"], s["path_unit"] = ch["x_east"], ch["y_north"], "m"
         if length:
