@@ -208,11 +208,17 @@ def description_headline(d) -> list:
         rate = p.get("apsidal_rate_from_rest_rad_s", p.get("foucault_rate_rad_s"))
         if rate is None or "foucault_rate_rad_s" not in p:
             continue
-        turn = f"a full turn in {2 * math.pi / abs(rate) / 3600.0:.1f} h" if rate else "it does not turn"
-        sense = "clockwise" if rate > 0 else "counter-clockwise"
-        lines.append(f"{name}: the swing plane turns {math.degrees(rate) * 3600.0:.3f} °/h {sense} seen from above, "
-                     f"{turn}" + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p else ""))
+        lines.append(turn_line(name, rate) + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p
+                                              else ""))
     return lines
+
+
+def turn_line(name, rate_rad_s) -> str:
+    """``<name>: the swing plane turns R °/h <sense> seen from above, a full turn in H h`` (rate about
+    the upward vertical, positive clockwise seen from above)."""
+    turn = f"a full turn in {2 * math.pi / abs(rate_rad_s) / 3600.0:.1f} h" if rate_rad_s else "it does not turn"
+    sense = "clockwise" if rate_rad_s > 0 else "counter-clockwise"
+    return f"{name}: the swing plane turns {math.degrees(rate_rad_s) * 3600.0:.3f} °/h {sense} seen from above, {turn}"
 
 
 def print_description(d, stream=None) -> None:
@@ -473,9 +479,7 @@ def estimate_headline(r) -> list:
     for name, e in r.get("instruments", {}).items():
         k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
         if k:
-            lines.append(f"{name}: the swing plane turns {math.degrees(k) * 3600.0:.3f} °/h "
-                         f"{'clockwise' if k > 0 else 'counter-clockwise'} seen from above, a full turn in "
-                         f"{2 * math.pi / abs(k) / 3600.0:.1f} h")
+            lines.append(turn_line(name, k))
     return lines
 
 
