@@ -137,3 +137,21 @@ def test_n_known_estimates_are_calibrated_200_seeds(scene, overrides, lat):
     err, sig, crlb, absolute = _calibrate(scene, overrides, lat, 200)
     assert 0.8 <= math.sqrt(np.mean((err / sig) ** 2)) <= 1.2
     assert np.all((sig / crlb >= 0.95) & (sig / crlb <= 1.1))
+
+
+def test_a_small_angle_model_is_not_corrected_for_a_finite_amplitude(capsys):
+    # A scene whose instruments do not simulate finite_amplitude swings in T0 at any amplitude (and
+    # its pendulum's apsides turn at exactly k): the estimator's finite-amplitude corrections would
+    # bias it — (2/π)K(sin²(a/2)) = 1 + 6.25e-4 at 0.1 rad moves cos γ by 1.25e-3, 800 σ on one
+    # horizontal gyroscope with n known. Found by trying a hand-written scene without an effects block.
+    import json
+    assert main(["estimate", "quet_gyroscopes", "--json", "--set", "instruments.gyro_meridian=null",
+                 "--set", "effects.finite_amplitude=null", "--set", "effects.centrifugal=null",
+                 "--set", "site.latitude_deg=-33.87"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["earth_rate_known"] and abs(r["latitude_deg"] - 33.87) < 4 * r["latitude_sigma_deg"]
+    assert main(["estimate", "foucault_pantheon", "--json", "--duration-s", "1200",
+                 "--set", "effects.finite_amplitude=null", "--set", "effects.centrifugal=null"]) == 0
+    p = json.loads(capsys.readouterr().out)["instruments"]["pendulum"]
+    k = N * math.sin(math.radians(48.8462))
+    assert p["ellipse_correction_rad_s"] == 0.0 and abs(p["foucault_rate_rad_s"] - k) < 4 * p["foucault_rate_sigma_rad_s"]
