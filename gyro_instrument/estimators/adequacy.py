@@ -123,17 +123,6 @@ def _time_unit_refusal(name, ratio, period_data, expected):
         ratio, 1.0))
 
 
-def swing_amplitude(rec, pendulum) -> float:
-    """The record's swing amplitude, rad: a pendulum's 99.5 % deflection, a gyroscope's half 0.5–99.5 % range."""
-    if pendulum:
-        r = np.hypot(rec["deflection_east"], rec["deflection_north"])
-        r = r[np.isfinite(r)]
-        return float(np.percentile(r, 99.5)) if r.size else math.nan
-    y = np.asarray(rec["angle"], dtype=float)
-    y = y[np.isfinite(y)]
-    return float(0.5 * (np.percentile(y, 99.5) - np.percentile(y, 0.5))) if y.size else math.nan
-
-
 def check_before_fit(name, inst, rec) -> list:
     """The ``amplitude`` and ``sampling`` checks of one record; raises :class:`InadequateData`.
 
@@ -154,7 +143,7 @@ def check_before_fit(name, inst, rec) -> list:
     if expected is None:
         return [check_entry(name, "sampling", "not_applicable", "the scene predicts no swing for this instrument")]
     out = []
-    a = swing_amplitude(rec, inst.IS_PENDULUM)
+    a = inst.observation().swing_amplitude(rec)
     if math.isfinite(a):
         # a scene released at rest predicts no amplitude to compare with: only the half-turn limit applies
         ratio = a / expected.amplitude_rad if expected.amplitude_rad > 0 else 0.0
@@ -187,9 +176,7 @@ def _refuse_undersampled(name, inst, rec, dt, spp, expected, need):
     """Raise for a record with fewer than :data:`MIN_SAMPLES_PER_PERIOD` samples per predicted
     period: as a time unit when the record's own period says so, else as an alias."""
     from gyro_instrument.estimators.period import EstimationError, fft_guess
-    y = rec["deflection_east"] if inst.IS_PENDULUM else rec["angle"]
-    if inst.IS_PENDULUM and np.nanvar(rec["deflection_north"]) > np.nanvar(y):
-        y = rec["deflection_north"]
+    y = inst.observation().swing_signal(rec)
     ok = np.isfinite(rec["t"]) & np.isfinite(y)
     try:
         period_data = 2.0 * math.pi / fft_guess(np.asarray(rec["t"])[ok], np.asarray(y)[ok], min_cycles=2.0)

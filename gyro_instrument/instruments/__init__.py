@@ -8,6 +8,8 @@ package needs to know about a type is a declared member of the class (the protoc
 from gyro_instrument.instruments.base import DirectingModel, Instrument
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.gimbal import GimbalGyroscope
+from gyro_instrument.instruments.observation import (JointLayout, Observation, PlanePrecession, RotorObservation,
+                                                     SwingRate)
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 from gyro_instrument.instruments.puiseux import PuiseuxBody
@@ -23,9 +25,10 @@ def register(cls) -> type:
     ------
     ValueError
         When ``cls`` is not an Instrument subclass, its ``type_name`` is empty or taken, or its
-        protocol is incomplete: no ``SIMULATOR_NODE``, ``MEASURED_CHANNELS`` not leading
-        ``JOINTS`` (plus ``deflection``, ``azimuth`` for a pendulum, one rotor joint otherwise),
-        or a measured channel that is neither a column nor a pendulum deflection.
+        protocol is incomplete: no ``SIMULATOR_NODE``, ``JOINTS`` that do not fit its observation's
+        joint layout (:meth:`~.observation.Observation.layout_of`: the measured channels, the joints
+        derived from them, a rotor joint if it has one), a measured channel whose true value is not a
+        column, or ``IS_PENDULUM`` not its observation's ``SHOWS_BOB_POSITION``.
     """
     if not (isinstance(cls, type) and issubclass(cls, Instrument)):
         raise ValueError(f"register: {cls!r} is not an Instrument subclass")
@@ -34,15 +37,20 @@ def register(cls) -> type:
         raise ValueError(f"register: instrument type {name!r} is empty or already registered ({', '.join(REGISTRY)})")
     if not cls.SIMULATOR_NODE:
         raise ValueError(f"register: {name} declares no SIMULATOR_NODE")
-    m = len(cls.MEASURED_CHANNELS)
-    extra = 2 if cls.IS_PENDULUM else 1
-    if len(cls.JOINTS) != m + extra:
-        raise ValueError(f"register: {name} JOINTS {cls.JOINTS} must be the {m} measured channels' joints and "
-                         f"{'deflection, azimuth' if cls.IS_PENDULUM else 'one rotor joint'}")
+    obs = cls.OBSERVATION
+    if not (isinstance(obs, type) and issubclass(obs, Observation)):
+        raise ValueError(f"register: {name} OBSERVATION {obs!r} is not an Observation subclass")
+    try:
+        obs.layout_of(cls)
+    except ValueError as exc:
+        raise ValueError(f"register: {name} {exc} ({obs.__name__})") from None
     columns = {c.name for c in cls.COLUMNS}
-    if not cls.IS_PENDULUM and not set(cls.MEASURED_CHANNELS) <= columns:
-        raise ValueError(f"register: {name} MEASURED_CHANNELS {cls.MEASURED_CHANNELS} must be columns "
-                         f"({', '.join(sorted(columns))})")
+    if not set(obs.true_columns(cls)) <= columns:
+        raise ValueError(f"register: {name} MEASURED_CHANNELS {cls.MEASURED_CHANNELS} are read from the columns "
+                         f"{obs.true_columns(cls)} ({obs.__name__}), which must be columns ({', '.join(sorted(columns))})")
+    if cls.IS_PENDULUM != obs.SHOWS_BOB_POSITION:
+        raise ValueError(f"register: {name} IS_PENDULUM {cls.IS_PENDULUM} contradicts its observation "
+                         f"{obs.__name__} (SHOWS_BOB_POSITION {obs.SHOWS_BOB_POSITION})")
     REGISTRY[name] = cls
     return cls
 
@@ -66,4 +74,5 @@ for _cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope,
     register(_cls)
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
-           "PlaneGyroscope", "PuiseuxBody", "SphericalPendulum", "register", "simulator_kinds", "unregister"]
+           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RotorObservation",
+           "SphericalPendulum", "SwingRate", "register", "simulator_kinds", "unregister"]

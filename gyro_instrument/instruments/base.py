@@ -13,11 +13,17 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
 ``COLUMNS``              the simulated output channels
 ``MEASURED_CHANNELS``    the angles a sensor reads (:meth:`Instrument.measured_angles`)
 ``JOINTS``               the ``sensor_msgs/JointState`` joints it publishes
-``IS_PENDULUM``          a bob whose deflections x/l, y/l are measured (Foucault estimator)
+``OBSERVATION``          its :class:`~.observation.Observation` class: what it measures, the joint
+                         layout, the sensor draws, how a record becomes a measurement
+                         (:meth:`Instrument.observation` builds it); everything outside
+                         ``instruments/`` asks the observation
+``IS_PENDULUM``          kept for ros/ until it asks the observation: equals the observation's
+                         ``SHOWS_BOB_POSITION`` (checked by ``register``)
 ``SIMULATOR_NODE``       the ROS simulator node that hosts it
 ``check_params``,        parameter checks beyond each parameter's own range (classmethods,
 ``check_effects``        called by scene loading for every instrument)
-``directing_model``      a :class:`DirectingModel` for a gyroscope with a directing line
+``directing_model``      a :class:`DirectingModel` for a gyroscope with a directing line (what
+                         :class:`~.observation.SwingRate` is built from)
 =======================  ===================================================================
 
 Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports.
@@ -35,6 +41,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.effect import CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, supporting_effects
 from gyro_instrument.core.integrate import Trajectory
 from gyro_instrument.effects import canonical_order
+from gyro_instrument.instruments.observation import Observation, SwingRate
 
 #: Most periods (swings, turns) one run may hold. An adaptive 8th-order step covers a few percent
 #: of a period at the default rtol (~50 right-hand-side evaluations per period), so 1e9 periods
@@ -226,6 +233,10 @@ class Instrument:
         measured channels first; then, for a pendulum, ``deflection`` (hypot of the two measured
         deflections) and ``azimuth`` (compass, atan2(east, north)); otherwise one rotor joint
         (position: integrated true spin; velocity: the measured ``spin_rate``, rad/s).
+    OBSERVATION : type
+        The :class:`~.observation.Observation` subclass that :meth:`observation` builds (default
+        :class:`~.observation.SwingRate`: a directing swing when :meth:`directing_model` gives one,
+        else measured angles and a rotor).
     IS_PENDULUM : bool
         A bob on a rod of length :meth:`pendulum_length_m`: its ``COLUMNS`` include ``x_east`` and
         ``y_north`` (m), its two measured channels are the deflections x/l, y/l (east, north), it
@@ -244,6 +255,7 @@ class Instrument:
     COLUMNS: ClassVar[tuple] = ()
     MEASURED_CHANNELS: ClassVar[tuple] = ()
     JOINTS: ClassVar[tuple] = ()
+    OBSERVATION: ClassVar[type] = SwingRate
     IS_PENDULUM: ClassVar[bool] = False
     SIMULATOR_NODE: ClassVar[str] = ""
     #: True when :meth:`axis_direction_enu` gives the rotor axis (published as ``<name>/axis_direction``)
@@ -273,6 +285,11 @@ class Instrument:
         """Check the parameters against the instrument's effect list (tuple of names, all in
         ``SUPPORTED_EFFECTS``), e.g. an integrator that needs an effect. Raises SceneError; the
         default accepts everything."""
+
+    def observation(self) -> Observation:
+        """What this instrument measures and how (:class:`~.observation.Observation`), built by
+        ``OBSERVATION.of(self)``."""
+        return self.OBSERVATION.of(self)
 
     def directing_model(self) -> "DirectingModel | None":
         """The :class:`DirectingModel` of a gyroscope with a directing line, or None (the default:
@@ -316,12 +333,9 @@ class Instrument:
     def measured_angles(self, columns) -> dict:
         """True values of the ``MEASURED_CHANNELS`` from simulated ``columns``: dict name -> array
         (rad), in ``MEASURED_CHANNELS`` order. The default reads the columns of the same names; for a
-        pendulum, ``x_east / l`` and ``y_north / l`` (l = :meth:`pendulum_length_m`)."""
-        if self.IS_PENDULUM:
-            east, north = self.MEASURED_CHANNELS
-            length = self.pendulum_length_m()
-            return {east: columns["x_east"] / length, north: columns["y_north"] / length}
-        return {c: columns[c] for c in self.MEASURED_CHANNELS}
+        pendulum, ``x_east / l`` and ``y_north / l`` (l = :meth:`pendulum_length_m`): the observation's
+        :meth:`~.observation.Observation.true_values`."""
+        return self.observation().true_values(columns)
 
     def __init__(self, name, site, params, effects) -> None:
         """``effects`` maps name -> Effect for the effects active on this instrument only (kept in

@@ -97,6 +97,7 @@ from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span, with_notes
+from gyro_instrument.instruments.observation import RotorObservation
 
 # ----------------------------------------------------------------------------- geometry
 
@@ -201,6 +202,7 @@ class FreeGyroscope(Instrument):
     MECHANICS = frozenset({FRAME_RATE})
     MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
+    OBSERVATION = RotorObservation
     SHOWS_AXIS = True
 
     def axis_direction_enu(self, position) -> np.ndarray:

@@ -41,6 +41,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import (Column, ExpectedSwing, Instrument, Simulation, check_period_count,
                                               run_span, with_notes)
 from gyro_instrument.instruments.chain import HingeChain, Link
+from gyro_instrument.instruments.observation import PlanePrecession
 
 PENDULUM_COLUMNS = (
     Column("deflection", "rad", "θ: angle of the bob from the downward vertical"),
@@ -367,6 +368,7 @@ class SphericalPendulum(Instrument):
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
     IS_PENDULUM = True
+    OBSERVATION = PlanePrecession
     SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
@@ -833,6 +835,7 @@ class CompoundPendulum(Instrument):
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
     IS_PENDULUM = True
+    OBSERVATION = PlanePrecession
     SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod

@@ -37,6 +37,7 @@ from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
+from gyro_instrument.instruments.observation import SwingRate
 
 
 def plane_normal_enu(plane, normal_enu, site) -> np.ndarray:
@@ -93,6 +94,7 @@ class PlaneGyroscope(Instrument):
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, RESTORING_LAW})
     MEASURED_CHANNELS = ("angle",)
     JOINTS = ("axis", "rotor")
+    OBSERVATION = SwingRate
     SHOWS_AXIS = True
     SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),

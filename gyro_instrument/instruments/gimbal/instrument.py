@@ -74,6 +74,7 @@ from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun
 from gyro_instrument.instruments.gimbal.theory import (axial_momentum, free_mass_matrix, locked_swing_constant,
                                                        outer_fixed_swing_constant, quet_energy, quet_swing_durations_s,
                                                        spin_invariant, swing_duration_s, swing_inertias_kg_m2)
+from gyro_instrument.instruments.observation import SwingRate
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
 INTEGRATORS = ("auto", "closed_form", "hinge_chain")
@@ -200,6 +201,7 @@ class GimbalGyroscope(Instrument):
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA})
     MEASURED_CHANNELS = ("outer_angle", "inner_angle")
     JOINTS = ("outer_ring", "inner_ring", "rotor")
+    OBSERVATION = SwingRate        # RotorObservation with free rings (no directing line)
     SIMULATOR_NODE = "gyrocompass_sim"
     STREAMS = True
     COLUMNS = (

@@ -18,6 +18,7 @@ from gyro_instrument.core.params import PairParam, Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span
+from gyro_instrument.instruments.observation import RotorObservation
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general
 from gyro_instrument.instruments.puiseux.general import (GeneralModes, general_modes, inertia_conjugacy,
                                                          linear_rotation, normal_frame)
@@ -113,6 +114,7 @@ class PuiseuxBody(Instrument):
     MEASURED_CHANNELS = ("tilt", "tilt_azimuth")
     SHOWS_CONTACT_POINT = True
     JOINTS = ("tilt", "tilt_azimuth", "spin")
+    OBSERVATION = RotorObservation
     SIMULATOR_NODE = "top_sim"
     COLUMNS = (
         Column("tilt", "rad", "theta: angle between the body axis Gz and the upward vertical"),
