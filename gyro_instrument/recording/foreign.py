@@ -47,15 +47,8 @@ def parse_topic_remaps(items, insts, field="--topic") -> dict:
 
 
 def _required_joints(inst):
-    """The joints an instrument's record needs (None: not used by the estimator)."""
-    from gyro_instrument.estimators.pipeline import estimable
-    if inst.IS_PENDULUM:
-        return inst.JOINTS[:len(inst.MEASURED_CHANNELS)]
-    if not estimable(inst):
-        return None
-    # JOINTS lead with one joint per measured channel and end with the rotor (Instrument protocol)
-    channel = inst.directing_model().angle_channel
-    return (inst.JOINTS[inst.MEASURED_CHANNELS.index(channel)], inst.JOINTS[-1])
+    """The joints an instrument's record needs (None: not used by the estimator): its observation's."""
+    return inst.observation().required_joints()
 
 
 def _column_of(names, name, joint):
@@ -85,7 +78,7 @@ def foreign_samples(scan, insts, remaps=None) -> tuple:
     -------
     samples : dict
         instrument -> (t_ns from the first sample, position (m, k), velocity (m, k)) in
-        ``Instrument.JOINTS`` order (NaN for joints not recorded).
+        joint layout order (``Instrument.JOINTS``) (NaN for joints not recorded).
     report : dict
         ``matched``, ``unmatched``, ``unused`` (see the module docstring).
     notes : list of str
@@ -129,7 +122,7 @@ def _match_topics(insts, remaps, by_topic, report):
 
 def _read_rows(scan, wanted, report):
     """Decode the wanted topics' intact JointState records: ({name: (stamps, log times, positions,
-    velocities)} as lists in ``Instrument.JOINTS`` order, NaN for joints not recorded; the number of
+    velocities)} as lists in joint layout order (``Instrument.JOINTS``), NaN for joints not recorded; the number of
     messages that did not decode; the decoder's notes about the schemas). A topic lacking a required joint goes to ``report["unmatched"]``."""
     from gyro_instrument.recording.bag_samples import MessageDecoder
     decode = MessageDecoder()
@@ -151,8 +144,9 @@ def _read_rows(scan, wanted, report):
             continue
         key = tuple(names)
         if key not in columns:
-            cols = [_column_of(names, name, j) for j in inst.JOINTS]
-            missing = [j for j in joints if cols[inst.JOINTS.index(j)] is None]
+            layout = inst.observation().layout.names
+            cols = [_column_of(names, name, j) for j in layout]
+            missing = [j for j in joints if cols[layout.index(j)] is None]
             if missing:
                 report["unmatched"][name] = (f"topic {channel.topic} lacks the joints {', '.join(missing)} of a "
                                              f"{inst.type_name} (its joints: {', '.join(names) or 'none'})")

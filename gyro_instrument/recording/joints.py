@@ -3,11 +3,14 @@
 One layout, used by the simulator nodes to publish, by the estimator node to rebuild its input,
 and by ``replay`` to read a bag — so all three feed the estimator bit-identical floats.
 
-Per instrument, the joints its class declares (``Instrument.JOINTS``, prefixed ``<instrument>/``;
-msg_docs/topics.md lists them per type): first one per measured channel (``MEASURED_CHANNELS``,
-position = the measured angle); then, for a pendulum (``IS_PENDULUM``), ``deflection`` = hypot of
-the measured deflections x/l, y/l and ``azimuth`` = atan2(east, north) (compass, rad); otherwise
-one rotor joint (position = integrated true spin, velocity = measured spin ρ).
+Per instrument, the joints its observation lays out (:class:`~gyro_instrument.instruments.observation.JointLayout`,
+names ``Instrument.JOINTS`` prefixed ``<instrument>/``; msg_docs/topics.md lists them per type):
+first one per measured channel (position = the measured angle); then the joints the observation
+derives from them (a pendulum's ``deflection`` = hypot of the deflections x/l, y/l and ``azimuth``
+= atan2(east, north), compass, rad); then, when it has a rotor, the rotor joint (position =
+integrated true spin, velocity = measured spin ρ). The observation writes the rows
+(:meth:`~gyro_instrument.instruments.observation.Observation.joint_rows`) and reads them back
+(:meth:`~gyro_instrument.instruments.observation.Observation.joint_record`): one definition.
 
 Velocities of measured angles are centred differences of the published positions; rotor angles
 integrate the simulated spin; efforts are 0 (no torque sensor) — every array is filled, as
@@ -21,7 +24,7 @@ import numpy as np
 
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S, sample_blocks_ns, sample_times_ns
-from gyro_instrument.estimators.pipeline import MeasureStream, measure, simulate_truth
+from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
 
 
 @dataclass
@@ -66,25 +69,17 @@ def joint_streams(scene, kinds=None, seed=None, truth=None) -> tuple:
         if kinds is not None and inst.type_name not in kinds:
             continue
         rec, cols = records[name], sims[name].columns
-        names = inst.JOINTS
-        if inst.IS_PENDULUM:
-            e, n = (rec[c] for c in inst.MEASURED_CHANNELS)
-            pos = np.column_stack([e, n, np.hypot(e, n), np.arctan2(e, n)])
-            vel = np.column_stack([_rate(t, pos[:, j]) for j in range(4)])
-            l = inst.pendulum_length_m()
-            x, y = l * e, l * n
-            bob = np.column_stack([x, y, -np.sqrt(np.maximum(l * l - x * x - y * y, 0.0))])
+        obs = inst.observation()
+        rated, spin = obs.joint_rows(rec)
+        vel_cols = [_rate(t, c) for c in rated]
+        if spin is None:
+            pos, vel = np.column_stack(rated), np.column_stack(vel_cols)
         else:
-            chans = inst.MEASURED_CHANNELS
-            spin = rec.get("spin_rate", np.zeros_like(t))
-            pos_cols = [rec[c] for c in chans]
-            vel_cols = [_rate(t, c) for c in pos_cols]
-            true_spin = cols.get("spin_rate", spin)
-            pos = np.column_stack(pos_cols + [_rotor_angle(t, np.nan_to_num(true_spin))])
+            true_spin = cols.get(obs.spin_channel, spin)
+            pos = np.column_stack(rated + [_rotor_angle(t, np.nan_to_num(true_spin))])
             vel = np.column_stack(vel_cols + [spin])
-            bob = None
-        streams[name] = JointStream(name, inst.type_name, tuple(f"{name}/{j}" for j in names), pos, vel,
-                                    np.zeros_like(pos), bob)
+        streams[name] = JointStream(name, inst.type_name, tuple(f"{name}/{j}" for j in obs.layout.names), pos, vel,
+                                    np.zeros_like(pos), obs.bob_enu_m(rec))
         if inst.SHOWS_CONTACT_POINT:          # true (simulated) contact point, body frame, (m, 3)
             streams[name].extra["contact_point_m"] = inst.contact_point_body(cols)
     return t_ns, streams
@@ -190,36 +185,37 @@ class _InstrumentJoints:
 
     def __init__(self, scene, name, inst, n, seed, uniform_dx):
         self.name, self.inst = name, inst
-        self.names = tuple(f"{name}/{j}" for j in inst.JOINTS)
+        self.obs = inst.observation()
+        self.names = tuple(f"{name}/{j}" for j in self.obs.layout.names)
         self.measure = MeasureStream(scene, inst, n, seed)
         self.grad = GradientStream(uniform_dx)
-        self.rotor = None if inst.IS_PENDULUM else _RotorStream()
-        self.held = None       # the newest block's last row (position, spin/bob), waiting for its rate
+        self.rotor = None if self.obs.spin_channel is None else _RotorStream()
+        self.held = None       # the newest block's last row (position, side columns), waiting for its rate
 
     def rows(self, t, columns):
-        """(position (m, k), rated columns of position, spin rate (m,) or bob (m, 3)) of a block."""
+        """(position (m, k), rated columns of position, side (m, s): the measured spin for a rotor,
+        then the bob's ENU position (3 columns) when the observation shows one) of a block."""
         rec = self.measure.block(t, columns)
-        inst = self.inst
-        if inst.IS_PENDULUM:
-            e, n = (rec[c] for c in inst.MEASURED_CHANNELS)
-            pos = np.column_stack([e, n, np.hypot(e, n), np.arctan2(e, n)])
-            l = inst.pendulum_length_m()
-            x, y = l * e, l * n
-            return pos, pos, np.column_stack([x, y, -np.sqrt(np.maximum(l * l - x * x - y * y, 0.0))])
-        pos_cols = [rec[c] for c in inst.MEASURED_CHANNELS]
-        spin = rec.get("spin_rate", np.zeros_like(t))
-        true_spin = columns.get("spin_rate", spin)
-        pos = np.column_stack(pos_cols + [self.rotor.push(t, np.nan_to_num(true_spin))])
-        return pos, np.column_stack(pos_cols), spin
+        rated, spin = self.obs.joint_rows(rec)
+        side = []
+        if spin is not None:
+            true_spin = columns.get(self.obs.spin_channel, spin)
+            pos = np.column_stack(rated + [self.rotor.push(t, np.nan_to_num(true_spin))])
+            side.append(spin[:, None])
+        else:
+            pos = np.column_stack(rated)
+        bob = self.obs.bob_enu_m(rec)
+        if bob is not None:
+            side.append(bob)
+        return pos, np.column_stack(rated), np.concatenate(side, axis=1) if side else np.zeros((len(t), 0))
 
     def stream(self, pos, side, rates, contact=None):
-        """A :class:`JointStream` from positions, their rates, and the spin (gyroscope) or bob (pendulum);
+        """A :class:`JointStream` from positions, their rates, and the side columns (:meth:`rows`);
         ``contact``: the true contact point (m, 3) of a body that shows it (``SHOWS_CONTACT_POINT``)."""
-        if self.inst.IS_PENDULUM:
-            js = JointStream(self.name, self.inst.type_name, self.names, pos, rates, np.zeros_like(pos), side)
-        else:
-            vel = np.column_stack([rates, side])
-            js = JointStream(self.name, self.inst.type_name, self.names, pos, vel, np.zeros_like(pos), None)
+        k = 0 if self.rotor is None else 1
+        vel = np.column_stack([rates, side[:, :k]]) if k else rates
+        bob = side[:, k:k + 3] if self.obs.SHOWS_BOB_POSITION else None
+        js = JointStream(self.name, self.inst.type_name, self.names, pos, vel, np.zeros_like(pos), bob)
         if contact is not None:
             js.extra["contact_point_m"] = contact
         return js
@@ -313,22 +309,13 @@ def records_from_joints(insts, samples) -> dict:
     insts : dict
         instrument name -> instrument (from ``build_instruments``).
     samples : dict
-        instrument name -> (t_ns int array, position (m, k), velocity (m, k)), joints in
-        ``Instrument.JOINTS`` order.
+        instrument name -> (t_ns int array, position (m, k), velocity (m, k)), joints in the
+        observation's layout order (``Instrument.JOINTS``).
     """
     records = {}
     for name, (t_ns, pos, vel) in samples.items():
-        inst = insts[name]
         t_ns = np.asarray(t_ns, dtype=np.int64)
         pos = np.asarray(pos, dtype=float).reshape(len(t_ns), -1)
         vel = np.asarray(vel, dtype=float).reshape(len(t_ns), -1)
-        rec = {"t": t_ns / 1e9}
-        for j, key in enumerate(inst.MEASURED_CHANNELS):
-            rec[key] = pos[:, j].copy()
-        if not inst.IS_PENDULUM:
-            rec["spin_rate"] = vel[:, -1].copy()
-            model = inst.directing_model()
-            if model is not None:
-                rec["angle"] = rec[model.angle_channel]
-        records[name] = rec
+        records[name] = insts[name].observation().joint_record(t_ns / 1e9, pos, vel)
     return records
