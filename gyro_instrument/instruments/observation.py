@@ -228,6 +228,11 @@ class Observation:
         ``size`` rows); notes what it assumed in ``notes``."""
         return {c: col(c) for c in full}
 
+    def table_length_m(self) -> float | None:
+        """The length (m) a table's position columns are divided by to give the measured angles, or
+        None when the record is not read from positions."""
+        return None
+
     # ------------------------------------------------------------------ estimation
     def rotating(self) -> bool:
         """True when the instrument simulates the Earth's rotation (its measurement observes n)."""
@@ -433,6 +438,10 @@ class PlanePrecession(Observation):
         if full == self.POSITION_COLUMNS:
             return {east: col("x_east") / self.length_m, north: col("y_north") / self.length_m}
         return {east: col(east), north: col(north)}
+
+    def table_length_m(self) -> float:
+        """l: ``x_east`` / l and ``y_north`` / l are the deflections."""
+        return self.length_m
 
     def swing_amplitude(self, rec) -> float:
         """The 99.5 % deflection hypot(x, y)/l, rad."""
