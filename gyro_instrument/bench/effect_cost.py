@@ -231,11 +231,7 @@ def _estimate(scene, insts, records):
 
 def _primary_angles(inst, sim):
     """{column name: array (rad)}: the angle channels the sensor reads (see the module docstring)."""
-    cols = sim.columns
-    model = None if inst.IS_PENDULUM else inst.directing_model()
-    if model is not None:
-        return {model.angle_channel: cols[model.angle_channel]}
-    return inst.measured_angles(cols)
+    return inst.observation().signal_angles(sim.columns)
 
 
 def _instrument_row(label, effect, ref, run, iname, base):

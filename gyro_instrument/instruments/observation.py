@@ -176,6 +176,11 @@ class Observation:
         """True values of the measured angles from simulated ``columns``: name -> array (rad)."""
         return {c: columns[c] for c in self.layout.measured}
 
+    def signal_angles(self, columns) -> dict:
+        """The true angles whose motion carries the measurement (name -> array, rad): all measured
+        angles by default."""
+        return self.true_values(columns)
+
     def sensor_inputs(self, columns) -> list:
         """The sensor draws, in order: ``(record key, true values, 'angle' | 'rate')`` — the measured
         angles, then the spin when it is simulated."""
@@ -311,6 +316,10 @@ class SwingRate(RotorObservation):
         self.normal_enu = tuple(model.normal_enu)
         self.label = model.label
         self.null_reason = model.null_reason
+
+    def signal_angles(self, columns) -> dict:
+        """The swinging angle only."""
+        return {self.angle_channel: columns[self.angle_channel]}
 
     def complete(self, rec) -> dict:
         """Adds ``angle``: the swinging channel."""

@@ -180,7 +180,7 @@ def _azimuth_panel(ax, n, t, tc, az, line, scale):
         text = (f"expected: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)}: a full turn in "
                 f"{line['full_turn_h']:.1f} h\nat latitude {latitude_words(line['latitude_deg'])}"
                 + (f", released at {math.degrees(line['release'][0]):.1f}° (exact finite-amplitude rate; "
-                   f"n·sin(latitude) alone: {deg_per_h(line['k_rad_s']):+.3f} °/h)" if line["finite_amplitude"]
+                   f"n·sin(latitude) alone: {deg_per_h(line['k_rad_s']):+.3f} °/h)" if line["exact_amplitude"]
                    else " (n·sin(latitude))")
                 + f"\nmeasured (slope of the points): {deg_per_h(measured):+.3f} °/h")
         label = "expected, from the release"

@@ -75,16 +75,17 @@ def expected_line(scene, name) -> dict | None:
     try:
         from gyro_instrument.scenes import build_instruments
         inst = build_instruments(scene).get(name)
-        pred = inst.predictions() if inst is not None and inst.IS_PENDULUM else None
+        obs = inst.observation() if inst is not None else None
+        pred = inst.predictions() if obs is not None and obs.SHOWS_BOB_POSITION else None
     except Exception:                   # noqa: BLE001 - a scene that does not build draws no line
         return None
-    if not pred or pred.get("apsidal_rate_from_rest_rad_s") is None or not hasattr(inst, "psi0"):
+    if not pred or pred.get("apsidal_rate_from_rest_rad_s") is None or obs.release() is None:
         return None
     rate = float(pred["apsidal_rate_from_rest_rad_s"])
     return {"rate_rad_s": rate, "k_rad_s": float(pred["foucault_rate_rad_s"]),
-            "latitude_deg": scene.site.latitude_deg, "release": (float(inst.theta0), float(inst.psi0)),
+            "latitude_deg": scene.site.latitude_deg, "release": tuple(float(v) for v in obs.release()),
             "full_turn_h": 2 * math.pi / abs(rate) / 3600.0 if rate else math.inf,
-            "finite_amplitude": inst.has("finite_amplitude")}
+            "exact_amplitude": obs.models_finite_amplitude()}
 
 
 def oscillation_residuals(t, y) -> tuple | None:

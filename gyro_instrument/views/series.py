@@ -64,8 +64,8 @@ def _table_series(path, field, scene, overrides=()):
     t = cols[TIME_COLUMN]
     insts = build_instruments(scene) if scene else {}
     names = list(dict.fromkeys(c.split(".", 1)[0] for c in cols if "." in c))
-    angle_names = {c for cls in REGISTRY.values() if not cls.IS_PENDULUM for c in cls.MEASURED_CHANNELS} \
-        | {"deflection"}
+    angle_names = {c for cls in REGISTRY.values() if not cls.OBSERVATION.SHOWS_BOB_POSITION
+                   for c in cls.MEASURED_CHANNELS} | {"deflection"}
     series = {}
     for name in names:
         ch = {c.split(".", 1)[1]: cols[c] for c in cols if c.startswith(f"{name}.")}
@@ -83,7 +83,7 @@ def _table_series(path, field, scene, overrides=()):
 def _pendulum_series(t, ch, inst):
     """A pendulum's series from its table channels: deflections in degrees when its length is known
     (from the scene), else positions in metres; never angles it cannot know."""
-    length = inst.pendulum_length_m() if inst is not None and inst.IS_PENDULUM else None
+    length = inst.observation().table_length_m() if inst is not None else None
     s = {"type": inst.type_name if inst is not None else "pendulum", "t": t}
     if {"x_east", "y_north"} <= set(ch):
         s["east"], s["north"], s["path_unit"] = ch["x_east"], ch["y_north"], "m"
@@ -130,12 +130,13 @@ def _bag_series(path, scene, topics):
     series = {}
     for name, rec in records_from_joints(insts, samples).items():
         inst = insts[name]
-        if inst.IS_PENDULUM:
+        obs = inst.observation()
+        if obs.SHOWS_BOB_POSITION:
             s = _pendulum_series(rec["t"], {"deflection_east": rec["deflection_east"],
                                             "deflection_north": rec["deflection_north"]}, inst)
         else:
             s = {"type": inst.type_name, "t": rec["t"],
-                 "channels": [(c, np.degrees(rec[c]), "deg") for c in inst.MEASURED_CHANNELS if c in rec]}
+                 "channels": [(c, np.degrees(rec[c]), "deg") for c in obs.layout.measured if c in rec]}
         series[name] = s
     return series, scene, list(notes)
 
