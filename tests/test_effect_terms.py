@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from gyro_instrument.core.effect import MECHANICS, POINT_MASS, Effect
+from gyro_instrument.core.effect import MECHANICS, POINT_MASS, Effect, EffectContext
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.effects.centrifugal import centrifugal_gradient_acceleration
@@ -59,7 +59,7 @@ def test_plane_gyroscope_scalar_path_equals_the_summed_terms(effects):
             if "finite_amplitude" not in effects:
                 udd_ref = still[2] * u / math.sin(u) + (full[2] - still[2])
             p = inst.site.earth_rate_rad_s * inst.sin_omega
-            scale = max(inst.mu * p * abs(rho) + abs(ud) + abs(rho) / 100.0, 1e-30)
+            scale = max(inst.p.inertia_ratio * p * abs(rho) + abs(ud) + abs(rho) / 100.0, 1e-30)
             assert udd == pytest.approx(udd_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
             assert rhod == pytest.approx(rhod_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
 
@@ -84,10 +84,11 @@ def test_parareal_fast_path_equals_the_summed_terms(effects):
 
 def test_point_mass_terms_equal_the_vector_helpers():
     """Component-form terms equal −2 Ω × v and −Ω × (Ω × δr) (Quet sec. 1 eqs. 16, 19) to rounding."""
-    om = Site.from_degrees(48.8462).earth_rate_enu()
+    ctx = EffectContext.of_site(Site.from_degrees(48.8462))
+    om = ctx.site.earth_rate_enu()
     rng = np.random.default_rng(3)
-    cor = EFFECTS["earth_rotation"]().point_mass_term(om)
-    cen = EFFECTS["centrifugal"]().point_mass_term(om)
+    cor = EFFECTS["earth_rotation"]().point_mass_term(ctx)
+    cen = EFFECTS["centrifugal"]().point_mass_term(ctx)
     for _ in range(5):
         dr, v = rng.normal(size=3) * 5.0, rng.normal(size=3)
         np.testing.assert_allclose(cor(*dr, *v), coriolis_acceleration(om, v), rtol=0, atol=1e-19)
@@ -97,8 +98,9 @@ def test_point_mass_terms_equal_the_vector_helpers():
 def test_spin_and_damping_terms():
     """spin_decay's bearing torque is C times its angular deceleration −ρ/τ; pivot damping −(2/τ) J q̇."""
     sd = EFFECTS["spin_decay"](time_constant_s=50.0)
-    assert sd.spin_torque(2.0, 600.0) == pytest.approx(2.0 * sd.spin_torque_per_inertia(600.0), rel=1e-15)
-    assert EFFECTS["pivot_damping"](time_constant_s=10.0).damping_torque(3.0, 0.5) == pytest.approx(-0.3)
+    ctx = EffectContext.of_site(Site.from_degrees(48.8462))
+    assert sd.spin_torque(ctx, 2.0, 600.0) == pytest.approx(2.0 * sd.spin_torque_per_inertia(600.0), rel=1e-15)
+    assert EFFECTS["pivot_damping"](time_constant_s=10.0).damping_torque(ctx, 3.0, 0.5) == pytest.approx(-0.3)
 
 
 def test_every_effect_declares_known_kinds_and_implements_their_hooks():

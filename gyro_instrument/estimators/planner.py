@@ -137,7 +137,7 @@ def instrument_models(scene) -> tuple:
             continue
         if inst.IS_PENDULUM:
             pred = inst.predictions()
-            alpha = math.sin(math.radians(inst.initial_deflection_deg))
+            alpha = math.sin(math.radians(inst.p.initial_deflection_deg))
             period = 4.0 * pred["quarter_period_s"] if "quarter_period_s" in pred else \
                 2.0 * math.pi * math.sqrt(inst.pendulum_length_m() / site.gravity_m_s2)
             models.append(InstrumentModel(name, "pendulum", 2.0 * math.pi / period, n * math.sin(site.latitude_rad),

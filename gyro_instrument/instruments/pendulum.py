@@ -34,7 +34,7 @@ import numpy as np
 from scipy.special import elliprf, elliprj, ellipk
 
 from gyro_instrument.core.angles import Unwrapper
-from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN
+from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN, Scales
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.parareal import dense_output, hermite_rows
 from gyro_instrument.core.params import Param
@@ -314,6 +314,18 @@ def binet_ellipse(t, length_m, gravity_m_s2, k_rad_s, x0, y0, vx0, vy0, velocity
     return z.real, z.imag, zd.real, zd.imag
 
 
+def _effects_with(effect_names, kind) -> list:
+    """The registered effects among ``effect_names`` contributing to the mechanics ``kind``."""
+    from gyro_instrument.effects import REGISTRY
+    return [n for n in effect_names if n in REGISTRY and kind in REGISTRY[n].MECHANICS]
+
+
+def _not_conservative(effect_names) -> list:
+    """The effects among ``effect_names`` (registered names) that do not declare ``conservative``, sorted."""
+    from gyro_instrument.effects import REGISTRY
+    return sorted(n for n in effect_names if not (n in REGISTRY and REGISTRY[n].is_conservative()))
+
+
 def pendulum_columns(pos, vel, omega0_sq, unwrappers=None) -> dict:
     """Derived columns from bob positions/velocities (arrays (3, m), ENU).
 
@@ -351,8 +363,9 @@ class SphericalPendulum(Instrument):
                   "seen from above (toward increasing azimuth)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance (adaptive)"),
         Param("integrator", kind="str", default="auto", choices=("auto", "adaptive", "parareal"),
-              doc="auto: parareal whenever the model allows it (finite_amplitude listed, no effect outside "
-                  "earth_rotation, centrifugal, finite_amplitude, a release from rest at up to 10 degrees whose amplitude is "
+              doc="auto: parareal whenever the model allows it (finite_amplitude listed, every effect conservative "
+                  "as earth_rotation, centrifugal and finite_amplitude are, a release from rest at up to 10 degrees whose "
+                  "amplitude is "
                   "above the round-off floor), "
                   "else adaptive ('describe' says which and why); adaptive: DOP853 swing after swing; parareal: "
                   "every swing period of a window at once (fixed-step RK8 batched over periods, Newton-parareal "
@@ -373,20 +386,24 @@ class SphericalPendulum(Instrument):
     def check_effects(cls, prefix, p, effects) -> None:
         from gyro_instrument.core.errors import SceneError
         if p["integrator"] == "parareal":
-            if "finite_amplitude" not in effects:
+            if not _effects_with(effects, RESTORING_LAW):
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs the effect finite_amplitude (the "
                                  "full model); the linear model has Binet's closed form")
-            if "air_drag" in effects:
-                raise SceneError(f"{prefix}.integrator", "parareal", "needs a conservative motion: leave out "
-                                 "air_drag or use integrator: adaptive")
+            dissipative = _not_conservative(effects)
+            if dissipative:
+                raise SceneError(f"{prefix}.integrator", "parareal", f"needs a conservative motion: leave out "
+                                 f"{', '.join(dissipative)} or use integrator: adaptive")
             if p["initial_deflection_deg"] >= 90.0 or p["initial_deflection_deg"] <= 0.0 \
                     or p["radial_speed_m_s"] != 0.0 or p["transverse_speed_m_s"] != 0.0:
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs a release from rest at a deflection "
                                  "in (0, 90) degrees (its period and precession come from that release)")
 
-    #: The effects the parareal fast path is chosen with by ``integrator: auto``: conservative terms
-    #: (its Newton iteration starts from the comparison pendulum, a conservative swing).
-    PARAREAL_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude"})
+    #: The parareal fast path needs of the active effects (chosen by ``integrator: auto``, required by
+    #: an explicit ``parareal``): a ``restoring_law`` effect (the full Cartesian model, whose right-hand
+    #: side :meth:`rhs_exact` sums every active ``point_mass`` term, batched over swings as the hook's
+    #: contract says) and every effect ``conservative`` (:data:`~gyro_instrument.core.effect.CONSERVATIVE`:
+    #: its Newton iteration starts from the comparison pendulum, a conservative swing, and its period is
+    #: that of the first swing). Any effect declaring it keeps the fast path; none is named here.
     #: Largest release deflection (deg) at which ``integrator: auto`` takes parareal at its default
     #: grid: against DOP853 at rtol 1e-12 (5 m, 20 min, full model) the largest position difference
     #: over the amplitude was 3.2e-10, 2.2e-10, 3.2e-10 at 2°, 5°, 10°, under the shooting tolerance
@@ -397,60 +414,56 @@ class SphericalPendulum(Instrument):
     def chosen_integrator(self, duration_s=None) -> tuple:
         """(integrator, reason): ``adaptive`` or ``parareal`` as the scene asks, or for ``auto`` the fast
         path parareal when the full model and a release from rest allow it (the conditions
-        :meth:`check_effects` enforces for an explicit parareal, and no effect outside
-        :data:`PARAREAL_EFFECTS`), else adaptive with the reason."""
-        if self.integrator != "auto":
-            return self.integrator, "chosen in the scene"
-        if not self.has("finite_amplitude"):
+        :meth:`check_effects` enforces for an explicit parareal: a restoring law and every active effect
+        conservative), else adaptive with the reason."""
+        if self.p.integrator != "auto":
+            return self.p.integrator, "chosen in the scene"
+        if self.restoring_law() is None:
             return "adaptive", "auto: the linear (small-angle) model has no parareal path (finite_amplitude not listed)"
-        other = sorted(set(self.effects) - self.PARAREAL_EFFECTS)
+        other = _not_conservative(self.effects)
         if other:
             return "adaptive", f"auto: parareal is for a conservative swing; {', '.join(other)} listed"
-        if not (0.0 < self.initial_deflection_deg < 90.0) or self.radial_speed_m_s or self.transverse_speed_m_s:
+        if not (0.0 < self.p.initial_deflection_deg < 90.0) or self.p.radial_speed_m_s or self.p.transverse_speed_m_s:
             return "adaptive", "auto: parareal needs a release from rest between 0 and 90 degrees"
         # The bob's height (~l) carries round-off eps·l: relative to the swing amplitude l sin θ0 that is
         # eps / sin θ0, and Newton cannot move the swing starts by less (at θ0 = 1e-9 rad it stalled at
         # 1e-7 > shooting_tol 1e-9). Auto asks for a floor 100 times below the tolerance.
-        floor = np.finfo(float).eps / math.sin(self.theta0)
-        if 100.0 * floor > self.shooting_tol:
-            return "adaptive", (f"auto: at a release of {self.initial_deflection_deg:.3g} deg the round-off of the "
+        floor = np.finfo(float).eps / math.sin(self.p.initial_deflection_rad)
+        if 100.0 * floor > self.p.shooting_tol:
+            return "adaptive", (f"auto: at a release of {self.p.initial_deflection_deg:.3g} deg the round-off of the "
                                 f"bob's height is {floor:.1e} of the amplitude, too close to parareal's shooting "
-                                f"tolerance {self.shooting_tol:g}")
-        if self.initial_deflection_deg > self.PARAREAL_AUTO_MAX_DEG:
-            return "adaptive", (f"auto: a release at {self.initial_deflection_deg:g} deg is beyond the "
-                                f"{self.PARAREAL_AUTO_MAX_DEG:g} deg where parareal's {self.segment_steps}-step grid "
+                                f"tolerance {self.p.shooting_tol:g}")
+        if self.p.initial_deflection_deg > self.PARAREAL_AUTO_MAX_DEG:
+            return "adaptive", (f"auto: a release at {self.p.initial_deflection_deg:g} deg is beyond the "
+                                f"{self.PARAREAL_AUTO_MAX_DEG:g} deg where parareal's {self.p.segment_steps}-step grid "
                                 f"is validated to its shooting tolerance")
         return "parareal", ("auto: the full conservative model released from rest, the fast path (all swings of "
                             "a window at once; DOP853 with integrator: adaptive)")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.l = self.length_m
-        self.g = site.gravity_m_s2
-        self.theta0 = math.radians(self.initial_deflection_deg)
-        self.psi0 = math.radians(self.initial_azimuth_deg)
 
     def pendulum_length_m(self) -> float:
         """The rod length l, m."""
-        return self.l
+        return self.p.length_m
 
     def expected_swing(self) -> "ExpectedSwing":
         """Four exact quarter periods of a plane swing (sec. 2 eq. 42 without its series:
         :func:`quarter_period_s`) and the release deflection θ0 (the Earth's k changes neither
         by more than (k/ω0)², below 1e-8 for any pendulum)."""
-        return ExpectedSwing(4.0 * quarter_period_s(self.l, self.g, self.theta0, 0.0), abs(self.theta0),
+        return ExpectedSwing(4.0 * quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, 0.0), abs(self.p.initial_deflection_rad),
                              "length_m, initial_deflection_deg and the site's gravity", *WINDOW_SAMPLING)
 
     def initial_state(self) -> tuple:
         """Bob position and velocity (ENU) at release; velocity relative to the Earth."""
-        st, ct = math.sin(self.theta0), math.cos(self.theta0)
-        sp, cp = math.sin(self.psi0), math.cos(self.psi0)
-        r = self.l * np.array([st * sp, st * cp, -ct])
+        st, ct = math.sin(self.p.initial_deflection_rad), math.cos(self.p.initial_deflection_rad)
+        sp, cp = math.sin(self.p.initial_azimuth_rad), math.cos(self.p.initial_azimuth_rad)
+        r = self.p.length_m * np.array([st * sp, st * cp, -ct])
         e_rad = np.array([ct * sp, ct * cp, st])        # ∂r/∂θ / l
         e_az = np.array([cp, -sp, 0.0])                 # ∂r/∂ψ direction (clockwise from above)
         if st == 0.0:
             e_az = np.array([cp, -sp, 0.0])
-        v = self.radial_speed_m_s * e_rad + self.transverse_speed_m_s * e_az
+        v = self.p.radial_speed_m_s * e_rad + self.p.transverse_speed_m_s * e_az
         return r, v
 
     def predictions(self) -> dict:
@@ -476,14 +489,14 @@ class SphericalPendulum(Instrument):
         rotating = self.has("earth_rotation")
         k = k_site if rotating else 0.0
         if self.has("finite_amplitude"):
-            beta = abs(min_deflection_from_rest_rad(self.l, self.g, k, self.theta0))
-            quarter = quarter_period_s(self.l, self.g, self.theta0, beta)
+            beta = abs(min_deflection_from_rest_rad(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad))
+            quarter = quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta)
             k_h = self.site.earth_rate_enu()[1] if rotating else 0.0
-            apsidal = apsidal_rate_from_rest_exact_rad_s(self.l, self.g, k, self.theta0, k_h, self.psi0)
-            series = apsidal_rate_from_rest_rad_s(k, self.theta0)
+            apsidal = apsidal_rate_from_rest_exact_rad_s(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad, k_h, self.p.initial_azimuth_rad)
+            series = apsidal_rate_from_rest_rad_s(k, self.p.initial_deflection_rad)
         else:
-            W = math.sqrt(self.g / self.l + k * k)
-            beta = math.asin(min(1.0, math.sin(self.theta0) * abs(k) / W))
+            W = math.sqrt(self.context.gravity_m_s2 / self.p.length_m + k * k)
+            beta = math.asin(min(1.0, math.sin(self.p.initial_deflection_rad) * abs(k) / W))
             quarter = 0.5 * math.pi / W
             apsidal = series = k
         out = {"foucault_rate_rad_s": k,
@@ -491,11 +504,11 @@ class SphericalPendulum(Instrument):
                "precession_sense": precession_sense(k),
                "full_turn_h": (2 * math.pi / abs(k) / 3600.0) if k else math.inf,
                "quarter_period_s": quarter,
-               "quarter_period_series_s": quarter_period_series_s(self.l, self.g, self.theta0, beta),
+               "quarter_period_series_s": quarter_period_series_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta),
                "min_deflection_from_rest_rad": beta,
                "apsidal_rate_from_rest_rad_s": apsidal,
                "apsidal_rate_quet_series_rad_s": series}
-        if self.has("finite_amplitude") and rotating and 0.0 < self.theta0 < math.pi:
+        if self.has("finite_amplitude") and rotating and 0.0 < self.p.initial_deflection_rad < math.pi:
             out.update(self._horizontal_rate_beta(beta))
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s "
@@ -508,45 +521,44 @@ class SphericalPendulum(Instrument):
         """What sec. 2 §II could not include: the horizontal Earth rate's share of the minimum
         deflection (:func:`min_deflection_with_horizontal_rate_rad`), for this release."""
         k_h = self.site.earth_rate_enu()[1]
-        exact = min_deflection_with_horizontal_rate_rad(self.l, self.g, self.site.k_vertical_rad_s, k_h,
-                                                        self.theta0, self.psi0)
+        exact = min_deflection_with_horizontal_rate_rad(self.p.length_m, self.context.gravity_m_s2, self.site.k_vertical_rad_s, k_h,
+                                                        self.p.initial_deflection_rad, self.p.initial_azimuth_rad)
         err = beta / exact - 1.0 if exact > 0.0 else math.inf
-        north = min_deflection_with_horizontal_rate_rad(self.l, self.g, self.site.k_vertical_rad_s, k_h,
-                                                        self.theta0, 0.0)
+        north = min_deflection_with_horizontal_rate_rad(self.p.length_m, self.context.gravity_m_s2, self.site.k_vertical_rad_s, k_h,
+                                                        self.p.initial_deflection_rad, 0.0)
         err_north = beta / north - 1.0 if north > 0.0 else math.inf
-        from_rest = self.radial_speed_m_s == 0.0 and self.transverse_speed_m_s == 0.0
+        from_rest = self.p.radial_speed_m_s == 0.0 and self.p.transverse_speed_m_s == 0.0
         def off(e):
             return "equal to it" if abs(e) < 1e-12 else f"{100.0 * abs(e):.3g} % {'above' if e > 0 else 'below'} it"
         text = (f"sec. 2 §II's minimum deflection β = √(l/g) k sin θ0 cos(θ0/2) keeps only the vertical Earth "
                 f"rate; the horizontal rate n cos γ = {k_h:.6g} rad/s acting on the bob's vertical velocity changes "
                 f"the area integral by −n cos γ l² cos ψ0 (θ0 − sin θ0 cos θ0): for this release (azimuth "
-                f"{math.degrees(self.psi0):g}°) the minimum deflection is {exact:.6g} rad and β = {beta:.6g} rad "
+                f"{math.degrees(self.p.initial_azimuth_rad):g}°) the minimum deflection is {exact:.6g} rad and β = {beta:.6g} rad "
                 f"is {off(err)} (for a release toward north here: {off(err_north)})"
                 + ("" if from_rest else "; both are for a release from rest, not this launch"))
         return {"min_deflection_from_rest_exact_rad": exact, "min_deflection_quet_relative_error": err,
                 "beyond_the_paper": text}
 
-    def scales(self, duration_s) -> dict:
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
-                "restoring_rate_rad_s": math.sqrt(self.g / self.l), "amplitude_rad": self.theta0,
-                "duration_s": duration_s}
+    def scales(self, duration_s) -> Scales:
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=None,
+                restoring_rate_rad_s=math.sqrt(self.context.gravity_m_s2 / self.p.length_m), amplitude_rad=self.p.initial_deflection_rad,
+                duration_s=duration_s)
 
     def point_mass_terms(self) -> list:
         """The active effects' ``point_mass`` terms f(δr, v) -> a (ENU, rotating frame), summing order."""
-        om = self.site.earth_rate_enu()
-        terms = (e.point_mass_term(om) for e in self.effects_of(POINT_MASS))
+        terms = (e.point_mass_term(self.context) for e in self.effects_of(POINT_MASS))
         return [f for f in terms if f is not None]
 
     def rhs_exact(self) -> Callable:
         """Cartesian constrained right-hand side for y = [r, v] (ENU): gravity, the tension and the
         sum of the active effects' point-mass accelerations at δr = r − r_rest (module docstring).
         Accepts a batch of states (y of shape (6, m)) when every term does."""
-        l2 = self.l * self.l
-        g = self.g
+        l2 = self.p.length_m * self.p.length_m
+        g = self.context.gravity_m_s2
         terms = self.point_mass_terms()
-        a_b = 2.0 * math.sqrt(g / self.l)
-        b2 = g / self.l
-        zr = -self.l
+        a_b = 2.0 * math.sqrt(g / self.p.length_m)
+        b2 = g / self.p.length_m
+        zr = -self.p.length_m
 
         half_b2 = 0.5 * b2
 
@@ -570,7 +582,7 @@ class SphericalPendulum(Instrument):
         """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x plus the
         horizontal part of the active effects' point-mass accelerations, taken on the horizontal
         plane (δr = (x, y, 0), v = (vx, vy, 0): Coriolis from the vertical Earth-rate part, ...)."""
-        w0sq = self.g / self.l
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
         terms = self.point_mass_terms()
 
         def rhs(t, y):
@@ -607,26 +619,26 @@ class SphericalPendulum(Instrument):
         if t0 is None:
             return
         r0, v0 = self.initial_state()
-        w0sq = self.g / self.l
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
         # Absolute tolerances scale with the motion, not the rod: a 1e-9 rad swing on 67 m moves
         # the bob 7e-8 m, which an atol of 1e-12 l would resolve to only 1e-3 of itself.
         w0 = math.sqrt(w0sq)
-        check_period_count(f"instruments.{self.name}.length_m", self.l, 2.0 * math.pi / w0, t_end - t0)
-        amp = max(self.l * math.sin(self.theta0), float(np.linalg.norm(v0)) / w0, 1e-12 * self.l)
-        atol_r, atol_v = self.rtol * amp, self.rtol * amp * w0
+        check_period_count(f"instruments.{self.name}.length_m", self.p.length_m, 2.0 * math.pi / w0, t_end - t0)
+        amp = max(self.p.length_m * math.sin(self.p.initial_deflection_rad), float(np.linalg.norm(v0)) / w0, 1e-12 * self.p.length_m)
+        atol_r, atol_v = self.p.rtol * amp, self.p.rtol * amp * w0
         # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
         # level, which no tolerance may ask to resolve (an inverted bob took 7e6 evaluations).
-        atol_z, atol_vz = max(atol_r, 1e-14 * self.l), max(atol_v, 1e-14 * self.l * w0)
+        atol_z, atol_vz = max(atol_r, 1e-14 * self.p.length_m), max(atol_v, 1e-14 * self.p.length_m * w0)
         unwrappers = (Unwrapper(), Unwrapper())
         if self.chosen_integrator(t_end - t0)[0] == "parareal":
             yield from self._stream_parareal(blocks, t0, t_end, r0, v0, amp, options.get("progress"), unwrappers)
             return
         exact = self.restoring_law() is not None          # finite_amplitude: the exact (Cartesian) model
         if exact:
-            run = integration(self.rhs_exact(), np.concatenate([r0, v0]), t0, t_end, rtol=self.rtol,
+            run = integration(self.rhs_exact(), np.concatenate([r0, v0]), t0, t_end, rtol=self.p.rtol,
                               atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
         else:
-            run = integration(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t0, t_end, rtol=self.rtol,
+            run = integration(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t0, t_end, rtol=self.p.rtol,
                               atol=np.array([atol_r] * 2 + [atol_v] * 2))
         for t in blocks:
             traj = run.advance(t)
@@ -635,7 +647,7 @@ class SphericalPendulum(Instrument):
             else:
                 x, y, vx, vy = traj.y
                 rh2 = x * x + y * y
-                pos = np.vstack([x, y, -np.sqrt(np.maximum(self.l ** 2 - rh2, 0.0))])
+                pos = np.vstack([x, y, -np.sqrt(np.maximum(self.p.length_m ** 2 - rh2, 0.0))])
                 vel = np.vstack([vx, vy, np.zeros_like(vx)])
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
@@ -651,8 +663,8 @@ class SphericalPendulum(Instrument):
         motion turned by k t)."""
         from gyro_instrument.core.dop853 import first_crossing
         k = self.site.k_vertical_rad_s if self.has("earth_rotation") else 0.0
-        beta = min_deflection_from_rest_rad(self.l, self.g, k, self.theta0)
-        guess = 4.0 * quarter_period_s(self.l, self.g, self.theta0, beta)
+        beta = min_deflection_from_rest_rad(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad)
+        guess = 4.0 * quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta)
         rhs = self.rhs_exact()
 
         def f(tt, *y):
@@ -663,9 +675,9 @@ class SphericalPendulum(Instrument):
         # DOP853 on floats (core/dop853.py: scipy's method and step control; not scipy.integrate,
         # whose import costs the command line 0.25-0.4 s), the apocentre by bisection on its dense output
         period, y1, sol, nfev = first_crossing(f, np.concatenate([r0, v0]), 1.2 * guess, apocentre,
-                                               after=0.9 * guess, rtol=1e-12, atol=1e-14 * self.l)
+                                               after=0.9 * guess, rtol=1e-12, atol=1e-14 * self.p.length_m)
         if period is None:
-            return guess, -apsidal_rate_from_rest_rad_s(k, self.theta0) * guess, nfev, sol
+            return guess, -apsidal_rate_from_rest_rad_s(k, self.p.initial_deflection_rad) * guess, nfev, sol
         turn = math.atan2(r0[0] * y1[1] - r0[1] * y1[0], r0[0] * y1[0] + r0[1] * y1[1])
         return period, turn, nfev, sol
 
@@ -707,9 +719,9 @@ class SphericalPendulum(Instrument):
             pred[:, b] = np.cos(ang) * y_start[b] - np.sin(ang) * y_start[b + 1]
             pred[:, b + 1] = np.sin(ang) * y_start[b] + np.cos(ang) * y_start[b + 1]
             pred[:, b + 2] = y_start[b + 2]
-        w0sq = self.g / self.l
-        _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.segment_steps, scale,
-                                 tol=self.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
+        _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.p.segment_steps, scale,
+                                 tol=self.p.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
                                  span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
@@ -730,8 +742,8 @@ class SphericalPendulum(Instrument):
         period, phi, evals, _ = self._first_swing(r0, v0)
         n_total = max(1, int(math.ceil((t_end - t0) / period)))
         per = self.WINDOW_SWINGS
-        scale = np.array([amp] * 3 + [amp * math.sqrt(self.g / self.l)] * 3)
-        w0sq = self.g / self.l
+        scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
         window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
         passes = 0
         for t in blocks:
@@ -759,7 +771,7 @@ class SphericalPendulum(Instrument):
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
             c0 = None
             traj = Trajectory(t, y, evals, wall, cpu,
-                              f"parareal RK8 ({self.segment_steps} steps/period, {passes} passes in "
+                              f"parareal RK8 ({self.p.segment_steps} steps/period, {passes} passes in "
                               f"{window + 1} window{'s' if window else ''})")
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
                                                    "period_s": period, "segments": n_total})
@@ -850,23 +862,17 @@ class CompoundPendulum(Instrument):
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.A = self.transverse_inertia_kg_m2
-        self.C = self.axial_inertia_kg_m2
-        self.M = self.mass_kg
-        self.lc = self.com_distance_m
-        self.equivalent_length_m = self.A / (self.M * self.lc)
-        self.theta0 = math.radians(self.initial_deflection_deg)
-        self.psi0 = math.radians(self.initial_azimuth_deg)
+        self.equivalent_length_m = self.p.transverse_inertia_kg_m2 / (self.p.mass_kg * self.p.com_distance_m)
 
     def pendulum_length_m(self) -> float:
         """The pivot–centre-of-mass distance l, m (the deflections are those of the centre of mass)."""
-        return self.lc
+        return self.p.com_distance_m
 
     def expected_swing(self) -> "ExpectedSwing":
         """Four quarter periods of the simple pendulum of the equivalent length λ (sec. 3 §VI eq. 57)
         and the release deflection θ0."""
-        return ExpectedSwing(4.0 * quarter_period_s(self.equivalent_length_m, self.site.gravity_m_s2, self.theta0, 0.0),
-                             abs(self.theta0), "the body's inertia, mass, centre of mass and initial deflection",
+        return ExpectedSwing(4.0 * quarter_period_s(self.equivalent_length_m, self.site.gravity_m_s2, self.p.initial_deflection_rad, 0.0),
+                             abs(self.p.initial_deflection_rad), "the body's inertia, mass, centre of mass and initial deflection",
                              *WINDOW_SAMPLING)
 
     def predictions(self) -> dict:
@@ -879,28 +885,29 @@ class CompoundPendulum(Instrument):
         k = k_site if self.has("earth_rotation") else 0.0
         lam = self.equivalent_length_m
         g = self.site.gravity_m_s2
-        e0 = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
-                       -math.cos(self.theta0)])
+        e0 = np.array([math.sin(self.p.initial_deflection_rad) * math.sin(self.p.initial_azimuth_rad), math.sin(self.p.initial_deflection_rad) * math.cos(self.p.initial_azimuth_rad),
+                       -math.cos(self.p.initial_deflection_rad)])
         om = self.site.earth_rate_enu() if self.has("earth_rotation") else np.zeros(3)
         out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k, "precession_sense": precession_sense(k),
-               "quarter_period_s": quarter_period_s(lam, g, self.theta0, 0.0),
-               "absolute_spin_rad_s": self.spin_rate_rad_s + float(om @ e0)}
+               "quarter_period_s": quarter_period_s(lam, g, self.p.initial_deflection_rad, 0.0),
+               "absolute_spin_rad_s": self.p.spin_rate_rad_s + float(om @ e0)}
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
-    def scales(self, duration_s) -> dict:
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": None,
-                "restoring_rate_rad_s": math.sqrt(self.site.gravity_m_s2 / self.equivalent_length_m),
-                "amplitude_rad": self.theta0, "duration_s": duration_s}
+    def scales(self, duration_s) -> Scales:
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=None,
+                restoring_rate_rad_s=math.sqrt(self.site.gravity_m_s2 / self.equivalent_length_m),
+                amplitude_rad=self.p.initial_deflection_rad, duration_s=duration_s)
 
     def build_chain(self) -> HingeChain:
+        A, C = self.p.transverse_inertia_kg_m2, self.p.axial_inertia_kg_m2
         links = [Link("cardan_east", np.array([1.0, 0.0, 0.0]), np.zeros((3, 3))),
                  Link("cardan_north", np.array([0.0, 1.0, 0.0]), np.zeros((3, 3))),
-                 Link("body", np.array([0.0, 0.0, -1.0]), np.diag([self.A, self.A, self.C]),
-                      mass_kg=self.M, com_m=np.array([0.0, 0.0, -self.lc]), spin_inertia=self.C)]
-        links[0].swing_inertia = links[1].swing_inertia = self.A
+                 Link("body", np.array([0.0, 0.0, -1.0]), np.diag([A, A, C]),
+                      mass_kg=self.p.mass_kg, com_m=np.array([0.0, 0.0, -self.p.com_distance_m]), spin_inertia=C)]
+        links[0].swing_inertia = links[1].swing_inertia = A
         return HingeChain(links, np.eye(3), self.site.earth_rate_enu(),
-                          np.array([0.0, 0.0, -self.site.gravity_m_s2]), self.effects.values())
+                          np.array([0.0, 0.0, -self.context.gravity_m_s2]), self.effects.values(), self.context)
 
     STREAMS = True
 
@@ -912,21 +919,21 @@ class CompoundPendulum(Instrument):
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
-        check_period_count(f"instruments.{self.name}.transverse_inertia_kg_m2", self.A,
+        check_period_count(f"instruments.{self.name}.transverse_inertia_kg_m2", self.p.transverse_inertia_kg_m2,
                            2.0 * math.pi * math.sqrt(self.equivalent_length_m / self.site.gravity_m_s2), t_end - t0)
         chain = self.build_chain()
-        d = np.array([math.sin(self.theta0) * math.sin(self.psi0), math.sin(self.theta0) * math.cos(self.psi0),
-                      -math.cos(self.theta0)])
+        d = np.array([math.sin(self.p.initial_deflection_rad) * math.sin(self.p.initial_azimuth_rad), math.sin(self.p.initial_deflection_rad) * math.cos(self.p.initial_azimuth_rad),
+                      -math.cos(self.p.initial_deflection_rad)])
         # Body axis (0,0,-1) after Rx(a) Ry(b) is (−sin b, cos b sin a, −cos b cos a).
         b = math.asin(-d[0])
         a = math.atan2(d[1], -d[2])
-        run = integration(chain.rhs, [a, b, 0.0, 0.0, 0.0, self.spin_rate_rad_s], t0, t_end, rtol=self.rtol,
+        run = integration(chain.rhs, [a, b, 0.0, 0.0, 0.0, self.p.spin_rate_rad_s], t0, t_end, rtol=self.p.rtol,
                           atol=1e-13)
         unwrappers = (Unwrapper(), Unwrapper())
         for t in blocks:
             traj = run.advance(t)
             qa, qb, qs, qda, qdb, qds = traj.y
-            lc = self.lc
+            lc = self.p.com_distance_m
             pos = lc * np.vstack([-np.sin(qb), np.cos(qb) * np.sin(qa), -np.cos(qb) * np.cos(qa)])
             # velocity of the CM by differentiating the expression
             vel = lc * np.vstack([-np.cos(qb) * qdb,

@@ -78,11 +78,11 @@ def expected_line(scene, name) -> dict | None:
         pred = inst.predictions() if inst is not None and inst.IS_PENDULUM else None
     except Exception:                   # noqa: BLE001 - a scene that does not build draws no line
         return None
-    if not pred or pred.get("apsidal_rate_from_rest_rad_s") is None or not hasattr(inst, "psi0"):
+    if not pred or pred.get("apsidal_rate_from_rest_rad_s") is None or not hasattr(inst.p, "initial_azimuth_rad"):
         return None
     rate = float(pred["apsidal_rate_from_rest_rad_s"])
     return {"rate_rad_s": rate, "k_rad_s": float(pred["foucault_rate_rad_s"]),
-            "latitude_deg": scene.site.latitude_deg, "release": (float(inst.theta0), float(inst.psi0)),
+            "latitude_deg": scene.site.latitude_deg, "release": (float(inst.p.initial_deflection_rad), float(inst.p.initial_azimuth_rad)),
             "full_turn_h": 2 * math.pi / abs(rate) / 3600.0 if rate else math.inf,
             "finite_amplitude": inst.has("finite_amplitude")}
 

@@ -11,6 +11,8 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from gyro_instrument.core.effect import Scales
+
 from gyro_instrument.core.angles import NumpyUnwrapper
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import integration
@@ -190,43 +192,37 @@ class PuiseuxBody(Instrument):
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.g = float(site.gravity_m_s2)
-        self.M = float(self.mass_kg)
-        if self.shape == "ellipsoid":
-            self.alpha, self.beta, self.gamma = self.semi_axes_m
+        if self.p.shape == "ellipsoid":
+            self.alpha, self.beta, self.gamma = self.p.semi_axes_m
             self.rho = self.alpha ** 2 / self.gamma
             self.rho_prime = self.beta ** 2 / self.gamma
             self.delta = 0.0
-            self.surface = EllipsoidSurface(self.semi_axes_m)
-            self.inertia = (homogeneous_inertia(self.M, self.semi_axes_m) if self.homogeneous
-                            else tuple(self.inertia_kg_m2))
-        elif self.shape == "curvature":
-            self.rho, self.rho_prime = self.curvature_radii_m
-            self.gamma = float(self.com_height_m)
-            self.delta = math.radians(self.curvature_angle_deg)
+            self.surface = EllipsoidSurface(self.p.semi_axes_m)
+            self.inertia = (homogeneous_inertia(self.p.mass_kg, self.p.semi_axes_m) if self.p.homogeneous
+                            else tuple(self.p.inertia_kg_m2))
+        elif self.p.shape == "curvature":
+            self.rho, self.rho_prime = self.p.curvature_radii_m
+            self.gamma = float(self.p.com_height_m)
+            self.delta = math.radians(self.p.curvature_angle_deg)
             self.surface = EllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.delta)
-            self.inertia = tuple(self.inertia_kg_m2)
+            self.inertia = tuple(self.p.inertia_kg_m2)
         else:
-            self.rho, self.rho_prime = self.curvature_radii_m
-            self.gamma = float(self.com_height_m)
+            self.rho, self.rho_prime = self.p.curvature_radii_m
+            self.gamma = float(self.p.com_height_m)
             self.delta = None
-            self.P = normal_frame(*(math.radians(getattr(self, k)) for k in GENERAL_ANGLES))
+            self.P = normal_frame(*(math.radians(getattr(self.p, k)) for k in GENERAL_ANGLES))
             self.surface = GeneralEllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.P)
-            self.inertia = tuple(self.inertia_kg_m2)
-        self.general = self.shape == "general"
+            self.inertia = tuple(self.p.inertia_kg_m2)
+        self.general = self.p.shape == "general"
         self.dynamics = contact_dynamics_general if self.general else contact_dynamics
         #: the body line GA (upward at rest) in body axes
         self.u_body = self.P[2] if self.general else np.array([0.0, 0.0, 1.0])
-        if self.spin_rate_rad_s is not None:
-            self.r0 = float(self.spin_rate_rad_s)
-        elif self.spin_rate_turn_s is not None:
-            self.r0 = TWO_PI * float(self.spin_rate_turn_s)
+        if self.p.spin_rate_rad_s is not None:
+            self.r0 = float(self.p.spin_rate_rad_s)
+        elif self.p.spin_rate_turn_s is not None:
+            self.r0 = TWO_PI * float(self.p.spin_rate_turn_s)
         else:
             self.r0 = 0.0
-        self.theta0 = math.radians(self.initial_tilt_deg)
-        self.azimuth0 = math.radians(self.initial_tilt_azimuth_deg)
-        self.thetadot0 = math.radians(self.initial_tilt_rate_deg_s)
-        self.azimuthdot0 = math.radians(self.initial_azimuth_rate_deg_s)
 
     # ---------------------------------------------------------------- predictions
     def coefficients(self, r=None) -> tuple:
@@ -243,9 +239,9 @@ class PuiseuxBody(Instrument):
                              "(shape ellipsoid or curvature); the general body (sec. III) has modes()")
         A, B, C = self.inertia
         r = self.r0 if r is None else r
-        if self.shape == "ellipsoid":
-            return (*ellipsoid_coefficients(A, B, C, self.M, self.g, r, self.alpha, self.beta, self.gamma), 0.0)
-        return curvature_coefficients(A, B, C, self.M, self.g, r, self.rho, self.rho_prime, self.gamma,
+        if self.p.shape == "ellipsoid":
+            return (*ellipsoid_coefficients(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, r, self.alpha, self.beta, self.gamma), 0.0)
+        return curvature_coefficients(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, r, self.rho, self.rho_prime, self.gamma,
                                       self.delta)
 
     def predictions(self) -> dict:
@@ -268,7 +264,7 @@ class PuiseuxBody(Instrument):
         A, B, C = self.inertia
         D, E, F, G = self.coefficients()
         v = classify_coefficients(A, B, D, E, F, G)
-        rcrit = critical_spin_general_rad_s(A, B, C, self.M, self.g, self.rho, self.rho_prime, self.gamma,
+        rcrit = critical_spin_general_rad_s(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, self.rho, self.rho_prime, self.gamma,
                                             self.delta)
         out = {
             "omega_sq_rad2_s2": v.omega_sq,
@@ -284,8 +280,8 @@ class PuiseuxBody(Instrument):
             "rho_prime_m": self.rho_prime,
             "spin_rate_rad_s": self.r0,
         }
-        if self.shape == "ellipsoid" and self.homogeneous:
-            rc = critical_spin_rad_s(self.alpha, self.beta, self.gamma, self.g)
+        if self.p.shape == "ellipsoid" and self.p.homogeneous:
+            rc = critical_spin_rad_s(self.alpha, self.beta, self.gamma, self.context.gravity_m_s2)
             out["critical_spin_closed_form_rad_s"] = rc
             out["critical_spin_closed_form_turn_s"] = rc / TWO_PI
         y0 = self.initial_state()
@@ -302,7 +298,7 @@ class PuiseuxBody(Instrument):
     # ---------------------------------------------------------------- sec. III
     def modes(self) -> "GeneralModes":
         """:class:`~gyro_instrument.instruments.puiseux.general.GeneralModes` of the general body."""
-        return general_modes(self.inertia, self.M, self.g, self.rho, self.rho_prime, self.gamma, self.P)
+        return general_modes(self.inertia, self.p.mass_kg, self.context.gravity_m_s2, self.rho, self.rho_prime, self.gamma, self.P)
 
     def linear_initial_conditions(self) -> tuple:
         """φ(0), φ̇(0): rotation vector from the rest orientation and body rate, body axes (general body).
@@ -311,7 +307,7 @@ class PuiseuxBody(Instrument):
         Pᵀ θ0 (−cos az, sin az, 0) in body axes; the rate is the exact initial body rate (first order
         in the small velocities, φ̇ = w).
         """
-        tilt = self.theta0 * np.array([-math.cos(self.azimuth0), math.sin(self.azimuth0), 0.0])
+        tilt = self.p.initial_tilt_rad * np.array([-math.cos(self.p.initial_tilt_azimuth_rad), math.sin(self.p.initial_tilt_azimuth_rad), 0.0])
         return self.P.T @ tilt, self.initial_state()[4:]
 
     def linear_prediction(self, t, modes=None) -> dict:
@@ -418,13 +414,13 @@ class PuiseuxBody(Instrument):
             out["notes"] = notes
         return out
 
-    def scales(self, duration_s) -> dict:
+    def scales(self, duration_s) -> Scales:
         """Characteristic scales: spin, small-tilt restoring rate at rest, amplitude, duration."""
         A, B, _ = self.inertia
-        w0 = math.sqrt(self.M * self.g * min(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma))
+        w0 = math.sqrt(self.p.mass_kg * self.context.gravity_m_s2 * min(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma))
                        / max(A, B))
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": abs(self.r0) or None,
-                "restoring_rate_rad_s": w0, "amplitude_rad": self.theta0, "duration_s": duration_s}
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=abs(self.r0) or None,
+                restoring_rate_rad_s=w0, amplitude_rad=self.p.initial_tilt_rad, duration_s=duration_s)
 
     # ---------------------------------------------------------------- model
     def initial_state(self) -> np.ndarray:
@@ -434,12 +430,12 @@ class PuiseuxBody(Instrument):
         normal frame A-xi, A-eta, A-zeta does (so GA is vertical); then it is tilted and set moving as
         the class docstring says, the line GA (= Gz but for the general body) playing the axis.
         """
-        th, az = self.theta0, self.azimuth0
+        th, az = self.p.initial_tilt_rad, self.p.initial_tilt_azimuth_rad
         # axis u in ENU, leaning toward compass azimuth az: (sin az, cos az) horizontally
         e_th = np.array([math.cos(th) * math.sin(az), math.cos(th) * math.cos(az), -math.sin(th)])
         e_az = np.array([math.cos(az), -math.sin(az), 0.0])  # direction of increasing compass azimuth
         u = np.array([math.sin(th) * math.sin(az), math.sin(th) * math.cos(az), math.cos(th)])
-        udot = self.thetadot0 * e_th + self.azimuthdot0 * math.sin(th) * e_az
+        udot = self.p.initial_tilt_rate_rad_s * e_th + self.p.initial_azimuth_rate_rad_s * math.sin(th) * e_az
         w_world = self.r0 * u + np.cross(u, udot)
         # rotation by th about e_z x u / |...| = (-cos az, sin az, 0) (horizontal, perpendicular to az)
         axis = np.array([-math.cos(az), math.sin(az), 0.0])
@@ -466,7 +462,7 @@ class PuiseuxBody(Instrument):
 
     def rhs(self) -> Callable:
         """Right-hand side f(t, y) of the exact model (:mod:`.dynamics`)."""
-        surf, inertia, M, g = self.surface, self.inertia, self.M, self.g
+        surf, inertia, M, g = self.surface, self.inertia, self.p.mass_kg, self.context.gravity_m_s2
         sqrt = math.sqrt
         contact_dynamics = self.dynamics
 
@@ -486,7 +482,7 @@ class PuiseuxBody(Instrument):
             ``angular_momentum_vertical_kg_m2_s`` (n·Iw), ``quaternion_norm``.
         """
         y = np.asarray(y, dtype=float)
-        _, _, N, h, zdot, n = self.dynamics(y, self.surface, self.inertia, self.M, self.g, np.sqrt)
+        _, _, N, h, zdot, n = self.dynamics(y, self.surface, self.inertia, self.p.mass_kg, self.context.gravity_m_s2, np.sqrt)
         q = y[:4]
         qn2 = np.sum(q * q, axis=0)
         qw, qx, qy, qz = q
@@ -496,7 +492,7 @@ class PuiseuxBody(Instrument):
         A, B, C = self.inertia
         w = y[4:]
         rot = 0.5 * (A * w[0] ** 2 + B * w[1] ** 2 + C * w[2] ** 2)
-        energy = 0.5 * self.M * zdot ** 2 + rot + self.M * self.g * h
+        energy = 0.5 * self.p.mass_kg * zdot ** 2 + rot + self.p.mass_kg * self.context.gravity_m_s2 * h
         lz = n[0] * A * w[0] + n[1] * B * w[1] + n[2] * C * w[2]
         return {"n": np.array(n), "axis_enu": axis, "com_height_m": h, "com_velocity_m_s": zdot,
                 "normal_force_N": N, "energy_J": energy, "angular_momentum_vertical_kg_m2_s": lz,
@@ -527,7 +523,7 @@ class PuiseuxBody(Instrument):
         if t0 is None:
             return
         run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
-                          rtol=self.rtol if rtol is None else rtol, atol=atol)
+                          rtol=self.p.rtol if rtol is None else rtol, atol=atol)
         carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
         for t in blocks:
             traj = run.advance(t)
