@@ -430,8 +430,8 @@ def test_predictions_for_the_papers_spheroid():
 @pytest.mark.parametrize("raw, field, text", [
     (dict(semi_axes_m=[0.1, 0.1, 0.2], spin_rate_rad_s=1.0, spin_rate_turn_s=1.0),
      "instruments.body.spin_rate_turn_s", "not both"),
-    (dict(shape="ellipsoid"), "instruments.body.p.semi_axes_m", "required when shape = ellipsoid"),
-    (dict(semi_axes_m=[0.1, -0.1, 0.2]), "instruments.body.p.semi_axes_m", "> 0"),
+    (dict(shape="ellipsoid"), "instruments.body.semi_axes_m", "required when shape = ellipsoid"),
+    (dict(semi_axes_m=[0.1, -0.1, 0.2]), "instruments.body.semi_axes_m", "> 0"),
     (dict(semi_axes_m=[0.1, 0.1, 0.2], homogeneous=False), "instruments.body.inertia_kg_m2", "homogeneous = false"),
     (dict(semi_axes_m=[0.1, 0.1, 0.2], homogeneous=False, inertia_kg_m2=[1.0, 1.0, 3.0]),
      "instruments.body.inertia_kg_m2", "triangle"),
