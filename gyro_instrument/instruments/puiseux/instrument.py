@@ -11,7 +11,6 @@ import math
 import numpy as np
 
 from gyro_instrument.core.effect import Scales
-
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import PairParam, Param
 from gyro_instrument.instruments.base import Column, Instrument
