@@ -68,8 +68,8 @@ class AnalyticCompass(Instrument):
             if AnalyticCompass.ON_BLOCK is not None:
                 AnalyticCompass.ON_BLOCK(i)
             AnalyticCompass.EVENTS.append(("integrate", i))
-            if self.block_cost_s:
-                time.sleep(self.block_cost_s)
+            if self.p.block_cost_s:
+                time.sleep(self.p.block_cost_s)
             yield self.simulate(b, **options)
 
 
