@@ -161,11 +161,11 @@ def describe(scene) -> dict:
            "duration_s": scene.duration_s, "sample_rate_hz": scene.sample_rate_hz, "seed": scene.seed,
            "scene_effects": list(scene.effects), "instruments": {}}
     for name, inst in insts.items():
-        scales = inst.scales(scene.duration_s)
+        context = inst.effect_context(scene.duration_s)
         effects = {}
         for ename in sorted(inst.SUPPORTED_EFFECTS):
             eff = scene.effects.get(ename) or EFFECTS[ename]()
-            size, formula = eff.relative_size(scales)
+            size, formula = eff.relative_size(context)
             effects[ename] = {"active": inst.has(ename), "relative_size": float(size), "formula": formula}
         out["instruments"][name] = {"type": inst.type_name, "summary": inst.summary,
                                     "parameters": dict(inst.params), "effects": effects,

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from gyro_instrument import instruments
-from gyro_instrument.core.effect import FRAME_RATE
+from gyro_instrument.core.effect import FRAME_RATE, Scales
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, DirectingModel, Instrument, Simulation
 
@@ -42,34 +42,34 @@ class AnalyticCompass(Instrument):
     ON_BLOCK = None
 
     def _omega(self):
-        K = self.inertia_ratio * self.model_earth_rate() * math.cos(self.site.latitude_rad) * self.spin_rate_rad_s
+        K = self.p.inertia_ratio * self.model_earth_rate() * math.cos(self.site.latitude_rad) * self.p.spin_rate_rad_s
         return math.sqrt(max(K, 0.0))
 
     def scales(self, duration_s):
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "restoring_rate_rad_s": self._omega(),
-                "amplitude_rad": math.radians(abs(self.initial_angle_deg)), "duration_s": duration_s}
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, restoring_rate_rad_s=self._omega(),
+                      amplitude_rad=math.radians(abs(self.p.initial_angle_deg)), duration_s=duration_s)
 
     def predictions(self):
         w = self._omega()
         return {"swing_duration_small_s": math.pi / w if w > 0 else math.inf}
 
     def directing_model(self):
-        return DirectingModel(gain=self.inertia_ratio, normal_enu=(0.0, 0.0, 1.0), label="horizontal",
+        return DirectingModel(gain=self.p.inertia_ratio, normal_enu=(0.0, 0.0, 1.0), label="horizontal",
                               angle_channel="angle", null_reason="no restoring torque at a pole")
 
     def simulate(self, t, **options):
         t = np.asarray(t, dtype=float)
-        w, u0 = self._omega(), math.radians(self.initial_angle_deg)
+        w, u0 = self._omega(), math.radians(self.p.initial_angle_deg)
         return Simulation(t, {"angle": u0 * np.cos(w * t), "angle_rate": -u0 * w * np.sin(w * t),
-                              "spin_rate": np.full(t.size, self.spin_rate_rad_s)}, None)
+                              "spin_rate": np.full(t.size, self.p.spin_rate_rad_s)}, None)
 
     def stream(self, blocks, **options):
         for i, b in enumerate(blocks):
             if AnalyticCompass.ON_BLOCK is not None:
                 AnalyticCompass.ON_BLOCK(i)
             AnalyticCompass.EVENTS.append(("integrate", i))
-            if self.block_cost_s:
-                time.sleep(self.block_cost_s)
+            if self.p.block_cost_s:
+                time.sleep(self.p.block_cost_s)
             yield self.simulate(b, **options)
 
 

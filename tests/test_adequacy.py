@@ -63,7 +63,7 @@ def test_the_predicted_period_is_quet_eq_9(periods):
     scene = load_scene(SCENE)
     h = build_instruments(scene)["gyro_horizontal"]
     n, g = scene.site.earth_rate_rad_s, scene.site.latitude_rad
-    t0 = math.pi / math.sqrt(h.mu * n * h.spin_rate_rad_s * math.cos(g))
+    t0 = math.pi / math.sqrt(h.p.inertia_ratio * n * h.p.spin_rate_rad_s * math.cos(g))
     # the model's T0 carries the O(n²) term (relative n/ρ ~ 1e-7) and the finite-amplitude factor
     # (2/π)K(sin²(u0/2)) = 1 + u0²/16 + ... (6.25e-4 at 0.1 rad)
     assert periods["gyro_horizontal"] == pytest.approx(2 * t0 * (1 + 0.1 ** 2 / 16), rel=2e-6)
@@ -116,7 +116,7 @@ def test_a_scene_that_does_not_describe_the_instrument_is_refused(tmp_path, caps
     # predicts a period √30 = 5.5x shorter, beyond the factor 4 a latitude or a spin error could explain
     header, data = measured
     path = write(tmp_path / "m.csv", header, data)
-    rho = build_instruments(load_scene(SCENE))["gyro_horizontal"].spin_rate_rad_s
+    rho = build_instruments(load_scene(SCENE))["gyro_horizontal"].p.spin_rate_rad_s
     code, out, err = run(capsys, "estimate", "--data", path, "--scene", SCENE,
                          "--set", f"instruments.gyro_horizontal.spin_rate_rad_s={30 * rho}")
     assert code == 2 and "period check of gyro_horizontal" in err and "does not describe this instrument" in err

@@ -36,9 +36,9 @@ def _predicted_diff(effect, iname):
     """a ω t ε with ε the size ``describe`` reports for this instrument and effect."""
     scene = load_scene("quet_paris", [f"duration_s={DURATION}"])
     inst = build_instruments(scene)[iname]
-    scales = inst.scales(DURATION)
-    eps, _ = scene.effects[effect].relative_size(scales)
-    return scales["amplitude_rad"] * scales["restoring_rate_rad_s"] * DURATION * eps
+    ctx = inst.effect_context(DURATION)
+    eps, _ = scene.effects[effect].relative_size(ctx)
+    return ctx.scales.amplitude_rad * ctx.scales.restoring_rate_rad_s * DURATION * eps
 
 
 def test_rows_cover_every_effect_and_instrument(quet_rows):

@@ -244,9 +244,9 @@ def test_plane_gyroscope_integrals_eq1_eq3(build, model, cone):
     axis = (math.sin(eps) * (np.cos(c["angle"])[:, None] * ox + np.sin(c["angle"])[:, None] * oy)
             + math.cos(eps) * oz)
     inv = c["spin_rate"] + axis @ n
-    rho0 = g.spin_rate_rad_s
+    rho0 = g.p.spin_rate_rad_s
     assert np.ptp(inv) < 1e-12 * rho0
-    E = g.A * math.sin(eps) ** 2 * c["angle_rate"] ** 2 + g.C * c["spin_rate"] ** 2
+    E = g.p.transverse_inertia_kg_m2 * math.sin(eps) ** 2 * c["angle_rate"] ** 2 + g.C * c["spin_rate"] ** 2
     assert np.ptp(E) < 1e-10 * g.C * rho0 ** 2
     # angle_rate is du/dt (kinematics; spline, 1e-8 of the peak rate)
     ud = derivative(t, c["angle"])
@@ -337,7 +337,7 @@ def test_gimbal_free_integrals_eq12_eq13_and_rotor_kinematics(build):
     theta, psi = quet_angles(g, c)
     inv = spin_invariant(c["spin_rate"], theta, psi, g.k, g.k_prime)
     assert np.ptp(inv) < 1e-12 * 20.0
-    E = quet_energy(theta, c["inner_rate"], c["outer_rate"], c["spin_rate"], g.A, g.C, g.A1, g.C1, g.A2)
+    E = quet_energy(theta, c["inner_rate"], c["outer_rate"], c["spin_rate"], g.p.transverse_inertia_kg_m2, g.C, g.A1, g.C1, g.A2)
     assert np.ptp(E) < 1e-10 * g.C * 20.0 ** 2
     assert np.max(np.abs(inner(derivative(t, c["outer_angle"]) - c["outer_rate"]))) < 1e-7 * np.max(np.abs(c["outer_rate"]))
     assert np.max(np.abs(inner(derivative(t, c["inner_angle"]) - c["inner_rate"]))) < 1e-7 * np.max(np.abs(c["inner_rate"]))
@@ -366,7 +366,7 @@ def test_gimbal_small_swings_closed_form_sec4_IV(build, configuration):
     assert np.max(np.abs(c[moving] - 1e-4 * np.cos(math.pi * t / T))) < 1e-6 * 1e-4
     assert np.ptp(c[held]) == 0.0
     theta, psi = quet_angles(g, c)
-    assert np.ptp(spin_invariant(c["spin_rate"], theta, psi, g.k, g.k_prime)) < 1e-12 * g.spin_rate_rad_s
+    assert np.ptp(spin_invariant(c["spin_rate"], theta, psi, g.k, g.k_prime)) < 1e-12 * g.p.spin_rate_rad_s
 
 
 # ----------------------------------------------------------------------------- predictions: magnitudes

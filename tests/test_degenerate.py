@@ -70,7 +70,7 @@ def test_a_pose_1e3_rad_from_the_lock_runs():
     (0.01 s: the near-lock motion is fast, ~1 ms per sample of work)."""
     g = make(configuration="free", initial_outer_angle_deg=0.0, initial_inner_angle_deg=math.degrees(1e-3) - 90.0)
     M = g.mass_matrix(g.build_chain(), [g.psi0, g.theta0, 0.0])
-    np.testing.assert_allclose(M, free_mass_matrix(g.A, g.C, g.A1, g.C1, g.A2, g.theta0), rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(M, free_mass_matrix(g.p.transverse_inertia_kg_m2, g.C, g.A1, g.C1, g.A2, g.theta0), rtol=1e-12, atol=1e-18)
     assert scaled_condition(M) == pytest.approx(8e6, rel=1e-3)
     sim = g.simulate(np.linspace(0.0, 0.01, 11))
     assert all(np.all(np.isfinite(v)) for v in sim.columns.values())

@@ -78,7 +78,7 @@ def test_leaving_an_effect_out_changes_the_output_as_describe_predicts(itype, ef
     R = max(np.max(np.abs(with_[c] - without[c])) for c in with_) / max(np.ptp(y) for y in with_.values())
     if spin is not None and np.max(np.abs(spin)) > 0:
         R = max(R, np.max(np.abs(spin - spin_without)) / np.max(np.abs(spin)))
-    T = inst.scales(with_scene.duration_s)["restoring_rate_rad_s"]
+    T = inst.scales(with_scene.duration_s).restoring_rate_rad_s
     swings = with_scene.duration_s * T / math.pi if T and math.isfinite(T) else 0.0
     assert R >= LOWER * size, f"{itype} without {effect}: R = {R:.3g} < {LOWER:g} x predicted {size:.3g}"
     assert R <= UPPER * size * (swings + 1.0), \

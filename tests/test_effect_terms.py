@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from gyro_instrument.core.effect import MECHANICS, POINT_MASS, Effect
+from gyro_instrument.core.effect import MECHANICS, POINT_MASS, Effect, EffectContext
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.effects.centrifugal import centrifugal_gradient_acceleration
@@ -59,7 +59,7 @@ def test_plane_gyroscope_scalar_path_equals_the_summed_terms(effects):
             if "finite_amplitude" not in effects:
                 udd_ref = still[2] * u / math.sin(u) + (full[2] - still[2])
             p = inst.site.earth_rate_rad_s * inst.sin_omega
-            scale = max(inst.mu * p * abs(rho) + abs(ud) + abs(rho) / 100.0, 1e-30)
+            scale = max(inst.p.inertia_ratio * p * abs(rho) + abs(ud) + abs(rho) / 100.0, 1e-30)
             assert udd == pytest.approx(udd_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
             assert rhod == pytest.approx(rhod_ref, abs=1e-12 * scale), (inst.name, u, ud, rho)
 
@@ -84,10 +84,11 @@ def test_parareal_fast_path_equals_the_summed_terms(effects):
 
 def test_point_mass_terms_equal_the_vector_helpers():
     """Component-form terms equal −2 Ω × v and −Ω × (Ω × δr) (Quet sec. 1 eqs. 16, 19) to rounding."""
-    om = Site.from_degrees(48.8462).earth_rate_enu()
+    ctx = EffectContext.of_site(Site.from_degrees(48.8462))
+    om = ctx.site.earth_rate_enu()
     rng = np.random.default_rng(3)
-    cor = EFFECTS["earth_rotation"]().point_mass_term(om)
-    cen = EFFECTS["centrifugal"]().point_mass_term(om)
+    cor = EFFECTS["earth_rotation"]().point_mass_term(ctx)
+    cen = EFFECTS["centrifugal"]().point_mass_term(ctx)
     for _ in range(5):
         dr, v = rng.normal(size=3) * 5.0, rng.normal(size=3)
         np.testing.assert_allclose(cor(*dr, *v), coriolis_acceleration(om, v), rtol=0, atol=1e-19)
@@ -97,8 +98,9 @@ def test_point_mass_terms_equal_the_vector_helpers():
 def test_spin_and_damping_terms():
     """spin_decay's bearing torque is C times its angular deceleration −ρ/τ; pivot damping −(2/τ) J q̇."""
     sd = EFFECTS["spin_decay"](time_constant_s=50.0)
-    assert sd.spin_torque(2.0, 600.0) == pytest.approx(2.0 * sd.spin_torque_per_inertia(600.0), rel=1e-15)
-    assert EFFECTS["pivot_damping"](time_constant_s=10.0).damping_torque(3.0, 0.5) == pytest.approx(-0.3)
+    ctx = EffectContext.of_site(Site.from_degrees(48.8462))
+    assert sd.spin_torque(ctx, 2.0, 600.0) == pytest.approx(2.0 * sd.spin_torque_per_inertia(600.0), rel=1e-15)
+    assert EFFECTS["pivot_damping"](time_constant_s=10.0).damping_torque(ctx, 3.0, 0.5) == pytest.approx(-0.3)
 
 
 def test_every_effect_declares_known_kinds_and_implements_their_hooks():
@@ -140,3 +142,72 @@ def test_terms_are_summed_in_registry_order_whatever_the_scene_order():
     t = np.linspace(0.0, 20.0, 41)
     np.testing.assert_array_equal(a.simulate(t).columns["x_east"], b.simulate(t).columns["x_east"])
     assert POINT_MASS in EFFECTS["earth_rotation"].MECHANICS
+
+
+def test_a_new_conservative_point_mass_effect_keeps_the_pendulum_fast_path():
+    """The pendulum chooses parareal from capabilities, not names (issue 23): an effect registered
+    later that declares ``conservative`` keeps ``integrator: auto`` on parareal and its term is
+    summed (here g(γ)'s latitude variation read from the context, zero at the site itself: the
+    result equals the run without it bit for bit); one that does not declare it drops to adaptive
+    with its name in the reason."""
+    from gyro_instrument.core.effect import CONSERVATIVE
+    from gyro_instrument.effects import register, unregister
+
+    class GravityVariation(Effect):
+        name = "gravity_variation_test"
+        summary = "test: the change of g over the bob's displacement, from the context's site"
+        MECHANICS = frozenset({POINT_MASS})
+        CAPABILITIES = frozenset({CONSERVATIVE})
+        calls = []
+
+        def relative_size(self, ctx):
+            return 0.0, "0 (test)"
+
+        def point_mass_term(self, ctx):
+            GravityVariation.calls.append(ctx.gravity_m_s2)
+            g0 = ctx.site.gravity_m_s2           # the rest point's g: the term is g(rest) − g0 = 0
+
+            def term(dx, dy, dz, vx, vy, vz):
+                return 0.0 * dx, 0.0 * dy, (ctx.gravity_m_s2 - g0) * dz
+            return term
+
+    class Dissipative(GravityVariation):
+        name = "dissipative_test"
+        CAPABILITIES = frozenset()
+
+    register(GravityVariation)
+    register(Dissipative)
+    try:
+        over = ["duration_s=66", "sample_rate_hz=2"]
+        base = load_scene("foucault_pantheon", over)
+        plain = build_instruments(base)["pendulum"]
+        extra = dict(plain.effects, gravity_variation_test=GravityVariation())
+        inst = type(plain)("pendulum", base.site, plain.params, extra)
+        assert inst.chosen_integrator(66.0)[0] == "parareal"
+        t = np.arange(0.0, 66.0, 0.5)
+        a, b = inst.simulate(t), plain.simulate(t)
+        assert GravityVariation.calls and GravityVariation.calls[-1] == base.site.gravity_m_s2
+        for c in ("x_east", "y_north"):
+            np.testing.assert_array_equal(a.columns[c], b.columns[c])
+        slow = type(plain)("pendulum", base.site, plain.params, dict(plain.effects, dissipative_test=Dissipative()))
+        choice, why = slow.chosen_integrator(66.0)
+        assert choice == "adaptive" and "dissipative_test" in why
+    finally:
+        unregister("gravity_variation_test")
+        unregister("dissipative_test")
+
+
+def test_typed_parameters_are_frozen_and_carry_radian_views():
+    """Instruments and effects read validated parameters from ``self.p``, a frozen dataclass made
+    once per class from PARAMS; ``*_deg`` parameters have ``*_rad`` views equal to math.radians."""
+    import dataclasses
+
+    inst = build_instruments(load_scene("foucault_pantheon", ["duration_s=10"]))["pendulum"]
+    assert inst.p.length_m == inst.params["length_m"]
+    assert inst.p.initial_deflection_rad == math.radians(inst.params["initial_deflection_deg"])
+    assert [f.name for f in dataclasses.fields(inst.p)] == [p.name for p in type(inst).PARAMS]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        inst.p.length_m = 1.0
+    assert not hasattr(inst, "length_m") and not hasattr(inst, "theta0")
+    assert type(inst.p) is type(build_instruments(load_scene("quet_paris", ["duration_s=10"]))["pendulum"].p)
+    assert EFFECTS["spin_decay"](time_constant_s=50.0).p.time_constant_s == 50.0

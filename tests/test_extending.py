@@ -19,7 +19,7 @@ import yaml
 
 from gyro_instrument import effects, instruments
 from gyro_instrument.cli import describe, main, replay_bag, simulate_scene
-from gyro_instrument.core.effect import DAMPING, FRAME_RATE, RESTORING_LAW, Effect
+from gyro_instrument.core.effect import DAMPING, FRAME_RATE, RESTORING_LAW, Effect, Scales, bound_hooks
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.scene import EPOCH_NS
@@ -37,11 +37,11 @@ class EddyBrake(Effect):
                     doc="tau: the brake torque is -(J/tau) times the hinge rate"),)
     MECHANICS = frozenset({DAMPING})
 
-    def relative_size(self, scales):
-        return scales["duration_s"] / (2.0 * self.time_constant_s), "duration / (2 tau) (amplitude lost)"
+    def relative_size(self, ctx):
+        return ctx.scales.duration_s / (2.0 * self.p.time_constant_s), "duration / (2 tau) (amplitude lost)"
 
-    def damping_torque(self, inertia, rate):
-        return -inertia * rate / self.time_constant_s
+    def damping_torque(self, ctx, inertia, rate):
+        return -inertia * rate / self.p.time_constant_s
 
 
 class MinimalGyrocompass(Instrument):
@@ -62,34 +62,34 @@ class MinimalGyrocompass(Instrument):
     SIMULATOR_NODE = "gyrocompass_sim"
 
     def _K(self):
-        return self.inertia_ratio * self.model_earth_rate() * math.cos(self.site.latitude_rad) * self.spin_rate_rad_s
+        return self.p.inertia_ratio * self.model_earth_rate() * math.cos(self.site.latitude_rad) * self.p.spin_rate_rad_s
 
     def scales(self, duration_s):
-        K = self.inertia_ratio * self.site.earth_rate_rad_s * math.cos(self.site.latitude_rad) * self.spin_rate_rad_s
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": self.inertia_ratio
-                * self.spin_rate_rad_s, "restoring_rate_rad_s": math.sqrt(K),
-                "amplitude_rad": math.radians(abs(self.initial_angle_deg)), "duration_s": duration_s}
+        K = self.p.inertia_ratio * self.site.earth_rate_rad_s * math.cos(self.site.latitude_rad) * self.p.spin_rate_rad_s
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=self.p.inertia_ratio
+                      * self.p.spin_rate_rad_s, restoring_rate_rad_s=math.sqrt(K),
+                      amplitude_rad=math.radians(abs(self.p.initial_angle_deg)), duration_s=duration_s)
 
     def predictions(self):
         K = self._K()
         return {"swing_duration_small_s": math.pi / math.sqrt(K) if K > 0 else math.inf}
 
     def directing_model(self):
-        return DirectingModel(gain=self.inertia_ratio, normal_enu=(0.0, 0.0, 1.0), label="horizontal",
+        return DirectingModel(gain=self.p.inertia_ratio, normal_enu=(0.0, 0.0, 1.0), label="horizontal",
                               angle_channel="angle", null_reason="no restoring torque at a pole")
 
     def simulate(self, t, **options):
         t = np.asarray(t, dtype=float)
-        K, A = self._K(), self.transverse_inertia_kg_m2
+        K, A = self._K(), self.p.transverse_inertia_kg_m2
         law = self.restoring_law() or (lambda u: u)
-        damping = [e.damping_torque for e in self.effects_of(DAMPING)]
+        damping = bound_hooks(self.effects_of(DAMPING), DAMPING, self.context)
 
         def rhs(_, y):
             u, ud = y
             return np.array([ud, -K * law(u) + sum(f(A, ud) for f in damping) / A])
-        traj = integrate(rhs, [math.radians(self.initial_angle_deg), 0.0], t, rtol=1e-11, atol=1e-13)
+        traj = integrate(rhs, [math.radians(self.p.initial_angle_deg), 0.0], t, rtol=1e-11, atol=1e-13)
         return Simulation(t, {"angle": traj.y[0], "angle_rate": traj.y[1],
-                              "spin_rate": np.full(t.size, self.spin_rate_rad_s)}, traj)
+                              "spin_rate": np.full(t.size, self.p.spin_rate_rad_s)}, traj)
 
 
 SCENE = {"name": "extending", "description": "a minimal gyrocompass and a meridian plane gyroscope, braked",

@@ -56,7 +56,7 @@ def measure(g, swings=6, samples_per_swing=200):
     T = pr["swing_duration_small_s"]
     t = np.linspace(0.0, swings * T, swings * samples_per_swing + 1)
     sim = g.simulate(t)
-    key = "inner_angle" if g.configuration == "outer_fixed" else "outer_angle"
+    key = "inner_angle" if g.p.configuration == "outer_fixed" else "outer_angle"
     y = sim.columns[key]
     # Small oscillations are about 0 in the documented column convention.
     assert abs(np.mean(y)) < 1e-3 * np.max(np.abs(y))
@@ -213,11 +213,11 @@ def test_polar_axis_section_V():
     t = np.linspace(0.0, 30 * Tn, 3001)
     sim = g.simulate(t)
     inv = g.invariants(sim)
-    assert np.ptp(inv["axial_momentum_kg_m2_s"]) < 1e-12 * g.C * g.spin_rate_rad_s
+    assert np.ptp(inv["axial_momentum_kg_m2_s"]) < 1e-12 * g.C * g.p.spin_rate_rad_s
     theta = sim.extra["theta"]
     s0 = math.sin(g.theta0)
-    b, gam = g.A + g.C1 - g.A1, g.A1 + g.A2
-    assert np.ptp(theta) == pytest.approx(2 * N * (b * s0 ** 2 + gam) / (g.C * g.spin_rate_rad_s * s0), rel=1e-6)
+    b, gam = g.p.transverse_inertia_kg_m2 + g.C1 - g.A1, g.A1 + g.A2
+    assert np.ptp(theta) == pytest.approx(2 * N * (b * s0 ** 2 + gam) / (g.C * g.p.spin_rate_rad_s * s0), rel=1e-6)
     assert fitted_swing(t, theta - np.mean(theta), Tn) == pytest.approx(Tn, rel=1e-6)
     w = math.pi / Tn
     X = np.column_stack([np.ones_like(t), t, np.cos(w * t), np.sin(w * t)])
@@ -240,10 +240,10 @@ def test_near_gimbal_lock_stays_finite_with_ring_inertia():
              initial_inner_angle_deg=math.degrees(theta0) - 90.0)
     chain = g.build_chain()
     M = g.mass_matrix(chain, [g.psi0, g.theta0, 0.0])
-    a, gam = g.A + g.A1, g.A1 + g.A2
-    u2 = (g.A + g.C1 - g.A1) * math.sin(theta0) ** 2 + gam
+    a, gam = g.p.transverse_inertia_kg_m2 + g.A1, g.A1 + g.A2
+    u2 = (g.p.transverse_inertia_kg_m2 + g.C1 - g.A1) * math.sin(theta0) ** 2 + gam
     assert np.linalg.det(M) == pytest.approx(a * g.C * u2, rel=1e-12)
-    assert u2 / (g.A * math.sin(theta0) ** 2) > 5e5
+    assert u2 / (g.p.transverse_inertia_kg_m2 * math.sin(theta0) ** 2) > 5e5
     t = np.linspace(0.0, 2.0, 401)
     sim = g.simulate(t)
     c = sim.columns
@@ -252,8 +252,8 @@ def test_near_gimbal_lock_stays_finite_with_ring_inertia():
     inv = g.invariants(sim)
     assert np.ptp(inv["spin_13_rad_s"]) < 1e-11
     assert np.ptp(inv["jacobi_J"]) < 1e-11
-    sum_I = g.A * 2 + g.C + g.A1 * 2 + g.C1 + g.A2 * 2 + g.C2
-    rho0 = g.spin_rate_rad_s
+    sum_I = g.p.transverse_inertia_kg_m2 * 2 + g.C + g.A1 * 2 + g.C1 + g.A2 * 2 + g.C2
+    rho0 = g.p.spin_rate_rad_s
     budget = 4 * N * g.C * (rho0 + N) + N ** 2 * sum_I
     assert np.max(gam * c["outer_rate"] ** 2) <= budget
     assert np.max(a * c["inner_rate"] ** 2) <= budget
@@ -282,7 +282,7 @@ def test_pivot_damping_and_spin_decay():
     g.effects["spin_decay"] = EFFECTS["spin_decay"](time_constant_s=50.0)
     t = np.linspace(0.0, 20.0, 21)
     rho = g.simulate(t).columns["spin_rate"]
-    np.testing.assert_allclose(rho, g.spin_rate_rad_s * np.exp(-t / 50.0), rtol=1e-8)
+    np.testing.assert_allclose(rho, g.p.spin_rate_rad_s * np.exp(-t / 50.0), rtol=1e-8)
 
 
 # ------------------------------------------------------------------ geometry and parameters
@@ -351,14 +351,14 @@ def test_closed_form_is_the_chain(effects):
                 g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
             chain = g.build_chain()
             f, _ = g.closed_form(chain)
-            inertia = g.A + g.C + g.A1 + g.C1 + g.A2 + g.C2
+            inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
             for _ in range(30):
                 q = rng.uniform(-3.0, 3.0, chain.nf)
                 v = rng.uniform(-5.0, 5.0, chain.nf)
                 v[-1] *= 100.0                         # the rotor spins fast
                 y = np.concatenate([q, v])
                 ref = chain.rhs(0.0, y)
-                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.A, g.C),
+                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
                             np.max(np.abs(ref[chain.nf:])))
                 kappa = scaled_condition(g.mass_matrix(chain, q))
                 bound = 1000 * np.finfo(float).eps * kappa * scale
@@ -397,7 +397,7 @@ def test_unknown_rigid_body_term_falls_back_to_the_chain():
         name = "cubic"
         MECHANICS = frozenset({RIGID_BODY})
 
-        def rigid_body_torque(self, inertia, w_rel, omega_b):
+        def rigid_body_torque(self, ctx, inertia, w_rel, omega_b):
             return np.dot(omega_b, omega_b) * np.cross(omega_b, inertia @ omega_b)
 
     assert rigid_body_coefficients([EFFECTS["earth_rotation"](), EFFECTS["centrifugal"]()]) == (1.0, 1.0)
@@ -417,22 +417,24 @@ def test_hinge_terms_linear_or_called():
     calls any other term. Both routes equal the chain's right-hand side (the same bound as
     :func:`test_closed_form_is_the_chain`, 1000 eps κ S; a dropped or doubled term is O(J q̇/τ) ≈ 1e-3 S
     here): a quadratic pivot drag is not linear (None) and is called as is."""
-    from gyro_instrument.core.effect import DAMPING, Effect
+    from gyro_instrument.core.effect import DAMPING, SPIN, Effect, EffectContext, bound_hooks
     from gyro_instrument.instruments.gimbal.dynamics import linear_hinge_coefficient
 
     class QuadraticDrag(Effect):
         name = "quadratic_drag"
         MECHANICS = frozenset({DAMPING})
 
-        def damping_torque(self, inertia, rate):
+        def damping_torque(self, ctx, inertia, rate):
             return -0.05 * inertia * rate * abs(rate)
 
     damping = EFFECTS["pivot_damping"](time_constant_s=100.0)
     decay = EFFECTS["spin_decay"](time_constant_s=50.0)
-    assert linear_hinge_coefficient([damping.damping_torque], 2.0) == damping.damping_torque(2.0, 1.0)
-    assert linear_hinge_coefficient([decay.spin_torque], 3.0) == decay.spin_torque(3.0, 1.0)
+    ctx = EffectContext.of_site(SITE)
+    (damp,), (spin,) = bound_hooks([damping], DAMPING, ctx), bound_hooks([decay], SPIN, ctx)
+    assert linear_hinge_coefficient([damp], 2.0) == damping.damping_torque(ctx, 2.0, 1.0)
+    assert linear_hinge_coefficient([spin], 3.0) == decay.spin_torque(ctx, 3.0, 1.0)
     assert linear_hinge_coefficient([], 3.0) == 0.0
-    assert linear_hinge_coefficient([QuadraticDrag().damping_torque], 2.0) is None
+    assert linear_hinge_coefficient(bound_hooks([QuadraticDrag()], DAMPING, ctx), 2.0) is None
     rng = np.random.default_rng(17)
     p = validate_params("instruments.g", GimbalGyroscope.PARAMS, {"configuration": "free", "integrator": "closed_form"})
     for extra in ({"pivot_damping": damping, "spin_decay": decay},
@@ -442,12 +444,12 @@ def test_hinge_terms_linear_or_called():
         g = GimbalGyroscope("g", SITE, p, effects)
         chain = g.build_chain()
         f, _ = g.closed_form(chain)
-        inertia = g.A + g.C + g.A1 + g.C1 + g.A2 + g.C2
+        inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
         for _ in range(20):
             q, v = rng.uniform(-3.0, 3.0, chain.nf), rng.uniform(-5.0, 5.0, chain.nf)
             v[-1] *= 100.0
             ref = chain.rhs(0.0, np.concatenate([q, v]))
-            scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.A, g.C),
+            scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
                         np.max(np.abs(ref[chain.nf:])))
             bound = 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
             assert np.max(np.abs(np.array(f(0.0, *q, *v)) - ref)) < bound, sorted(extra)
@@ -469,7 +471,7 @@ def test_stream_equals_simulate_bit_for_bit(configuration):
     duration = 1.5 if configuration == "free" else 30.0      # ~3 nutations per sample / ~2 swings
     scene = load_scene("gimbal_paris", [f"duration_s={duration}", "sample_rate_hz=50"] + over)
     g = build_instruments(scene)["gimbal_outer_fixed" if configuration == "outer_fixed" else "gimbal_locked"]
-    assert g.configuration == configuration
+    assert g.p.configuration == configuration
     assert g.STREAMS and g.integrator_choice()[0] == "closed_form"
     one = g.simulate(sample_times(scene))
     for window_s in (0.07, 1.0):

@@ -179,9 +179,9 @@ def test_scalar_dop853_driver_matches_generic_driver(build, effects):
     g = build(PlaneGyroscope, Site.from_degrees(48.85), effects, plane="meridian", initial_angle_deg=40.0)
     t = np.linspace(0.0, 120.0, 2401)
     s = g.simulate(t)
-    ref = integrate(g.reduced_rhs(), [g.u0, g.ud0, g.spin_rate_rad_s], t, rtol=g.rtol, atol=1e-13)
+    ref = integrate(g.reduced_rhs(), [g.p.initial_angle_rad, g.p.initial_rate_rad_s, g.p.spin_rate_rad_s], t, rtol=g.p.rtol, atol=1e-13)
     assert s.trajectory.nfev == ref.nfev
     assert np.max(np.abs(s.trajectory.y[:2] - ref.y[:2])) < 1e-12
     assert np.max(np.abs(s.trajectory.y[2] - ref.y[2])) < 1e-12 * abs(ref.y[2, 0])
     one = g.simulate(np.array([5.0])).columns
-    assert one["angle"][0] == g.u0 and one["spin_rate"][0] == g.spin_rate_rad_s
+    assert one["angle"][0] == g.p.initial_angle_rad and one["spin_rate"][0] == g.p.spin_rate_rad_s

@@ -243,8 +243,8 @@ def spheroid_turning_point(body, theta0):
     exact invariants: energy and n·Iw with r constant give, at θ̇ = 0,
     (C r)²(cos θ0 − cos θ)² / (2A sin²θ) = M g (h(θ0) − h(θ))."""
     A, _, C = body.inertia
-    r, M, g = body.r0, body.M, body.g
-    a, _, c = body.semi_axes_m
+    r, M, g = body.r0, body.p.mass_kg, body.context.gravity_m_s2
+    a, _, c = body.p.semi_axes_m
     h = lambda th: math.sqrt(a * a * math.sin(th) ** 2 + c * c * math.cos(th) ** 2)
     f = lambda th: (C * r) ** 2 * (math.cos(theta0) - math.cos(th)) ** 2 / (2 * A * math.sin(th) ** 2) \
         - M * g * (h(theta0) - h(th))
@@ -295,7 +295,7 @@ def test_spheroid_invariants(spheroid_runs):
         assert np.ptp(lz) < 1e-8 * abs(lz[0])
         assert np.max(np.abs(sim.extra["quaternion_norm"] - 1.0)) < 1e-8
     body, sim = runs[0.90]
-    ke_z = 0.5 * body.M * sim.extra["com_velocity_m_s"] ** 2
+    ke_z = 0.5 * body.p.mass_kg * sim.extra["com_velocity_m_s"] ** 2
     assert np.max(ke_z) > 1e-4 * sim.extra["energy_J"][0]
 
 
@@ -372,7 +372,7 @@ def test_invariants_of_the_exact_model(large_motion):
     # and the vertical kinetic energy is far above the energy bound.
     assert np.ptp(sim.columns["spin_rate"]) > 0.05 * abs(body.r0)
     assert np.ptp(sim.columns["tilt"]) > 0.3
-    assert np.max(0.5 * body.M * sim.extra["com_velocity_m_s"] ** 2) > 1e-4 * abs(e[0])
+    assert np.max(0.5 * body.p.mass_kg * sim.extra["com_velocity_m_s"] ** 2) > 1e-4 * abs(e[0])
     assert sim.extra["min_normal_force_N"] > 0.0
 
 
@@ -387,7 +387,7 @@ def test_contact_kinematics_and_normal_force(large_motion):
     assert np.max(np.abs(dz - zdot)[2:-2]) < 1e-4 * np.ptp(zdot)
     zdd = np.gradient(zdot, t, edge_order=2)
     N = sim.extra["normal_force_N"]
-    assert np.max(np.abs(N - body.M * (G + zdd))[2:-2]) < 1e-3 * np.ptp(N)
+    assert np.max(np.abs(N - body.p.mass_kg * (G + zdd))[2:-2]) < 1e-3 * np.ptp(N)
 
 
 def test_initial_conditions_and_columns():
@@ -400,7 +400,7 @@ def test_initial_conditions_and_columns():
     assert c["tilt"][0] == pytest.approx(math.radians(20.0), abs=1e-14)
     assert c["tilt_azimuth"][0] == pytest.approx(math.radians(120.0), abs=1e-14)
     assert c["spin_rate"][0] == pytest.approx(3.0 * TURN, rel=1e-14)
-    a, b, g_ = body.semi_axes_m
+    a, b, g_ = body.p.semi_axes_m
     n = np.array([c["vertical_body_x"][0], c["vertical_body_y"][0], math.cos(c["tilt"][0])])
     assert c["com_height"][0] == pytest.approx(math.sqrt(a * a * n[0] ** 2 + b * b * n[1] ** 2 + g_ * g_ * n[2] ** 2),
                                                rel=1e-14)

@@ -221,7 +221,7 @@ def test_both_swing_durations(oblique):
     body, t, sim = oblique
     pred = body.predictions()
     assert pred["verdict"] == "stable" and pred["section"] == "III"
-    C, M = body.inertia[2], body.M
+    C, M = body.inertia[2], body.p.mass_kg
     durations = [math.pi * math.sqrt(C / (M * G * om)) for om in pred["puiseux_omega_m"]]
     np.testing.assert_allclose(pred["swing_durations_s"], durations, rtol=1e-14)
     freqs, _, misfit = fit_two_frequencies(t, sim.columns["vertical_body_x"], sim.columns["vertical_body_y"])
@@ -490,7 +490,7 @@ def section_I_path(body, t):
     a = X1 * np.cos(om[0] * t) + Y1 * np.sin(om[0] * t) + X2 * np.cos(om[1] * t) + Y2 * np.sin(om[1] * t)
     b = (lam[0] * (Y1 * np.cos(om[0] * t) - X1 * np.sin(om[0] * t))
          + lam[1] * (Y2 * np.cos(om[1] * t) - X2 * np.sin(om[1] * t)))
-    alpha, beta, gamma = body.semi_axes_m
+    alpha, beta, gamma = body.p.semi_axes_m
     return -alpha * alpha / gamma * a, -beta * beta / gamma * b
 
 
@@ -524,7 +524,7 @@ def test_ellipsoid_contact_point_stations_and_retrogradations(spin, retrograde):
     # 2.7e-5 rad after 50 and 120 rad of turn).
     assert np.max(np.abs(sim.columns["turn_angle"] - spin * t)) < THETA0 ** 2 * spin * t[-1]
     # exact: the contact point is on the ellipsoid, below G by the com_height column (1e-12 m)
-    a, b, c = body.semi_axes_m
+    a, b, c = body.p.semi_axes_m
     z = sim.columns["contact_z"]
     assert np.max(np.abs(x * x / a ** 2 + y * y / b ** 2 + z * z / c ** 2 - 1.0)) < 1e-12
     R = quat_to_matrix(sim.extra["state"][:4].T)

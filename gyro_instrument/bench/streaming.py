@@ -122,7 +122,7 @@ def whole_process_rows(wp_rows, reference, duration_s, progress=print) -> list:
     from gyro_instrument.scenes import build_instruments, load_scene
     scene = load_scene("foucault_pantheon", [f"duration_s={duration_s!r}"])
     p = build_instruments(scene)["pendulum"]
-    w0sq = p.g / p.l
+    w0sq = p.context.gravity_m_s2 / p.p.length_m
     env = _env()
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "x.parquet")
@@ -134,7 +134,8 @@ def whole_process_rows(wp_rows, reference, duration_s, progress=print) -> list:
         rtol = textbook_rtol(wp_rows, duration_s, fast_err)
         progress(f"  whole process: textbook solve_ivp DOP853 rtol {rtol:g}")
         npy = os.path.join(tmp, "textbook.npy")
-        args = [scene.site.latitude_deg, p.l, p.g, p.initial_deflection_deg, p.initial_azimuth_deg, duration_s,
+        args = [scene.site.latitude_deg, p.p.length_m, p.context.gravity_m_s2, p.p.initial_deflection_deg,
+                p.p.initial_azimuth_deg, duration_s,
                 scene.sample_rate_hz, rtol, scene.site.earth_rate_rad_s]
         tb_wall, _ = run_child([sys.executable, "-c", TEXTBOOK_SCRIPT, *map(repr, map(float, args)), npy], env)
         y = np.load(npy)[:, -1]

@@ -81,15 +81,15 @@ def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, 
     add("linear (small-angle) model, DOP853", "rtol 1e-10", sim, cpu, sim.trajectory.nfev)
     p, t, _ = _pendulum(duration_s, rate_hz)
     (pos, vel, nfev), cpu = _cpu(lambda: p.comparison_solution(t))
-    sim = Simulation(t, pendulum_columns(pos, vel, p.g / p.l), None)
+    sim = Simulation(t, pendulum_columns(pos, vel, p.context.gravity_m_s2 / p.p.length_m), None)
     add("Quet's comparison pendulum (first swing turned by its apsidal angle)", "", sim, cpu, nfev)
     r0, v0 = p.initial_state()
 
     def binet():
-        x, y, vx, vy = binet_ellipse(t, p.l, p.g, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1],
+        x, y, vx, vy = binet_ellipse(t, p.p.length_m, p.context.gravity_m_s2, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1],
                                      velocity=True)
-        z = -np.sqrt(np.maximum(p.l ** 2 - x * x - y * y, 0.0))
-        return pendulum_columns(np.vstack([x, y, z]), np.vstack([vx, vy, 0 * vx]), p.g / p.l)
+        z = -np.sqrt(np.maximum(p.p.length_m ** 2 - x * x - y * y, 0.0))
+        return pendulum_columns(np.vstack([x, y, z]), np.vstack([vx, vy, 0 * vx]), p.context.gravity_m_s2 / p.p.length_m)
     cols, cpu = _cpu(binet)
     add("Binet's closed form (linear model)", "", Simulation(t, cols, None), cpu, 0)
     return rows
@@ -172,7 +172,7 @@ def plane_gyroscope_closed_form(g, t) -> np.ndarray:
     from scipy.special import ellipj, ellipk
     pred = g.predictions()
     w = math.pi / pred["swing_duration_small_s"]
-    k = math.sin(g.u0 / 2.0)
+    k = math.sin(g.p.initial_angle_rad / 2.0)
     m = k * k
     sn, _, _, _ = ellipj(float(ellipk(m)) - w * np.asarray(t, dtype=float), m)
     return 2.0 * np.arcsin(k * sn)
@@ -673,7 +673,7 @@ def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:
     p = build_instruments(scene)["pendulum"]
     t = sample_times(scene)
     r0, v0 = p.initial_state()
-    x, y = binet_ellipse(t, p.l, p.g, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1])
+    x, y = binet_ellipse(t, p.p.length_m, p.context.gravity_m_s2, scene.site.k_vertical_rad_s, r0[0], r0[1], v0[0], v0[1])
     with tempfile.TemporaryDirectory() as tmp:
         data = os.path.join(tmp, "day.parquet")
         try:

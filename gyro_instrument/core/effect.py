@@ -30,16 +30,37 @@ declare is never called):
 Contributions are summed in the registry's order (:func:`gyro_instrument.effects.canonical_order`),
 so a result does not depend on the order a scene lists its effects.
 
-``relative_size`` estimates, from an instrument's characteristic scales, how much leaving the
-effect out would change the result, for ``gyro-instrument describe``.
+Every hook receives one :class:`EffectContext` first (model: Orekit's ``ForceModel``, which
+receives the whole ``SpacecraftState``): the site, its local gravity g, the Earth-rate vector Ω in
+ENU and the instrument's characteristic :class:`Scales`. An effect needing g or the latitude reads
+them there, never off Ω's direction or a constant. The instrument builds the context
+(``Instrument.effect_context``).
+
+Beside the kinds it contributes to, an effect declares what it is (``CAPABILITIES``, a subset of
+:data:`CAPABILITIES`; model: Orekit's ``dependsOnPositionOnly``):
+
+==================  ==================================================================================
+``conservative``    its terms do no net work over a closed path of the relative motion: derivable from a
+                    potential (centrifugal gradient, a gravity term) or gyroscopic (Coriolis, no work),
+                    or a restoring law of a potential; no dissipation. An instrument's fast path that
+                    needs a conservative motion (the pendulum's parareal shooting from a conservative
+                    swing) accepts every such effect whose terms it sums.
+``default_on``      a reader assumes it simulated unless a scene says otherwise (the Earth's rotation):
+                    a scene leaving it out gets a note saying so (:func:`gyro_instrument.scenes.scene_notes`).
+==================  ==================================================================================
+
+``relative_size`` estimates, from the context's scales, how much leaving the effect out would
+change the result, for ``gyro-instrument describe``.
 """
 
+import functools
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
-from gyro_instrument.core.params import validate_params
+from gyro_instrument.core.params import params_dataclass, validate_params
 
 POINT_MASS = "point_mass"
 RIGID_BODY = "rigid_body"
@@ -53,6 +74,79 @@ FRAME_RATE = "frame_rate"
 MECHANICS = frozenset((POINT_MASS, RIGID_BODY, DAMPING, SPIN, RESTORING_LAW, CARRIER_INERTIA, FRAME_RATE))
 
 
+CONSERVATIVE = "conservative"
+DEFAULT_ON = "default_on"
+
+#: Every capability an effect may declare (see the module docstring).
+CAPABILITIES = frozenset((CONSERVATIVE, DEFAULT_ON))
+
+#: The hook of each kind of mechanics (the Effect method an instrument calls for it).
+HOOKS = {POINT_MASS: "point_mass_term", RIGID_BODY: "rigid_body_torque", DAMPING: "damping_torque",
+         SPIN: "spin_torque", RESTORING_LAW: "restoring_law", CARRIER_INERTIA: "carrier_inertia",
+         FRAME_RATE: "frame_rate_rad_s"}
+
+
+@dataclass(frozen=True)
+class Scales:
+    """An instrument's characteristic scales, for effect-size estimates (``Effect.relative_size``).
+
+    Attributes
+    ----------
+    earth_rate_rad_s : float
+        The site's Earth rate n, rad/s.
+    duration_s : float or None
+        The run's duration, s (None when the context is built for dynamics only).
+    restoring_rate_rad_s : float
+        The restoring (swing) angular frequency, rad/s (√(g/l) for a pendulum); 0 when none.
+    gyro_rate_rad_s : float or None
+        μ ρ0, the gyroscopic rate, rad/s; None for an instrument without a rotor's directing torque.
+    amplitude_rad : float
+        The release amplitude, rad.
+    ring_inertia_ratio : float
+        (C1 + A2)/A of a gimbal's rings, 0 without rings.
+    """
+
+    earth_rate_rad_s: float
+    duration_s: float | None = None
+    restoring_rate_rad_s: float = 0.0
+    gyro_rate_rad_s: float | None = None
+    amplitude_rad: float = 0.0
+    ring_inertia_ratio: float = 0.0
+
+
+@dataclass(frozen=True)
+class EffectContext:
+    """What every effect hook receives: the instrument's world, frozen.
+
+    Attributes
+    ----------
+    site : gyro_instrument.core.site.Site
+        The site (latitude, Earth rate, local gravity).
+    gravity_m_s2 : float
+        Local (plumb-line) gravity g at the rest point, m/s², from the site.
+    omega_enu : tuple of 3 float
+        The Earth-rate vector Ω in ENU, rad/s: n (0, cos γ, sin γ).
+    scales : Scales or None
+        The instrument's characteristic scales (None when built without them).
+    """
+
+    site: object
+    gravity_m_s2: float
+    omega_enu: tuple
+    scales: Scales | None = None
+
+    @classmethod
+    def of_site(cls, site, scales=None) -> "EffectContext":
+        """The context at ``site`` (g and Ω read from it) with optional ``scales``."""
+        return cls(site, float(site.gravity_m_s2), tuple(float(o) for o in site.earth_rate_enu()), scales)
+
+
+def bound_hooks(effects, kind, context) -> list:
+    """The hooks of ``kind`` (:data:`MECHANICS`) of those ``effects`` declaring it, in their order,
+    with ``context`` bound: callables taking the hook's remaining arguments."""
+    return [functools.partial(getattr(e, HOOKS[kind]), context) for e in effects if kind in e.MECHANICS]
+
+
 def supporting_effects(registry, kinds) -> frozenset:
     """Names of the effects of ``registry`` (name -> Effect subclass) that contribute to one of
     ``kinds`` (a set of :data:`MECHANICS`): frozenset of str."""
@@ -64,30 +158,40 @@ class Effect:
     """Base class of all physical effects.
 
     Subclasses set ``name``, ``summary``, ``PARAMS`` (a tuple of :class:`~gyro_instrument.core.params.Param`), ``MECHANICS``
-    (the kinds they contribute to, a subset of :data:`MECHANICS`), implement
-    :meth:`relative_size` and the hook of each declared kind. A hook's default contributes
-    nothing.
+    (the kinds they contribute to, a subset of :data:`MECHANICS`), ``CAPABILITIES`` (a subset of
+    :data:`CAPABILITIES`), implement :meth:`relative_size` and the hook of each declared kind. A
+    hook's default contributes nothing. Every hook takes an :class:`EffectContext` first.
+    The validated parameters are ``self.p``, a frozen dataclass generated once per class from
+    ``PARAMS`` (:func:`~gyro_instrument.core.params.params_dataclass`); ``self.params`` the same as a dict.
     """
 
     name: ClassVar[str] = ""
     summary: ClassVar[str] = ""
     PARAMS: ClassVar[tuple] = ()
     MECHANICS: ClassVar[frozenset] = frozenset()
+    CAPABILITIES: ClassVar[frozenset] = frozenset()
+    #: For a ``default_on`` effect, the scene note's words when no instrument simulates it, when one
+    #: instrument leaves it out, and for an instrument that cannot simulate it.
+    ABSENT_MEANS: ClassVar[str] = "its terms are left out of the model and of the predictions"
+    ABSENT_MEANS_FOR_ONE: ClassVar[str] = "its terms are left out of its model and of its predictions"
+    UNSUPPORTED_MEANS: ClassVar[str] = "leaves it out by design"
 
     def __init__(self, field_prefix="effects", **params) -> None:
         self.params = validate_params(f"{field_prefix}.{self.name}", self.PARAMS, params)
-        for key, value in self.params.items():
-            setattr(self, key, value)
+        self.p = params_dataclass(type(self))(**self.params)
 
-    def relative_size(self, scales) -> tuple:
+    @classmethod
+    def is_conservative(cls) -> bool:
+        """True when the effect declares :data:`CONSERVATIVE`."""
+        return CONSERVATIVE in cls.CAPABILITIES
+
+    def relative_size(self, ctx) -> tuple:
         """Estimated relative size of the effect for an instrument.
 
         Parameters
         ----------
-        scales : dict
-            The instrument's characteristic scales (see ``Instrument.scales``), e.g.
-            ``earth_rate_rad_s``, ``restoring_rate_rad_s``, ``gyro_rate_rad_s``,
-            ``amplitude_rad``, ``duration_s``.
+        ctx : EffectContext
+            Its ``scales`` (:class:`Scales`) are the instrument's characteristic scales.
 
         Returns
         -------
@@ -97,9 +201,9 @@ class Effect:
         raise NotImplementedError
 
     # ------------------------------------------------------------------ terms, one hook per kind
-    def point_mass_term(self, omega_enu) -> Callable | None:
+    def point_mass_term(self, ctx) -> Callable | None:
         """``point_mass``: a function ``f(dx, dy, dz, vx, vy, vz) -> (ax, ay, az)`` giving this
-        effect's acceleration (m/s²) of a point in the Earth-fixed frame rotating at ``omega_enu``
+        effect's acceleration (m/s²) of a point in the Earth-fixed frame rotating at ``ctx.omega_enu``
         (rad/s, ENU, constant), from the point's displacement (m) from its rest point (where local
         gravity is measured) and its velocity relative to the Earth (m/s), all ENU components.
         Built once per right-hand side (constants bound, like Orekit's ``ForceModel.init``), then
@@ -107,36 +211,36 @@ class Effect:
         None: no contribution."""
         return None
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
+    def rigid_body_torque(self, ctx, inertia, w_rel, omega_b) -> np.ndarray:
         """``rigid_body``: this effect's part of the inertia torque I α_abs + ω_abs × I ω_abs of a
         body turning about a fixed point in axes rotating at the constant ``omega_b`` (body axes,
         rad/s); ``inertia`` (3, 3) kg m² and ``w_rel`` (3,) rad/s the body's angular velocity
         relative to the Earth, body axes. Returns an ndarray (3,), N m, added to I α + w × I w."""
         raise NotImplementedError(f"{self.name} declares no rigid_body term")
 
-    def damping_torque(self, inertia, rate) -> float:
+    def damping_torque(self, ctx, inertia, rate) -> float:
         """``damping``: torque (N m) on a swinging hinge of swinging inertia ``inertia`` (kg m²)
         turning at ``rate`` (rad/s) relative to its carrier."""
         raise NotImplementedError(f"{self.name} declares no damping term")
 
-    def spin_torque(self, inertia, spin_rate) -> float:
+    def spin_torque(self, ctx, inertia, spin_rate) -> float:
         """``spin``: torque (N m) on a rotor's spin hinge, axial moment ``inertia`` (kg m²),
         spinning at ``spin_rate`` (rad/s) relative to its carrier."""
         raise NotImplementedError(f"{self.name} declares no spin term")
 
-    def restoring_law(self) -> Callable:
+    def restoring_law(self, ctx) -> Callable:
         """``restoring_law``: the function g(angle) replacing the angle in a restoring torque
         (``math.sin``-like, accepting floats and arrays)."""
         raise NotImplementedError(f"{self.name} declares no restoring law")
 
-    def carrier_inertia(self, inertia) -> float | np.ndarray:
+    def carrier_inertia(self, ctx, inertia) -> float | np.ndarray:
         """``carrier_inertia``: the inertia (kg m², scalar or tensor) a carrier of given
         ``inertia`` contributes to the motion."""
         raise NotImplementedError(f"{self.name} declares no carrier inertia")
 
-    def frame_rate_rad_s(self, site) -> float:
+    def frame_rate_rad_s(self, ctx) -> float:
         """``frame_rate``: the rotation rate (rad/s) this effect gives the Earth-fixed frame at
-        ``site``."""
+        ``ctx.site``."""
         raise NotImplementedError(f"{self.name} declares no frame rate")
 
     def __repr__(self):

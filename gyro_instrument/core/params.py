@@ -8,7 +8,7 @@ mapping (from YAML, the CLI's ``--set`` or ROS parameters) into checked values, 
 
 import difflib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 
 from gyro_instrument.core.errors import SceneError
 
@@ -202,6 +202,54 @@ def validate_params(prefix, params, raw) -> dict:
         else:
             out[p.name] = p.default
     return out
+
+
+#: Typed fields by ``Param.kind`` (annotations of the generated parameter dataclasses).
+_KIND_TYPES = {"float": float, "int": int, "bool": bool, "str": str, "vec3": tuple, "pair": tuple}
+
+#: Angle suffixes a parameter is given in at the edge, and the SI suffix of its radian view.
+_RADIAN_VIEWS = (("_deg_s", "_rad_s"), ("_deg", "_rad"))
+
+
+def _radian_view(name):
+    def view(self):
+        return math.radians(getattr(self, name))
+    view.__doc__ = f"``{name}`` in radians (``math.radians``)."
+    return property(view)
+
+
+def params_dataclass(owner) -> type:
+    """The frozen dataclass of ``owner``'s validated parameters, generated once per class.
+
+    ``owner`` is a class with ``PARAMS`` (a tuple of :class:`Param`: an instrument or an effect).
+    The dataclass ``<Owner>Params`` has one typed field per parameter, in ``PARAMS`` order, and for
+    each float given in degrees (``*_deg``, ``*_deg_s``) a read-only radian view (``*_rad``,
+    ``*_rad_s``; ``math.radians`` of the value) unless a parameter already has that name. Build it
+    from :func:`validate_params`'s result: ``params_dataclass(cls)(**validated)``; read
+    ``p.length_m``, ``p.initial_deflection_rad``.
+
+    Returns
+    -------
+    type
+        The dataclass (cached on ``owner``; regenerated when ``owner.PARAMS`` is another tuple).
+    """
+    cached = owner.__dict__.get("_params_dataclass")
+    if cached is not None and cached[0] is owner.PARAMS:
+        return cached[1]
+    names = {p.name for p in owner.PARAMS}
+    views = {}
+    for p in owner.PARAMS:
+        for deg, rad in _RADIAN_VIEWS:
+            if p.kind == "float" and p.name.endswith(deg):
+                view = p.name[:-len(deg)] + rad
+                if view not in names:
+                    views[view] = _radian_view(p.name)
+                break
+    fields = [(p.name, _KIND_TYPES.get(p.kind, object)) for p in owner.PARAMS]
+    cls = make_dataclass(f"{owner.__name__}Params", fields, frozen=True, namespace=views)
+    cls.__doc__ = f"Validated parameters of {owner.__name__} (frozen; generated from its PARAMS)."
+    setattr(owner, "_params_dataclass", (owner.PARAMS, cls))
+    return cls
 
 
 def unknown_key_hint(key, known, what="key") -> str:

@@ -5,7 +5,7 @@ instruments sum the effects' terms (:func:`canonical_order`). A new effect is on
 :func:`register` call (docs/extending.md).
 """
 
-from gyro_instrument.core.effect import MECHANICS, Effect
+from gyro_instrument.core.effect import CAPABILITIES, MECHANICS, Effect
 from gyro_instrument.effects.air_drag import AirDrag
 from gyro_instrument.effects.centrifugal import Centrifugal
 from gyro_instrument.effects.earth_rotation import EarthRotation
@@ -26,7 +26,8 @@ def register(cls) -> type:
     ------
     ValueError
         When ``cls`` is not an Effect subclass, its ``name`` is empty or taken, or its
-        ``MECHANICS`` name no known kind (:data:`gyro_instrument.core.effect.MECHANICS`).
+        ``MECHANICS`` name no known kind (:data:`gyro_instrument.core.effect.MECHANICS`), or its
+        ``CAPABILITIES`` no known capability (:data:`gyro_instrument.core.effect.CAPABILITIES`).
     """
     if not (isinstance(cls, type) and issubclass(cls, Effect)):
         raise ValueError(f"register: {cls!r} is not an Effect subclass")
@@ -37,6 +38,9 @@ def register(cls) -> type:
     if unknown or not cls.MECHANICS:
         raise ValueError(f"register: {cls.name} MECHANICS {sorted(cls.MECHANICS)} must be a non-empty subset "
                          f"of {sorted(MECHANICS)}")
+    if set(cls.CAPABILITIES) - CAPABILITIES:
+        raise ValueError(f"register: {cls.name} CAPABILITIES {sorted(cls.CAPABILITIES)} must be a subset "
+                         f"of {sorted(CAPABILITIES)}")
     REGISTRY[cls.name] = cls
     return cls
 

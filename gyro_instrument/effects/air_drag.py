@@ -18,19 +18,20 @@ class AirDrag(Effect):
     name = "air_drag"
     summary = "air drag on the bob: linear (time constant tau) plus quadratic"
     MECHANICS = frozenset({POINT_MASS})
+    CAPABILITIES = frozenset()           # dissipative: velocity-dependent work
     PARAMS = (Param("time_constant_s", default=7200.0, low=0.0, open_low=True,
                     doc="e-folding time of the amplitude under linear drag"),
               Param("quadratic_per_m", default=0.0, low=0.0,
                     doc="quadratic drag coefficient c_q (acceleration = c_q |v|^2), 1/m"))
 
-    def relative_size(self, scales) -> tuple:
-        return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
+    def relative_size(self, ctx) -> tuple:
+        return ctx.scales.duration_s / self.p.time_constant_s, "duration / tau (amplitude lost over the run)"
 
     def acceleration(self, v) -> np.ndarray:
         """Drag acceleration −(2/τ) v − c_q |v| v (m/s²) for a velocity ``v`` (3,) relative to the air."""
-        return -(2.0 / self.time_constant_s) * v - self.quadratic_per_m * np.linalg.norm(v) * v
+        return -(2.0 / self.p.time_constant_s) * v - self.p.quadratic_per_m * np.linalg.norm(v) * v
 
-    def point_mass_term(self, omega_enu) -> Callable:
+    def point_mass_term(self, ctx) -> Callable:
         """:meth:`acceleration` of the velocity relative to the Earth (still air); one state at a time."""
         acceleration = self.acceleration
 

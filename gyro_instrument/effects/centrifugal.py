@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gyro_instrument.core.effect import POINT_MASS, RIGID_BODY, Effect
+from gyro_instrument.core.effect import CONSERVATIVE, POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
 
 
@@ -23,23 +23,25 @@ class Centrifugal(Effect):
     name = "centrifugal"
     summary = "centrifugal gradient, second order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY})
+    CAPABILITIES = frozenset({CONSERVATIVE})   # the gradient of the centrifugal potential
 
-    def relative_size(self, scales) -> tuple:
-        n = scales["earth_rate_rad_s"]
-        if scales.get("gyro_rate_rad_s"):
-            return n / scales["gyro_rate_rad_s"], "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
-        w0 = scales["restoring_rate_rad_s"]
+    def relative_size(self, ctx) -> tuple:
+        scales = ctx.scales
+        n = scales.earth_rate_rad_s
+        if scales.gyro_rate_rad_s:
+            return n / scales.gyro_rate_rad_s, "n / (mu rho0) (sec. 4 §1: dropped term over kept one)"
+        w0 = scales.restoring_rate_rad_s
         if not w0:
             return math.inf, "(n / omega0)^2 with no restoring rate (omega0 = 0): nothing for it to be small against"
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
 
-    def point_mass_term(self, omega_enu) -> Callable:
+    def point_mass_term(self, ctx) -> Callable:
         """−Ω × (Ω × δr) over the displacement δr from the rest point, written |Ω|² δr − (Ω·δr) Ω
         (:func:`centrifugal_gradient_acceleration`, component form).
 
         Ω in ENU has no east part (n (0, cos γ, sin γ)); then its zero products are left out: the
         same doubles for a finite δr in 10 array operations instead of 14."""
-        ox, oy, oz = (float(o) for o in omega_enu)
+        ox, oy, oz = (float(o) for o in ctx.omega_enu)
         o2 = ox * ox + oy * oy + oz * oz
         if ox == 0.0:
             def gradient_no_east(dx, dy, dz, vx, vy, vz):
@@ -52,7 +54,7 @@ class Centrifugal(Effect):
             return o2 * dx - od * ox, o2 * dy - od * oy, o2 * dz - od * oz
         return gradient
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
+    def rigid_body_torque(self, ctx, inertia, w_rel, omega_b) -> np.ndarray:
         """The inertia torque's part quadratic in Ω (:func:`rigid_body_inertia_torque_quadratic`)."""
         return rigid_body_inertia_torque_quadratic(inertia, omega_b)
 

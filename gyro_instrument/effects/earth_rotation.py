@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gyro_instrument.core.effect import FRAME_RATE, POINT_MASS, RIGID_BODY, Effect
+from gyro_instrument.core.effect import CONSERVATIVE, DEFAULT_ON, FRAME_RATE, POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
 
 
@@ -22,21 +22,30 @@ class EarthRotation(Effect):
     name = "earth_rotation"
     summary = "Coriolis / gyroscopic coupling, first order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY, FRAME_RATE})
+    #: Gyroscopic (Coriolis does no work) and assumed by a reader: a scene without it gets a note.
+    CAPABILITIES = frozenset({CONSERVATIVE, DEFAULT_ON})
+    #: What a scene leaving it out simulates, for the note (:func:`gyro_instrument.scenes.scene_notes`).
+    ABSENT_MEANS = ("the instruments move as on a non-rotating Earth (n = 0 in the model: no Foucault precession, "
+                    "no gyroscopic directing torque) and the predictions say the same")
+    #: The same for one instrument that leaves it out.
+    ABSENT_MEANS_FOR_ONE = "it moves as on a non-rotating Earth and its predictions assume n = 0"
+    #: What an instrument whose kinds it does not meet ignores by design.
+    UNSUPPORTED_MEANS = "ignores the Earth's rotation by design"
 
-    def relative_size(self, scales) -> tuple:
-        if scales.get("gyro_rate_rad_s"):
+    def relative_size(self, ctx) -> tuple:
+        if ctx.scales.gyro_rate_rad_s:
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
-        n = scales["earth_rate_rad_s"]
-        return n * scales["duration_s"], "n * duration (swing-plane turn over the run, rad, at most)"
+        n = ctx.scales.earth_rate_rad_s
+        return n * ctx.scales.duration_s, "n * duration (swing-plane turn over the run, rad, at most)"
 
-    def point_mass_term(self, omega_enu) -> Callable:
+    def point_mass_term(self, ctx) -> Callable:
         """Coriolis acceleration −2 Ω × v (:func:`coriolis_acceleration`, component form).
 
         Ω in ENU has no east part (n (0, cos γ, sin γ)); then the zero products are left out and
         the factor −2 is taken into the coefficients (exact: a power of two), so each component is
         the same double as in the general form for finite v, in 5 array operations instead of 12
         (the pendulum's batched right-hand side calls it ~5 700 times a sidereal day)."""
-        ox, oy, oz = (float(o) for o in omega_enu)
+        ox, oy, oz = (float(o) for o in ctx.omega_enu)
         if ox == 0.0:
             m2y, m2z = -2.0 * oy, -2.0 * oz
 
@@ -48,13 +57,13 @@ class EarthRotation(Effect):
             return -2.0 * (oy * vz - oz * vy), -2.0 * (oz * vx - ox * vz), -2.0 * (ox * vy - oy * vx)
         return coriolis
 
-    def rigid_body_torque(self, inertia, w_rel, omega_b) -> np.ndarray:
+    def rigid_body_torque(self, ctx, inertia, w_rel, omega_b) -> np.ndarray:
         """The inertia torque's part linear in Ω (:func:`rigid_body_inertia_torque_linear`)."""
         return rigid_body_inertia_torque_linear(inertia, w_rel, omega_b)
 
-    def frame_rate_rad_s(self, site) -> float:
+    def frame_rate_rad_s(self, ctx) -> float:
         """The site's Earth rate n (the frame turns; without this effect n = 0 in the model)."""
-        return site.earth_rate_rad_s
+        return ctx.site.earth_rate_rad_s
 
 
 def coriolis_acceleration(omega, v) -> np.ndarray:

@@ -13,7 +13,7 @@ import numpy as np
 
 from scipy.special import ellipk
 
-from gyro_instrument.core.effect import RESTORING_LAW, Effect
+from gyro_instrument.core.effect import CONSERVATIVE, RESTORING_LAW, Effect
 
 
 class FiniteAmplitude(Effect):
@@ -22,12 +22,13 @@ class FiniteAmplitude(Effect):
     name = "finite_amplitude"
     summary = "exact trigonometry (sin u) instead of the small-angle model (u)"
     MECHANICS = frozenset({RESTORING_LAW})
+    CAPABILITIES = frozenset({CONSERVATIVE})   # the law of a potential (1 − cos u)
 
-    def relative_size(self, scales) -> tuple:
-        a = scales.get("amplitude_rad", 0.0)
+    def relative_size(self, ctx) -> tuple:
+        a = ctx.scales.amplitude_rad
         return a * a / 16.0, "a^2 / 16 (relative period change, sec. 2 eq. 42)"
 
-    def restoring_law(self) -> Callable:
+    def restoring_law(self, ctx) -> Callable:
         """``numpy.sin``: the exact restoring law (its absence means the small-angle law, u)."""
         return np.sin
 

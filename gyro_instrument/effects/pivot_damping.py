@@ -17,13 +17,13 @@ class PivotDamping(Effect):
     PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
                     doc="e-folding time of the oscillation amplitude"),)
 
-    def relative_size(self, scales) -> tuple:
-        return scales["duration_s"] / self.time_constant_s, "duration / tau (amplitude lost over the run)"
+    def relative_size(self, ctx) -> tuple:
+        return ctx.scales.duration_s / self.p.time_constant_s, "duration / tau (amplitude lost over the run)"
 
     def rate(self) -> float:
         """Damping rate 2/τ (per second) multiplying J q̇ in the hinge torque."""
-        return 2.0 / self.time_constant_s
+        return 2.0 / self.p.time_constant_s
 
-    def damping_torque(self, inertia, rate) -> float:
+    def damping_torque(self, ctx, inertia, rate) -> float:
         """−(2/τ) J q̇ (N m) on a hinge of swinging inertia J = ``inertia`` turning at q̇ = ``rate``."""
         return -self.rate() * inertia * rate

@@ -9,7 +9,7 @@ rings (C1 = 2A1) (sec. 4 §IV).
 
 import numpy as np
 
-from gyro_instrument.core.effect import CARRIER_INERTIA, Effect
+from gyro_instrument.core.effect import CARRIER_INERTIA, CONSERVATIVE, Effect
 
 
 class RingInertia(Effect):
@@ -18,11 +18,12 @@ class RingInertia(Effect):
     name = "ring_inertia"
     summary = "inertia of the gimbal rings (A1, C1, A2)"
     MECHANICS = frozenset({CARRIER_INERTIA})
+    CAPABILITIES = frozenset({CONSERVATIVE})   # inertia: no work
 
-    def relative_size(self, scales) -> tuple:
-        r = scales.get("ring_inertia_ratio", 0.0)
+    def relative_size(self, ctx) -> tuple:
+        r = ctx.scales.ring_inertia_ratio
         return r / 2.0, "(C1 + A2) / (2 A): relative change of the locked-ring period"
 
-    def carrier_inertia(self, inertia) -> float | np.ndarray:
+    def carrier_inertia(self, ctx, inertia) -> float | np.ndarray:
         """The ring's own moment, unchanged: the ring takes part in the motion (absent: massless)."""
         return inertia

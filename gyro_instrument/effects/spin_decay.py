@@ -18,14 +18,14 @@ class SpinDecay(Effect):
     PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
                     doc="e-folding time of the rotor's relative spin"),)
 
-    def relative_size(self, scales) -> tuple:
-        return scales["duration_s"] / self.time_constant_s, "duration / tau (spin lost over the run)"
+    def relative_size(self, ctx) -> tuple:
+        return ctx.scales.duration_s / self.p.time_constant_s, "duration / tau (spin lost over the run)"
 
     def spin_torque_per_inertia(self, spin_rate_rad_s) -> float:
         """Angular deceleration −ρ/τ of the rotor (torque divided by C), rad/s²."""
-        return -spin_rate_rad_s / self.time_constant_s
+        return -spin_rate_rad_s / self.p.time_constant_s
 
-    def spin_torque(self, inertia, spin_rate) -> float:
+    def spin_torque(self, ctx, inertia, spin_rate) -> float:
         """Bearing torque −C ρ / τ (N m) on a rotor of axial moment C = ``inertia`` spinning at ρ =
         ``spin_rate`` relative to its carrier (C times :meth:`spin_torque_per_inertia`)."""
-        return -inertia * spin_rate / self.time_constant_s
+        return -inertia * spin_rate / self.p.time_constant_s

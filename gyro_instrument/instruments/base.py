@@ -38,8 +38,10 @@ from typing import ClassVar
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.effect import CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, supporting_effects
+from gyro_instrument.core.effect import (CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, EffectContext, Scales,
+                                         supporting_effects)
 from gyro_instrument.core.integrate import Trajectory
+from gyro_instrument.core.params import params_dataclass
 from gyro_instrument.effects import canonical_order
 from gyro_instrument.instruments.observation import Observation, SwingRate
 
@@ -338,14 +340,26 @@ class Instrument:
         return self.observation().true_values(columns)
 
     def __init__(self, name, site, params, effects) -> None:
-        """``effects`` maps name -> Effect for the effects active on this instrument only (kept in
-        the registry's order, the order their terms are summed)."""
+        """``params``: the validated parameters (``PARAMS`` names -> values), read as ``self.p``, a
+        frozen dataclass generated once per class (:func:`~gyro_instrument.core.params.params_dataclass`:
+        ``self.p.length_m``, and radian views ``self.p.initial_deflection_rad`` of the ``*_deg``
+        parameters); ``self.params`` is the same as a dict. ``effects`` maps name -> Effect for the
+        effects active on this instrument only (kept in the registry's order, the order their terms
+        are summed). ``self.context`` is the :class:`~gyro_instrument.core.effect.EffectContext`
+        (without scales) the instrument gives its effects' dynamics hooks."""
         self.name = name
         self.site = site
         self.params = dict(params)
+        self.p = params_dataclass(type(self))(**self.params)
         self.effects = canonical_order(dict(effects))
-        for key, value in self.params.items():
-            setattr(self, key, value)
+        self.context = EffectContext.of_site(site)
+
+    def effect_context(self, duration_s=None) -> EffectContext:
+        """The :class:`~gyro_instrument.core.effect.EffectContext` for this instrument: the site, its g
+        and Ω, and, for a run of ``duration_s`` seconds, :meth:`scales` (None without a duration)."""
+        if duration_s is None:
+            return self.context
+        return EffectContext.of_site(self.site, self.scales(duration_s))
 
     def has(self, effect_name) -> bool:
         """True when the effect is listed for this instrument (and so is evaluated)."""
@@ -362,7 +376,7 @@ class Instrument:
     def restoring_law(self) -> Callable | None:
         """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
         ``finite_amplitude``), or None: the small-angle law g(u) = u."""
-        laws = [e.restoring_law() for e in self.effects_of(RESTORING_LAW)]
+        laws = [e.restoring_law(self.context) for e in self.effects_of(RESTORING_LAW)]
         return laws[-1] if laws else None
 
     def carrier_inertia(self, inertia) -> float | np.ndarray:
@@ -370,11 +384,13 @@ class Instrument:
         sum over the active ``carrier_inertia`` effects, 0.0 (massless) without one."""
         total = 0.0
         for e in self.effects_of(CARRIER_INERTIA):
-            total = total + e.carrier_inertia(inertia)
+            total = total + e.carrier_inertia(self.context, inertia)
         return total
 
-    def scales(self, duration_s) -> dict:
-        """Characteristic scales for effect-size estimates (see ``Effect.relative_size``)."""
+    def scales(self, duration_s) -> Scales:
+        """Characteristic scales (:class:`~gyro_instrument.core.effect.Scales`) of a run of
+        ``duration_s`` seconds, for effect-size estimates (``Effect.relative_size`` reads them from
+        :meth:`effect_context`)."""
         raise NotImplementedError
 
     def simulate(self, t, **options) -> Simulation:
@@ -438,7 +454,7 @@ class Instrument:
         Earth rate with ``earth_rotation``), 0 without one."""
         total = 0.0
         for e in self.effects_of(FRAME_RATE):
-            total = total + e.frame_rate_rad_s(self.site)
+            total = total + e.frame_rate_rad_s(self.context)
         return total
 
     def missing_effect_note(self, effect_name, consequence) -> str | None:

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN
+from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN, bound_hooks
 from gyro_instrument.core.vector import cross3
 
 
@@ -96,9 +96,11 @@ class HingeChain:
         The instrument's active effects in summing order: their ``rigid_body`` terms enter every
         body's inertia torque (dropped when Ω = 0: they vanish), their ``damping`` and ``spin``
         terms the declared hinges (:func:`effect_hinge_torques`).
+    context : EffectContext, optional
+        What the effects' hooks receive first (``Instrument.context``).
     """
 
-    def __init__(self, links, base_rotation, omega_enu, gravity_enu, effects=()) -> None:
+    def __init__(self, links, base_rotation, omega_enu, gravity_enu, effects=(), context=None) -> None:
         self.links = list(links)
         self.nl = len(self.links)
         self.free = [k for k, L in enumerate(self.links) if not L.locked]
@@ -108,8 +110,8 @@ class HingeChain:
         self.gravity_base = self.base.T @ np.asarray(gravity_enu, dtype=float)
         effects = list(effects)
         rotating = bool(np.any(self.omega_base != 0.0))
-        self.body_terms = [e.rigid_body_torque for e in effects if RIGID_BODY in e.MECHANICS] if rotating else []
-        self.hinge_torques = effect_hinge_torques(self.links, effects)
+        self.body_terms = bound_hooks(effects, RIGID_BODY, context) if rotating else []
+        self.hinge_torques = effect_hinge_torques(self.links, effects, context)
         self.axes = [np.asarray(L.axis, dtype=float) / np.linalg.norm(L.axis) for L in self.links]
         self.gravity_on = any(L.mass_kg != 0.0 and np.any(L.com_m) for L in self.links)
 
@@ -214,12 +216,12 @@ class HingeChain:
         return self.base @ (B @ np.asarray(axis_body, dtype=float))
 
 
-def effect_hinge_torques(links, effects) -> Callable | None:
+def effect_hinge_torques(links, effects, context=None) -> Callable | None:
     """Hinge torques from the effects' ``damping`` and ``spin`` terms, or None when none acts.
 
-    Each link with a ``swing_inertia`` J gets Σ ``damping_torque(J, q̇)`` over the ``damping``
+    Each link with a ``swing_inertia`` J gets Σ ``damping_torque(context, J, q̇)`` over the ``damping``
     effects (``pivot_damping``: −(2/τ) J q̇, small swings decaying as e^(−t/τ)); each link with a
-    ``spin_inertia`` C gets Σ ``spin_torque(C, q̇)`` over the ``spin`` effects (``spin_decay``:
+    ``spin_inertia`` C gets Σ ``spin_torque(context, C, q̇)`` over the ``spin`` effects (``spin_decay``:
     −C q̇/τ) — friction acts on the joint rate, the rotor's rate relative to its carrier.
 
     Returns
@@ -227,8 +229,8 @@ def effect_hinge_torques(links, effects) -> Callable | None:
     callable or None
         ``f(q, qd, w_rel_axis) -> ndarray (len(links),)``, N m.
     """
-    damping = [e.damping_torque for e in effects if DAMPING in e.MECHANICS]
-    spinning = [e.spin_torque for e in effects if SPIN in e.MECHANICS]
+    damping = bound_hooks(effects, DAMPING, context)
+    spinning = bound_hooks(effects, SPIN, context)
     swing = [(k, L.swing_inertia) for k, L in enumerate(links) if L.swing_inertia is not None] if damping else []
     spin = [(k, L.spin_inertia) for k, L in enumerate(links) if L.spin_inertia is not None] if spinning else []
     if not swing and not spin:

@@ -91,73 +91,19 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from gyro_instrument.core.effect import FRAME_RATE
+from gyro_instrument.core.effect import FRAME_RATE, Scales
 from gyro_instrument.core.angles import NumpyUnwrapper
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.observation import RotorObservation
+# The geometry and the closed form live in free_gyroscope_theory; re-exported here, where they were defined.
+from gyro_instrument.instruments.free_gyroscope_theory import (angle_between, axis_from_alt_az, axis_relative_to_earth,
+                                                               body_frame, equatorial_basis)
 
-# ----------------------------------------------------------------------------- geometry
-
-
-def axis_from_alt_az(altitude_rad, azimuth_rad) -> np.ndarray:
-    """Unit ENU vector at ``altitude_rad`` above the horizon, compass ``azimuth_rad``."""
-    ca = math.cos(altitude_rad)
-    return np.array([ca * math.sin(azimuth_rad), ca * math.cos(azimuth_rad), math.sin(altitude_rad)])
-
-
-def equatorial_basis(site) -> tuple:
-    """ENU unit vectors (m, w, ê): m toward the local meridian's equator point (hour angle 0),
-    w toward the west (hour angle +90°), ê the north part of Earth's axis."""
-    g = site.latitude_rad
-    return (np.array([0.0, -math.sin(g), math.cos(g)]), np.array([-1.0, 0.0, 0.0]),
-            site.earth_axis_north_enu())
-
-
-def body_frame(k0) -> np.ndarray:
-    """A rotation matrix (columns b1, b2, k0) whose third column is the unit axis ``k0``."""
-    ref = np.eye(3)[int(np.argmin(np.abs(k0)))]
-    b1 = ref - np.dot(ref, k0) * k0
-    b1 /= np.linalg.norm(b1)
-    return np.column_stack([b1, np.cross(k0, b1), k0])
-
-
-def angle_between(a, b) -> float:
-    """Angle between two vectors, rad, accurate at 0 and π (atan2 of |a×b| and a·b)."""
-    return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
-
-
-def axis_relative_to_earth(k0, e_axis, n, mu, rho0, tau) -> np.ndarray:
-    """Exact direction of the figure axis relative to the Earth at times ``tau`` after release.
-
-    The torque-free closed form of the module docstring: ω0 = ρ0 k0 + n ê, ω3 = ω0·k0,
-    Λ = ω0 + (μ − 1) ω3 k0; the axis turns about Λ at |Λ| in the inertial frame and the Earth
-    turns at n about ê: k(τ) = Rot(ê, −nτ) Rot(Λ̂, |Λ|τ) k0.
-
-    Parameters
-    ----------
-    k0, e_axis : array (3,)
-        Unit initial axis and north part of Earth's axis (ENU).
-    n, mu, rho0 : float
-        Earth rate (rad/s), μ = C/A, relative spin at release (rad/s).
-    tau : array (m,)
-        Seconds since release.
-
-    Returns
-    -------
-    ndarray (m, 3)
-        Unit axis in ENU.
-    """
-    omega0 = rho0 * k0 + n * e_axis
-    Lam = omega0 + (mu - 1.0) * float(np.dot(omega0, k0)) * k0
-    lam = float(np.linalg.norm(Lam))
-    tau = np.atleast_1d(np.asarray(tau, dtype=float))
-    k_in = rotate_about(np.broadcast_to(k0, (tau.size, 3)), Lam / lam, lam * tau) if lam > 0.0 else \
-        np.broadcast_to(k0, (tau.size, 3))
-    return rotate_about(k_in, e_axis, -n * tau)
-
+__all__ = ["FreeGyroscope", "angle_between", "axis_from_alt_az", "axis_relative_to_earth", "body_frame",
+           "equatorial_basis"]
 
 # ----------------------------------------------------------------------------- instrument
 
@@ -221,12 +167,9 @@ class FreeGyroscope(Instrument):
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.mu = self.inertia_ratio
-        self.A = self.transverse_inertia_kg_m2
-        self.C = self.mu * self.A
-        self.rho0 = self.spin_rate_rad_s
-        self.k0 = axis_from_alt_az(math.radians(self.initial_axis_altitude_deg),
-                                   math.radians(self.initial_axis_azimuth_deg))
+        self.C = self.p.inertia_ratio * self.p.transverse_inertia_kg_m2
+        self.k0 = axis_from_alt_az(math.radians(self.p.initial_axis_altitude_deg),
+                                   math.radians(self.p.initial_axis_azimuth_deg))
         self.e_axis = site.earth_axis_north_enu()
         self.eq_m, self.eq_w, _ = equatorial_basis(site)
         self.R0 = body_frame(self.k0)
@@ -257,13 +200,13 @@ class FreeGyroscope(Instrument):
             half-angle between k0 and L (rad).
         """
         n = self.model_rate() if n is None else n
-        omega0 = self.rho0 * self.k0 + n * self.e_axis
+        omega0 = self.p.spin_rate_rad_s * self.k0 + n * self.e_axis
         omega3 = float(np.dot(omega0, self.k0))
-        Lam = omega0 + (self.mu - 1.0) * omega3 * self.k0
+        Lam = omega0 + (self.p.inertia_ratio - 1.0) * omega3 * self.k0
         lam = float(np.linalg.norm(Lam))
         beta = angle_between(self.k0, Lam) if lam > 0.0 else 0.0
         return {"omega0": omega0, "omega3": omega3, "Lambda": Lam, "lam": lam,
-                "sigma": (1.0 - self.mu) * omega3, "beta": beta}
+                "sigma": (1.0 - self.p.inertia_ratio) * omega3, "beta": beta}
 
     # ---------------------------------------------------------------- predictions
     def predictions(self) -> dict:
@@ -293,7 +236,7 @@ class FreeGyroscope(Instrument):
             Rates are signed (the hour angle grows at +n: westward); magnitudes are ≥ 0.
         """
         n = self.model_rate()
-        mu, rho0, th = self.mu, self.rho0, self.theta0
+        mu, rho0, th = self.p.inertia_ratio, self.p.spin_rate_rad_s, self.theta0
         s, c = math.sin(th), math.cos(th)
         k = self.motion_constants(n)
         lam, beta, Lam = k["lam"], k["beta"], k["Lambda"]
@@ -344,42 +287,42 @@ class FreeGyroscope(Instrument):
         (``initial_cos_theta_acceleration_quet_relative_error``: Quet's eq. 9 over the exact value − 1).
         """
         T = self.ZERO_SPIN_HORIZON_S
-        k1 = axis_relative_to_earth(self.k0, self.e_axis, n, self.mu, 0.0, [T])[0]
+        k1 = axis_relative_to_earth(self.k0, self.e_axis, n, self.p.inertia_ratio, 0.0, [T])[0]
         exact = angle_between(self.k0, k1)
         s, c = math.sin(self.theta0), math.cos(self.theta0)
-        lead = 0.5 * abs(self.mu - 1.0) * n * n * s * abs(c) * T * T
-        quet_acc = n * s * s * self.mu * self.rho0
-        full_acc = n * s * s * (self.mu * self.rho0 + (self.mu - 1.0) * n * c)
+        lead = 0.5 * abs(self.p.inertia_ratio - 1.0) * n * n * s * abs(c) * T * T
+        quet_acc = n * s * s * self.p.inertia_ratio * self.p.spin_rate_rad_s
+        full_acc = n * s * s * (self.p.inertia_ratio * self.p.spin_rate_rad_s + (self.p.inertia_ratio - 1.0) * n * c)
         acc_err = quet_acc / full_acc - 1.0 if full_acc != 0.0 else (0.0 if quet_acc == 0.0 else math.inf)
-        worst = 0.25 * abs(self.mu - 1.0) * n * n * T * T          # θ0 = 45°, leading order
+        worst = 0.25 * abs(self.p.inertia_ratio - 1.0) * n * n * T * T          # θ0 = 45°, leading order
         if exact < 1e-12:
-            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.mu:g} "
+            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.p.inertia_ratio:g} "
                     f"Ω is a principal axis and a zero-spin release stays put (departure after 1 h below 1e-12 rad: "
                     f"round-off)")
         else:
-            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.mu:g} "
+            here = (f"for this axis (θ0 = {math.degrees(self.theta0):.6g}° from Earth's north axis) and μ = {self.p.inertia_ratio:g} "
                     f"a zero-spin release leaves its place by {math.degrees(exact):.4g}° in the first hour (leading "
                     f"order ½|μ − 1| n² sin θ0 |cos θ0| t² = {math.degrees(lead):.4g}°)")
         text = (f"sec. 4 §II item 1: released with zero spin the body stays in relative equilibrium (Quet); exact "
                 f"only for μ = 1 or an axis along or across Earth's axis, because the relative vis viva (eq. 2) drops "
                 f"the centrifugal torque (C − A) n² sin θ0 cos θ0: {here}")
-        if self.mu != 1.0:
+        if self.p.inertia_ratio != 1.0:
             text += f"; with this μ an axis at 45° from Earth's axis would leave by {math.degrees(worst):.4g}° in the first hour"
-        if self.rho0 != 0.0 and acc_err != 0.0:
-            text += (f"; with ρ0 = {self.rho0:g} rad/s the same term makes Quet's eq. (9) initial acceleration of "
+        if self.p.spin_rate_rad_s != 0.0 and acc_err != 0.0:
+            text += (f"; with ρ0 = {self.p.spin_rate_rad_s:g} rad/s the same term makes Quet's eq. (9) initial acceleration of "
                      f"cos θ off by {acc_err:+.3g} relative")
         return {"zero_spin_departure_1h_rad": exact, "zero_spin_departure_1h_leading_rad": lead,
                 "initial_cos_theta_acceleration_quet_relative_error": acc_err, "beyond_the_paper": text}
 
-    def scales(self, duration_s) -> dict:
+    def scales(self, duration_s) -> Scales:
         """Scales for effect-size estimates. There is no restoring torque; the free-precession
         (nutation) rate |L|/A stands in for ``restoring_rate_rad_s`` (inf if the body is at rest
         in a non-rotating world), and ``amplitude_rad`` is the nutation radius β."""
         n = self.site.earth_rate_rad_s
         k = self.motion_constants(n)
         lam = k["lam"] if k["lam"] > 0.0 else math.inf
-        return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.rho0) or None,
-                "restoring_rate_rad_s": lam, "amplitude_rad": k["beta"], "duration_s": duration_s}
+        return Scales(earth_rate_rad_s=n, gyro_rate_rad_s=abs(self.p.inertia_ratio * self.p.spin_rate_rad_s) or None,
+                restoring_rate_rad_s=lam, amplitude_rad=k["beta"], duration_s=duration_s)
 
     # ---------------------------------------------------------------- solution paths
     def analytic_state(self, tau) -> np.ndarray:
@@ -413,7 +356,7 @@ class FreeGyroscope(Instrument):
         scalar DOP853 driver (``integrate(method="DOP853-scalar")``): a 7-element state is evaluated
         ~5x faster without numpy's per-call overhead. Euler's equations for A = A, C = μA, and
         q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|."""
-        a = 1.0 - self.mu
+        a = 1.0 - self.p.inertia_ratio
         kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
 
         def f(t, qw, qx, qy, qz, w1, w2, w3):
@@ -451,7 +394,7 @@ class FreeGyroscope(Instrument):
         k_enu = rotate_about(k_in, self.e_axis, -n * tau)
         e, nn, u = k_enu[:, 0], k_enu[:, 1], k_enu[:, 2]
         dm, dw, de = k_enu @ self.eq_m, k_enu @ self.eq_w, k_enu @ self.e_axis
-        ib = np.array([self.A, self.A, self.C])
+        ib = np.array([self.p.transverse_inertia_kg_m2, self.p.transverse_inertia_kg_m2, self.C])
         Lb = wb * ib
         # Attitude relative to the Earth: Rot(ê, −n τ) R.
         Re = quat_to_matrix(quat_from_rotvec(self.e_axis, -n * tau)) @ R
@@ -498,13 +441,13 @@ class FreeGyroscope(Instrument):
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
-        model = model or self.model
+        model = model or self.p.model
         unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
         run = None
         if model != "analytic":
             wb0 = self.R0.T @ self.motion_constants()["omega0"]
             run = integration(self.rhs_scalar(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
-                              method="DOP853-scalar", rtol=self.rtol if rtol is None else rtol, atol=1e-14)
+                              method="DOP853-scalar", rtol=self.p.rtol if rtol is None else rtol, atol=1e-14)
         for t in blocks:
             tau = t - t0
             if run is None:

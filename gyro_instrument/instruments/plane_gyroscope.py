@@ -34,7 +34,7 @@ from gyro_instrument.core.integrate import integrate, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN
+from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN, Scales
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 from gyro_instrument.instruments.observation import SwingRate
@@ -108,21 +108,16 @@ class PlaneGyroscope(Instrument):
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.normal = plane_normal_enu(self.plane, self.normal_enu, site)
+        self.normal = plane_normal_enu(self.p.plane, self.p.normal_enu, site)
         self.frame, self.sin_omega = plane_frame(self.normal, site)
-        self.eps = math.radians(self.cone_half_angle_deg)
-        self.is_cone = self.cone_half_angle_deg < 90.0
-        self.mu = self.inertia_ratio
-        self.A = self.transverse_inertia_kg_m2
-        self.C = self.mu * self.A
-        self.u0 = math.radians(self.initial_angle_deg)
-        self.ud0 = math.radians(self.initial_rate_deg_s)
+        self.is_cone = self.p.cone_half_angle_deg < 90.0
+        self.C = self.p.inertia_ratio * self.p.transverse_inertia_kg_m2
 
     # ---------------------------------------------------------------- predictions
     def _swing_duration_small_s(self, n):
         """Eq. (9) (or the cone form) at Earth rate ``n``."""
-        return swing_duration_small_s(self.mu, n, self.spin_rate_rad_s, self.sin_omega,
-                                      math.sin(self.eps) if self.is_cone else 1.0)
+        return swing_duration_small_s(self.p.inertia_ratio, n, self.p.spin_rate_rad_s, self.sin_omega,
+                                      math.sin(self.p.cone_half_angle_rad) if self.is_cone else 1.0)
 
     def predictions(self) -> dict:
         """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients, for
@@ -131,12 +126,12 @@ class PlaneGyroscope(Instrument):
         ``finite_amplitude`` the small-angle model swings in T0 at any amplitude."""
         n = self.model_earth_rate()
         T0 = self._swing_duration_small_s(n)
-        factor = finite_amplitude_factor(self.u0) if self.has("finite_amplitude") else 1.0
+        factor = finite_amplitude_factor(self.p.initial_angle_rad) if self.has("finite_amplitude") else 1.0
         out = {"sin_omega": self.sin_omega,
                "swing_duration_small_s": T0,
                "swing_duration_s": T0 * factor if math.isfinite(T0) else math.inf,
                "period_s": 2.0 * T0,
-               "conserved_spin_rad_s": self.spin_rate_rad_s + n * self.sin_omega * math.cos(self.u0)}
+               "conserved_spin_rad_s": self.p.spin_rate_rad_s + n * self.sin_omega * math.cos(self.p.initial_angle_rad)}
         T_site = self._swing_duration_small_s(self.site.earth_rate_rad_s)
         rest = " (only the O(n²) centrifugal term acts)" if self.has("centrifugal") else ""
         return with_notes(out, self.missing_effect_note(
@@ -160,26 +155,26 @@ class PlaneGyroscope(Instrument):
         T = self.predictions()["swing_duration_s"]
         if not (math.isfinite(T) and T > 0):
             return None
-        return ExpectedSwing(2.0 * T, abs(self.u0), "inertia_ratio, spin_rate_rad_s, plane and the site's latitude")
+        return ExpectedSwing(2.0 * T, abs(self.p.initial_angle_rad), "inertia_ratio, spin_rate_rad_s, plane and the site's latitude")
 
     def directing_model(self) -> DirectingModel | None:
         """What an estimator may know of this instrument: K = (π/T0)² = gain · n ρ · sin ω(γ), with
         gain = μ (μ / sin ε on a cone) and sin ω from the plane normal (ENU) and the latitude."""
-        gain = self.mu / (math.sin(self.eps) if self.is_cone else 1.0)
+        gain = self.p.inertia_ratio / (math.sin(self.p.cone_half_angle_rad) if self.is_cone else 1.0)
         # The exact equation adds (μ − 1) n² sin² ω to K (module docstring): K/(μρ) = y0 (1 + c2 y0 / ρ)
         # with y0 = n sin ω and c2 = (μ − 1)/μ. Derived for the plane only (ε = 90°).
-        c2 = 0.0 if self.is_cone else (self.mu - 1.0) / self.mu
+        c2 = 0.0 if self.is_cone else (self.p.inertia_ratio - 1.0) / self.p.inertia_ratio
         return DirectingModel(gain=gain, second_order=c2, normal_enu=tuple(float(v) for v in self.normal),
-                              label=self.plane, angle_channel="angle", spin_rate_rad_s=float(self.spin_rate_rad_s),
+                              label=self.p.plane, angle_channel="angle", spin_rate_rad_s=float(self.p.spin_rate_rad_s),
                               null_reason="a directing plane perpendicular to Earth's axis (horizontal at a pole) "
                                           "has no restoring torque (Quet sec. 4 §1 item 4)")
 
-    def scales(self, duration_s) -> dict:
+    def scales(self, duration_s) -> Scales:
         n = self.site.earth_rate_rad_s
         T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
-        return {"earth_rate_rad_s": n, "gyro_rate_rad_s": abs(self.mu * self.spin_rate_rad_s) or None,
-                "restoring_rate_rad_s": math.pi / T0 if math.isfinite(T0) else 0.0,
-                "amplitude_rad": abs(self.u0), "duration_s": duration_s}
+        return Scales(earth_rate_rad_s=n, gyro_rate_rad_s=abs(self.p.inertia_ratio * self.p.spin_rate_rad_s) or None,
+                restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) else 0.0,
+                amplitude_rad=abs(self.p.initial_angle_rad), duration_s=duration_s)
 
     # ---------------------------------------------------------------- models
     def reduced_rhs_scalar(self) -> Callable:
@@ -192,13 +187,13 @@ class PlaneGyroscope(Instrument):
         with p = n sin ω, s = sin u (``finite_amplitude``; u for Quet's small-swing form) and d the
         ``pivot_damping`` rate. Absent effects enter as zero coefficients."""
         p = self.site.earth_rate_rad_s * self.sin_omega
-        mu = self.mu
+        mu = self.p.inertia_ratio
         rot = self.has("earth_rotation")
         a = mu * p if rot else 0.0                                       # eq. (2)
         pr = p if rot else 0.0                                           # eq. (3)
         b = (mu - 1.0) * p * p if self.has("centrifugal") else 0.0       # the dropped O(n²) term
         damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
-        tau_s = self.effect("spin_decay").time_constant_s if self.has("spin_decay") else 0.0
+        tau_s = self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
         decay = 1.0 / tau_s if tau_s else 0.0
         sin, cos = math.sin, math.cos
 
@@ -226,12 +221,12 @@ class PlaneGyroscope(Instrument):
         an optional fixed tilt to the cone, then the rotor's spin hinge."""
         links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)))]
         # Rotor axis along body x; tilt about y by (π/2 − ε) puts it at ε from the normal.
-        tilt = axis_rotation([0.0, 1.0, 0.0], -(math.pi / 2 - self.eps)) if self.is_cone else np.eye(3)
-        links[0].swing_inertia = self.A * (math.sin(self.eps) ** 2 if self.is_cone else 1.0)
-        links.append(Link("rotor", np.array([1.0, 0.0, 0.0]), np.diag([self.C, self.A, self.A]),
+        tilt = axis_rotation([0.0, 1.0, 0.0], -(math.pi / 2 - self.p.cone_half_angle_rad)) if self.is_cone else np.eye(3)
+        links[0].swing_inertia = self.p.transverse_inertia_kg_m2 * (math.sin(self.p.cone_half_angle_rad) ** 2 if self.is_cone else 1.0)
+        links.append(Link("rotor", np.array([1.0, 0.0, 0.0]), np.diag([self.C, self.p.transverse_inertia_kg_m2, self.p.transverse_inertia_kg_m2]),
                           pre_rotation=tilt, spin_inertia=self.C))
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
-        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
+        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values(), self.context)
 
     #: The effects :meth:`reduced_rhs_scalar` is derived for by hand. With any other active effect
     #: (one registered later for a kind this instrument sums) the hinge chain, which sums every
@@ -244,15 +239,15 @@ class PlaneGyroscope(Instrument):
         """(driver, reason): the DOP853 driver a run uses (``integrator``; auto: the scalar driver for
         the reduced model, scipy's for the hinge chain)."""
         if self._model() == "chain":
-            why = "a cone" if self.is_cone else ("an effect outside the reduced equations" if self.model == "reduced"
+            why = "a cone" if self.is_cone else ("an effect outside the reduced equations" if self.p.model == "reduced"
                                                  else "model: chain")
             return "vector", f"the hinge chain ({why}) runs scipy's DOP853 on arrays"
-        if self.integrator != "auto":
-            return self.integrator, "chosen in the scene"
+        if self.p.integrator != "auto":
+            return self.p.integrator, "chosen in the scene"
         return "scalar", "auto: the reduced model's 3 components on Python floats, the fast path (same steps as vector)"
 
     def _model(self, model=None):
-        return "chain" if self.is_cone or not set(self.effects) <= self.REDUCED_EFFECTS else (model or self.model)
+        return "chain" if self.is_cone or not set(self.effects) <= self.REDUCED_EFFECTS else (model or self.p.model)
 
     def simulate(self, t, model=None, **options) -> Simulation:
         """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model
@@ -264,7 +259,7 @@ class PlaneGyroscope(Instrument):
         if t.ndim == 1 and t.size and np.all(np.diff(t) >= 0.0):
             return super().simulate(t, model=model, **options)
         if self._model(model) == "reduced":
-            traj = integrate(self.reduced_rhs(), [self.u0, self.ud0, self.spin_rate_rad_s], t, rtol=self.rtol,
+            traj = integrate(self.reduced_rhs(), [self.p.initial_angle_rad, self.p.initial_rate_rad_s, self.p.spin_rate_rad_s], t, rtol=self.p.rtol,
                              atol=1e-13)
             u, ud, rho = traj.y
             return Simulation(t, {"angle": u, "angle_rate": ud, "spin_rate": rho}, traj, extra={"model": "reduced"})
@@ -281,11 +276,11 @@ class PlaneGyroscope(Instrument):
             return
         model = self._model(model)
         if model == "reduced":
-            y0 = [self.u0, self.ud0, self.spin_rate_rad_s]
-            if self.integrator == "vector":
-                run = integration(self.reduced_rhs(), y0, t0, t_end, rtol=self.rtol, atol=1e-13)
+            y0 = [self.p.initial_angle_rad, self.p.initial_rate_rad_s, self.p.spin_rate_rad_s]
+            if self.p.integrator == "vector":
+                run = integration(self.reduced_rhs(), y0, t0, t_end, rtol=self.p.rtol, atol=1e-13)
             else:
-                run = integration(self.reduced_rhs_scalar(), y0, t0, t_end, method="DOP853-scalar", rtol=self.rtol,
+                run = integration(self.reduced_rhs_scalar(), y0, t0, t_end, method="DOP853-scalar", rtol=self.p.rtol,
                                   atol=1e-13)
             for t in blocks:
                 traj = run.advance(t)
@@ -294,9 +289,9 @@ class PlaneGyroscope(Instrument):
             return
         chain = self.build_chain()
         # ρ = φ̇ + u̇ cos ε (the frame's rate has a component cos ε along a cone axis).
-        cos_eps = math.cos(self.eps) if self.is_cone else 0.0
-        phid0 = self.spin_rate_rad_s - self.ud0 * cos_eps
-        run = integration(chain.rhs, [self.u0, 0.0, self.ud0, phid0], t0, t_end, rtol=self.rtol, atol=1e-13)
+        cos_eps = math.cos(self.p.cone_half_angle_rad) if self.is_cone else 0.0
+        phid0 = self.p.spin_rate_rad_s - self.p.initial_rate_rad_s * cos_eps
+        run = integration(chain.rhs, [self.p.initial_angle_rad, 0.0, self.p.initial_rate_rad_s, phid0], t0, t_end, rtol=self.p.rtol, atol=1e-13)
         for t in blocks:
             traj = run.advance(t)
             u, phi, ud, phid = traj.y

@@ -10,6 +10,7 @@ objects, each given only the effects the scene lists for it.
 import os
 from importlib import resources
 
+from gyro_instrument.core.effect import DEFAULT_ON
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.scene import Scene, apply_overrides, build_scene, read_yaml
@@ -85,41 +86,63 @@ def build_instruments(scene) -> dict:
     return out
 
 
-#: Start of the note for a scene (or instrument) that does not simulate the Earth's rotation.
-NO_EARTH_ROTATION = "earth_rotation is not simulated"
+def not_simulated(effect_name) -> str:
+    """Start of the note for a scene (or instrument) that does not simulate ``effect_name``."""
+    return f"{effect_name} is not simulated"
+
+
+def default_on_effects() -> list:
+    """The registered effect classes a reader assumes simulated (``DEFAULT_ON`` in their
+    ``CAPABILITIES``: the Earth's rotation), in registry order."""
+    return [cls for cls in EFFECTS.values() if DEFAULT_ON in cls.CAPABILITIES]
+
+
+#: Start of the note for a scene (or instrument) that does not simulate the Earth's rotation (the
+#: shipped default-on effect).
+NO_EARTH_ROTATION = not_simulated(default_on_effects()[0].name)
 
 
 def scene_notes(scene) -> list:
     """What the scene leaves out that a reader would assume is there, one sentence each.
 
     ``describe`` (text and ``scene_notes`` in JSON), ``simulate`` (stderr) and ``estimate`` (text
-    and ``scene_notes`` in JSON) all print these. Today one case: the Earth's rotation. A scene in
+    and ``scene_notes`` in JSON) all print these: one per ``DEFAULT_ON`` effect
+    (:func:`default_on_effects`; today the Earth's rotation) that the scene leaves out. A scene in
     which no instrument lists ``earth_rotation`` (a hand-written file without an ``effects:``
     block, or ``--set effects.earth_rotation=null``) is simulated on a non-rotating Earth; one
-    whose instrument leaves it out of its own ``effects:`` list is so for that instrument.
+    whose instrument leaves it out of its own ``effects:`` list is so for that instrument. The
+    words are the effect's own (``ABSENT_MEANS``, ``ABSENT_MEANS_FOR_ONE``, ``UNSUPPORTED_MEANS``).
 
     Returns
     -------
     list of str
     """
-    with_rotation, without, unsupported = [], [], []
+    notes = []
+    for cls in default_on_effects():
+        note = _absent_note(scene, cls)
+        if note:
+            notes.append(note)
+    return notes
+
+
+def _absent_note(scene, cls) -> str | None:
+    """The note for the default-on effect class ``cls`` (:func:`scene_notes`), or None."""
+    effect = cls.name
+    with_it, without, unsupported = [], [], []
     for name, (itype, _params, effect_names) in scene.instruments.items():
-        if "earth_rotation" in effect_names:
-            with_rotation.append(name)
-        elif "earth_rotation" in INSTRUMENTS[itype].SUPPORTED_EFFECTS:
+        if effect in effect_names:
+            with_it.append(name)
+        elif effect in INSTRUMENTS[itype].SUPPORTED_EFFECTS:
             without.append(name)
         else:
             unsupported.append(f"{name} ({itype})")
-    notes = []
-    if not with_rotation:
-        text = (f"{NO_EARTH_ROTATION}: the instruments move as on a non-rotating Earth (n = 0 in the model: "
-                f"no Foucault precession, no gyroscopic directing torque) and the predictions say the same")
+    if not with_it:
+        text = f"{not_simulated(effect)}: {cls.ABSENT_MEANS}"
         if without:
-            text += "; add it with an effects: block in the scene file or --set effects.earth_rotation={}"
+            text += f"; add it with an effects: block in the scene file or --set effects.{effect}={{}}"
         if unsupported:
-            text += f"; {', '.join(unsupported)} ignores the Earth's rotation by design"
-        notes.append(text)
-    elif without:
-        notes.append(f"{NO_EARTH_ROTATION} for {', '.join(without)}: left out of its effects: list, it moves as "
-                     f"on a non-rotating Earth and its predictions assume n = 0")
-    return notes
+            text += f"; {', '.join(unsupported)} {cls.UNSUPPORTED_MEANS}"
+        return text
+    if without:
+        return f"{not_simulated(effect)} for {', '.join(without)}: left out of its effects: list, {cls.ABSENT_MEANS_FOR_ONE}"
+    return None

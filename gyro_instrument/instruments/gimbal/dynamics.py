@@ -36,7 +36,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN
+from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN, bound_hooks
 
 #: Relative residual above which the active effects' rigid-body torques are not c_l L + c_q Q
 #: (the probes are O(1) numbers; a sum of the two exact forms agrees to ~1e-16).
@@ -53,20 +53,20 @@ def _quadratic(I, om):
     return np.cross(om, I @ om)
 
 
-def rigid_body_coefficients(effects) -> tuple | None:
+def rigid_body_coefficients(effects, context=None) -> tuple | None:
     """(c_l, c_q) with Σ rigid_body_torque(I, w, Ω) = c_l L(I, w, Ω) + c_q Ω × IΩ over ``effects``.
 
     Measured on the effects' own terms at fixed O(1) probes (a full inertia tensor, angular
     velocity and frame rate), then checked at two more probes (another state, and Ω tripled so a
     term of another degree in Ω shows). ``earth_rotation`` gives (1, 0), ``centrifugal`` (0, 1),
-    both (1, 1), none (0, 0).
+    both (1, 1), none (0, 0). ``context``: the EffectContext the hooks receive.
 
     Returns
     -------
     tuple of float or None
         None when the sum is not of that form to :data:`_FORM_TOLERANCE` (relative).
     """
-    terms = [e.rigid_body_torque for e in effects if RIGID_BODY in e.MECHANICS]
+    terms = bound_hooks(effects, RIGID_BODY, context)
     I = np.array([[2.0, 0.3, -0.2], [0.3, 1.5, 0.1], [-0.2, 0.1, 1.1]])
 
     def total(w, om):
@@ -89,8 +89,6 @@ def rigid_body_coefficients(effects) -> tuple | None:
     return cl, cq
 
 
-def _hinge_terms(effects, kind, method):
-    return [getattr(e, method) for e in effects if kind in e.MECHANICS]
 
 
 #: Rates (rad/s) at which :func:`linear_hinge_coefficient` checks a hinge torque's linearity.
@@ -122,16 +120,16 @@ class _Floats(tuple):
         return self
 
 
-def _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias):
+def _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias, context=None):
     """:func:`closed_form_rhs`'s arguments as Python floats, flat: (A, C, A1, C1, A2, C2) the
     inertias, (Ox, Oy, Oz) the Earth rate, (c_l, c_q) the coefficients, the effects' damping and
-    spin hinge terms (:func:`_hinge_terms`), and the swinging inertias (J_outer, J_inner)."""
+    spin hinge terms (their hooks with ``context`` bound), and the swinging inertias (J_outer, J_inner)."""
     A, C, A1, C1, A2, C2 = (float(v) for v in inertias)
     Ox, Oy, Oz = (float(v) for v in omega_base)
     cl, cq = (float(v) for v in coefficients)
     effects = list(effects)
-    damp = _hinge_terms(effects, DAMPING, "damping_torque")
-    spin = _hinge_terms(effects, SPIN, "spin_torque")
+    damp = bound_hooks(effects, DAMPING, context)
+    spin = bound_hooks(effects, SPIN, context)
     J_outer, J_inner = (float(v) for v in swing_inertias)
     return A, C, A1, C1, A2, C2, Ox, Oy, Oz, cl, cq, damp, spin, J_outer, J_inner
 
@@ -212,7 +210,8 @@ def _free_rhs(inputs) -> Callable:
     return rhs
 
 
-def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias) -> Callable:
+def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias,
+                    context=None) -> Callable:
     """Right-hand side ``f(t, *y) -> tuple`` of the gimbal on floats, the chain's state layout.
 
     Parameters
@@ -232,6 +231,8 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
         bearing (moment C, rate φ̇), as :func:`~gyro_instrument.instruments.chain.effect_hinge_torques`.
     held_angle : float
         The held ring's angle (Quet's θ or ψ), rad; ignored for ``free``.
+    context : EffectContext, optional
+        What the effects' hooks receive first (``Instrument.context``).
 
     Returns
     -------
@@ -240,7 +241,7 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
         free configuration's also has ``on_array(t, y)`` taking the state as an ndarray (the
         Fortran driver's call, one Python frame less per evaluation).
     """
-    inputs = _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias)
+    inputs = _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias, context)
     (A, C, A1, C1, A2, C2, Ox, Oy, Oz, cl, cq, damp, spin, J_outer, J_inner) = inputs
     a_inner = A + A1
     (kx1, kx2, ky1, ky2, kz0, lx1, lx2, lx3, ly1, ly2, lz1, lz2, qx, qy, qz, q0, u2_s,

@@ -58,29 +58,26 @@ Quet's §V takes the south part, ω = 0, k = n).
 """
 
 import math
-from collections.abc import Iterator
 
 import numpy as np
 
-from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, RIGID_BODY, SPIN
+from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, RIGID_BODY, SPIN, Scales
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
-from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, with_notes
-from gyro_instrument.instruments.chain import HingeChain, Link
-from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs,
-                                                         rigid_body_coefficients)
-from gyro_instrument.instruments.gimbal.theory import (axial_momentum, free_mass_matrix, locked_swing_constant,
-                                                       outer_fixed_swing_constant, quet_energy, quet_swing_durations_s,
+from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, with_notes
+from gyro_instrument.instruments.chain import HingeChain
+from gyro_instrument.instruments.gimbal.dynamics import rigid_body_coefficients
+# The chain and the integrators live in runs (GimbalRuns); ATOL is re-exported here, where it was defined.
+from gyro_instrument.instruments.gimbal.runs import ATOL, GimbalRuns
+from gyro_instrument.instruments.gimbal.theory import (free_mass_matrix, locked_swing_constant,
+                                                       outer_fixed_swing_constant, quet_swing_durations_s,
                                                        spin_invariant, swing_duration_s, swing_inertias_kg_m2)
 from gyro_instrument.instruments.observation import SwingRate
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
 INTEGRATORS = ("auto", "closed_form", "hinge_chain")
 
-#: Absolute tolerance of both integrators (rad, rad/s), as before the closed form existed.
-ATOL = 1e-13
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
 
 #: Default initial swing angle (0.1 rad, as for the directing-plane gyroscope), degrees.
@@ -142,7 +139,7 @@ def scaled_condition(M) -> float:
     return cond if math.isfinite(cond) else math.inf
 
 
-class GimbalGyroscope(Instrument):
+class GimbalGyroscope(GimbalRuns, Instrument):
     """Rotor in two rings, the outer turning about an axis ``PP'`` fixed on the Earth.
 
     See the module docstring for axes, angle conventions and the four periods of
@@ -302,43 +299,37 @@ class GimbalGyroscope(Instrument):
         super().__init__(name, site, full, effects)
         self.check_params(name, self.params)
         self.check_effects(name, self.params, tuple(effects))
-        self.pp_enu = outer_axis_direction_enu(self.outer_axis, self.outer_axis_enu, site)
+        self.pp_enu = outer_axis_direction_enu(self.p.outer_axis, self.p.outer_axis_enu, site)
         self.frame, self.sin_omega = plane_frame(self.pp_enu, site)
         # ω: angle between oz and the south part of Earth's axis (Quet sec. 1 eq. 17).
         self.cos_omega = -float(np.dot(site.earth_axis_north_enu(), self.pp_enu))
         n = site.earth_rate_rad_s
         self.k = n * self.cos_omega
         self.k_prime = n * self.sin_omega
-        self.A = self.transverse_inertia_kg_m2
-        self.C = self.inertia_ratio * self.A
+        self.C = self.p.inertia_ratio * self.p.transverse_inertia_kg_m2
         # Ring moments as given (for predictions of both forms) ...
-        self.A1_given = self.inner_ring_diametral_inertia_kg_m2
-        self.C1_given = 2.0 * self.A1_given if self.inner_ring_axial_inertia_kg_m2 is None \
-            else self.inner_ring_axial_inertia_kg_m2
-        self.A2_given = self.outer_ring_diametral_inertia_kg_m2
-        self.C2_given = 2.0 * self.A2_given if self.outer_ring_axial_inertia_kg_m2 is None \
-            else self.outer_ring_axial_inertia_kg_m2
+        self.C1_given = 2.0 * self.p.inner_ring_diametral_inertia_kg_m2 if self.p.inner_ring_axial_inertia_kg_m2 is None \
+            else self.p.inner_ring_axial_inertia_kg_m2
+        self.C2_given = 2.0 * self.p.outer_ring_diametral_inertia_kg_m2 if self.p.outer_ring_axial_inertia_kg_m2 is None \
+            else self.p.outer_ring_axial_inertia_kg_m2
         # ... and as simulated: massless rings unless ``ring_inertia`` is listed.
-        self.A1 = self.carrier_inertia(self.A1_given)
+        self.A1 = self.carrier_inertia(self.p.inner_ring_diametral_inertia_kg_m2)
         self.C1 = self.carrier_inertia(self.C1_given)
-        self.A2 = self.carrier_inertia(self.A2_given)
+        self.A2 = self.carrier_inertia(self.p.outer_ring_diametral_inertia_kg_m2)
         self.C2 = self.carrier_inertia(self.C2_given)
-        conf = self.configuration
-        self.alpha_fixed = math.radians(self.outer_fixed_angle_deg)
+        conf = self.p.configuration
         if conf == "outer_fixed":
-            self.theta_ref = math.atan2(self.sin_omega * math.cos(self.alpha_fixed), -self.cos_omega)
-            self.outer0 = self.alpha_fixed
-            inner0 = DEFAULT_SWING_DEG if self.initial_inner_angle_deg is None else self.initial_inner_angle_deg
+            self.theta_ref = math.atan2(self.sin_omega * math.cos(self.p.outer_fixed_angle_rad), -self.cos_omega)
+            self.outer0 = self.p.outer_fixed_angle_rad
+            inner0 = DEFAULT_SWING_DEG if self.p.initial_inner_angle_deg is None else self.p.initial_inner_angle_deg
         else:
             self.theta_ref = math.pi / 2
-            self.outer0 = math.radians(DEFAULT_SWING_DEG if self.initial_outer_angle_deg is None
-                                       else self.initial_outer_angle_deg)
-            inner0 = 0.0 if self.initial_inner_angle_deg is None else self.initial_inner_angle_deg
+            self.outer0 = math.radians(DEFAULT_SWING_DEG if self.p.initial_outer_angle_deg is None
+                                       else self.p.initial_outer_angle_deg)
+            inner0 = 0.0 if self.p.initial_inner_angle_deg is None else self.p.initial_inner_angle_deg
         self.inner0 = math.radians(inner0)
-        self.outer_rate0 = math.radians(self.initial_outer_rate_deg_s)
-        self.inner_rate0 = math.radians(self.initial_inner_rate_deg_s)
-        self.rigid_body_coefficients = rigid_body_coefficients(self.effects.values())
-        if self.integrator == "closed_form" and self.rigid_body_coefficients is None:
+        self.rigid_body_coefficients = rigid_body_coefficients(self.effects.values(), self.context)
+        if self.p.integrator == "closed_form" and self.rigid_body_coefficients is None:
             raise SceneError(f"{name}.integrator", "closed_form",
                              "needs rigid-body effect terms of first and second order in the Earth rate "
                              "(earth_rotation, centrifugal); use auto or hinge_chain with these effects")
@@ -349,7 +340,7 @@ class GimbalGyroscope(Instrument):
         T = self.predictions()["swing_duration_small_s"]
         if not (math.isfinite(T) and T > 0):
             return None
-        amp = self.outer0 if self.configuration != "outer_fixed" else self.inner0
+        amp = self.outer0 if self.p.configuration != "outer_fixed" else self.inner0
         return ExpectedSwing(2.0 * T, abs(amp), "configuration, the inertias, spin_rate_rad_s and the site's latitude")
 
     def directing_model(self) -> DirectingModel | None:
@@ -360,21 +351,21 @@ class GimbalGyroscope(Instrument):
         A + 2A1 + A2 for thin rings), s = sin ω of PP' (T, T', T'''). ``outer_fixed``: the inner ring
         swings in the plane normal to NN' with inertia A + A1 (T'').
         """
-        if self.configuration == "locked":
+        if self.p.configuration == "locked":
             normal = self.pp_enu
-            gain = self.C / (self.A + self.C1 + self.A2)
-            label = {"vertical": "horizontal", "east_west": "meridian"}.get(self.outer_axis, self.outer_axis)
+            gain = self.C / (self.p.transverse_inertia_kg_m2 + self.C1 + self.A2)
+            label = {"vertical": "horizontal", "east_west": "meridian"}.get(self.p.outer_axis, self.p.outer_axis)
             chan = "outer_angle"
-        elif self.configuration == "outer_fixed":
+        elif self.p.configuration == "outer_fixed":
             psi = self.outer0 + math.pi / 2
             normal = self.frame @ np.array([math.cos(psi), math.sin(psi), 0.0])
-            gain = self.C / (self.A + self.A1)
+            gain = self.C / (self.p.transverse_inertia_kg_m2 + self.A1)
             label = "meridian" if abs(normal[0]) > 1 - 1e-9 else "outer_fixed"
             chan = "inner_angle"
         else:
             return None
         return DirectingModel(gain=gain, normal_enu=tuple(float(v) for v in normal), label=label, angle_channel=chan,
-                              spin_rate_rad_s=float(self.spin_rate_rad_s),
+                              spin_rate_rad_s=float(self.p.spin_rate_rad_s),
                               null_reason="the swing plane is perpendicular to Earth's axis here: no restoring torque")
 
     # ---------------------------------------------------------------- geometry helpers
@@ -391,7 +382,7 @@ class GimbalGyroscope(Instrument):
     def swing_plane_rate_rad_s(self) -> float:
         """n times the projection of Earth's axis on the plane of the inner swing (outer_fixed):
         m = n √(cos² ω + sin² ω cos² α); n for Quet's α = 0, whatever PP'."""
-        return self.site.earth_rate_rad_s * math.hypot(self.cos_omega, self.sin_omega * math.cos(self.alpha_fixed))
+        return self.site.earth_rate_rad_s * math.hypot(self.cos_omega, self.sin_omega * math.cos(self.p.outer_fixed_angle_rad))
 
     # ---------------------------------------------------------------- predictions
     def predictions(self) -> dict:
@@ -430,11 +421,11 @@ class GimbalGyroscope(Instrument):
         f = 1.0 if rotating else 0.0
         n = self.site.earth_rate_rad_s * f
         k, k_prime = self.k * f, self.k_prime * f
-        A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
-        rho0 = self.spin_rate_rad_s
+        A, C, A1, C1, A2 = self.p.transverse_inertia_kg_m2, self.C, self.A1, self.C1, self.A2
+        rho0 = self.p.spin_rate_rad_s
         cos_g = math.cos(self.site.latitude_rad)
         J_quet, J_thick, J_fixed = swing_inertias_kg_m2(A, A1, C1, A2)
-        out = {"configuration": self.configuration, "sin_omega": self.sin_omega, "cos_omega": self.cos_omega,
+        out = {"configuration": self.p.configuration, "sin_omega": self.sin_omega, "cos_omega": self.cos_omega,
                "k_rad_s": k, "k_prime_rad_s": k_prime,
                "inertia_locked_quet_kg_m2": J_quet, "inertia_locked_kg_m2": J_thick,
                "inertia_outer_fixed_kg_m2": J_fixed}
@@ -443,17 +434,17 @@ class GimbalGyroscope(Instrument):
         out["conserved_spin_rad_s"] = float(spin_invariant(rho0, theta0, psi0, k, k_prime))
         out["inner_reference_rad"] = self.theta_ref
         out["outer_reference_rad"] = math.pi / 2
-        conf = self.configuration
+        conf = self.p.configuration
         applies, Tq, Ts, Te = None, math.nan, math.nan, math.nan
         if conf == "locked":
-            applies = {"vertical": "T'", "east_west": "T'''"}.get(self.outer_axis, "T")
+            applies = {"vertical": "T'", "east_west": "T'''"}.get(self.p.outer_axis, "T")
             Tq, Ts = out["T_quet_s"], out["T_thick_s"]
             rho_eq = rho0 + k_prime * (math.cos(self.outer0) - 1.0)
             K = locked_swing_constant(A, C, C1, A2, self.C2, k_prime, rho_eq)
             Te = math.pi / math.sqrt(K) if K > 0 else math.inf
         elif conf == "outer_fixed":
             m = self.swing_plane_rate_rad_s() * f
-            applies = "T''" if self.alpha_fixed == 0.0 else "T'' (generalised)"
+            applies = "T''" if self.p.outer_fixed_angle_rad == 0.0 else "T'' (generalised)"
             Tq = Ts = swing_duration_s(J_fixed, C, m, rho0)
             rho_eq = rho0 + m * (math.cos(self.inner0) - 1.0)
             K = outer_fixed_swing_constant(A, C, A1, C1, m, rho_eq)
@@ -470,57 +461,24 @@ class GimbalGyroscope(Instrument):
                                          if rho0 != 0.0 and s0 != 0.0 else math.inf)
         return out
 
-    def scales(self, duration_s) -> dict:
+    def scales(self, duration_s) -> Scales:
         """Characteristic scales for ``Effect.relative_size``: swing and gyroscopic rates, ring ratio
         (those of the rotating Earth, whether or not ``earth_rotation`` is listed)."""
         pred = self._predictions(True)
-        conf = self.configuration
+        conf = self.p.configuration
         if conf == "outer_fixed":
-            J = self.A + self.A1
-            ring_ratio = self.A1_given / self.A
+            J = self.p.transverse_inertia_kg_m2 + self.A1
+            ring_ratio = self.p.inner_ring_diametral_inertia_kg_m2 / self.p.transverse_inertia_kg_m2
             amp = abs(self.inner0)
         else:
-            J = self.A + self.C1 + self.A2
-            ring_ratio = (self.C1_given + self.A2_given) / self.A
+            J = self.p.transverse_inertia_kg_m2 + self.C1 + self.A2
+            ring_ratio = (self.C1_given + self.p.outer_ring_diametral_inertia_kg_m2) / self.p.transverse_inertia_kg_m2
             amp = abs(self.outer0)
         T0 = pred["swing_duration_small_s"]
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s,
-                "gyro_rate_rad_s": abs(self.C * self.spin_rate_rad_s / J) or None,
-                "restoring_rate_rad_s": math.pi / T0 if math.isfinite(T0) and T0 > 0 else 0.0,
-                "ring_inertia_ratio": ring_ratio, "amplitude_rad": amp, "duration_s": duration_s}
-
-    # ---------------------------------------------------------------- model
-    def swing_inertias(self) -> tuple:
-        """(J_outer, J_inner): A + C1 + A2 about PP' (rings perpendicular) and A + A1 about NN', kg m²."""
-        _, J_thick, J_fixed = swing_inertias_kg_m2(self.A, self.A1, self.C1, self.A2)
-        return J_thick, J_fixed
-
-    def build_chain(self) -> HingeChain:
-        """Hinge chain outer ring (about oz) → inner ring (about NN') → rotor (about oQ).
-
-        ``pivot_damping`` puts −(2/τ) J q̇ on the outer and inner hinges with the constant swing
-        inertias of :meth:`swing_inertias` (small swings decay as e^(−t/τ)); ``spin_decay`` puts
-        −C φ̇ / τ on the rotor bearing (φ̇ the rotor's rate relative to the inner ring; an internal
-        torque, so it enters the rotor's equation only).
-        """
-        conf = self.configuration
-        links = [
-            Link("outer_ring", np.array([0.0, 0.0, 1.0]), np.diag([self.A2, self.C2, self.A2]),
-                 locked=(conf == "outer_fixed"), locked_angle=self.alpha_fixed + math.pi / 2),
-            Link("inner_ring", np.array([1.0, 0.0, 0.0]), np.diag([self.A1, self.C1, self.A1]),
-                 locked=(conf == "locked"), locked_angle=math.pi / 2),
-            Link("rotor", np.array([0.0, 0.0, 1.0]), np.diag([self.A, self.A, self.C]), spin_inertia=self.C),
-        ]
-        links[0].swing_inertia, links[1].swing_inertia = self.swing_inertias()
-        g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
-        return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values())
-
-    def initial_state(self, chain) -> np.ndarray:
-        """y0 = [q_free, q̇_free] at release: ψ0, θ0, φ0 = 0, ψ̇0, θ̇0, φ̇0 = ρ0 − ψ̇0 cos θ0."""
-        q = np.array([self.psi0, self.theta0, 0.0])
-        qd = np.array([self.outer_rate0, self.inner_rate0,
-                       self.spin_rate_rad_s - self.outer_rate0 * math.cos(self.theta0)])
-        return np.concatenate([q[chain.free], qd[chain.free]])
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s,
+                gyro_rate_rad_s=abs(self.C * self.p.spin_rate_rad_s / J) or None,
+                restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) and T0 > 0 else 0.0,
+                ring_inertia_ratio=ring_ratio, amplitude_rad=amp, duration_s=duration_s)
 
     def integrator_choice(self) -> tuple:
         """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why.
@@ -528,147 +486,13 @@ class GimbalGyroscope(Instrument):
         ``closed_form`` (:mod:`.dynamics`) whenever the active effects' rigid-body terms are
         c_l L + c_q Ω × IΩ (:func:`~.dynamics.rigid_body_coefficients`: true of every registered
         effect); ``hinge_chain`` otherwise, or when the scene asks for it."""
-        if self.integrator == "hinge_chain":
+        if self.p.integrator == "hinge_chain":
             return "hinge_chain", "chosen in the scene"
         if self.rigid_body_coefficients is None:
             return "hinge_chain", ("auto: an active effect's rigid-body terms are not the Earth rate's first- and "
                                    "second-order terms, which only the generic chain sums")
-        why = "chosen in the scene" if self.integrator == "closed_form" else \
+        why = "chosen in the scene" if self.p.integrator == "closed_form" else \
             "auto: the effects' terms fit the closed form (18-75x less CPU than the chain at the same rtol)"
         return "closed_form", why
 
-    def closed_form(self, chain) -> tuple:
-        """(rhs, y0) of :func:`~.dynamics.closed_form_rhs` for this gimbal, in ``chain``'s state layout."""
-        held = {"locked": chain.links[1].locked_angle, "outer_fixed": chain.links[0].locked_angle}
-        rhs = closed_form_rhs(self.configuration, (self.A, self.C, self.A1, self.C1, self.A2, self.C2),
-                              chain.omega_base, self.rigid_body_coefficients, self.effects.values(),
-                              held.get(self.configuration, 0.0), self.swing_inertias())
-        return rhs, [float(v) for v in self.initial_state(chain)]
 
-    def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
-        """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
-        DOP853 (:class:`~.dynamics.ClosedFormRun`) for the free rings, whose nutation takes tens of
-        steps per sample; scipy's DOP853 with dense output (:class:`~.dynamics.DenseRun`) for the
-        slow locked and outer-fixed swings, whose steps cover many samples (``gyro-instrument bench``,
-        realtime.csv: the work-precision rows of both drivers)."""
-        run = ClosedFormRun if self.configuration == "free" else DenseRun
-        return run(*self.closed_form(chain), t0, self.rtol, ATOL)
-
-    def simulate(self, t) -> Simulation:
-        """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
-
-        Parameters
-        ----------
-        t : array_like
-            Increasing sample times, s.
-
-        Returns
-        -------
-        Simulation
-            ``columns`` as in ``COLUMNS``; ``extra`` holds ``psi``, ``theta`` (Quet's angles,
-            rad), ``rotor_joint_rate`` (φ̇, rad/s) and the ``chain``. ``trajectory.meta`` names
-            the ``integrator`` and why (:meth:`integrator_choice`).
-
-        Raises
-        ------
-        IntegrationError
-            When the integrator fails (a step size below round-off).
-        """
-        t = np.asarray(t, dtype=float)
-        chain = self.build_chain()
-        choice, why = self.integrator_choice()
-        if choice == "hinge_chain":
-            traj = integrate(chain.rhs, self.initial_state(chain), t, rtol=self.rtol, atol=ATOL)
-            traj.meta.update(integrator=choice, reason=why)
-            return self._simulation(traj.t, traj.y, traj, chain)
-        run = self.closed_form_run(chain, t[0])
-        span = float(t[-1] - t[0]) or 1.0
-        y = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
-        return self._simulation(t, y, self._trajectory(run, t, y, why), chain)
-
-    def stream(self, blocks, **options) -> Iterator[Simulation]:
-        """:meth:`simulate` block by block (see :meth:`Instrument.stream`).
-
-        With the closed form, one run (:meth:`closed_form_run`) advances over the blocks, its steps
-        never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
-        concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
-        ``hinge_chain`` (the reference) integrates the whole run at once and slices it.
-        """
-        choice, why = self.integrator_choice()
-        if choice == "hinge_chain":
-            yield from super().stream(blocks, **options)
-            return
-        chain, run = self.build_chain(), None
-        for b in blocks:
-            b = np.asarray(b, dtype=float)
-            if run is None:
-                if b.size == 0:
-                    continue
-                run = self.closed_form_run(chain, b[0])
-            y = run.advance(b)
-            yield self._simulation(b, y, self._trajectory(run, b, y, why), chain)
-
-    def _trajectory(self, run, t, y, why) -> Trajectory:
-        return Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
-                          dict(run.meta, integrator="closed_form", reason=why))
-
-    def _simulation(self, t, y, traj, chain) -> Simulation:
-        """Columns and Quet's angles from states ``y`` (chain layout, shape (2 nf, m))."""
-        nf = chain.nf
-        m = y.shape[1]
-        q = np.array([[L.locked_angle] * m for L in chain.links], dtype=float)
-        qd = np.zeros((3, m))
-        q[chain.free] = y[:nf]
-        qd[chain.free] = y[nf:]
-        psi, theta, phi = q
-        psid, thetad, phid = qd
-        rho = phid + psid * np.cos(theta)
-        cols = {"outer_angle": psi - math.pi / 2, "inner_angle": theta - self.theta_ref, "rotor_angle": phi,
-                "outer_rate": psid, "inner_rate": thetad, "spin_rate": rho}
-        return Simulation(t, cols, traj, extra={"psi": psi, "theta": theta, "rotor_joint_rate": phid, "chain": chain})
-
-    def mass_matrix(self, chain, qf) -> np.ndarray:
-        """Mass matrix M(q) of the free coordinates (Kane: M_ab = Σ_k P_kaᵀ I_k P_kb), kg m².
-
-        For the free configuration, from eq. (12, first), M = [[u² + C cos²θ, 0, C cos θ],
-        [0, a, 0], [C cos θ, 0, C]] in (ψ, θ, φ), so det M = a C u² with u² ≥ A1 + A2: the
-        rings keep M regular at gimbal lock (θ → 0), where massless rings give a C A sin²θ → 0.
-        """
-        q, qd = chain.full_coordinates(np.asarray(qf, dtype=float), np.zeros(chain.nf))
-        _, _, _, P = chain.kinematics(q, qd)
-        M = np.zeros((chain.nf, chain.nf))
-        for k, L in enumerate(chain.links):
-            for a, j in enumerate(chain.free):
-                for b, i in enumerate(chain.free):
-                    if j <= k and i <= k:
-                        M[a, b] += P[k][j] @ L.inertia @ P[k][i]
-        return M
-
-    # ---------------------------------------------------------------- invariants
-    def invariants(self, sim) -> dict:
-        """Quet's integrals along a simulation (arrays over the samples).
-
-        Returns
-        -------
-        dict
-            ``spin_13_rad_s``: eq. (13), ρ − k cos θ + k' sin θ sin ψ; ``energy_12_J``: eq. (12,
-            first), a θ̇² + u²ψ̇² + Cρ² (twice the relative kinetic energy); ``jacobi_J``: the
-            exact integral T_rel − ½ Σ Ωᵀ I Ω (J); ``axial_momentum_kg_m2_s``: §V eq. (2, second)
-            (conserved when k' = 0).
-        """
-        psi, theta = sim.extra["psi"], sim.extra["theta"]
-        c = sim.columns
-        A, C, A1, C1, A2 = self.A, self.C, self.A1, self.C1, self.A2
-        e12 = quet_energy(theta, c["inner_rate"], c["outer_rate"], c["spin_rate"], A, C, A1, C1, A2)
-        chain = sim.extra["chain"]
-        om = chain.omega_base
-        t0 = np.empty_like(e12)
-        for i in range(e12.size):
-            qf = np.array([psi[i], theta[i], 0.0])[chain.free]
-            Bs = chain.orientations(chain.full_coordinates(qf, np.zeros(chain.nf))[0])
-            t0[i] = 0.5 * sum((B.T @ om) @ L.inertia @ (B.T @ om) for B, L in zip(Bs, chain.links))
-        return {"spin_13_rad_s": spin_invariant(c["spin_rate"], theta, psi, self.k, self.k_prime),
-                "energy_12_J": e12,
-                "jacobi_J": 0.5 * e12 - t0,
-                "axial_momentum_kg_m2_s": axial_momentum(theta, c["outer_rate"], c["spin_rate"], self.k,
-                                                         A, C, A1, C1, A2)}

@@ -7,21 +7,18 @@ small-angle or other approximation, so there is nothing to switch on or off.
 """
 
 import math
-from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from gyro_instrument.core.angles import NumpyUnwrapper
+from gyro_instrument.core.effect import Scales
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.integrate import integration
 from gyro_instrument.core.params import PairParam, Param
-from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
-from gyro_instrument.core.site import compass_azimuth_from_enu
-from gyro_instrument.instruments.base import Column, Instrument, Simulation, run_span
+from gyro_instrument.instruments.base import Column, Instrument
 from gyro_instrument.instruments.observation import RotorObservation
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics, contact_dynamics_general
 from gyro_instrument.instruments.puiseux.general import (GeneralModes, general_modes, inertia_conjugacy,
                                                          linear_rotation, normal_frame)
+from gyro_instrument.instruments.puiseux.runs import ContactRuns
 from gyro_instrument.instruments.puiseux.surface import EllipsoidSurface, GeneralEllipsoidSurface
 from gyro_instrument.instruments.puiseux.theory import (classify_coefficients, critical_spin_general_rad_s,
                                                         critical_spin_rad_s, curvature_coefficients,
@@ -34,7 +31,7 @@ SHAPE_KEYS = {"semi_axes_m": ("ellipsoid",), "curvature_radii_m": ("curvature", 
               "com_height_m": ("curvature", "general"), **{k: ("general",) for k in GENERAL_ANGLES}}
 
 
-class PuiseuxBody(Instrument):
+class PuiseuxBody(ContactRuns, Instrument):
     """Heavy body spun on a smooth horizontal plane (Puiseux 1852): exact rigid-body model.
 
     World frame ENU (x east, y north, z up); the azimuths are compass azimuths (0 north,
@@ -192,43 +189,37 @@ class PuiseuxBody(Instrument):
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
-        self.g = float(site.gravity_m_s2)
-        self.M = float(self.mass_kg)
-        if self.shape == "ellipsoid":
-            self.alpha, self.beta, self.gamma = self.semi_axes_m
+        if self.p.shape == "ellipsoid":
+            self.alpha, self.beta, self.gamma = self.p.semi_axes_m
             self.rho = self.alpha ** 2 / self.gamma
             self.rho_prime = self.beta ** 2 / self.gamma
             self.delta = 0.0
-            self.surface = EllipsoidSurface(self.semi_axes_m)
-            self.inertia = (homogeneous_inertia(self.M, self.semi_axes_m) if self.homogeneous
-                            else tuple(self.inertia_kg_m2))
-        elif self.shape == "curvature":
-            self.rho, self.rho_prime = self.curvature_radii_m
-            self.gamma = float(self.com_height_m)
-            self.delta = math.radians(self.curvature_angle_deg)
+            self.surface = EllipsoidSurface(self.p.semi_axes_m)
+            self.inertia = (homogeneous_inertia(self.p.mass_kg, self.p.semi_axes_m) if self.p.homogeneous
+                            else tuple(self.p.inertia_kg_m2))
+        elif self.p.shape == "curvature":
+            self.rho, self.rho_prime = self.p.curvature_radii_m
+            self.gamma = float(self.p.com_height_m)
+            self.delta = math.radians(self.p.curvature_angle_deg)
             self.surface = EllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.delta)
-            self.inertia = tuple(self.inertia_kg_m2)
+            self.inertia = tuple(self.p.inertia_kg_m2)
         else:
-            self.rho, self.rho_prime = self.curvature_radii_m
-            self.gamma = float(self.com_height_m)
+            self.rho, self.rho_prime = self.p.curvature_radii_m
+            self.gamma = float(self.p.com_height_m)
             self.delta = None
-            self.P = normal_frame(*(math.radians(getattr(self, k)) for k in GENERAL_ANGLES))
+            self.P = normal_frame(*(math.radians(getattr(self.p, k)) for k in GENERAL_ANGLES))
             self.surface = GeneralEllipsoidSurface.osculating(self.rho, self.rho_prime, self.gamma, self.P)
-            self.inertia = tuple(self.inertia_kg_m2)
-        self.general = self.shape == "general"
+            self.inertia = tuple(self.p.inertia_kg_m2)
+        self.general = self.p.shape == "general"
         self.dynamics = contact_dynamics_general if self.general else contact_dynamics
         #: the body line GA (upward at rest) in body axes
         self.u_body = self.P[2] if self.general else np.array([0.0, 0.0, 1.0])
-        if self.spin_rate_rad_s is not None:
-            self.r0 = float(self.spin_rate_rad_s)
-        elif self.spin_rate_turn_s is not None:
-            self.r0 = TWO_PI * float(self.spin_rate_turn_s)
+        if self.p.spin_rate_rad_s is not None:
+            self.r0 = float(self.p.spin_rate_rad_s)
+        elif self.p.spin_rate_turn_s is not None:
+            self.r0 = TWO_PI * float(self.p.spin_rate_turn_s)
         else:
             self.r0 = 0.0
-        self.theta0 = math.radians(self.initial_tilt_deg)
-        self.azimuth0 = math.radians(self.initial_tilt_azimuth_deg)
-        self.thetadot0 = math.radians(self.initial_tilt_rate_deg_s)
-        self.azimuthdot0 = math.radians(self.initial_azimuth_rate_deg_s)
 
     # ---------------------------------------------------------------- predictions
     def coefficients(self, r=None) -> tuple:
@@ -245,9 +236,9 @@ class PuiseuxBody(Instrument):
                              "(shape ellipsoid or curvature); the general body (sec. III) has modes()")
         A, B, C = self.inertia
         r = self.r0 if r is None else r
-        if self.shape == "ellipsoid":
-            return (*ellipsoid_coefficients(A, B, C, self.M, self.g, r, self.alpha, self.beta, self.gamma), 0.0)
-        return curvature_coefficients(A, B, C, self.M, self.g, r, self.rho, self.rho_prime, self.gamma,
+        if self.p.shape == "ellipsoid":
+            return (*ellipsoid_coefficients(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, r, self.alpha, self.beta, self.gamma), 0.0)
+        return curvature_coefficients(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, r, self.rho, self.rho_prime, self.gamma,
                                       self.delta)
 
     def predictions(self) -> dict:
@@ -270,7 +261,7 @@ class PuiseuxBody(Instrument):
         A, B, C = self.inertia
         D, E, F, G = self.coefficients()
         v = classify_coefficients(A, B, D, E, F, G)
-        rcrit = critical_spin_general_rad_s(A, B, C, self.M, self.g, self.rho, self.rho_prime, self.gamma,
+        rcrit = critical_spin_general_rad_s(A, B, C, self.p.mass_kg, self.context.gravity_m_s2, self.rho, self.rho_prime, self.gamma,
                                             self.delta)
         out = {
             "omega_sq_rad2_s2": v.omega_sq,
@@ -286,8 +277,8 @@ class PuiseuxBody(Instrument):
             "rho_prime_m": self.rho_prime,
             "spin_rate_rad_s": self.r0,
         }
-        if self.shape == "ellipsoid" and self.homogeneous:
-            rc = critical_spin_rad_s(self.alpha, self.beta, self.gamma, self.g)
+        if self.p.shape == "ellipsoid" and self.p.homogeneous:
+            rc = critical_spin_rad_s(self.alpha, self.beta, self.gamma, self.context.gravity_m_s2)
             out["critical_spin_closed_form_rad_s"] = rc
             out["critical_spin_closed_form_turn_s"] = rc / TWO_PI
         y0 = self.initial_state()
@@ -304,7 +295,7 @@ class PuiseuxBody(Instrument):
     # ---------------------------------------------------------------- sec. III
     def modes(self) -> "GeneralModes":
         """:class:`~gyro_instrument.instruments.puiseux.general.GeneralModes` of the general body."""
-        return general_modes(self.inertia, self.M, self.g, self.rho, self.rho_prime, self.gamma, self.P)
+        return general_modes(self.inertia, self.p.mass_kg, self.context.gravity_m_s2, self.rho, self.rho_prime, self.gamma, self.P)
 
     def linear_initial_conditions(self) -> tuple:
         """φ(0), φ̇(0): rotation vector from the rest orientation and body rate, body axes (general body).
@@ -313,7 +304,7 @@ class PuiseuxBody(Instrument):
         Pᵀ θ0 (−cos az, sin az, 0) in body axes; the rate is the exact initial body rate (first order
         in the small velocities, φ̇ = w).
         """
-        tilt = self.theta0 * np.array([-math.cos(self.azimuth0), math.sin(self.azimuth0), 0.0])
+        tilt = self.p.initial_tilt_rad * np.array([-math.cos(self.p.initial_tilt_azimuth_rad), math.sin(self.p.initial_tilt_azimuth_rad), 0.0])
         return self.P.T @ tilt, self.initial_state()[4:]
 
     def linear_prediction(self, t, modes=None) -> dict:
@@ -420,181 +411,14 @@ class PuiseuxBody(Instrument):
             out["notes"] = notes
         return out
 
-    def scales(self, duration_s) -> dict:
+    def scales(self, duration_s) -> Scales:
         """Characteristic scales: spin, small-tilt restoring rate at rest, amplitude, duration."""
         A, B, _ = self.inertia
-        w0 = math.sqrt(self.M * self.g * min(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma))
+        w0 = math.sqrt(self.p.mass_kg * self.context.gravity_m_s2 * min(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma))
                        / max(A, B))
-        return {"earth_rate_rad_s": self.site.earth_rate_rad_s, "gyro_rate_rad_s": abs(self.r0) or None,
-                "restoring_rate_rad_s": w0, "amplitude_rad": self.theta0, "duration_s": duration_s}
-
-    # ---------------------------------------------------------------- model
-    def initial_state(self) -> np.ndarray:
-        """State [q_w, q_x, q_y, q_z, w_x, w_y, w_z] at t = 0 (quaternion body -> ENU, w in body axes).
-
-        At rest the body's axes lie along ENU (ellipsoid, curvature) or, for the general body, its
-        normal frame A-xi, A-eta, A-zeta does (so GA is vertical); then it is tilted and set moving as
-        the class docstring says, the line GA (= Gz but for the general body) playing the axis.
-        """
-        th, az = self.theta0, self.azimuth0
-        # axis u in ENU, leaning toward compass azimuth az: (sin az, cos az) horizontally
-        e_th = np.array([math.cos(th) * math.sin(az), math.cos(th) * math.cos(az), -math.sin(th)])
-        e_az = np.array([math.cos(az), -math.sin(az), 0.0])  # direction of increasing compass azimuth
-        u = np.array([math.sin(th) * math.sin(az), math.sin(th) * math.cos(az), math.cos(th)])
-        udot = self.thetadot0 * e_th + self.azimuthdot0 * math.sin(th) * e_az
-        w_world = self.r0 * u + np.cross(u, udot)
-        # rotation by th about e_z x u / |...| = (-cos az, sin az, 0) (horizontal, perpendicular to az)
-        axis = np.array([-math.cos(az), math.sin(az), 0.0])
-        q = np.concatenate([[math.cos(th / 2)], math.sin(th / 2) * axis])
-        R = rotation_matrix(q)
-        if self.general:
-            R = R @ self.P                      # body -> normal frame (eq. 17) -> tilted ENU
-            q = quat_from_matrix(R)
-        return np.concatenate([q, R.T @ w_world])
-
-    def rest_quaternion(self) -> np.ndarray:
-        """Orientation at rest (GA vertical, no turn), body -> ENU: identity but for the general body."""
-        return quat_from_matrix(self.P) if self.general else np.array([1.0, 0.0, 0.0, 0.0])
-
-    def contact_points_body(self, n) -> np.ndarray:
-        """Contact point x_P = −∇h(n) in body axes (from G), m, shape (3, m), for verticals n (3, m)."""
-        n = np.asarray(n, dtype=float)
-        if self.general:
-            return self.surface.contact_point(n)
-        sf = self.surface
-        sx, sy, sz = sf.sxx * n[0] + sf.sxy * n[1], sf.sxy * n[0] + sf.syy * n[1], sf.szz * n[2]
-        s = np.sqrt(n[0] * sx + n[1] * sy + n[2] * sz)
-        return -np.array([sx / s, sy / s, sz / s - sf.cz])
-
-    def rhs(self) -> Callable:
-        """Right-hand side f(t, y) of the exact model (:mod:`.dynamics`)."""
-        surf, inertia, M, g = self.surface, self.inertia, self.M, self.g
-        sqrt = math.sqrt
-        contact_dynamics = self.dynamics
-
-        def f(t, y):
-            qdot, wdot, *_ = contact_dynamics(y, surf, inertia, M, g, sqrt)
-            return np.array([*qdot, *wdot])
-        return f
-
-    def diagnostics(self, y) -> dict:
-        """Derived quantities along a state history ``y`` (shape (7, m)).
-
-        Returns
-        -------
-        dict of ndarray
-            ``n`` (3, m) vertical in body axes, ``axis_enu`` (3, m), ``com_height_m``,
-            ``com_velocity_m_s`` (ż), ``normal_force_N``, ``energy_J``,
-            ``angular_momentum_vertical_kg_m2_s`` (n·Iw), ``quaternion_norm``.
-        """
-        y = np.asarray(y, dtype=float)
-        _, _, N, h, zdot, n = self.dynamics(y, self.surface, self.inertia, self.M, self.g, np.sqrt)
-        q = y[:4]
-        qn2 = np.sum(q * q, axis=0)
-        qw, qx, qy, qz = q
-        axis = np.array([2.0 * (qx * qz + qw * qy), 2.0 * (qy * qz - qw * qx), qw * qw - qx * qx - qy * qy + qz * qz]) / qn2
-        if self.general:                        # the line GA, not Gz
-            axis = np.einsum("mij,j->im", quat_to_matrix(q.T), self.u_body)
-        A, B, C = self.inertia
-        w = y[4:]
-        rot = 0.5 * (A * w[0] ** 2 + B * w[1] ** 2 + C * w[2] ** 2)
-        energy = 0.5 * self.M * zdot ** 2 + rot + self.M * self.g * h
-        lz = n[0] * A * w[0] + n[1] * B * w[1] + n[2] * C * w[2]
-        return {"n": np.array(n), "axis_enu": axis, "com_height_m": h, "com_velocity_m_s": zdot,
-                "normal_force_N": N, "energy_J": energy, "angular_momentum_vertical_kg_m2_s": lz,
-                "quaternion_norm": np.sqrt(qn2)}
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=abs(self.r0) or None,
+                restoring_rate_rad_s=w0, amplitude_rad=self.p.initial_tilt_rad, duration_s=duration_s)
 
     STREAMS = True
 
-    def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
-        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]): one block of
-        :meth:`stream`.
 
-        Returns
-        -------
-        Simulation
-            Columns as in ``COLUMNS``; ``extra`` holds ``energy_J``,
-            ``angular_momentum_vertical_kg_m2_s``, ``quaternion_norm``, ``normal_force_N``,
-            ``min_normal_force_N`` (negative: the body would leave the plane, outside the model)
-            and ``state`` (7, m).
-        """
-        return super().simulate(t, rtol=rtol, atol=atol, **options)
-
-    def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
-        """Block by block (:meth:`Instrument.stream`): one DOP853 step sequence bounded by the run's
-        end, carried across blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn
-        about the vertical is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the
-        block's minimum."""
-        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
-        if t0 is None:
-            return
-        run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
-                          rtol=self.rtol if rtol is None else rtol, atol=atol)
-        carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
-        for t in blocks:
-            traj = run.advance(t)
-            d = self.diagnostics(traj.y)
-            n, axis = d["n"], d["axis_enu"]
-            if self.general:
-                u = self.u_body      # elementwise sums, not BLAS: the same floats whatever the block
-                w = traj.y[4:]
-                cross = np.cross(n.T, u)
-                tilt = np.arctan2(np.sqrt(cross[:, 0] ** 2 + cross[:, 1] ** 2 + cross[:, 2] ** 2),
-                                  u[0] * n[0] + u[1] * n[1] + u[2] * n[2])
-                spin = u[0] * w[0] + u[1] * w[1] + u[2] * w[2]
-            else:
-                tilt = np.arctan2(np.hypot(n[0], n[1]), n[2])
-                spin = traj.y[6].copy()
-            columns = {"tilt": tilt,
-                       "tilt_azimuth": compass_azimuth_from_enu(axis[0], axis[1]),
-                       "spin_rate": spin,
-                       "com_height": d["com_height_m"],
-                       "vertical_body_x": n[0], "vertical_body_y": n[1]}
-            columns.update(self.contact_columns(traj.y, n, carry))
-            extra = {k: d[k] for k in ("energy_J", "angular_momentum_vertical_kg_m2_s", "quaternion_norm",
-                                       "normal_force_N", "com_velocity_m_s")}
-            extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
-            extra["state"] = traj.y
-            yield Simulation(t, columns, traj, extra=extra)
-
-    def contact_columns(self, y, n, carry=None) -> dict:
-        """The contact point and the turn about the vertical along a state history (sec. I and III).
-
-        Parameters
-        ----------
-        y : ndarray (7, m)
-            States.
-        n : ndarray (3, m)
-            Upward vertical in body axes.
-        carry : dict, optional
-            Across consecutive blocks of one run: ``{"unwrap": NumpyUnwrapper(), "turn0": None}``,
-            updated in place (the turn is unwrapped across blocks and measured from the run's first
-            sample); None for a whole history at once.
-
-        Returns
-        -------
-        dict of ndarray (m,)
-            ``contact_x``, ``contact_y``, ``contact_z``: x_P = −∇h(n) in principal axes from G, m;
-            ``contact_east``, ``contact_north``: R x_P on the plane from the vertical through G, m
-            (G moves only vertically: eqs. 1-2 with no initial horizontal velocity);
-            ``turn_angle``: the twist of the rotation from the rest orientation about the vertical,
-            2·atan2(q_z, q_w) of q ⊗ q_rest⁻¹ (swing-twist decomposition), unwrapped, rad (the
-            unwrapping needs less than a turn per sample: |r| / sample rate < 2π).
-        """
-        xp = self.contact_points_body(n)
-        q = np.asarray(y[:4], dtype=float).T
-        R = quat_to_matrix(q)
-        world = [R[:, i, 0] * xp[0] + R[:, i, 1] * xp[1] + R[:, i, 2] * xp[2] for i in (0, 1)]   # R x_P, per sample
-        rest = self.rest_quaternion()
-        rel = quat_mul(q, rest * np.array([1.0, -1.0, -1.0, -1.0]))
-        raw = np.arctan2(rel[:, 3], rel[:, 0])
-        if carry is None:
-            turn = 2.0 * np.unwrap(raw)
-            turn0 = turn[0]
-        else:
-            turn = 2.0 * carry["unwrap"](raw)
-            if carry["turn0"] is None:
-                carry["turn0"] = turn[0]
-            turn0 = carry["turn0"]
-        return {"contact_x": xp[0], "contact_y": xp[1], "contact_z": xp[2],
-                "contact_east": world[0], "contact_north": world[1], "turn_angle": turn - turn0}

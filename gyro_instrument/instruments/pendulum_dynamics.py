@@ -1,0 +1,294 @@
+"""The spherical pendulum's equations of motion and integrators (Quet 1853 sec. 2, eq. 21).
+
+:class:`SwingDynamics` holds what :class:`~gyro_instrument.instruments.pendulum.SphericalPendulum`
+integrates: the Cartesian constrained right-hand side summing the active effects' point-mass terms
+(:meth:`SwingDynamics.rhs_exact`), the small-angle model (:meth:`SwingDynamics.rhs_linear`), the
+streamed adaptive DOP853 runs and the parareal fast path (windows of whole swings, Newton-parareal
+from Quet's comparison pendulum). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
+gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
+"""
+
+import math
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from gyro_instrument.core.angles import Unwrapper
+from gyro_instrument.core.effect import POINT_MASS
+from gyro_instrument.core.integrate import Trajectory, integration
+from gyro_instrument.core.parareal import dense_output, hermite_rows
+from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
+from gyro_instrument.instruments.pendulum_theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
+                                                         quarter_period_s)
+
+
+def pendulum_columns(pos, vel, omega0_sq, unwrappers=None) -> dict:
+    """Derived columns from bob positions/velocities (arrays (3, m), ENU).
+
+    ``unwrappers``: a pair of :class:`~gyro_instrument.core.angles.Unwrapper` (azimuth, swing
+    azimuth) carried from block to block of a streamed run; fresh ones by default (one block)."""
+    unwrap_az, unwrap_swing = unwrappers if unwrappers is not None else (Unwrapper(), Unwrapper())
+    x, y, z = pos
+    vx, vy = vel[0], vel[1]
+    rh = np.hypot(x, y)
+    deflection = np.arctan2(rh, -z)
+    azimuth = unwrap_az(np.arctan2(x, y))
+    # Fradkin tensor in (north, east) axes: its major axis is the swing plane.
+    n, e, vn, ve = y, x, vy, vx
+    tnn = omega0_sq * n * n + vn * vn
+    tee = omega0_sq * e * e + ve * ve
+    tne = omega0_sq * n * e + vn * ve
+    swing = 0.5 * unwrap_swing(np.arctan2(2.0 * tne, tnn - tee))
+    return {"deflection": deflection, "azimuth": azimuth, "swing_azimuth": swing,
+            "x_east": x, "y_north": y, "z_up": z}
+
+
+def _swing_frames(U, w0sq):
+    """Rotations about the vertical by each state's swing-plane angle (Fradkin tensor), acting on
+    position and velocity: the frame in which a swing's one-period Jacobian varies slowly."""
+    x, y, vx, vy = U[:, 0], U[:, 1], U[:, 3], U[:, 4]
+    txx, tyy, txy = w0sq * x * x + vx * vx, w0sq * y * y + vy * vy, w0sq * x * y + vx * vy
+    a = 0.5 * np.unwrap(np.arctan2(2 * txy, txx - tyy))
+    c, s = np.cos(a), np.sin(a)
+    R = np.zeros((len(a), 6, 6))
+    for b in (0, 3):
+        R[:, b, b], R[:, b, b + 1], R[:, b + 1, b], R[:, b + 1, b + 1] = c, -s, s, c
+        R[:, b + 2, b + 2] = 1.0
+    return R
+
+
+class SwingDynamics:
+    """The spherical pendulum's right-hand sides and integrators, mixed into
+    :class:`~gyro_instrument.instruments.pendulum.SphericalPendulum` (which supplies ``p``,
+    ``context``, ``site``, the effects, :meth:`initial_state` and :meth:`chosen_integrator`)."""
+
+    def point_mass_terms(self) -> list:
+        """The active effects' ``point_mass`` terms f(δr, v) -> a (ENU, rotating frame), summing order."""
+        terms = (e.point_mass_term(self.context) for e in self.effects_of(POINT_MASS))
+        return [f for f in terms if f is not None]
+
+    def rhs_exact(self) -> Callable:
+        """Cartesian constrained right-hand side for y = [r, v] (ENU): gravity, the tension and the
+        sum of the active effects' point-mass accelerations at δr = r − r_rest (module docstring).
+        Accepts a batch of states (y of shape (6, m)) when every term does."""
+        l2 = self.p.length_m * self.p.length_m
+        g = self.context.gravity_m_s2
+        terms = self.point_mass_terms()
+        a_b = 2.0 * math.sqrt(g / self.p.length_m)
+        b2 = g / self.p.length_m
+        zr = -self.p.length_m
+
+        half_b2 = 0.5 * b2
+
+        def rhs(t, y):
+            x, yy, z, vx, vy, vz = y
+            fx, fy, fz = 0.0, 0.0, -g
+            dz = z - zr
+            for term in terms:
+                ax, ay, az = term(x, yy, dz, vx, vy, vz)
+                fx += ax
+                fy += ay
+                fz += az
+            r2 = x * x + yy * yy + z * z
+            rv = x * vx + yy * vy + z * vz
+            lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv
+                   + half_b2 * (r2 - l2)) / r2
+            return np.array([vx, vy, vz, fx - lam * x, fy - lam * yy, fz - lam * z])
+        return rhs
+
+    def rhs_linear(self) -> Callable:
+        """Small-angle model for y = [x, y, vx, vy] (horizontal, ENU): ẍ = −(g/l) x plus the
+        horizontal part of the active effects' point-mass accelerations, taken on the horizontal
+        plane (δr = (x, y, 0), v = (vx, vy, 0): Coriolis from the vertical Earth-rate part, ...)."""
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
+        terms = self.point_mass_terms()
+
+        def rhs(t, y):
+            x, yy, vx, vy = y
+            ax, ay = -w0sq * x, -w0sq * yy
+            for term in terms:
+                tx, ty, _ = term(x, yy, 0.0, vx, vy, 0.0)
+                ax += tx
+                ay += ty
+            return np.array([vx, vy, ax, ay])
+        return rhs
+
+    def stream(self, blocks, **options) -> Iterator[Simulation]:
+        """Integrate block by block (:meth:`Instrument.stream`), carrying the exact state.
+
+        The adaptive paths (full Cartesian model, linear model) continue one DOP853 step sequence
+        bounded by the run's end (:class:`~gyro_instrument.core.integrate.Integration`): the blocks
+        concatenate to :meth:`simulate` bit for bit. The parareal path converges windows of
+        :attr:`WINDOW_SWINGS` whole swings one after the other, each from the end state of the
+        last (:meth:`_stream_parareal`); the windows depend on the run, not on the blocks, so the
+        blocks concatenate to :meth:`simulate` bit for bit there too. ``options``: ``progress``
+        (callable taking a line of text: parareal passes), ``t_end``.
+
+        Raises
+        ------
+        SceneError
+            The run would hold more swings than can be integrated (``length_m``).
+        IntegrationError
+            A failed step or a non-finite state.
+        """
+        blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
+        if t0 is None:
+            return
+        r0, v0 = self.initial_state()
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
+        # Absolute tolerances scale with the motion, not the rod: a 1e-9 rad swing on 67 m moves
+        # the bob 7e-8 m, which an atol of 1e-12 l would resolve to only 1e-3 of itself.
+        w0 = math.sqrt(w0sq)
+        check_period_count(f"instruments.{self.name}.length_m", self.p.length_m, 2.0 * math.pi / w0, t_end - t0)
+        amp = max(self.p.length_m * math.sin(self.p.initial_deflection_rad), float(np.linalg.norm(v0)) / w0, 1e-12 * self.p.length_m)
+        atol_r, atol_v = self.p.rtol * amp, self.p.rtol * amp * w0
+        # Vertically tension and gravity cancel (g − λ z ≈ 0): z and v_z carry round-off at the ε g
+        # level, which no tolerance may ask to resolve (an inverted bob took 7e6 evaluations).
+        atol_z, atol_vz = max(atol_r, 1e-14 * self.p.length_m), max(atol_v, 1e-14 * self.p.length_m * w0)
+        unwrappers = (Unwrapper(), Unwrapper())
+        if self.chosen_integrator(t_end - t0)[0] == "parareal":
+            yield from self._stream_parareal(blocks, t0, t_end, r0, v0, amp, options.get("progress"), unwrappers)
+            return
+        exact = self.restoring_law() is not None          # finite_amplitude: the exact (Cartesian) model
+        if exact:
+            run = integration(self.rhs_exact(), np.concatenate([r0, v0]), t0, t_end, rtol=self.p.rtol,
+                              atol=np.array([atol_r, atol_r, atol_z, atol_v, atol_v, atol_vz]))
+        else:
+            run = integration(self.rhs_linear(), [r0[0], r0[1], v0[0], v0[1]], t0, t_end, rtol=self.p.rtol,
+                              atol=np.array([atol_r] * 2 + [atol_v] * 2))
+        for t in blocks:
+            traj = run.advance(t)
+            if exact:
+                pos, vel = traj.y[:3], traj.y[3:]
+            else:
+                x, y, vx, vy = traj.y
+                rh2 = x * x + y * y
+                pos = np.vstack([x, y, -np.sqrt(np.maximum(self.p.length_m ** 2 - rh2, 0.0))])
+                vel = np.vstack([vx, vy, np.zeros_like(vx)])
+            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
+
+    def _first_swing(self, r0, v0):
+        """Period and apsidal turn of the first swing, from the full equations (DOP853, rtol 1e-12).
+
+        The guess is Quet's: T = 4 × the quarter period (42) between θ0 and the minimum deflection
+        β of sec. 2 §II, and a turn of −k′ T with k′ the apsidal rate of sec. 2 §III. The swing is
+        then integrated to its second apocentre (x ẋ + y ẏ = 0, decreasing) after 0.9 T: that time and
+        the azimuth turned there are the comparison pendulum's period and turn, exact for this
+        release, which the first guess of every swing start uses (sec. 2: the non-rotating
+        motion turned by k t)."""
+        from gyro_instrument.core.dop853 import first_crossing
+        k = self.site.k_vertical_rad_s if self.has("earth_rotation") else 0.0
+        beta = min_deflection_from_rest_rad(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad)
+        guess = 4.0 * quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta)
+        rhs = self.rhs_exact()
+
+        def f(tt, *y):
+            return tuple(rhs(tt, np.array(y)).tolist())
+
+        def apocentre(y):
+            return y[0] * y[3] + y[1] * y[4]                      # d(x² + y²)/dt / 2
+        # DOP853 on floats (core/dop853.py: scipy's method and step control; not scipy.integrate,
+        # whose import costs the command line 0.25-0.4 s), the apocentre by bisection on its dense output
+        period, y1, sol, nfev = first_crossing(f, np.concatenate([r0, v0]), 1.2 * guess, apocentre,
+                                               after=0.9 * guess, rtol=1e-12, atol=1e-14 * self.p.length_m)
+        if period is None:
+            return guess, -apsidal_rate_from_rest_rad_s(k, self.p.initial_deflection_rad) * guess, nfev, sol
+        turn = math.atan2(r0[0] * y1[1] - r0[1] * y1[0], r0[0] * y1[0] + r0[1] * y1[1])
+        return period, turn, nfev, sol
+
+    def comparison_solution(self, t) -> tuple:
+        """Quet's comparison pendulum (sec. 2): the first swing of the full model (DOP853, rtol
+        1e-12), repeated every period and turned about the vertical by its apsidal angle each time
+        — the non-rotating motion turned by k t, with the swing's exact period and turn. Exact
+        for the first swing; it misses what the horizontal Earth rate and the slow change of the
+        ellipse do later (the parareal fast path adds them). Returns (position, velocity, nfev)."""
+        r0, v0 = self.initial_state()
+        period, turn, nfev, sol = self._first_swing(r0, v0)
+        t = np.asarray(t, dtype=float) - float(t[0])
+        n = np.floor(t / period)
+        y = sol(t - n * period)
+        c, s = np.cos(n * turn), np.sin(n * turn)
+        out = y.copy()
+        for b in (0, 3):
+            out[b] = c * y[b] - s * y[b + 1]
+            out[b + 1] = s * y[b] + c * y[b + 1]
+        return out[:3], out[3:], nfev
+
+    #: Swings per parareal window of a streamed run: memory ~10 kB per swing at 48 steps (the grid
+    #: of positions and derivatives, the Newton pass's stages), so a window of 2048 swings (9.3 h of
+    #: the 67 m pendulum) holds ~20 MB whatever the duration; long enough that the Python overhead
+    #: of a window (~600 batched right-hand-side calls per Newton pass) stays small against the
+    #: numpy work it drives (the whole ``simulate`` of a sidereal day at 20 Hz to Parquet, median of 3
+    #: with the CPU shared: one window of 5 247 swings 2.4 s and 203 MB peak RSS, windows of 2048
+    #: swings 2.6 s and 164 MB, of 512 swings 2.6 s and 145 MB; the times differ within the noise).
+    WINDOW_SWINGS = 2048
+
+    def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
+        """Newton-parareal over ``n_seg`` whole swings from ``y_start`` (:func:`~gyro_instrument.core.
+        parareal.parareal`); first guess of each swing's start: ``y_start`` turned about the vertical by
+        ``phi`` per swing (Quet's comparison pendulum, sec. 2). Returns (grid, info, end state)."""
+        from gyro_instrument.core.parareal import parareal
+        ang = phi * np.arange(n_seg + 1)
+        pred = np.empty((n_seg + 1, 6))
+        for b in (0, 3):
+            pred[:, b] = np.cos(ang) * y_start[b] - np.sin(ang) * y_start[b + 1]
+            pred[:, b + 1] = np.sin(ang) * y_start[b] + np.cos(ang) * y_start[b + 1]
+            pred[:, b + 2] = y_start[b + 2]
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
+        _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.p.segment_steps, scale,
+                                 tol=self.p.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
+                                 span=span)
+        return grid, info, grid[0][-1, :, -1].copy()
+
+    def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
+        """The fast path (:mod:`gyro_instrument.core.parareal`), window by window of whole swings.
+
+        Segments are one swing period T, measured on the first swing of the full model
+        (:meth:`_first_swing`: Quet's quarter period (42) with the minimum deflection β of sec. 2 §II
+        as the guess); the first guess of each swing's start is the window's start turned by the
+        apsidal angle per period (sec. 2 §III: the comparison pendulum). Newton-parareal then
+        converges the starts on the full equations (:meth:`rhs_exact`, every listed effect), so the
+        result is the full model to ``shooting_tol``, not the comparison solution. The run's
+        ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
+        from the fine end state of window w's last swing, so the state carried is the integrated one
+        and the windows do not depend on how the samples are cut into blocks."""
+        c0, w0t = time.process_time(), time.perf_counter()
+        cpu = wall = 0.0                     # this generator's own time (not the consumer's between blocks)
+        period, phi, evals, _ = self._first_swing(r0, v0)
+        n_total = max(1, int(math.ceil((t_end - t0) / period)))
+        per = self.WINDOW_SWINGS
+        scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
+        w0sq = self.context.gravity_m_s2 / self.p.length_m
+        window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
+        passes = 0
+        for t in blocks:
+            if c0 is None:
+                c0, w0t = time.process_time(), time.perf_counter()
+            tau = t - t0
+            seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
+            win = seg // per
+            y = np.empty((6, t.size))
+            for w in range(int(win[0]), int(win[-1]) + 1):
+                while window < w:            # every window in turn: the state is carried through all
+                    window += 1
+                    n_seg = min(per, n_total - window * per)
+                    span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
+                    grid = rows = None               # the previous window's grid is not needed any more
+                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
+                    rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
+                    evals += info["rhs_columns"]
+                    passes += info["iterations"]
+                sel = win == w
+                if sel.any():
+                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3, rows=rows)
+            pos, vel = y[:3], y[3:]
+            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
+            c0 = None
+            traj = Trajectory(t, y, evals, wall, cpu,
+                              f"parareal RK8 ({self.p.segment_steps} steps/period, {passes} passes in "
+                              f"{window + 1} window{'s' if window else ''})")
+            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
+                                                   "period_s": period, "segments": n_total})
