@@ -28,7 +28,7 @@ def write_bag(path, scene="quet_paris", duration_s=DURATION_S, chunk_size=32 * 1
     from gyro_instrument.recording.joints import joint_streams
     from gyro_instrument.recording.mcap_io import BagWriter
     from gyro_instrument.ros import messages as m
-    from gyro_instrument.ros.topics import CLOCK, joint_topic
+    from gyro_instrument.recording.topics import CLOCK, joint_topic
     from gyro_instrument.scenes import load_scene
     sc = load_scene(scene, [f"duration_s={duration_s!r}"])
     t_ns, streams = joint_streams(sc)
