@@ -14,15 +14,31 @@ half-written output (see :func:`guarded`).
 The work itself is :mod:`gyro_instrument.api`'s, shared with the ROS nodes and the tests.
 """
 
-from gyro_instrument.api import describe, replay_bag, to_jsonable
-from gyro_instrument.cli.commands import (COMMANDS, closed_pipe, guarded, interrupted, main, one_line,
-                                          run_command)
-from gyro_instrument.cli.parser import (EXIT_BAD_INPUT, EXIT_CLOSED_PIPE, EXIT_INTEGRATION_FAILED, EXIT_INTERRUPTED,
-                                        add_run_command, add_scene_arguments, add_scene_option, build_parser,
-                                        scene_arg, scene_from_args)
-from gyro_instrument.cli.simulate import (check_disk, output_step, simulate_scene, simulate_to_file, stream_scene,
-                                          terminal_progress, write_csv)
-from gyro_instrument.cli.text import print_description, print_estimate, print_plan
+#: where each public name lives; imported on first use (PEP 562), so that ``python -m
+#: gyro_instrument.cli`` imports nothing heavy before ``__main__``'s interrupt guard
+_HOMES = {
+    "gyro_instrument.api": ("describe", "replay_bag", "to_jsonable"),
+    "gyro_instrument.cli.commands": ("COMMANDS", "closed_pipe", "guarded", "interrupted", "main", "one_line",
+                                     "run_command"),
+    "gyro_instrument.cli.parser": ("EXIT_BAD_INPUT", "EXIT_CLOSED_PIPE", "EXIT_INTEGRATION_FAILED",
+                                   "EXIT_INTERRUPTED", "add_run_command", "add_scene_arguments", "add_scene_option",
+                                   "build_parser", "scene_arg", "scene_from_args"),
+    "gyro_instrument.cli.simulate": ("check_disk", "output_step", "simulate_scene", "simulate_to_file",
+                                     "stream_scene", "terminal_progress", "write_csv"),
+    "gyro_instrument.cli.text": ("print_description", "print_estimate", "print_plan"),
+}
+_HOME = {name: module for module, names in _HOMES.items() for name in names}
+
+
+def __getattr__(name) -> object:
+    """A public name of the CLI, imported from its module on first use."""
+    import importlib
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_HOME[name]), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = ["COMMANDS", "EXIT_BAD_INPUT", "EXIT_CLOSED_PIPE", "EXIT_INTEGRATION_FAILED", "EXIT_INTERRUPTED",
            "add_run_command", "add_scene_arguments", "add_scene_option", "build_parser", "check_disk", "closed_pipe",

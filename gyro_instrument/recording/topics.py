@@ -123,6 +123,11 @@ def publications(name, inst) -> list:
     return out + visual
 
 
+def joint_names(name, inst) -> tuple:
+    """The JointState joint names ``<name>/<joint>`` instrument ``inst`` publishes (and the estimator reads)."""
+    return publications(name, inst)[0].names
+
+
 def scene_publications(insts) -> list:
     """Every instrument publication of the scene, in scene order."""
     return [p for name, inst in insts.items() for p in publications(name, inst)]

@@ -57,12 +57,6 @@ def swing_plane_azimuth(t_s, east, north, window_s) -> tuple:
     return az, rate
 
 
-def axis_directions(inst, stream) -> np.ndarray | None:
-    """Unit rotor-axis vectors in ENU (m, 3) of a gyroscope from its published angles, or None
-    for an instrument whose axis is not shown (``Instrument.axis_direction_enu``)."""
-    return inst.axis_direction_enu(stream.position) if inst.SHOWS_AXIS else None
-
-
 class SwingPlaneStream:
     """:func:`swing_plane_azimuth` over a run that arrives block by block, bit for bit.
 
@@ -232,14 +226,15 @@ class PendulumVisual:
 
 @dataclass
 class AxisVisual:
-    """What a gyroscope shows: its rotor axis in ENU per sample of the current block."""
+    """What a gyroscope shows: its rotor axis in ENU (unit vectors, ``Instrument.axis_direction_enu``
+    of its published angles) per sample of the current block."""
 
     origin: np.ndarray
     inst: object
     axis: np.ndarray = None
 
     def push(self, start, t_s, stream) -> None:
-        self.axis = axis_directions(self.inst, stream)
+        self.axis = self.inst.axis_direction_enu(stream.position)
 
     def markers(self, i, j, stream) -> AxisMarkers:
         return AxisMarkers(self.origin, np.nan_to_num(self.axis[j]), 1.0)

@@ -29,7 +29,8 @@ def split_ros_args(argv) -> tuple:
 def main(argv=None) -> int:
     """Run one command line; exit status as :func:`gyro_instrument.cli.main` (0, 2, 3, 130)."""
     try:
-        from gyro_instrument import cli as core_cli
+        from gyro_instrument.cli import commands as core_cli
+        from gyro_instrument.cli import text  # noqa: F401  (imported here, inside the guard)
     except KeyboardInterrupt:
         print("gyro-instrument: interrupted", file=sys.stderr)
         return 130
@@ -75,7 +76,8 @@ def _command(core_cli, argv):
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        core_cli.print_estimate(result)
+        from gyro_instrument.cli.text import print_estimate
+        print_estimate(result)
         if not (args.quiet or args.stats):
             print(f"  suite: {stats['samples']} samples in {stats['wall_s']:.2f} s "
                   f"({stats['real_time_factor_achieved']:.1f}x real time); recorded {sum(stats['recorded'].values())} "

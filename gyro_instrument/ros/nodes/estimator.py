@@ -14,7 +14,7 @@ from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
-from gyro_instrument.recording.topics import CLOCK, DIAGNOSTICS, ESTIMATOR_TOPICS, joint_topic
+from gyro_instrument.recording.topics import CLOCK, DIAGNOSTICS, ESTIMATOR_TOPICS, joint_names, joint_topic
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.ros.nodes.base import LATCHED, RELIABLE_ALL, STEADY, SceneNode
@@ -52,7 +52,7 @@ class EstimatorNode(SceneNode):
             if estimable(inst):
                 # records_from_joints reads the measured channels and the last joint's velocity
                 self.buffers[name] = JointBuffer(m.joint_state_layout(
-                    tuple(f"{name}/{j}" for j in inst.JOINTS)), keep=len(inst.MEASURED_CHANNELS))
+                    joint_names(name, inst)), keep=len(inst.MEASURED_CHANNELS))
                 sub = self.create_subscription(
                     m.JointState, joint_topic(name), lambda data, n=name: self._on_joint_raw(n, data),
                     RELIABLE_ALL, raw=True)
@@ -201,7 +201,7 @@ class EstimatorNode(SceneNode):
         self._on_joint(name, msg)
 
     def _on_joint(self, name, msg):
-        expected = self.insts[name].JOINTS
+        expected = tuple(n.split("/")[-1] for n in joint_names(name, self.insts[name]))
         names = tuple(n.split("/")[-1] for n in msg.name)
         if names != expected or len(msg.position) != len(expected) or len(msg.velocity) != len(expected):
             self._reject(name, f"joints {list(names)} do not match {list(expected)}")
