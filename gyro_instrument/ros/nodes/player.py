@@ -232,7 +232,7 @@ class PlayerNode(SceneNode):
             now = time.monotonic()
             if rtf != self._rtf:
                 nxt = self.peek()
-                self._rtf, self._w0, self._t0 = rtf, now, (nxt[2] if nxt is not None else self._t0)
+                self._rtf, self._w0, self._t0 = rtf, now, (nxt[2] if nxt is not None else 0)
             k = 0
             while k < FLOW_BATCH and self.peek() is not None and \
                     (self.peek()[2] - self._t0) <= (now - self._w0) * rtf * 1e9:
