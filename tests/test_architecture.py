@@ -15,7 +15,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "gyro_instrument"
 LAYER = {"core": 0, "effects": 1, "instruments": 2, "scenes": 2, "sensors": 3, "estimators": 3,
-         "recording": 4, "bench": 4, "views": 4, "cli": 5, "ros": 6}
+         "recording": 4, "bench": 4, "views": 4, "cli": 5, "api": 5, "ros": 6}
 ROS_MODULES = ("rclpy", "std_msgs", "sensor_msgs", "geometry_msgs", "builtin_interfaces", "rosgraph_msgs",
                "diagnostic_msgs", "rcl_interfaces", "rosidl_runtime_py", "visualization_msgs")
 

@@ -205,7 +205,7 @@ def test_run_records_a_split_rosbag2_directory_that_replays_to_the_live_estimate
     rclpy.init(context=ctx, args=[])
     try:
         node = PlayerNode(context=ctx, parameter_overrides=[Parameter("bag", value=str(d))])
-        assert len(node.queue) == len(theirs) and not node.damaged
+        assert node.total == len(theirs) and not node.damaged
         node.destroy_node()
     finally:
         rclpy.shutdown(context=ctx)

@@ -5,7 +5,7 @@ import importlib.util
 from pathlib import Path
 
 from gyro_instrument.ros.cli import build_parser
-from gyro_instrument.ros.topics import ESTIMATOR_TOPICS
+from gyro_instrument.recording.topics import ESTIMATOR_TOPICS
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -174,7 +174,7 @@ def test_recorded_and_replayed(scene_file, tmp_path):
     from gyro_instrument.recording.joints import joint_streams, records_from_joints
     from gyro_instrument.recording.mcap_io import BagWriter, qos_yaml
     from gyro_instrument.ros import messages as m
-    from gyro_instrument.ros.topics import joint_topic, scene_topics
+    from gyro_instrument.recording.topics import joint_topic, scene_topics
     scene = load_scene(scene_file)
     insts = build_instruments(scene)
     t_ns, streams = joint_streams(scene, truth=simulate_truth(scene))

@@ -9,7 +9,7 @@ import numpy as np
 
 from gyro_instrument.estimators.pipeline import simulate_truth
 from gyro_instrument.ros.suite import run_suite
-from gyro_instrument.ros.topics import scene_topics
+from gyro_instrument.recording.topics import scene_topics
 from gyro_instrument.scenes import build_instruments, load_scene
 
 

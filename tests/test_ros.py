@@ -79,8 +79,8 @@ def test_player_republishes_a_bag_to_an_estimator(live_run, ctx):
         ex.spin_once(timeout_sec=0.01)
         assert time.monotonic() - t0 < 10
     n_joint, sent = 3 * stats["samples"], 0
-    while player.index < len(player.queue):
-        sent += player.queue[player.index][0].endswith("/joint_states")
+    while player.peek() is not None:
+        sent += player.peek()[0].endswith("/joint_states")
         player.publish_next()
         while est.received() < sent:            # lock-step, as the suite does
             ex.spin_once(timeout_sec=0.001)

@@ -258,6 +258,7 @@ def suite_real_time_factor(duration_s=None, rate_hz=100.0) -> tuple:
     import sys
     import tempfile
     from gyro_instrument.recording.mcap_io import read_messages
+    from gyro_instrument.recording.topics import is_joint_topic
     import importlib.util
     if importlib.util.find_spec("rclpy") is None:
         return None, "rclpy not installed"
@@ -280,7 +281,7 @@ def suite_real_time_factor(duration_s=None, rate_hz=100.0) -> tuple:
             recorded[topic] = recorded.get(topic, 0) + 1
         # every joint stream holds one message per sample, and the file holds what the recorder counted
         lost = sorted(tp for tp, n in stats["recorded"].items()
-                      if recorded.get(tp, 0) != n or (tp.endswith("/joint_states") and n != stats["samples"]))
+                      if recorded.get(tp, 0) != n or (is_joint_topic(tp) and n != stats["samples"]))
         if lost:
             return None, f"recording incomplete on {lost}"
         return stats["real_time_factor_achieved"], ""

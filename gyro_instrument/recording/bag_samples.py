@@ -5,6 +5,7 @@ import numpy as np
 
 from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.recording.bag_layout import scan_path
+from gyro_instrument.recording.topics import JOINT_STATE_TYPE, instrument_of, is_joint_topic
 
 
 class MessageDecoder:
@@ -127,8 +128,7 @@ def joint_samples(scan, epoch_ns, with_notes=False) -> tuple:
     rows = {}                    # instrument -> list of (layout, bytes) or (None, (stamp, pos, vel))
     count = undecodable = 0
     for schema, channel, message in scan.records():
-        if schema is None or not channel.topic.endswith("/joint_states") \
-                or schema.name != "sensor_msgs/msg/JointState":
+        if schema is None or not is_joint_topic(channel.topic) or schema.name != JOINT_STATE_TYPE:
             continue
         data = message.data
         lay = layouts.get(channel.id)
@@ -150,9 +150,7 @@ def joint_samples(scan, epoch_ns, with_notes=False) -> tuple:
                 layouts[channel.id] = lay if lay is not None and lay.matches(data) and epoch_ns == EPOCH_NS \
                     else None
             entry = (None, (stamp, pos, vel))
-        parts = channel.topic.strip("/").split("/")          # [<namespace>/...]<instrument>/joint_states
-        name = parts[-2] if len(parts) >= 2 else parts[0]
-        rows.setdefault(name, []).append(entry)
+        rows.setdefault(instrument_of(channel.topic), []).append(entry)
         count += 1
     out = {name: _arrays(entries) for name, entries in rows.items()}
     if with_notes:

@@ -17,12 +17,14 @@ record. ``recover`` rewrites only intact records and records what was lost in th
 """
 
 import copy
+import heapq
 import json
 import os
 import time
 from collections.abc import Iterator
 
 from mcap.data_stream import RecordBuilder
+from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
 from gyro_instrument.recording.bag_scan import DAMAGE_RECORD, STATUS_RECORD, scan_bag
@@ -326,15 +328,33 @@ def read_messages(path, topics=None, scan=None) -> Iterator:
         yield channel.topic, schema.name if schema else "", message.log_time, message.data
 
 
-def read_metadata(path, name="gyro_instrument", scan=None) -> dict | None:
-    """The first intact metadata record of that name as a dict, or None (also from a file cut short).
+def play_plan(path, scan) -> list:
+    """How :func:`stream_messages` reads each file of a bag: [(file, None)] for a file found intact
+    (summary read, no damage, no note: read chunk by chunk by the MCAP reader, in log-time order) or
+    [(file, its scan)] for one that is not (its intact records from the scan). Holding the plan and
+    not the scan lets an intact bag's messages be released as they are played."""
+    files = getattr(scan, "files", None) or [path]
+    scans = getattr(scan, "file_scans", None) or [scan]
+    return [(f, None if (s.summary_ok and s.data_end and not s.damaged and not s.truncated and not s.notes) else s)
+            for f, s in zip(files, scans)]
 
-    Raises
-    ------
-    SceneError
-        ``path`` is not an MCAP file.
-    """
-    return (scan or scan_bag(path)).metadata_record(name)
+
+def _file_messages(k, path, scan):
+    if scan is not None:
+        for i, (tp, ty, t, data) in enumerate(read_messages(path, scan=scan)):
+            yield t, k, i, tp, ty, data
+        return
+    with open(path, "rb") as fh:
+        for i, (schema, channel, message) in enumerate(make_reader(fh).iter_messages(log_time_order=True)):
+            yield message.log_time, k, i, channel.topic, schema.name if schema else "", message.data
+
+
+def stream_messages(plan) -> Iterator:
+    """Yield (topic, type_name, log_time_ns, cdr_bytes) of every intact message of a bag in log-time
+    order (ties: file order), as :func:`read_messages` does, reading the files of ``plan``
+    (:func:`play_plan`) as they are needed: memory holds the chunks being read, not the bag."""
+    for t, _, _, tp, ty, data in heapq.merge(*(_file_messages(k, f, s) for k, (f, s) in enumerate(plan))):
+        yield tp, ty, t, data
 
 
 def damage_record(scan, epoch_ns) -> dict:

@@ -8,13 +8,18 @@ deflection over the last period: with sums over a trailing window of ``e = x/l``
 
 is the compass azimuth of the plane (0 north, clockwise seen from above), defined modulo π; it is
 unwrapped so that the Foucault precession plots as a line (it starts in [0, π)).
+
+What the markers show is computed here too (:class:`PendulumVisual`, :class:`AxisVisual`: the
+geometry of one marker set in ``site_enu``); ``ros/messages.py`` only fills the messages.
 """
 
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.core.site import plane_frame
+from gyro_instrument.recording.topics import TRAIL
+
 
 
 def swing_plane_azimuth(t_s, east, north, window_s) -> tuple:
@@ -50,12 +55,6 @@ def swing_plane_azimuth(t_s, east, north, window_s) -> tuple:
     span = t_s - t_s[lo]
     rate = np.divide(az - az[lo], span, out=np.zeros(m), where=span > 0)      # over the last period
     return az, rate
-
-
-def axis_directions(inst, stream) -> np.ndarray | None:
-    """Unit rotor-axis vectors in ENU (m, 3) of a gyroscope from its published angles, or None
-    for an instrument whose axis is not shown (``Instrument.axis_direction_enu``)."""
-    return inst.axis_direction_enu(stream.position) if inst.SHOWS_AXIS else None
 
 
 class SwingPlaneStream:
@@ -135,3 +134,111 @@ class SwingPlaneStream:
             out[1:] = p[1:] + run[1:]
         self.twice_last, self.correction = p[-1], run[-1]
         return out
+
+
+@dataclass(frozen=True)
+class PendulumMarkers:
+    """A pendulum's marker geometry in ``site_enu`` (m): the pivot, the bob, the bob's recent trail
+    (k, 3), the swing-plane line's two ends (2, 3) and the bob's drawn size."""
+
+    pivot: np.ndarray
+    bob: np.ndarray
+    trail: np.ndarray
+    plane_ends: np.ndarray
+    size_m: float
+
+
+@dataclass(frozen=True)
+class AxisMarkers:
+    """A gyroscope's rotor axis drawn as an arrow of ``length_m`` from ``origin`` along ``axis``
+    (unit vector), in ``site_enu``."""
+
+    origin: np.ndarray
+    axis: np.ndarray
+    length_m: float
+
+
+@dataclass
+class PendulumVisual:
+    """What a pendulum shows, block by block: the swing plane (continued over blocks,
+    :class:`SwingPlaneStream`), the largest deflection so far (the plane line's half length), the
+    bob trail's history.
+
+    Parameters
+    ----------
+    origin : ndarray (3,)
+        Where the instrument stands in ``site_enu``, m.
+    length_m : float
+        Pendulum length l, m.
+    period_s : float
+        The trailing window of the swing plane: one period 2π√(l/g), s (g the site's).
+    n : int
+        Samples of the run.
+    t_last_s : float
+        Time of its last sample, s.
+    every : int
+        Samples between two visual messages.
+    """
+
+    origin: np.ndarray
+    length_m: float
+    period_s: float
+    n: int
+    t_last_s: float
+    every: int
+    half: float = 1e-3
+    trail: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    trail_start: int = 0
+    plane: np.ndarray = None
+    plane_rate: np.ndarray = None
+
+    def __post_init__(self):
+        self.plane_stream = SwingPlaneStream(self.period_s, self.n, self.t_last_s)
+
+    def push(self, start, t_s, stream) -> None:
+        """A new block (first sample ``start``, times ``t_s`` s) of the pendulum's ``JointStream``."""
+        az, rate = self.plane_stream.push(t_s, stream.position[:, 0], stream.position[:, 1])
+        self.plane, self.plane_rate = az, rate
+        biggest = np.fmax.reduce(stream.position[:, 2]) if stream.position.shape[0] else np.nan
+        if np.isfinite(biggest):
+            self.half = max(self.half, float(biggest) * self.length_m)
+        # trail: the last TRAIL visual periods before the block, then the block
+        self.trail = np.concatenate([self.trail[-self.every * TRAIL:], stream.bob_enu_m])
+        self.trail_start = start - (self.trail.shape[0] - stream.bob_enu_m.shape[0])
+
+    def markers(self, i, j, stream) -> PendulumMarkers:
+        """The markers at global sample ``i`` (row ``j`` of the current block's ``stream``)."""
+        size = min(max(0.03 * self.length_m, 0.05), 2.0)
+        a = self.trail_start
+        trail = self.trail[max(i - self.every * TRAIL, 0) - a:i + 1 - a:self.every]
+        pivot = self.origin + np.array([0.0, 0.0, self.length_m])
+        bob = pivot + np.nan_to_num(stream.bob_enu_m[j])
+        foot = np.array([pivot[0], pivot[1], bob[2]])
+        az = float(self.plane[j])
+        d = np.array([math.sin(az), math.cos(az), 0.0]) * self.half
+        return PendulumMarkers(pivot, bob, pivot + np.nan_to_num(trail).reshape(-1, 3), np.array([foot - d, foot + d]),
+                               size)
+
+    def rows(self, local) -> tuple:
+        """The swing-plane JointState columns (position, velocity, effort) at block rows ``local``."""
+        return self.plane[local][:, None], self.plane_rate[local][:, None], np.zeros((local.size, 1))
+
+
+@dataclass
+class AxisVisual:
+    """What a gyroscope shows: its rotor axis in ENU (unit vectors, ``Instrument.axis_direction_enu``
+    of its published angles) per sample of the current block."""
+
+    origin: np.ndarray
+    inst: object
+    axis: np.ndarray = None
+
+    def push(self, start, t_s, stream) -> None:
+        self.axis = self.inst.axis_direction_enu(stream.position)
+
+    def markers(self, i, j, stream) -> AxisMarkers:
+        return AxisMarkers(self.origin, np.nan_to_num(self.axis[j]), 1.0)
+
+    def rows(self, local) -> tuple:
+        """The Vector3Stamped column at block rows ``local``."""
+        return (self.axis[local],)

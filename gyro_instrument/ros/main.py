@@ -9,45 +9,50 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 from rclpy._rclpy_pybind11 import RCLError
 
+from gyro_instrument.instruments import REGISTRY, simulator_kinds
+from gyro_instrument.recording.topics import CLOCK, CLOCK_TYPE, ESTIMATOR_TOPICS, VISUAL_PERIOD_S, publications
 from gyro_instrument.ros import params as P
-from gyro_instrument.instruments import simulator_kinds
-from gyro_instrument.ros.topics import ESTIMATOR_TOPICS
 
+#: the nodes that are not simulators (a simulator's help is derived from the instruments it hosts)
 _SUMMARIES = {
-    "gyrocompass_sim": "Simulates the scene's gyroscopes (plane, gimbal, free) and publishes their joint states.",
-    "pendulum_sim": "Simulates the scene's pendulums and publishes their joint states and bob positions.",
-    "top_sim": "Simulates the scene's Puiseux bodies and publishes their joint states and contact points.",
     "estimator": "Estimates latitude and Earth rate from the instruments' joint states.",
     "recorder": "Records the scene's topics to MCAP (rosbag2 layout, sim-time log times, completeness status).",
     "player": "Plays an MCAP bag back to DDS, driving clock; exits at the end (or loops).",
 }
-_SIM_TOPICS = ["<instrument>/joint_states (sensor_msgs/msg/JointState), per sample",
-               "<instrument>/markers (visualization_msgs/msg/MarkerArray, site_enu), once per second of sim time",
-               "clock (rosgraph_msgs/msg/Clock): published with publish_clock:=true, else subscribed (followed)"]
 _TOPICS = {
-    "gyrocompass_sim": _SIM_TOPICS + ["<gyro>/axis_direction (geometry_msgs/msg/Vector3Stamped, site_enu), once "
-                                      "per second of sim time"],
-    "pendulum_sim": _SIM_TOPICS[:1] + ["<pendulum>/bob_position (geometry_msgs/msg/PointStamped), per sample",
-                                       "<pendulum>/swing_plane (sensor_msgs/msg/JointState: swing-plane azimuth, "
-                                       "compass, rad), once per second of sim time"] + _SIM_TOPICS[1:],
-    "top_sim": _SIM_TOPICS[:1] + ["<body>/contact_point (geometry_msgs/msg/PointStamped, <body>_body: principal "
-                                  "axes from the centre of mass, m), per sample"] + _SIM_TOPICS[2:],
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()],
     "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
     "player": ["the bag's topics (relative names), clock"],
 }
 _EXAMPLES = {
-    "gyrocompass_sim": "gyrocompass_sim --ros-args -p scene:=quet_paris -p publish_clock:=true "
-                       "-p real_time_factor:=0 --params-file params.yaml",
-    "pendulum_sim": "pendulum_sim --ros-args -r __ns:=/ship1 -p scene:=foucault_pantheon -p duration_s:=60",
-    "top_sim": "top_sim --ros-args -p scene:=puiseux_spheroid -p publish_clock:=true",
     "estimator": "estimator --ros-args -p scene:=quet_paris",
     "recorder": "recorder --ros-args -p scene:=quet_paris -p output:=out.mcap -p stop_when_complete:=true",
     "player": "player --ros-args -p bag:=bags/quet_paris.mcap -p real_time_factor:=0",
 }
 
 
+def simulator_topics(kinds) -> list:
+    """``--help`` lines of the topics a simulator hosting ``kinds`` publishes (from each type's
+    :func:`~gyro_instrument.recording.topics.publications`), then the clock."""
+    lines = []
+    for kind in kinds:
+        for p in publications("<instrument>", REGISTRY[kind]):
+            frame = f", {p.frame_id}" if p.frame_id else ""
+            rate = f"once per {VISUAL_PERIOD_S:g} s of sim time" if p.sparse else "per sample"
+            line = f"{p.topic} ({p.type_name}{frame}), {rate}"
+            if line not in lines:
+                lines.append(line)
+    return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)"]
+
+
 def help_text(name) -> str:
+    """``--help`` of node ``name``: a simulator's summary, topics and example follow from the
+    instrument types it hosts (``SIMULATOR_NODE``), so a new simulator node needs no table here."""
+    kinds = simulator_kinds().get(name)
+    if kinds is not None:
+        summary = f"Simulates the scene's instruments of types {', '.join(kinds)} and publishes what they show."
+        return P.help_text(name, summary, P.NODE_SPECS[name], simulator_topics(kinds),
+                           f"{name} --ros-args -p scene:=SCENE -p publish_clock:=true -p real_time_factor:=0")
     return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name], _EXAMPLES[name])
 
 

@@ -17,9 +17,9 @@ from gyro_instrument.core.scene import EPOCH_NS
 # the CDR codec is rclpy-free and shared with replay (gyro_instrument.recording.cdr); re-exported here
 from gyro_instrument.recording.cdr import (CLOCK_LAYOUT, CdrLayout, cdr_stamp_ns, cdr_time_ns,  # noqa: F401
                                           joint_state_layout, point_stamped_layout)
+from gyro_instrument.recording.topics import SITE_FRAME  # noqa: F401  (re-exported)
+from gyro_instrument.recording.visual import AxisMarkers
 
-#: frame of ENU vectors at the site (REP-105 'map'-like local frame)
-SITE_FRAME = "site_enu"
 
 
 def stamp(t_ns_from_release) -> Time:
@@ -120,24 +120,19 @@ def _set_points(mk, pts):
         p.x, p.y, p.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
 
 
-def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, half_length_m, size_m,
-                     reuse=None) -> "MarkerArray":
-    """visualization_msgs/MarkerArray of a pendulum in ``site_enu``: the bob (sphere), the wire,
-    the bob's recent trail (a LINE_STRIP, left out while the trail has fewer than two points: a line
-    strip of one point is invalid) and the swing plane (a line through the point below the pivot
-    along the compass azimuth ``plane_azimuth``). ``reuse``: a MarkerArray this function returned
-    before, updated in place."""
+def pendulum_markers(t_ns, name, geom, reuse=None) -> "MarkerArray":
+    """visualization_msgs/MarkerArray of a pendulum (:class:`~gyro_instrument.recording.visual.PendulumMarkers`)
+    in ``site_enu``: the bob (sphere), the wire, the bob's recent trail (a LINE_STRIP, left out while
+    the trail has fewer than two points: a line strip of one point is invalid) and the swing plane
+    (a line). ``reuse``: a MarkerArray this function returned before, updated in place."""
     from visualization_msgs.msg import Marker, MarkerArray
-    pivot = np.asarray(pivot_enu, dtype=float)
-    bob = pivot + np.asarray(bob_enu, dtype=float)
-    foot = np.array([pivot[0], pivot[1], bob[2]])
-    d = np.array([math.sin(plane_azimuth), math.cos(plane_azimuth), 0.0]) * half_length_m
+    size_m = geom.size_m
     arr = reuse or MarkerArray(markers=[
         _marker(t_ns, name, 0, Marker.SPHERE, (0.9, 0.6, 0.1, 1.0), (size_m,) * 3),
         _marker(t_ns, name, 1, Marker.LINE_LIST, (0.7, 0.7, 0.7, 1.0), (size_m / 10, 0, 0)),
         _marker(t_ns, name, 3, Marker.LINE_LIST, (1.0, 0.2, 0.2, 1.0), (size_m / 5, 0, 0)),
     ])
-    trail = pivot + np.asarray(trail_enu, dtype=float).reshape(-1, 3)
+    trail = geom.trail
     strip = next((mk for mk in arr.markers if mk.id == 2), None)
     if trail.shape[0] >= 2 and strip is None:      # a line strip needs two points: left out until then
         strip = _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0))
@@ -148,23 +143,32 @@ def pendulum_markers(t_ns, name, pivot_enu, bob_enu, trail_enu, plane_azimuth, h
     st = stamp(t_ns)
     for mk in arr.markers:
         mk.header.stamp = st
+    bob = geom.bob
     pos = arr.markers[0].pose.position
     pos.x, pos.y, pos.z = float(bob[0]), float(bob[1]), float(bob[2])
-    _set_points(arr.markers[1], [pivot, bob])
+    _set_points(arr.markers[1], [geom.pivot, bob])
     if strip is not None:
         _set_points(strip, trail)
-    _set_points(arr.markers[-1], [foot - d, foot + d])
+    _set_points(arr.markers[-1], geom.plane_ends)
     return arr
 
 
-def axis_markers(t_ns, name, origin_enu, axis_enu, length_m) -> "MarkerArray":
-    """visualization_msgs/MarkerArray of a gyroscope's rotor axis (an arrow) in ``site_enu``."""
+def axis_markers(t_ns, name, geom) -> "MarkerArray":
+    """visualization_msgs/MarkerArray of a gyroscope's rotor axis (an arrow,
+    :class:`~gyro_instrument.recording.visual.AxisMarkers`) in ``site_enu``."""
     from visualization_msgs.msg import Marker, MarkerArray
-    o = np.asarray(origin_enu, dtype=float)
+    o, length_m = np.asarray(geom.origin, dtype=float), geom.length_m
     return MarkerArray(markers=[
         _marker(t_ns, name, 0, Marker.ARROW, (0.2, 0.8, 0.3, 1.0), (length_m / 20, length_m / 10, length_m / 6),
-                [o, o + length_m * np.asarray(axis_enu, dtype=float)]),
+                [o, o + length_m * np.asarray(geom.axis, dtype=float)]),
     ])
+
+
+def marker_array(t_ns, name, geom, reuse=None) -> "MarkerArray":
+    """The MarkerArray of a marker geometry of :mod:`gyro_instrument.recording.visual`."""
+    if isinstance(geom, AxisMarkers):
+        return axis_markers(t_ns, name, geom)
+    return pendulum_markers(t_ns, name, geom, reuse)
 
 
 def message_class(type_name) -> type:

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 from rclpy.parameter import Parameter
 
+from gyro_instrument.instruments import simulator_kinds
+
 _TYPES = {
     "double": (Parameter.Type.DOUBLE, ParameterType.PARAMETER_DOUBLE),
     "int": (Parameter.Type.INTEGER, ParameterType.PARAMETER_INTEGER),
@@ -179,8 +181,20 @@ PLAYER = [
                                         "matched subscription before playing", read_only=True),
 ] + WAIT
 
-NODE_SPECS = {"gyrocompass_sim": SIMULATOR, "pendulum_sim": SIMULATOR, "top_sim": SIMULATOR,
-              "estimator": ESTIMATOR, "recorder": RECORDER, "player": PLAYER}
+class _NodeSpecs(dict):
+    """Node name -> its parameters; a simulator node an instrument type registered later names
+    (``SIMULATOR_NODE``) has the simulators' parameters too."""
+
+    def __missing__(self, name):
+        if name in simulator_kinds():
+            return SIMULATOR
+        raise KeyError(name)
+
+
+#: node name -> its parameters: every simulator node the instrument types name (``SIMULATOR_NODE``),
+#: then the estimator, the recorder and the player
+NODE_SPECS = _NodeSpecs({**{sim: SIMULATOR for sim in simulator_kinds()},
+                         "estimator": ESTIMATOR, "recorder": RECORDER, "player": PLAYER})
 #: parameters rclpy (or the RMW) declares itself; not reported as unknown
 BUILTIN = ("use_sim_time", "start_type_description_service")
 

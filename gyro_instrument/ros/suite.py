@@ -16,23 +16,22 @@ file starts them) is :mod:`gyro_instrument.ros.launch`.
 """
 
 import json
-import math
 import resource
 import signal
 import threading
 import time
-from contextlib import ExitStack
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.parameter import Parameter
-from rclpy.subscription import Subscription
 
-from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
+from gyro_instrument import api
+from gyro_instrument.api import check_run_memory, check_window  # noqa: F401  (re-exported)
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
-from gyro_instrument.instruments import REGISTRY, simulator_kinds
+from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
+from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 
 
 #: samples per batch at full speed; at most the publishers' KEEP_LAST depth (1000), so a writer
@@ -41,198 +40,15 @@ BATCH = 100
 MAX_BATCH = 1000
 
 
-class DeliveryError(RuntimeError):
-    """A message was not delivered in time (the suite never drops silently)."""
-
-
-def _call(sub, taken):
-    if sub._callback_type is Subscription.CallbackType.MessageOnly:
-        sub.callback(taken[0])
-    else:
-        sub.callback(*taken)
-
-
-class LockStep:
-    """Delivery of published batches to subscriptions, without the executor's per-callback cost.
-
-    Parameters
-    ----------
-    context : rclpy.Context
-    counted : list of (topic, Subscription)
-        Subscriptions that receive exactly one message per published sample of their topic.
-    others : list of Subscription
-        Subscriptions drained after each batch (whatever arrived), e.g. the nodes' ``/clock``.
-    """
-
-    def __init__(self, context, counted, others=()):
-        self.context = context
-        self.counted = list(counted)
-        self.others = list(others)
-
-    def deliver(self, published, timeout_s, describe=lambda: "") -> None:
-        """Take ``published[topic]`` messages from every counted subscription of that topic, run
-        the callbacks sample-major (message i of each subscription in order, then i + 1), then
-        drain the other subscriptions. ``published[topic]`` is a count (one message per sample
-        of the batch) or a list of the sample offsets in the batch its messages belong to (the
-        markers, every few samples). Raises :class:`DeliveryError` after ``timeout_s`` without
-        a complete batch."""
-        offsets = [published.get(topic, 0) for topic, _ in self.counted]
-        want = [len(o) if isinstance(o, list) else o for o in offsets]
-        got = self._collect(want, timeout_s, describe)
-        self._run_sample_major(self._calls(got), offsets)
-        self.drain()
-
-    def _collect(self, want, timeout_s, describe):
-        """Take ``want[j]`` messages from counted subscription j, waiting on a wait set for any not
-        yet delivered.
-
-        Returns the list (one per counted subscription) of the taken tuples, in arrival order.
-        Raises :class:`DeliveryError` (naming ``describe()`` and the short topics) when a
-        subscription still lacks messages ``timeout_s`` after the first incomplete pass.
-        """
-        got = [[] for _ in self.counted]
-        deadline = None
-        while True:
-            missing = []
-            for (_, sub), q, n in zip(self.counted, got, want):
-                if len(q) < n:
-                    with sub.handle:
-                        take, msg_type, raw = sub.handle.take_message, sub.msg_type, sub.raw
-                        while len(q) < n:
-                            taken = take(msg_type, raw)
-                            if taken is None:
-                                break
-                            q.append(taken)
-                    if len(q) < n:
-                        missing.append(sub)
-            if not missing:
-                return got
-            now = time.monotonic()
-            if deadline is None:
-                deadline = now + timeout_s
-            elif now > deadline:
-                short = ", ".join(f"{topic} {len(q)}/{n}" for (topic, _), q, n in zip(self.counted, got, want)
-                                  if len(q) < n)
-                raise DeliveryError(f"{describe()}: not delivered in {timeout_s} s: {short}")
-            self._wait(missing, 0.01)
-
-    def _calls(self, got):
-        """Turn the taken messages into ``(callback, arguments)`` pairs, one list per counted
-        subscription: MessageOnly callbacks get the message alone, the others the whole taken
-        tuple (message and message info)."""
-        calls = []
-        for (_, sub), q in zip(self.counted, got):
-            if sub._callback_type is Subscription.CallbackType.MessageOnly:
-                calls.append([(sub.callback, (taken[0],)) for taken in q])
-            else:
-                calls.append([(sub.callback, taken) for taken in q])
-        return calls
-
-    @staticmethod
-    def _run_sample_major(calls, offsets):
-        """Run the calls sample-major: call i of every per-sample (dense) subscription in order,
-        then the sparse subscriptions' (markers') calls at sample offset i, then i + 1. Dense
-        subscriptions with different numbers of calls run row by row up to the longest."""
-        dense = [c for c, o in zip(calls, offsets) if not isinstance(o, list)]
-        sparse_at = {}                               # sample offset -> calls of sparse topics (markers)
-        for c, o in zip(calls, offsets):
-            if isinstance(o, list):
-                for off, call in zip(o, c):
-                    sparse_at.setdefault(off, []).append(call)
-        if len({len(c) for c in dense}) <= 1:        # every per-sample topic published the same samples
-            if not sparse_at:
-                for row in zip(*dense):
-                    for cb, args in row:
-                        cb(*args)
-            else:
-                for i, row in enumerate(zip(*dense)):
-                    for cb, args in row:
-                        cb(*args)
-                    for cb, args in sparse_at.get(i, ()):
-                        cb(*args)
-        else:
-            for i in range(max(len(c) for c in dense)):
-                for c in dense:
-                    if i < len(c):
-                        cb, args = c[i]
-                        cb(*args)
-                for cb, args in sparse_at.get(i, ()):
-                    cb(*args)
-
-    def drain(self) -> None:
-        """Run the callbacks of whatever the other subscriptions hold."""
-        for sub in self.others:
-            with sub.handle:
-                while True:
-                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
-                    if taken is None:
-                        break
-                    _call(sub, taken)
-
-    def _wait(self, subs, timeout_s):
-        with ExitStack() as stack:
-            stack.enter_context(self.context.handle)
-            for sub in subs:
-                stack.enter_context(sub.handle)
-            ws = _rclpy.WaitSet(len(subs), 0, 0, 0, 0, 0, self.context.handle)
-            ws.clear_entities()
-            for sub in subs:
-                ws.add_subscription(sub.handle)
-            ws.wait(int(timeout_s * 1e9))
-
-
 #: a block integrated faster than this (s of wall time) is quick: the suite commits the bag before
 #: the next integration only when its last commit is this old (see run_suite)
 QUICK_S = 0.25
-#: accepted ``window_s`` (simulated seconds per integrated block), as the simulators' parameter
-MIN_WINDOW_S, MAX_WINDOW_S = 1.0e-3, 1.0e6
-
-
 class BagWriteError(SceneError):
     """The bag could not be written (a full disk): :meth:`DiskFull.line` as the one line."""
 
     def __init__(self, line) -> None:
         ValueError.__init__(self, line)
         self.field, self.value, self.valid = "--bag", None, line
-
-
-def check_window(window_s, field="--window-s") -> None:
-    """Refuse a window that cannot work: not a number, not finite, or outside [:data:`MIN_WINDOW_S`,
-    :data:`MAX_WINDOW_S`] (below a millisecond every block is one sample and the run crawls).
-
-    Raises
-    ------
-    SceneError
-        Naming ``field``, the value and the valid range.
-    """
-    ok = isinstance(window_s, (int, float)) and not isinstance(window_s, bool) and math.isfinite(window_s)
-    if not (ok and MIN_WINDOW_S <= window_s <= MAX_WINDOW_S):
-        raise SceneError(field, window_s, f"must be a number of simulated seconds in [{MIN_WINDOW_S:g}, "
-                                          f"{MAX_WINDOW_S:g}]")
-
-
-#: bytes per sample of the final estimate's work arrays, per instrument, with a margin of 1.5: 437
-#: measured (peak RSS of estimate_records on 172 800 samples of one horizontal gyrocompass, +72 MB)
-FIT_BYTES_PER_SAMPLE = 660
-
-
-def check_run_memory(scene) -> None:
-    """Refuse a run that cannot fit in memory, before any node starts. Instruments that stream hold
-    one block; one that does not (``STREAMS`` False) holds the run (``core.memory.check_memory``'s
-    estimate). The estimator keeps 8 (2 + k) bytes per sample of each instrument (k its measured
-    channels) in arrays that double (2x), and its final fits take :data:`FIT_BYTES_PER_SAMPLE` more."""
-    from gyro_instrument.core.memory import available_bytes, check_memory, sample_count
-    types = [spec[0] for spec in scene.instruments.values()]
-    if not all(getattr(REGISTRY.get(t), "STREAMS", False) for t in types):
-        check_memory(scene)
-        return
-    n = sample_count(scene)
-    need = n * sum(2 * 8 * (2 + len(REGISTRY[t].MEASURED_CHANNELS)) + FIT_BYTES_PER_SAMPLE for t in types)
-    available = available_bytes()
-    if available is not None and need > available:
-        raise SceneError("duration_s", scene.duration_s,
-                         f"the estimator would keep ~{need / 1e9:.3g} GB for {n} samples at {scene.sample_rate_hz:g} "
-                         f"Hz; {available / 1e9:.3g} GB available: lower duration_s or sample_rate_hz")
 
 
 def _params(scene, overrides, duration_s, **extra):
@@ -282,13 +98,11 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     DeliveryError
         A sample was not delivered within ``timeout_s``.
     """
-    from gyro_instrument.scenes import load_scene
     t_start = time.perf_counter()
     overrides = list(overrides)
-    overrides_all = overrides + ([f"duration_s={float(duration_s)!r}"] if duration_s else [])
-    scene_obj = load_scene(scene, overrides_all)          # refuse bad input before any node starts
+    scene_obj = api.load_scene(scene, overrides, duration_s or None)    # refuse bad input before any node starts
     if bag:
-        bag_format = _check_bag(scene, bag, bag_format, overwrite, max_bag_size, max_bag_duration_s)
+        bag_format = api.check_bag(scene, bag, bag_format, overwrite, max_bag_size, max_bag_duration_s, field="bag")
     check_window(window_s)
     check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
@@ -336,18 +150,6 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         rclpy.shutdown(context=context)
         for sig, h in handlers.items():
             signal.signal(sig, h)
-
-
-def _check_bag(scene, bag, bag_format, overwrite, max_bag_size, max_bag_duration_s):
-    """Resolve the bag layout (``mcap`` or ``rosbag2``) of the output path ``bag`` and refuse an
-    output that exists without ``overwrite`` or is one of the scene's input files; return the
-    layout. Raises :class:`SceneError` as
-    :func:`~gyro_instrument.recording.bag_layout.check_bag_output` does."""
-    from gyro_instrument.cli import scene_inputs
-    from gyro_instrument.recording.bag_layout import bag_format as layout_of, check_bag_output
-    bag_format = layout_of(bag, bag_format, max_bag_size, max_bag_duration_s)
-    check_bag_output(bag, bag_format, "bag", scene_inputs(scene), overwrite, max_bag_size, max_bag_duration_s)
-    return bag_format
 
 
 def _install_stop_handlers():

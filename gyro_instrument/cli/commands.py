@@ -1,0 +1,308 @@
+"""The subcommands (``args`` in, exit status out) and :func:`main` with its exit statuses (see
+:func:`guarded`)."""
+
+import json
+import math
+import os
+import signal
+import sys
+import threading
+
+from gyro_instrument import api
+from gyro_instrument.api import damage_line, replay_bag
+from gyro_instrument.cli.parser import (EXIT_BAD_INPUT, EXIT_CLOSED_PIPE, EXIT_INTEGRATION_FAILED, EXIT_INTERRUPTED,
+                                        build_parser, scene_arg, scene_from_args)
+from gyro_instrument.cli.simulate import simulate_to_file, terminal_progress
+from gyro_instrument.cli.text import print_description, print_estimate, print_plan, print_scene_notes
+from gyro_instrument.core.errors import IntegrationError, SceneError
+from gyro_instrument.core.files import check_output, check_output_dir, scene_inputs
+from gyro_instrument.core.jsonable import to_jsonable
+
+
+def main(argv=None) -> int:
+    """Run one command line (``argv``, default ``sys.argv[1:]``) and return the exit status.
+
+    0 success, 2 bad input (SceneError or an argparse error: one line on stderr), 3 integration
+    failed, 130 interrupted (Ctrl-C: one line, no output file left half-written). argparse's
+    ``--help`` and its errors raise SystemExit (0 and 2).
+    """
+    return guarded(lambda: run_command(build_parser().parse_args(argv)), process=argv is None)
+
+
+def guarded(body, process=False) -> int:
+    """Call ``body()`` and turn the expected failures into one line on stderr and an exit status.
+
+    SceneError -> 2, IntegrationError -> 3, a closed stdout pipe -> 141 quietly (:func:`closed_pipe`),
+    KeyboardInterrupt (wherever it lands: imports,
+    integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
+    exception is a bug and keeps its traceback. ``process``: this is the process's entry point
+    (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
+    Python exits cannot print a traceback after the one line.
+    """
+    try:
+        try:
+            return body()
+        except SceneError as exc:
+            print(f"gyro-instrument: error: {one_line(exc)}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        except IntegrationError as exc:
+            print(f"gyro-instrument: integration failed: {one_line(exc)}", file=sys.stderr)
+            return EXIT_INTEGRATION_FAILED
+        except BrokenPipeError:
+            return closed_pipe()
+    except KeyboardInterrupt:
+        return interrupted(process)
+    finally:
+        if process:
+            _ignore_sigint()
+
+
+def closed_pipe() -> int:
+    """The reader of stdout went away (``describe SCENE | head -2``): stop quietly with 141 (128 +
+    SIGPIPE, what a shell reports for a command its pipe closed), stdout pointed at /dev/null so
+    that Python's final flush cannot print a BrokenPipeError either."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):   # a stdout without a file descriptor (a test's)
+        pass
+    return EXIT_CLOSED_PIPE
+
+
+def one_line(exc) -> str:
+    """The message of ``exc`` on one line: newlines and other control characters in quoted
+    values (a key or value given on the command line) shown escaped."""
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(exc))
+
+
+def interrupted(process=False) -> int:
+    """Print ``gyro-instrument: interrupted`` and return 130, with further SIGINTs ignored while
+    printing (a second Ctrl-C must not interrupt the message); in-process callers get their
+    handler back."""
+    for _ in range(3):   # a second SIGINT before the handler is swapped lands here: try again
+        try:
+            previous = _ignore_sigint()
+            print("gyro-instrument: interrupted", file=sys.stderr)
+            if not process and previous is not None:
+                signal.signal(signal.SIGINT, previous)
+            return EXIT_INTERRUPTED
+        except KeyboardInterrupt:
+            continue
+    return EXIT_INTERRUPTED
+
+
+def _ignore_sigint():
+    """Ignore SIGINT (main thread only); return the previous handler or None."""
+    if threading.current_thread() is threading.main_thread():
+        return signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return None
+
+
+def run_command(args) -> int:
+    """Run the parsed subcommand ``args.command``; its exit status."""
+    return COMMANDS[args.command](args)
+
+
+def scenes_command(args) -> int:
+    """``gyro-instrument scenes``: the shipped scene names, one per line."""
+    from gyro_instrument.scenes import shipped_scene_names
+    print("\n".join(shipped_scene_names()))
+    return 0
+
+
+def describe_command(args) -> int:
+    """``gyro-instrument describe``: instruments, active effects, predictions (text or ``--json``)."""
+    d = api.describe(scene_from_args(args))
+    if args.json:
+        print(json.dumps(d, indent=2))
+    else:
+        print_description(d)
+    return 0
+
+
+def simulate_command(args) -> int:
+    """``gyro-instrument simulate``: every instrument channel to CSV or Parquet (``--out``)."""
+    from gyro_instrument.estimators.data_io import scene_sidecar_path, table_kind
+    check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    if table_kind(args.out) == "csv":        # its scene beside it, under the same rule
+        side = scene_sidecar_path(args.out)
+        check_output(side, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{side}.partial",))
+    scene = scene_from_args(args)
+    print_scene_notes(scene)
+    progress = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    rows, ncol, nfev, wall = simulate_to_file(scene, args.out, args.output_rate_hz, progress)
+    if progress:
+        progress(f"wrote {args.out}: {rows} rows x {ncol} columns "
+                 f"({nfev} right-hand-side evaluations, {wall:.2f} s integrating)")
+    return 0
+
+
+def estimate_command(args) -> int:
+    """``gyro-instrument estimate``: simulate through the sensors (or read ``--data``) and estimate."""
+    from gyro_instrument.estimators.pipeline import simulate_truth
+    scene = data_scene(args) if scene_arg(args) is None and args.data else None
+    if scene is None and scene_arg(args) is None:
+        raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'"
+                                        + (f" ({args.data} carries none: no Parquet metadata 'gyro_instrument."
+                                           f"scene_yaml', no .scene.yaml beside it)" if args.data else ""))
+    scene = scene or scene_from_args(args)
+    table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
+                   "--angle-unit": (args.angle_unit, "rad"), "--column": (args.columns, []),
+                   "--separator": (args.separator, None)}
+    if args.data:
+        from gyro_instrument.estimators.data_io import TableOptions, estimate_data
+        options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit, args.columns,
+                                          args.separator)
+        result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)
+    elif given := [(flag, v) for flag, (v, default) in table_flags.items() if v != default]:
+        raise SceneError(*given[0], "reads a table: give --data FILE (or leave the flag out)")
+    else:
+        with terminal_progress("simulating"):
+            truth = simulate_truth(scene)
+        result = api.estimate(scene, truth)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print_estimate(result)
+    return 0
+
+
+def data_scene(args) -> "Scene | None":
+    """The scene ``estimate --data FILE`` takes when no scene is given: the one the table carries
+    (written by ``simulate``), with ``--set`` applied and a note on stderr; None when it carries none."""
+    from gyro_instrument.estimators.data_io import scene_of_table
+    found = scene_of_table(args.data, args.overrides)
+    if found is None:
+        return None
+    scene, where = found
+    print(f"gyro-instrument: note: no --scene given: using the scene {scene.name!r} from {where}", file=sys.stderr)
+    return scene
+
+
+def bench_command(args) -> int:
+    """``gyro-instrument bench``: the studies of :mod:`gyro_instrument.bench.studies` into ``--out``."""
+    from gyro_instrument.bench.studies import run_bench
+    if args.overrides and args.scene is None:
+        raise SceneError("--set", args.overrides[0], "applies to a --scene; give --scene SCENE")
+    if args.scene is not None:
+        from gyro_instrument.scenes import load_scene
+        load_scene(args.scene, args.overrides)      # a bad scene stops here, before any directory is made
+    progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    if args.scheduler:
+        from gyro_instrument.core.parallel import dask_executor
+        with dask_executor(args.scheduler) as ex:      # no scheduler: exit 2 before --out is made
+            check_output_dir(args.out)
+            progress(f"sweeps on the Dask scheduler {args.scheduler}")
+            print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides,
+                            executor=ex))
+    else:
+        check_output_dir(args.out)
+        print(run_bench(args.out, args.quick, progress=progress, scene=args.scene, overrides=args.overrides))
+    return 0
+
+
+def sweep_command(args) -> int:
+    """``gyro-instrument sweep``: :func:`gyro_instrument.bench.sweep.run_sweep` into ``--out``."""
+    from gyro_instrument.bench.sweep import grid, run_sweep
+    from gyro_instrument.estimators.data_io import table_kind
+    if table_kind(args.out) != "parquet":
+        raise SceneError("--out", args.out, "must be a Parquet file (name ending .parquet or .pq)")
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise SceneError("--timeout", args.timeout, "must be a finite number of seconds > 0")
+    check_output(args.out, "--out", scene_inputs(args.scene), args.overwrite, also=(f"{args.out}.partial",))
+    grid(args.vary)                                   # a bad --vary stops here, before any scheduler is asked
+    if args.seeds < 1:
+        raise SceneError("--seeds", args.seeds, "must be an integer >= 1")
+    overrides = list(args.overrides) + ([f"duration_s={args.duration_s!r}"] if args.duration_s is not None else [])
+    progress = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    if args.scheduler:
+        from gyro_instrument.core.parallel import dask_executor
+        with dask_executor(args.scheduler, args.timeout, need_workers=True, progress=progress) as ex:
+            progress(f"sweep on the Dask scheduler {args.scheduler}")
+            r = run_sweep(args.scene, overrides, args.vary, args.seeds, args.out, executor=ex, progress=progress)
+    else:
+        r = run_sweep(args.scene, overrides, args.vary, args.seeds, args.out, progress=progress)
+    print(f"wrote {r['path']}: {r['rows']} rows x {r['columns']} columns ({r['points']} grid points, "
+          f"{r['errors']} with an error) in {r['wall_s']:.1f} s ({r['rows_per_s']:.3g} rows/s)")
+    return 0
+
+
+def recover_command(args) -> int:
+    """``gyro-instrument recover``: rewrite a damaged or cut bag's intact records (``--out``)."""
+    from gyro_instrument.core.scene import EPOCH_NS
+    from gyro_instrument.recording.bag_layout import bag_files, bag_inputs, scan_path
+    from gyro_instrument.recording.mcap_io import recover
+    bag_files(args.bag, "bag")
+    check_output(args.out, "--out", bag_inputs(args.bag), args.overwrite)
+    scan = scan_path(args.bag)
+    n, scan = recover(args.bag, args.out, scan)
+    print(f"recovered {n} messages from {args.bag} into {args.out}")
+    for d in scan.damage_dicts(EPOCH_NS):
+        print(f"  damaged: {damage_line(d)}")
+    for note in scan.notes:
+        print(f"  note: {note}")
+    if scan.truncated:
+        print("  note: the input was cut short (no summary): read up to its last complete record")
+    return 0
+
+
+def plot_command(args) -> int:
+    """``gyro-instrument plot``: the standard views of a table or a bag to PNG."""
+    import time
+    from gyro_instrument.views import plot_file
+    from gyro_instrument.views.rosette import parse_window
+    out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
+    t0 = time.perf_counter()
+    window = parse_window(args.window)
+    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite,
+                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate)
+    for note in notes:
+        print(f"gyro-instrument: note: {note}", file=sys.stderr)
+    views = [p for p in pngs if not p.endswith(".gif")]
+    print(f"wrote {len(views)} views" + (" and an animation" if len(views) < len(pngs) else "")
+          + f" in {time.perf_counter() - t0:.2f} s: " + ", ".join(pngs))
+    return 0
+
+
+def replay_command(args) -> int:
+    """``gyro-instrument replay``: the estimate from a recorded bag (:func:`replay_bag`)."""
+    result = replay_bag(args.bag, args.scene_option, args.overrides, args.topics)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print_estimate(result)
+    return 0
+
+
+def plan_command(args) -> int:
+    """``gyro-instrument plan``: see :mod:`gyro_instrument.estimators.planner`."""
+    from gyro_instrument.estimators.planner import NOISE_FACTORS, RATE_FACTORS, parse_targets, plan, verify_plan
+    targets = parse_targets(args.targets)
+    if args.verify and args.seeds < 2:
+        raise SceneError("--seeds", args.seeds, "must be an integer >= 2 (the rms of the Monte Carlo)")
+    err = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    d = plan(args.scene, args.overrides, targets, args.noise_factors or NOISE_FACTORS,
+             args.rate_factors or RATE_FACTORS, floor=not args.no_floor)
+    if args.verify:
+        verify_plan(d, args.seeds, progress=err)
+    d = to_jsonable(d)
+    if args.json:
+        print(json.dumps(d, indent=2))
+    else:
+        print_plan(d)
+    return 0
+
+
+#: Subcommand name -> its function (``args`` in, exit status out).
+COMMANDS = {
+    "scenes": scenes_command,
+    "describe": describe_command,
+    "simulate": simulate_command,
+    "estimate": estimate_command,
+    "bench": bench_command,
+    "plan": plan_command,
+    "sweep": sweep_command,
+    "recover": recover_command,
+    "plot": plot_command,
+    "replay": replay_command,
+}

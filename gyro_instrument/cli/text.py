@@ -1,0 +1,313 @@
+"""What the commands print: a scene's description, an estimate, a plan (text wrapped at
+:data:`TEXT_WIDTH`, periods labelled with their convention)."""
+
+import math
+import sys
+
+from gyro_instrument.recording.replay import damage_line
+
+def print_scene_notes(scene, stream=None) -> None:
+    """The scene's notes (:func:`gyro_instrument.scenes.scene_notes`) on stderr, one line each."""
+    from gyro_instrument.scenes import scene_notes
+    for note in scene_notes(scene):
+        print(f"gyro-instrument: note: {note}", file=stream or sys.stderr)
+
+
+SWING = "(one swing = half period)"
+FULL_PERIOD = "(full period)"
+QUARTER_PERIOD = "(quarter period, sec. 2 eq. 42)"
+
+
+def deg_h(rate_rad_s) -> str:
+    """A rate in rad/s as ``x deg/h`` (for printing beside the rad/s value)."""
+    return "null deg/h" if rate_rad_s is None else f"{math.degrees(rate_rad_s) * 3600.0:.6g} deg/h"
+
+
+def labelled(key, value) -> str:
+    """``key = value`` for a prediction, with the period convention beside a period or duration and
+    deg/h beside a rad/s rate."""
+    text = f"{key} = {value:.10g}" if isinstance(value, float) else f"{key} = {_fmt(value, '')}"
+    numbers = isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) for v in value)
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)) and not numbers:
+        return text
+    if "quarter_period" in key:
+        return f"{text} {QUARTER_PERIOD}"
+    if "half_period" in key:
+        return f"{text} (half period)"
+    if "swing_duration" in key or key.startswith("T_"):
+        return f"{text} {SWING}"
+    if "period" in key and key.endswith("_s"):
+        return f"{text} {FULL_PERIOD}"
+    if key.endswith("_rad_s") and not numbers:
+        if "spin" in key:     # a rotor's spin: turn/s is how people think of it
+            return f"{text} ({value / (2 * math.pi):.6g} turn/s)"
+        return f"{text} ({deg_h(value)})"
+    return text
+
+
+#: Printed text is wrapped at this width (continuation lines indented under their first).
+TEXT_WIDTH = 100
+
+
+def wrapped_writer(stream) -> tuple:
+    """(write, flush): ``write`` gathers text; ``flush`` writes it to ``stream`` with every line
+    longer than :data:`TEXT_WIDTH` wrapped at spaces, continuations indented 4 more than the line."""
+    import textwrap
+    parts = []
+
+    def flush():
+        for line in "".join(parts).splitlines():
+            lead = line[:len(line) - len(line.lstrip())]
+            stream.write(textwrap.fill(line, TEXT_WIDTH, subsequent_indent=lead + "    ", break_long_words=False,
+                                       break_on_hyphens=False) + "\n" if len(line) > TEXT_WIDTH else line + "\n")
+    return parts.append, flush
+
+
+def _hemisphere(lat) -> str:
+    return f"{abs(lat):.4f}° {'N' if lat > 0 else 'S'}" if lat else "0° (equator)"
+
+
+def description_headline(d) -> list:
+    """What a person asks first, as lines: the latitude and, per pendulum, the swing plane's turn in
+    °/h (the exact finite-amplitude rate when it has one) and a full turn in hours."""
+    lines = [f"latitude {_hemisphere(d['site']['latitude_deg'])}"]
+    for name, inst in d["instruments"].items():
+        p = inst["predictions"]
+        rate = p.get("apsidal_rate_from_rest_rad_s", p.get("foucault_rate_rad_s"))
+        if rate is None or "foucault_rate_rad_s" not in p:
+            continue
+        lines.append(turn_line(name, rate) + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p
+                                              else ""))
+    return lines
+
+
+def turn_line(name, rate_rad_s) -> str:
+    """``<name>: the swing plane turns R °/h <sense> seen from above, a full turn in H h`` (rate about
+    the upward vertical, positive clockwise seen from above)."""
+    turn = f"a full turn in {2 * math.pi / abs(rate_rad_s) / 3600.0:.1f} h" if rate_rad_s else "it does not turn"
+    sense = "clockwise" if rate_rad_s > 0 else "counter-clockwise"
+    return f"{name}: the swing plane turns {math.degrees(rate_rad_s) * 3600.0:.3f} °/h {sense} seen from above, {turn}"
+
+
+def print_description(d, stream=None) -> None:
+    """``describe``'s text: the answer first (:func:`description_headline`), then the site, each
+    instrument's effects, predictions (one a line) and columns; lines wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
+    s = d["site"]
+    w(f"scene {d['scene']}: {d['description']}\n")
+    for line in description_headline(d):
+        w(f"  {line}\n")
+    w(f"  site: latitude {s['latitude_deg']:.6f} deg, n = {s['earth_rate_rad_s']:.8g} rad/s "
+      f"({deg_h(s['earth_rate_rad_s'])}), "
+      f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
+    w(f"  effects listed: {', '.join(d['scene_effects']) or 'none'}\n")
+    for note in d.get("scene_notes", []):
+        w(f"  note: {note}\n")
+    for name, inst in d["instruments"].items():
+        w(f"\n  {name} ({inst['type']}): {inst['summary']}\n")
+        if "integrator" in inst:
+            w(f"    integrator: {inst['integrator']['chosen']} ({inst['integrator']['reason']})\n")
+        w(f"    {'effect':<18}{'active':<8}{'relative size':>14}  estimate\n")
+        for ename, e in inst["effects"].items():
+            size = e["relative_size"]
+            size_txt = f"{size:.3g}" if size is not None else "n/a"
+            w(f"    {ename:<18}{'yes' if e['active'] else 'no':<8}{size_txt:>14}  {e['formula']}\n")
+        w("    predictions:\n")
+        for k, v in inst["predictions"].items():
+            if k != "notes":
+                w(f"      {labelled(k, v)}\n")
+        for note in inst["predictions"].get("notes", []):
+            w(f"    prediction note: {note}\n")
+        w(f"    columns: {', '.join(inst['columns'])}\n")
+    flush()
+
+
+def _fmt(v, spec):
+    return "null" if v is None else format(v, spec)
+
+
+def print_estimate(r, stream=None) -> None:
+    """Human-readable estimate: the answer first (:func:`estimate_headline`), then the recovered
+    latitude and Earth rate next to the truth, the checks, each instrument and method; lines
+    wrapped at :data:`TEXT_WIDTH`."""
+    w, flush = wrapped_writer(stream or sys.stdout)
+    for line in estimate_headline(r):
+        w(f"{line}\n")
+    _print_estimate_body(r, w)
+    flush()
+
+
+def estimate_headline(r) -> list:
+    """The estimate's answer as lines: the latitude (or why there is none) and each pendulum's
+    measured swing-plane rate in °/h with its full turn in hours."""
+    lat = r.get("latitude_deg")
+    if lat is None:
+        lines = [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
+    else:
+        sig = r.get("latitude_sigma_deg")
+        lines = [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
+                 f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
+    for name, e in r.get("instruments", {}).items():
+        k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
+        if k:
+            lines.append(turn_line(name, k))
+    return lines
+
+
+def _print_estimate_body(r, w):
+    tr = r["truth"]
+    truth = "scene's" if r.get("data") else "truth"    # measured data: the scene's values are nominal, not a truth
+    if r.get("data"):
+        w(f"data {r['data']} read with scene {r['scene']}, {_fmt(r.get('observation_s'), 'g')} s of samples\n")
+    elif r.get("recording_cut"):     # replay of a cut bag: what was read, and why it stopped
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_read_s']:g} s of {r['observation_s']:g} s "
+          f"read per instrument (recording cut: {r['recording_cut']})\n")
+    else:
+        w(f"scene {r['scene']} (seed {r.get('seed')}), {r['observation_s']:g} s per instrument\n")
+    for note in r.get("scene_notes", []):
+        w(f"  note: {note}\n")
+    label = "|latitude|" if r.get("latitude_is_absolute") else "latitude  "
+    w(f"  {label} {_fmt(r['latitude_deg'], '.7f')} +/- {_fmt(r['latitude_sigma_deg'], '.2g')} deg"
+      f"   {truth} {tr['latitude_deg']:.7f}   (Cramer-Rao {_fmt(r['crlb']['latitude_deg'], '.2g')})\n")
+    if r.get("latitude_sigma_reason"):
+        lo, hi = r["latitude_interval_deg"]
+        lo3, hi3 = r["latitude_interval_3sigma_deg"]
+        w(f"             1-sigma interval [{lo:.7f}, {hi:.7f}], 3-sigma [{lo3:.7f}, {hi3:.7f}] deg: "
+          f"{r['latitude_sigma_reason']}\n")
+    if r.get("hemisphere") and r.get("latitude_deg") is not None:
+        w(f"  hemisphere {r['hemisphere']} ({r.get('hemisphere_basis')})\n")
+    for o in r.get("other_latitudes_deg") or ():
+        w(f"  also consistent: latitude {o['latitude_deg']:.7f} deg (delta chi2 = {o['delta_chi2']:.3g})\n")
+    if r.get("earth_rate_known"):
+        w(f"  Earth rate {r['earth_rate_rad_s']:.9e} rad/s ({deg_h(r['earth_rate_rad_s'])}) {r['earth_rate_basis']}\n")
+    else:
+        w(f"  Earth rate {_fmt(r['earth_rate_rad_s'], '.9e')} +/- {_fmt(r['earth_rate_sigma_rad_s'], '.2g')} rad/s"
+          f" ({deg_h(r['earth_rate_rad_s'])})"
+          f"   {truth} {tr['earth_rate_rad_s']:.9e}   (Cramer-Rao {_fmt(r['crlb']['earth_rate_rad_s'], '.2g')})\n")
+    if r.get("method"):
+        w(f"  method: {r['method']}\n")
+    print_checks(r.get("checks"), w)
+    if r.get("reason"):
+        w(f"  reason: {r['reason']}\n")
+    print_damage(r, w)
+    for name, e in r["instruments"].items():
+        if e.get("swing_duration_s") is not None:
+            c = e.get("counting", {})
+            w(f"  {name}: T = {e['swing_duration_s']:.9f} +/- {e['swing_duration_sigma_s']:.2g} s (fit; one swing = "
+              f"half period), T0 = {e['small_amplitude_swing_duration_s']:.9f} s (small amplitude, one swing); "
+              f"counting: {_fmt(c.get('swing_duration_s'), '.6f')} s (one swing; {c.get('swings')} swings)\n")
+        elif e.get("foucault_rate_rad_s") is not None:
+            w(f"  {name}: k = {e['foucault_rate_rad_s']:.6e} +/- {e['foucault_rate_sigma_rad_s']:.2g} rad/s "
+              f"({deg_h(e['foucault_rate_rad_s'])}; ellipse correction {e['ellipse_correction_rad_s']:.2g} rad/s), "
+              f"swing period {e['period_s']:.6g} s {FULL_PERIOD}\n")
+        else:
+            w(f"  {name}: null: {e.get('reason')}\n")
+    for mname, m in r["methods"].items():
+        lat = m.get("latitude_deg")
+        w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
+          + (" (|latitude|: hemisphere not determined)" if m.get("latitude_is_absolute") else "")
+          + (f" +/- {m['latitude_sigma_deg']:.2g}" if lat is not None and m.get("latitude_sigma_deg") is not None else "")
+          + (("," if "latitude_deg" in m else "") + f" n = {m['earth_rate_rad_s']:.9e} rad/s "
+             f"({deg_h(m['earth_rate_rad_s'])})"
+             if m.get("earth_rate_rad_s") is not None else "")
+          + (f"  [{m.get('reason') or m.get('reason_earth_rate')}]" if (m.get('reason') or m.get('reason_earth_rate')) else "")
+          + "\n")
+
+
+def print_checks(checks, w) -> None:
+    """One line for the adequacy checks that passed, one per check that did not (estimators/adequacy.py)."""
+    if not checks:
+        return
+    passed = [c for c in checks if c["status"] == "passed"]
+    w(f"  checks: {len(passed)} of {len(checks)} passed"
+      f" ({', '.join(sorted({c['check'] for c in passed}))})\n" if passed else "  checks: none passed\n")
+    for c in checks:
+        if c["status"] != "passed":
+            w(f"  check {c['check']} of {c['instrument']}: {c['status']}: {c['detail']}\n")
+
+
+def print_damage(r, w) -> None:
+    """The bag's lost stretches and the reader's notes (replay, estimate --data); nothing for a
+    live estimate."""
+    for d in r.get("damaged") or ():
+        w(f"  damaged: {damage_line(d)}\n")
+    for n in (r.get("replay_notes") or []) + (r.get("data_notes") or []):
+        w(f"  note: {n}\n")
+
+
+# ----------------------------------------------------------------------------- plan
+def human_duration(s) -> str:
+    """``161.6 s (2.69 min)``: seconds with the largest sensible unit beside them."""
+    if s is None:
+        return "null"
+    for unit, size in (("years", 365.25 * 86400), ("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if s >= 2 * size:
+            return f"{s:.4g} s ({s / size:.3g} {unit})"
+    return f"{s:.4g} s"
+
+
+def print_plan(d, stream=None) -> None:
+    """Human-readable plan (:func:`gyro_instrument.estimators.planner.plan`)."""
+    w = (stream or sys.stdout).write
+    sen = d["sensor"]
+    n = d["earth_rate_rad_s"]
+    w(f"plan for {d['scene']}: latitude {d['latitude_deg']:.6f} deg, n = {n:.8g} rad/s ({deg_h(n)}); sensor "
+      f"{sen['effective_noise_rad']:.3g} rad rms" + (f" (incl. quantization {sen['quantization_rad']:.3g} rad)"
+                                                    if sen["quantization_rad"] else "")
+      + (f", {100 * sen['dropout_fraction']:.3g} % dropouts" if sen["dropout_fraction"] else "")
+      + f" at {sen['sample_rate_hz']:g} Hz\n")
+    for name, m in d["instruments"].items():
+        what = (f"swing {m['swing_duration_s']:.6g} s {SWING}" if m["kind"] == "gyro"
+                else f"period {m['period_s']:.6g} s {FULL_PERIOD}")
+        w(f"  {name} ({m['configuration']}): {what}, amplitude {m['amplitude_rad']:.3g} rad, measures "
+          f"{m['measures']}\n")
+    for name, why in d.get("not_used", {}).items():
+        w(f"  {name}: not used ({why})\n")
+    for e in d["targets"]:
+        unit = e["target"].split("_", 1)[1] if e["target"].startswith("latitude") else e["target"][len("earth_rate_"):]
+        unit = unit.replace("_", "/")
+        w(f"\ntarget {e['target']} = {e['value']:g} (1 sigma):\n")
+        if e.get("observation_s") is None:
+            w(f"  not reachable: {e.get('reason')}\n")
+            continue
+        w(f"  observe {human_duration(e['observation_s'])} per configuration ({e['samples_per_instrument']} samples "
+          f"each): Cramer-Rao bound {e['planned_sigma']:.4g} {unit}; limited by {e['limited_by']}\n")
+        if e.get("latitude_note"):
+            w(f"  note: {e['latitude_note']}\n")
+        dep = e["dependence"]
+        sl, ss = dep["slope_at_plan"], dep["slope_short_record"]
+        w(f"  dependence: bound ~ T^{_fmt(sl, '.2f')} around the plan (T^-1.5 law once two cycles are in the "
+          f"record); below the estimator's shortest record ({d['min_record_s']:.4g} s) ~ T^{_fmt(ss, '.2f')}\n")
+        w("      T (s)        bound\n")
+        for row in dep["curve"]:
+            mark = "  <- plan" if row["observation_s"] == e["observation_s"] else (
+                "  (short record)" if row["regime"].startswith("short") else "")
+            w(f"    {row['observation_s']:10.4g}  {_fmt(row['sigma'], '11.4g')} {unit}{mark}\n")
+        fl = e.get("floor")
+        if fl:
+            if fl.get("bias") is None:
+                w(f"  floor: {fl.get('reason')}\n")
+            elif fl["reachable"]:
+                w(f"  floor: noise-free bias {fl['bias']:.2g} {unit} at the planned T: below the target\n")
+            else:
+                by = (f": set by {fl['set_by']}, a systematic effect the estimator does not correct" if fl.get("set_by")
+                      else ": no single effect sets it (the estimator's own bias at this record length)")
+                w(f"  floor: NOT REACHABLE: the noise-free estimate is off by {fl['bias']:.3g} {unit} at the planned T"
+                  f"{by}\n")
+                for c in fl.get("effects", []):
+                    w(f"    without {c['effect']}: bias {_fmt(c['bias_without'], '.3g')} {unit}\n")
+        rows = "; ".join(f"{r['change']} -> {human_duration(r['observation_s'])} (law {r['law_observation_s']:.4g} s)"
+                         for r in e["sensitivity"]["rows"])
+        w(f"  sensitivity: {rows}; law T ~ (sigma^2/f)^(1/3)\n")
+        c = e["counting"]
+        if c.get("observation_s") is None:
+            w(f"  Quet's counting: {c.get('reason')}\n")
+        else:
+            yr = " -- more than a year" if c["exceeds_a_year"] else ""
+            w(f"  Quet's counting of whole swings ({', '.join(c['instruments'])}): {human_duration(c['observation_s'])}"
+              f" ({c['observation_s'] / e['observation_s']:.3g}x the fit's){yr}\n")
+        v = e.get("verify")
+        if v:
+            w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
+              f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
+              + (f"; {v['null']} null" if v["null"] else "") + "\n")

@@ -1,0 +1,187 @@
+"""What every node shares: the QoS profiles, the steady clock, and :class:`SceneNode` (parameters
+declared from a table with descriptors and checked on every change, the scene, one clock owner
+per namespace)."""
+
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock as RclClock, ClockType
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from gyro_instrument import api
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.recording.topics import resolve
+from gyro_instrument.ros import messages as m
+from gyro_instrument.ros import params as P
+from gyro_instrument.scenes import build_instruments
+
+RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: the estimator's results: latched (the last estimate kept for subscribers that ask for
+#: TRANSIENT_LOCAL; a VOLATILE subscriber, the recorder's, still matches and gets new ones)
+LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: publishers of a node run alone: a sample is kept until every matched subscriber has it, however
+#: far ahead of a slow subscriber the publisher runs (real-time factor 0), so nothing is overwritten
+PUBLISH_ALL = RELIABLE_ALL
+#: timers that pace or wait run on the steady clock: never on sim time (a clock owner would wait for itself)
+STEADY = RclClock(clock_type=ClockType.STEADY_TIME)
+#: samples (or messages) a node run alone publishes per timer tick at real-time factor 0
+FLOW_BATCH = 200
+ACK_TIMEOUT = Duration(seconds=5)
+
+
+def acked(node, pubs) -> None:
+    """Wait until every subscriber acknowledged what ``pubs`` published; warn once per topic if not."""
+    for pub in pubs:
+        if not pub.wait_for_all_acked(ACK_TIMEOUT):
+            if pub.topic_name not in node._ack_warned:
+                node._ack_warned.add(pub.topic_name)
+                node.get_logger().warning(f"{pub.topic_name}: a subscriber did not acknowledge within 5 s "
+                                          f"(slow or gone); publishing on")
+
+
+class SceneNode(Node):
+    """Parameters declared from a table with descriptors, checked on every change; the scene."""
+
+    SPECS = P.SCENE
+    #: a change of these reloads the scene and restarts the run (simulators, estimator)
+    RESTART_ON = P.SCENE_NAMES
+
+    def __init__(self, name, specs=None, **kwargs):
+        super().__init__(name, **kwargs)
+        self.specs = specs or self.SPECS
+        self.refused = P.declare_all(self, self.specs)
+        self.scene = None
+        self.insts = {}
+        self.clock_owner = False
+        self.standalone = False
+        self._ack_warned = set()
+        self._restart = False
+        self.add_pre_set_parameters_callback(P.pre_set_checker(self, self.specs))
+        self.add_on_set_parameters_callback(self._check_params)
+        self.add_post_set_parameters_callback(self._after_set)
+
+    def value(self, name, default=None) -> object:
+        """A parameter's value (``default`` if it is not declared)."""
+        if not self.has_parameter(name):
+            return default
+        v = self.get_parameter(name).value
+        return default if v is None else v
+
+    def refuse_sim_time_if_owner(self) -> None:
+        """A clock owner started with ``use_sim_time:=true`` would wait for its own clock: refused."""
+        if self.clock_owner and self.value("use_sim_time", False):
+            self.get_logger().error("use_sim_time = true is invalid on the clock owner (it publishes clock and "
+                                    "would wait for itself): use_sim_time set back to false")
+            self.set_parameters([Parameter("use_sim_time", value=False)])
+
+    def _scene_args(self, changes=None):
+        vals = {p: self.value(p) for p in P.SCENE_NAMES}
+        for p in changes or ():
+            if p.name in vals:
+                vals[p.name] = p.value
+        return vals["scene"], list(vals["overrides"] or []), (float(vals["duration_s"] or 0.0) or None)
+
+    def _check_params(self, params):
+        for p in params:
+            if p.name == "use_sim_time" and p.value is True and self.clock_owner:
+                reason = ("use_sim_time = true is invalid on the clock owner: it publishes clock and would wait "
+                          "for itself")
+                self.get_logger().error(f"parameter refused: {reason}")
+                return SetParametersResult(successful=False, reason=reason)
+        if not any(p.name in P.SCENE_NAMES for p in params):
+            return SetParametersResult(successful=True)
+        try:
+            api.load_scene(*self._scene_args(params))
+        except SceneError as exc:
+            self.get_logger().error(f"parameter refused: {exc}")
+            return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
+    def _after_set(self, params):
+        for p in params:
+            self.refused.pop(p.name, None)
+        if any(p.name in self.RESTART_ON for p in params):
+            self._restart = True
+            if not self.standalone:
+                self.restart()
+
+    def restart(self) -> None:
+        """Reload the scene after a parameter change (subclasses tear down and start again)."""
+        self._restart = False
+
+    def load(self) -> bool:
+        """Load the scene from the parameters; on bad input log it and return False (stay up)."""
+        bad = [n for n in self.refused if n in P.SCENE_NAMES or n == "seed"]
+        if bad:
+            self.get_logger().error(f"not running: {', '.join(bad)} refused at start-up; set a valid value "
+                                    f"(ros2 param set) to start")
+            self.scene, self.insts = None, {}
+            return False
+        try:
+            self.scene = api.load_scene(*self._scene_args())
+            self.insts = build_instruments(self.scene)
+            return True
+        except SceneError as exc:
+            self.get_logger().error(f"{exc}")
+            self.scene, self.insts = None, {}
+            return False
+
+    def _named_nodes_ready(self, expected):
+        """expected: {node name: [resolved topics it must subscribe to]} -> names still missing."""
+        ns = self.get_namespace()
+        missing = []
+        for node_name, topics in expected.items():
+            for topic in topics:
+                infos = self.get_subscriptions_info_by_topic(topic)
+                if not any(i.node_name == node_name and i.node_namespace == ns for i in infos):
+                    missing.append(node_name)
+                    break
+        return missing
+
+    def _unmatched(self, pubs):
+        """Topics with a subscription the graph knows of that a publisher has not matched yet."""
+        return [pub.topic_name for pub in pubs
+                if pub.get_subscription_count() < len(self.get_subscriptions_info_by_topic(pub.topic_name))]
+
+    # ---- one clock per namespace -------------------------------------------------------------------
+
+    def clock_remap_note(self, topic) -> str:
+        """What sim-time consumers need when this node's clock is not ``/clock``: rclpy's time source
+        subscribes to the absolute ``/clock`` whatever the node's namespace."""
+        if topic == "/clock":
+            return ""
+        return (f"; a use_sim_time node reads this clock only when started with -r /clock:={topic} (rclpy's time "
+                f"source listens on the absolute /clock)")
+
+    def watch_clock(self, topic) -> None:
+        """Before owning ``topic``: count the ticks another node publishes on it (:meth:`other_clock_owner`)."""
+        self._foreign_ticks = 0
+
+        def tick(_data):
+            self._foreign_ticks += 1
+        self._clock_watch = self.create_subscription(m.Clock, topic, tick, RELIABLE_ALL, raw=True)
+
+    def other_clock_owner(self, topic) -> str | None:
+        """Why this node must not publish ``topic`` (None when it may): another node publishes it and
+        either ticks were seen from it while this node waited, or it is named before this one (two
+        owners started together: the first name keeps the clock). Stops the watch."""
+        watch = getattr(self, "_clock_watch", None)
+        if watch is not None:
+            self.destroy_subscription(watch)
+            self._clock_watch = None
+        me = resolve(self.get_namespace(), self.get_name())
+        others = sorted({resolve(i.node_namespace, i.node_name) for i in self.get_publishers_info_by_topic(topic)}
+                        - {me})
+        if not others:
+            return None
+        ticks = getattr(self, "_foreign_ticks", 0)
+        if ticks or others[0] < me:
+            seen = f"{ticks} ticks seen from it" if ticks else f"it was named first ({others[0]} < {me})"
+            return (f"another node already publishes {topic}: {', '.join(others)} ({seen}); one clock owner per "
+                    f"namespace, so this node does not publish it (no duplicate or backwards ticks)")
+        return None
+
+

@@ -1,0 +1,261 @@
+"""``estimator``: :class:`EstimatorNode` collects joint samples (raw CDR, decoded in bulk, at most
+4096 kept as bytes) into arrays of what it fits
+(:class:`~gyro_instrument.recording.joint_buffer.JointBuffer`) and calls the core estimator; run
+alone it publishes once every expected sample has arrived.
+"""
+
+import math
+import time
+
+from rclpy.serialization import deserialize_message
+
+from gyro_instrument.core.memory import sample_count
+from gyro_instrument.estimators.adequacy import InadequateData
+from gyro_instrument.estimators.pipeline import estimable, estimate_records
+from gyro_instrument.recording.joint_buffer import JointBuffer
+from gyro_instrument.recording.joints import records_from_joints
+from gyro_instrument.recording.topics import CLOCK, DIAGNOSTICS, ESTIMATOR_TOPICS, joint_names, joint_topic
+from gyro_instrument.ros import messages as m
+from gyro_instrument.ros import params as P
+from gyro_instrument.ros.nodes.base import LATCHED, RELIABLE_ALL, STEADY, SceneNode
+
+
+class EstimatorNode(SceneNode):
+    """Subscribes to the instruments' joint states and publishes latitude and Earth rate."""
+
+    SPECS = P.ESTIMATOR
+
+    def __init__(self, name="estimator", **kwargs):
+        super().__init__(name, **kwargs)
+        self.buffers = {}
+        self.subs = {}
+        self.rejected = {}
+        self.wrong_types = {}
+        self.result = None
+        self.refusal = None     # the InadequateData of a refused estimate (estimators/adequacy.py)
+        self.pubs = {}
+        self.timers_ = []
+        self.clock_sub = None
+        self.last_clock_ns = None
+        self.expected = 0
+        self.final = False
+        self._clock_done_at = None
+        self._last_input = None
+        self.runs = 0
+        if self.load():
+            self.prepare()
+
+    def prepare(self) -> None:
+        self.expected = sample_count(self.scene)
+        self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
+        for name, inst in self.insts.items():
+            if estimable(inst):
+                # records_from_joints reads the measured channels and the last joint's velocity
+                self.buffers[name] = JointBuffer(m.joint_state_layout(
+                    joint_names(name, inst)), keep=len(inst.MEASURED_CHANNELS))
+                sub = self.create_subscription(
+                    m.JointState, joint_topic(name), lambda data, n=name: self._on_joint_raw(n, data),
+                    RELIABLE_ALL, raw=True)
+                self.subs[sub.topic_name] = sub
+        # sim time from the clock: the stamp of an estimate that used no sample
+        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
+        for topic, type_name in ESTIMATOR_TOPICS.items():
+            self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, LATCHED)
+        period = float(self.get_parameter("publish_period_s").value)
+        if period > 0:
+            self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
+
+    def teardown(self) -> None:
+        for t in self.timers_:
+            self.destroy_timer(t)
+        for sub in list(self.subs.values()) + ([self.clock_sub] if self.clock_sub is not None else []):
+            self.destroy_subscription(sub)
+        for pub in self.pubs.values():
+            self.destroy_publisher(pub)
+        self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
+        self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
+        self._last_input = None
+
+    def new_run(self, why) -> None:
+        """The run restarted (the clock went back: a scene change or restart of the clock owner):
+        an estimate not yet published for the run so far is published first (WARN), then the
+        samples are dropped and a new estimate starts (with the new run's samples that came before
+        its first clock tick)."""
+        split = {name: buf.split_run() for name, buf in self.buffers.items()}
+        self.buffers = {name: old for name, (old, _) in split.items()}
+        if not self.final and self.received():
+            self._final(f"{why}; the run so far ended early")
+        self.runs += 1
+        self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
+        self.buffers = {name: new for name, (_, new) in split.items()}
+        self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
+
+    def restart(self) -> None:
+        super().restart()
+        self.teardown()
+        if self.load():
+            self.prepare()
+            self.get_logger().info(f"scene {self.scene.name}: estimator restarted, waiting for samples")
+            if self.standalone:
+                self.get_logger().info(self.startup_line())
+
+    def start(self) -> None:
+        """Run alone: publish once every expected sample has arrived, or with what there is (WARN)
+        ``input_timeout_s`` of wall time after the clock reached the last sample or after the input
+        (joint samples and clock) went silent; a new run (the clock going back) starts a new estimate."""
+        self.standalone = True
+        self.create_timer(0.5, self._control, clock=STEADY)
+        if self.scene is not None:
+            self.get_logger().info(self.startup_line())
+
+    def startup_line(self) -> str:
+        subs = ", ".join(self.subs) or "no joint states (nothing estimable in this scene)"
+        pubs = ", ".join(pub.topic_name for pub in self.pubs.values())
+        return (f"scene {self.scene.name}: expects {self.expected} samples on {subs}; publishes {pubs} "
+                f"(TRANSIENT_LOCAL, depth 1: a late subscriber asking for TRANSIENT_LOCAL gets the last estimate) "
+                f"once they have arrived, or from what it has when the input is silent for input_timeout_s = "
+                f"{self.value('input_timeout_s'):g} s")
+
+    def _control(self):
+        if self._restart:
+            self.restart()
+        if self.final or self.scene is None:
+            return
+        timeout = float(self.value("input_timeout_s", 5.0))
+        now = time.monotonic()
+        if self._clock_done_at is not None and now - max(self._clock_done_at, self._last_input or 0.0) > timeout:
+            # samples still arriving (a slow subscriber's queue) keep it waiting
+            self._final(f"the clock reached the end and no sample came for {timeout:g} s (input_timeout_s)")
+        elif self._last_input is not None and now - self._last_input > timeout:
+            self._final(f"no joint sample or clock tick for {now - self._last_input:.1f} s (input_timeout_s = "
+                        f"{timeout:g})")
+
+    def _final(self, short=None):
+        """Estimate and publish; ``short``: why the estimate comes before every expected sample (a
+        WARN, and the diagnostic status WARN with that reason)."""
+        self.final = True
+        if short is not None:
+            have = {n: len(b) for n, b in self.buffers.items()}
+            short = f"{short}: estimate from the samples received {have} of {self.expected} each"
+            self.get_logger().warning(short)
+        r = self.finalize(short)
+        if r is not None:
+            self.get_logger().info(f"estimate published: latitude {r.get('latitude_deg')} deg, Earth rate "
+                                   f"{r.get('earth_rate_rad_s')} rad/s ({r.get('method') or r.get('reason', '')})")
+
+    def _check_complete(self):
+        if self.standalone and not self.final and all(len(b) >= self.expected for b in self.buffers.values()):
+            if self.buffers or self._clock_done_at is not None:
+                self._final()
+
+    def _on_clock(self, data):
+        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        self._last_input = time.monotonic()
+        if self.standalone and self.last_clock_ns is not None and t < self.last_clock_ns and self.scene is not None:
+            self.new_run(f"the clock went back from {self.last_clock_ns / 1e9:g} s to {t / 1e9:g} s")
+        self.last_clock_ns = t
+        if self.standalone and self._clock_done_at is None and self.expected and self.scene is not None \
+                and self.last_clock_ns >= self.last_stamp_ns:
+            self._clock_done_at = time.monotonic()
+            self._check_complete()
+
+    def received(self) -> int:
+        return sum(len(b) for b in self.buffers.values())
+
+    def check_topic_types(self) -> dict:
+        """Topics the estimator listens to that the graph offers with another type (DDS never
+        matches them, so nothing arrives): {topic: [types]}; logged once and put in diagnostics."""
+        wrong = {}
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self.subs:
+                others = [t for t in types if t != "sensor_msgs/msg/JointState"]
+                if others:
+                    wrong[topic] = others
+        for topic, types in wrong.items():
+            if topic not in self.wrong_types:
+                self.get_logger().warning(f"{topic} is published as {', '.join(types)}; the estimator expects "
+                                          f"sensor_msgs/msg/JointState and receives nothing of that type")
+        self.wrong_types.update(wrong)
+        return wrong
+
+    def _reject(self, name, why):
+        self.rejected[name] = self.rejected.get(name, 0) + 1
+        if self.rejected[name] == 1:
+            self.get_logger().warning(f"{joint_topic(name)}: {why}; message ignored")
+
+    def _on_joint_raw(self, name, data):
+        """A serialized JointState: kept as bytes when it has the layout the simulators publish
+        (the common case, no Python message object), otherwise decoded and checked as any other."""
+        buf = self.buffers[name]
+        self._last_input = time.monotonic()
+        if buf.layout.matches(data):
+            buf.add_raw(data)
+            if self.standalone and len(buf) >= self.expected:
+                self._check_complete()
+            return
+        try:
+            msg = deserialize_message(data, m.JointState)
+        except Exception as exc:
+            self._reject(name, f"undecodable message ({exc.__class__.__name__})")
+            return
+        self._on_joint(name, msg)
+
+    def _on_joint(self, name, msg):
+        expected = tuple(n.split("/")[-1] for n in joint_names(name, self.insts[name]))
+        names = tuple(n.split("/")[-1] for n in msg.name)
+        if names != expected or len(msg.position) != len(expected) or len(msg.velocity) != len(expected):
+            self._reject(name, f"joints {list(names)} do not match {list(expected)}")
+            return
+        self.buffers[name].add(m.stamp_to_release_ns(msg.header.stamp), list(msg.position), list(msg.velocity))
+        if self.standalone and len(self.buffers[name]) >= self.expected:
+            self._check_complete()
+
+    def estimate(self) -> dict | None:
+        """Core call on everything received so far (None if nothing usable)."""
+        if self.scene is None:
+            return None
+        samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
+        recs = records_from_joints(self.insts, samples)
+        return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
+
+    def stamp_ns(self) -> int:
+        """Stamp of an estimate: the last sample it used, else the last clock tick (sim time), else 0."""
+        t = max((b.last_stamp() for b in self.buffers.values() if len(b)), default=None)
+        if t is None:
+            t = self.last_clock_ns
+        return 0 if t is None else max(int(t), 0)
+
+    def finalize(self, short=None) -> dict | None:
+        """Estimate and publish; returns the result dict. ``short``: why the input is incomplete (the
+        diagnostic status is then WARN with that text before the method)."""
+        try:
+            self.result = self.estimate()
+        except InadequateData as exc:  # the data fail an adequacy check: said on /diagnostics, no number
+            self.refusal = exc
+            self.get_logger().error(str(exc))
+            self.pubs[DIAGNOSTICS].publish(m.diagnostics(
+                self.stamp_ns(), "gyro_instrument/estimator", False, str(exc),
+                {"refused_by_check": exc.field, "rejected_messages": self.rejected}))
+            return None
+        except Exception as exc:  # the estimator must never take the node down
+            self.get_logger().error(f"estimation failed: {exc.__class__.__name__}: {exc}")
+            return None
+        if self.result is None:
+            return None
+        r = self.result
+        t = self.stamp_ns()
+        lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
+        sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
+        self.pubs["estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        text = r.get("method") or r.get("reason", "")
+        self.pubs[DIAGNOSTICS].publish(m.diagnostics(
+            t, "gyro_instrument/estimator", r.get("method") is not None and short is None,
+            text if short is None else f"{short}; {text}",
+            {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
+             "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
+             "rejected_messages": self.rejected, "wrong_topic_types": self.check_topic_types()}))
+        self.pubs["estimator/latitude_rad"].publish(m.float64(lat))
+        self.pubs["estimator/latitude_sigma_rad"].publish(m.float64(sig))
+        self.pubs["estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
+        self.pubs["estimator/earth_rate_sigma_rad_s"].publish(m.float64(r.get("earth_rate_sigma_rad_s")))
+        return r

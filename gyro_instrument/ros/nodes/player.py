@@ -1,0 +1,298 @@
+"""``player``: :class:`PlayerNode` republishes a bag's intact messages (every chunk's CRC checked;
+what was lost is logged with its log-time span) in log-time order, streamed from the MCAP reader
+(:func:`~gyro_instrument.recording.mcap_io.stream_messages`), driving ``clock``; waits for its
+subscribers, exits at the end (or loops).
+"""
+
+import os
+import time
+
+from gyro_instrument import api
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.recording.bag_layout import scan_path
+from gyro_instrument.recording.mcap_io import play_plan, read_messages, stream_messages
+from gyro_instrument.recording.topics import CLOCK
+from gyro_instrument.ros import messages as m
+from gyro_instrument.ros import params as P
+from gyro_instrument.ros.nodes.base import FLOW_BATCH, PUBLISH_ALL, STEADY, SceneNode, acked
+
+
+class PlayerNode(SceneNode):
+    """Republishes a bag on its topics (relative names), driving ``clock`` from the log times; waits
+    for its subscribers (topic by topic), counts what reached a subscriber, exits at the end
+    (``done``) or loops."""
+
+    SPECS = P.PLAYER
+    RESTART_ON = ()
+    #: the subscriptions the graph shows on the bag's topics must be unchanged (and all matched) for
+    #: this long (wall time, s) before playing: a subscriber's topics are discovered one by one
+    SETTLE_S = 0.5
+
+    def __init__(self, name="player", **kwargs):
+        super().__init__(name, **kwargs)
+        self.clock_owner = True
+        self.refuse_sim_time_if_owner()
+        self.pubs = {}
+        self.pub_qos = PUBLISH_ALL
+        self.total = 0              # messages to play (intact, of an installed type)
+        self.index = 0              # messages played in this pass
+        self._plan, self._it, self._next = [], iter(()), None
+        self.damaged = []
+        self.skipped = {}
+        self.done = False
+        self.state = "idle"
+        self.has_clock = False
+        self.timer = None
+        bag = self.get_parameter("bag").value
+        if not bag or not os.path.exists(bag):
+            self.get_logger().error(f"bag = {bag!r} is invalid: give an existing .mcap file or rosbag2 bag directory")
+            return
+        try:
+            scan = scan_path(bag)
+        except SceneError as exc:
+            self.get_logger().error(str(exc))
+            return
+        self.damaged = scan.damage_dicts(m.EPOCH_NS)
+        for d in self.damaged:
+            self.get_logger().warning(f"bag {bag}: damaged: {api.damage_line(d)}; those messages are not published")
+        for note in scan.notes:
+            self.get_logger().warning(f"bag {bag}: {note}")
+        classes = self._classes(bag, scan)
+        self._plan = play_plan(bag, scan)       # the scan is not kept: an intact bag is read as played
+        del scan
+        self._restart_stream()
+        for tp, n in self.skipped.items():
+            self.get_logger().warning(f"bag {bag}: {tp}: {n} messages not played (type not installed)")
+        for topic, cls in classes.items():
+            if cls is not None:
+                self.pubs[topic] = self.create_publisher(cls, topic, self.pub_qos)
+        clock_topics = {tp for tp in self.pubs if tp.split("/")[-1] == CLOCK}
+        self.has_clock = bool(clock_topics)
+        if not self.has_clock:
+            self.pubs[CLOCK] = self.create_publisher(m.Clock, CLOCK, self.pub_qos)
+            clock_topics = {CLOCK}
+        self.clock_topics = sorted(self.pubs[tp].topic_name for tp in clock_topics)
+        self._last_clock = None
+        self.sent = {tp: [0, 0, 0] for tp in self.pubs}     # sent, sent to >= 1 subscriber, deliveries
+        self._first_sent = set()
+        self._wait_topics = []
+        self._hold_topic = self._hold_t0 = None
+
+    def _message_class(self, bag, topic, type_name):
+        """The message class of ``type_name``, or None (logged) when its package is not installed or
+        has no such type: that topic is skipped, the rest played."""
+        try:
+            return m.message_class(type_name)
+        except (ImportError, AttributeError, ValueError) as exc:
+            self.get_logger().warning(f"bag {bag}: {topic} has type {type_name!r}, which is not installed here "
+                                      f"({exc.__class__.__name__}): that topic is skipped, the others are played")
+            return None
+
+    def load(self) -> bool:
+        return False
+
+    def _classes(self, bag, scan):
+        """{relative topic: message class or None (type not installed)} in the order the topics
+        first appear; counts :attr:`total` and the messages :attr:`skipped`."""
+        classes = {}
+        for tp, ty, _, _ in read_messages(bag, scan=scan):
+            topic = tp.lstrip("/")
+            if topic not in classes:
+                classes[topic] = self._message_class(bag, tp, ty)
+            if classes[topic] is None:
+                self.skipped[tp] = self.skipped.get(tp, 0) + 1
+            else:
+                self.total += 1
+        return classes
+
+    def _restart_stream(self):
+        """Play from the bag's first message (the start, or a loop)."""
+        self.index, self._next = 0, None
+        self._it = ((tp.lstrip("/"), ty, t, data) for tp, ty, t, data in stream_messages(self._plan)
+                    if tp.lstrip("/") in self.pubs)
+
+    def peek(self) -> tuple | None:
+        """The next message to play, (topic, type, log time ns, CDR bytes), or None at the end."""
+        if self._next is None:
+            self._next = next(self._it, None)
+        return self._next
+
+    def publish_next(self, counts=None) -> bool:
+        """Publish the next message (and a clock tick when the bag has none); False when done.
+        ``counts`` {topic: matched subscribers} is what :attr:`sent` counts as delivered."""
+        item = self.peek()
+        if item is None:
+            return False
+        topic, _, log_ns, data = item
+        self._next = None
+        if not self.has_clock and log_ns != self._last_clock:
+            self._send(CLOCK, m.CLOCK_LAYOUT.encode([log_ns - m.EPOCH_NS])[0], counts)
+            self._last_clock = log_ns
+        self._send(topic, data, counts)
+        self.index += 1
+        return True
+
+    def _send(self, topic, data, counts):
+        pub = self.pubs[topic]
+        n = counts[topic] if counts is not None else pub.get_subscription_count()
+        pub.publish(data)
+        c = self.sent[topic]
+        c[0] += 1
+        c[1] += n > 0
+        c[2] += n
+        self._first_sent.add(topic)
+
+    def start(self) -> None:
+        """Wait for the subscribers (``wait_topics``, ``wait_for``, ``min_subscribers``; every
+        subscription the graph shows matched and unchanged for :attr:`SETTLE_S`; at most
+        ``wait_timeout_s``), then play."""
+        self.standalone = True
+        if not self.total:
+            self.done = True
+            return
+        wt = self._wait_topics = self.wait_topics()
+        self.get_logger().info(
+            f"publishes {self.total} messages on {', '.join(p.topic_name for p in self.pubs.values())}"
+            f"{self.clock_remap_note(self.clock_topics[0])}; waiting up to {self.value('wait_timeout_s'):g} s for "
+            f"{self.value('min_subscribers')} subscriber(s) on topics other than the clock"
+            + (f", a subscriber on each of {', '.join(wt)} (wait_topics)" if wt else "")
+            + (f" and {', '.join(self.value('wait_for'))}" if self.value("wait_for") else "")
+            + f", and every subscription seen matched for {self.SETTLE_S:g} s")
+        self.state = "waiting"
+        self._wait_t0 = time.monotonic()
+        self._graph, self._graph_t = None, time.monotonic()
+        for tp in self.clock_topics:
+            self.watch_clock(tp)
+        self.timer = self.create_timer(0.002, self._tick, clock=STEADY)
+
+    def wait_topics(self) -> list:
+        """Resolved names of the topics that must each have a matched subscription before playing."""
+        want = list(self.value("wait_topics", []) or [])
+        by_name = {p.topic_name: p.topic_name for p in self.pubs.values()}
+        if "*" in want:
+            return sorted(by_name)
+        out = []
+        for tp in want:
+            name = self.resolve_topic_name(tp)
+            if name not in by_name:
+                self.get_logger().warning(f"wait_topics: {tp!r} is not a topic of the bag; not waited for")
+                continue
+            out.append(name)
+        return out
+
+    def _ready(self):
+        pubs = list(self.pubs.values())
+        topics = [p.topic_name for p in pubs]
+        missing = self._named_nodes_ready({n: topics for n in self.value("wait_for", [])})
+        # named nodes subscribe to any of the bag's topics
+        missing = [n for n in missing if not any(
+            i.node_name == n and i.node_namespace == self.get_namespace()
+            for t in topics for i in self.get_subscriptions_info_by_topic(t))]
+        # every sim-time node subscribes to the clock: only the other topics count as subscribers
+        few = sum(p.get_subscription_count() for p in pubs
+                  if p.topic_name not in self.clock_topics) < self.value("min_subscribers", 1)
+        alone = [p.topic_name for p in pubs if p.topic_name in self._wait_topics and p.get_subscription_count() == 0]
+        # subscriptions are discovered topic by topic: wait until what the graph shows stops changing
+        graph = tuple(len(self.get_subscriptions_info_by_topic(t)) for t in topics)
+        now = time.monotonic()
+        if graph != self._graph:
+            self._graph, self._graph_t = graph, now
+        settling = ["the graph to settle"] if now - self._graph_t < self.SETTLE_S else []
+        return missing + (["min_subscribers"] if few else []) + alone + self._unmatched(pubs) + settling
+
+    def _tick(self):
+        if self.state == "waiting":
+            missing = self._ready()
+            if missing:
+                if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
+                    return
+                self.get_logger().warning(f"wait_timeout_s passed without {', '.join(missing)}: playing anyway")
+            for tp in self.clock_topics:
+                reason = self.other_clock_owner(tp)
+                if reason is not None:
+                    self.get_logger().error(f"not playing: {reason}")
+                    self.timer.cancel()
+                    self.state = "refused"
+                    self.done = True
+                    return
+            self.state = "playing"
+            self._rtf = None
+            self._hold_t0 = None
+        if self.state != "playing":
+            return
+        counts = {tp: p.get_subscription_count() for tp, p in self.pubs.items()}
+        if self._held(counts):
+            return
+        rtf = float(self.value("real_time_factor", 1.0))
+        if rtf <= 0:
+            for _ in range(FLOW_BATCH):
+                if self._first_of_topic() or not self.publish_next(counts):
+                    break
+        else:
+            now = time.monotonic()
+            if rtf != self._rtf:
+                nxt = self.peek()
+                self._rtf, self._w0, self._t0 = rtf, now, (nxt[2] if nxt is not None else 0)
+            k = 0
+            while k < FLOW_BATCH and self.peek() is not None and \
+                    (self.peek()[2] - self._t0) <= (now - self._w0) * rtf * 1e9:
+                if self._first_of_topic():
+                    break
+                self.publish_next(counts)
+                k += 1
+        if self.peek() is None:
+            acked(self, self.pubs.values())
+            line = self.summary()
+            if self.value("loop", False):
+                self.get_logger().info(f"{line}; looping")
+                self._restart_stream()
+                self._rtf, self._last_clock = None, None
+            else:
+                self.get_logger().info(f"{line}; exiting")
+                self.timer.cancel()
+                self.state = "done"
+                self.done = True
+
+    def _first_of_topic(self) -> bool:
+        """True (stop the batch) when the next message is its topic's first and the graph shows a
+        subscription on that topic not matched yet: it is held (:meth:`_held`)."""
+        item = self.peek()
+        if item is None:
+            return False
+        topic = item[0]
+        if topic in self._first_sent or not self._unmatched([self.pubs[topic]]):
+            return False
+        self._hold_topic = topic
+        return True
+
+    def _held(self, counts) -> bool:
+        """A topic's first message waits (at most ``wait_timeout_s``) for a subscription the graph
+        shows on it to match; paced play then resumes from that message."""
+        topic = getattr(self, "_hold_topic", None)
+        if topic is None:
+            return False
+        if self._unmatched([self.pubs[topic]]):
+            if self._hold_t0 is None:
+                self._hold_t0 = time.monotonic()
+            if time.monotonic() - self._hold_t0 < self.value("wait_timeout_s"):
+                return True
+            self.get_logger().warning(f"{self.pubs[topic].topic_name}: a subscription seen in the graph did not match "
+                                      f"within wait_timeout_s; playing on")
+            self._first_sent.add(topic)
+        self._hold_topic, self._hold_t0, self._rtf = None, None, None      # paced play re-anchors here
+        counts[topic] = self.pubs[topic].get_subscription_count()
+        return False
+
+    def summary(self) -> str:
+        """What was played and what reached a subscriber (matched when the message was sent)."""
+        sent = sum(c[0] for c in self.sent.values())
+        to_one = sum(c[1] for c in self.sent.values())
+        deliveries = sum(c[2] for c in self.sent.values())
+        short = [f"{self.pubs[tp].topic_name} {c[1]} of {c[0]}" for tp, c in self.sent.items() if c[1] < c[0]]
+        line = (f"played {self.total} messages ({sent} published with the clock ticks added); {to_one} reached "
+                f"at least one matched subscriber, {deliveries} deliveries in all")
+        if short:
+            line += "; sent with no subscriber matched: " + ", ".join(short)
+        if self.skipped:
+            line += "; skipped (type not installed): " + ", ".join(f"{tp} {n}" for tp, n in self.skipped.items())
+        return line
