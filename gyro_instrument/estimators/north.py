@@ -292,8 +292,17 @@ def reversal_points(t, u, noise_sigma_rad=None, degree=4, window_fraction=0.125)
     vals = np.array([f[1] for f in fits])
     sig = np.array([sigma * math.sqrt(f[2] @ f[6] @ f[2]) for f in fits])
     tsig = np.array([sigma * math.sqrt(f[3] @ f[6] @ f[3]) * h / max(abs(f[4] @ f[5]), 1e-300) for f in fits])
-    hp, hps = (mean_interval(times) if times.size >= 3 else (float(times[1] - times[0]), math.nan))
+    hp, hps = half_period(times)
     return ReversalPoints(times, vals, sig, tsig, sigma, source, hp, hps)
+
+
+def half_period(times_s) -> tuple:
+    """Mean spacing of successive turning-point times (one swing, Quet's T = half the period) and its
+    standard error, by least squares of time against index (s); σ nan for 2 times."""
+    times = np.asarray(times_s, dtype=float)
+    if times.size < 2:
+        raise SceneError("reversal_times", times.size, "a half period needs ≥ 2 turning-point times")
+    return mean_interval(times) if times.size >= 3 else (float(times[1] - times[0]), math.nan)
 
 
 def _finite(t, u):
@@ -345,16 +354,21 @@ def schuler_bias(first_deviation_rad, ratio, nu) -> float:
 
 
 def _scatter_sigma(a):
-    """Reading σ from the scatter about a_i = c + (−1)^i (s0 + s1 i) (a centre and a linearly decaying
-    half-amplitude), ν − 3 degrees of freedom; None for ν < 4."""
+    """Reading σ from the scatter of the triple means m_j = (a_j + 2a_(j+1) + a_(j+2))/4 about their
+    mean, (ν − 3 dof; None for ν < 4): each m_j estimates the centre (a linear decay cancels in each),
+    so with independent readings of σ_a, E Σ(m_j − m̄)² = σ_a² tr(Bᵀ P B) (B the triple matrix, P the
+    centring); hence σ̂_a² = Σ(m_j − m̄)² / tr(BᵀPB). Exponential damping leaves the m_j alternating by
+    d_j (1 − q)²/4 (second order), which this σ then includes."""
     nu = a.size
     if nu < 4:
         return None, 0
-    i = np.arange(nu, dtype=float)
-    X = np.column_stack([np.ones(nu), (-1.0) ** i, (-1.0) ** i * i])
-    coef, *_ = np.linalg.lstsq(X, a, rcond=None)
-    r = a - X @ coef
-    return math.sqrt(float(r @ r) / (nu - 3)), nu - 3
+    k = nu - 2
+    B = np.zeros((k, nu))
+    for j in range(k):
+        B[j, j:j + 3] = [0.25, 0.5, 0.25]
+    P = np.eye(k) - 1.0 / k
+    r = P @ B @ a
+    return math.sqrt(float(r @ r) / float(np.trace(B.T @ P @ B))), nu - 3
 
 
 def _readings(readings, sigmas, least, method):
@@ -375,7 +389,7 @@ def schuler_mean(readings, sigmas=None) -> NorthEstimate:
 
     L = (a1 + 3a2 + 4a3 + … + 4a(ν−2) + 3a(ν−1) + aν) / (4(ν−2)) (:func:`schuler_weights`).
     σ: with reading σ's, propagated (readings independent): σ_L² = Σ w_i² σ_i²; without (a field
-    book), from the scatter about a centre and a linearly decaying half-amplitude (ν − 3 dof, ν ≥ 4).
+    book), from the scatter of the triple means (:func:`_scatter_sigma`, ν − 3 dof, ν ≥ 4).
     Unbiased for a linear amplitude decay; second-order bias under exponential damping
     (:func:`schuler_bias`).
     """
@@ -387,7 +401,7 @@ def schuler_mean(readings, sigmas=None) -> NorthEstimate:
     else:
         sr, dof = _scatter_sigma(a)
         sig = None if sr is None else sr * float(math.sqrt(w @ w))
-        src = (f"from the scatter of the readings ({dof} dof)" if sr is not None
+        src = (f"from the scatter of the triple means ({dof} dof)" if sr is not None
                else "none: 3 readings leave no scatter and no reading σ was given")
     return NorthEstimate("schuler_mean", centre, sig, src, int(a.size), "≥ 3 reversal points (≥ 4 for a σ "
                          "from the scatter)")
@@ -613,9 +627,11 @@ def crlb_centre(t, amplitude_rad, omega_rad_s, noise_sigma_rad, damping_per_s=0.
 
     Fisher information I = JᵀJ/σ² (J the Jacobian of the model in (c, a, b, ω[, δ][, d]) at the true
     parameters, white Gaussian noise σ); bound √[I⁻¹]_cc. Closed form for an undamped record of
-    many whole cycles: the constant column is orthogonal to the others (cos, sin, τ sin, τ cos and a
-    centred τ average to ~0 against it), so [I⁻¹]_cc → σ²/N: σ(c) ≥ σ/√N (:func:`crlb_centre_long`).
-    Damping changes this only through the small overlap of the decaying terms with the constant.
+    many whole cycles: the constant column is orthogonal to cos, sin, τ cos and a centred τ, so
+    [I⁻¹]_cc → σ²/N: σ(c) ≥ σ/√N (:func:`crlb_centre_long`). Next order, K whole cycles with ω (and
+    δ) fitted: the ω/δ columns span τ cos ωτ and τ sin ωτ, and over τ ∈ [−L/2, L/2] the constant
+    overlaps τ sin ωτ by L/ω against norms² L and L³/24: correlation² 24/(ωL)² = 6/(π²K²), so
+    σ(c) ≈ (σ/√N)(1 + 3/(π²K²)) (checked in tests/test_north_methods.py).
     """
     t = np.asarray(t, dtype=float)
     t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
