@@ -301,3 +301,16 @@ def test_field_book_bad_input_names_line_column_value_and_range(tmp_path, text, 
         return
     with pytest.raises(SceneError, match=match):
         fb.read_field_book(path, angle_unit=option)
+
+
+def test_bench_study_rows():
+    """The bench study (gyro_instrument.bench.north_study): one row per method and time; the fit's σ
+    is its bound (1 %: σ at the estimate vs at the truth), its noise-free floor ≪ the bound; a record
+    too short for two reversal points is refused, not estimated."""
+    from gyro_instrument.bench.north_study import north_accuracy_vs_time
+    rows = north_accuracy_vs_time([5.0, 60.0], damping_per_s=1e-3, seeds=3)
+    assert rows[0]["method"] == "all" and "observe longer" in rows[0]["refused"]
+    by = {r["method"]: r for r in rows[1:]}
+    assert set(by) == {"schuler_mean", "lavrov", "transit", "fit"}
+    assert by["fit"]["mean_sigma_rad"] == pytest.approx(by["fit"]["crlb_rad"], rel=0.01)
+    assert abs(by["fit"]["floor_rad"]) < 0.01 * by["fit"]["crlb_rad"]
