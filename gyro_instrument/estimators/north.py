@@ -431,7 +431,7 @@ def _geometric(params, i):
 
 
 def _geometric_jac(params, i):
-    c, d, q = params
+    _, d, q = params
     return np.column_stack([np.ones_like(i), (-q) ** i, d * i * (-1.0) ** i * q ** np.maximum(i - 1, 0)])
 
 
@@ -559,7 +559,7 @@ def transit_method(t, u, mark_rad, noise_sigma_rad=None) -> NorthEstimate:
 # ----------------------------------------------------------------------------- the full-record fit
 def _fit_jacobian(tau, p, damping, drift):
     """Columns ∂u/∂(c, a, b, ω[, δ][, d]) of u = c + d τ + e^(−δτ)(a cos ωτ + b sin ωτ)."""
-    c, a, b, w = p[:4]
+    _, a, b, w = p[:4]
     dl = p[4] if damping else 0.0
     E = np.exp(-dl * tau)
     co, si = np.cos(w * tau), np.sin(w * tau)
