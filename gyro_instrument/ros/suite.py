@@ -223,7 +223,7 @@ def check_run_memory(scene) -> None:
     channels) in arrays that double (2x), and its final fits take :data:`FIT_BYTES_PER_SAMPLE` more."""
     from gyro_instrument.core.memory import available_bytes, check_memory, sample_count
     types = [spec[0] for spec in scene.instruments.values()]
-    if not all(getattr(REGISTRY.get(t), "STREAMS", False) for t in types):
+    if not all(REGISTRY[t].STREAMS for t in types):
         check_memory(scene)
         return
     n = sample_count(scene)
