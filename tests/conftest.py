@@ -62,3 +62,29 @@ def ctx():
     rclpy.init(context=context, args=[])
     yield context
     rclpy.shutdown(context=context)
+
+
+@pytest.fixture(scope="session")
+def pool():
+    """One spawned process pool (two workers, the CI machine's cores) for every seeded sweep of the
+    session. Spawning a pool costs seconds (each worker imports numpy, scipy and the package), and
+    the seeded studies used to spawn one per test; a task's result does not depend on the pool or
+    worker it runs in (each task simulates its own truth, each seed's noise comes from its own
+    generator, ``sensors.scene_rng``), so sharing it changes no number."""
+    from gyro_instrument.core.parallel import process_executor
+    ex = process_executor(2)
+    yield ex
+    ex.shutdown()
+
+
+@pytest.fixture(scope="session")
+def sweep_seeds(pool):
+    """``sweep_seeds(scene, overrides, n)``: the estimate dicts of seeds 0..n-1 of one scene, through
+    :func:`gyro_instrument.estimators.pipeline.seed_sweep` on :func:`pool` in two chunks (even seeds,
+    then odd: one simulation of the truth per chunk), in the order 0, 2, 4, ..., 1, 3, 5, ..."""
+    from gyro_instrument.estimators.pipeline import seed_sweep
+
+    def run(scene, overrides, seeds):
+        chunks = [(scene, list(overrides), range(i, seeds, 2)) for i in range(2)]
+        return [r for part in pool.map(seed_sweep, chunks) for r in part]
+    return run

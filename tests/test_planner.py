@@ -39,11 +39,9 @@ def user_gyro(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def executor():
-    from gyro_instrument.core.parallel import process_executor
-    ex = process_executor(2)
-    yield ex
-    ex.shutdown()
+def executor(pool):
+    """The session's process pool (conftest ``pool``)."""
+    return pool
 
 
 def test_fisher_of_the_fit_meets_the_pure_sinusoid_bound_in_the_long_record():
