@@ -64,27 +64,63 @@ def ctx():
     rclpy.shutdown(context=context)
 
 
+# ----------------------------------------------------------------------------- seeded sweeps
+# The seeded calibrations (hundreds of sensor seeds of one simulated truth each) are CPU work on a
+# process pool. One pool serves the whole session (spawning one costs seconds of imports), and the
+# sweeps a test declares with ``@pytest.mark.seed_sweep(scene, overrides, n)`` are submitted to it
+# when collection ends, in test order: they run on the cores the serial session leaves idle, and the
+# test collects them. A sweep's numbers do not depend on when or where it runs (each task simulates
+# its own truth; each seed's noise comes from its own generator, ``sensors.scene_rng``).
+_POOL = []
+_PREFETCHED = {}       # (scene, overrides, n) -> [future of each chunk]
+
+
+def _pool():
+    if not _POOL:
+        from gyro_instrument.core.parallel import process_executor
+        _POOL.append(process_executor(2))
+    return _POOL[0]
+
+
+def _chunks(scene, overrides, seeds):
+    """Two tasks per sweep (even seeds, odd seeds: one simulation of the truth each)."""
+    return [(scene, list(overrides), range(i, seeds, 2)) for i in range(2)]
+
+
+def _submit(scene, overrides, seeds):
+    from gyro_instrument.estimators.pipeline import seed_sweep
+    return [_pool().submit(seed_sweep, c) for c in _chunks(scene, overrides, seeds)]
+
+
+def pytest_collection_finish(session):
+    """Submit every declared seed sweep of the selected tests, in test order."""
+    if session.config.option.collectonly:
+        return
+    for item in session.items:
+        for mark in item.iter_markers("seed_sweep"):
+            key = (mark.args[0], tuple(mark.args[1]), mark.args[2])
+            if key not in _PREFETCHED:
+                _PREFETCHED[key] = _submit(*key)
+
+
+def pytest_sessionfinish(session):
+    if _POOL:
+        _POOL.pop().shutdown(wait=True, cancel_futures=True)
+
+
 @pytest.fixture(scope="session")
 def pool():
-    """One spawned process pool (two workers, the CI machine's cores) for every seeded sweep of the
-    session. Spawning a pool costs seconds (each worker imports numpy, scipy and the package), and
-    the seeded studies used to spawn one per test; a task's result does not depend on the pool or
-    worker it runs in (each task simulates its own truth, each seed's noise comes from its own
-    generator, ``sensors.scene_rng``), so sharing it changes no number."""
-    from gyro_instrument.core.parallel import process_executor
-    ex = process_executor(2)
-    yield ex
-    ex.shutdown()
+    """The session's spawned process pool (two workers, the CI machine's cores)."""
+    return _pool()
 
 
 @pytest.fixture(scope="session")
-def sweep_seeds(pool):
+def sweep_seeds():
     """``sweep_seeds(scene, overrides, n)``: the estimate dicts of seeds 0..n-1 of one scene, through
-    :func:`gyro_instrument.estimators.pipeline.seed_sweep` on :func:`pool` in two chunks (even seeds,
-    then odd: one simulation of the truth per chunk), in the order 0, 2, 4, ..., 1, 3, 5, ..."""
-    from gyro_instrument.estimators.pipeline import seed_sweep
-
+    :func:`gyro_instrument.estimators.pipeline.seed_sweep` on the session's pool in two chunks (even
+    seeds, then odd), in the order 0, 2, 4, ..., 1, 3, 5, ...; a sweep the test declared with
+    ``@pytest.mark.seed_sweep(scene, overrides, n)`` was submitted when collection ended."""
     def run(scene, overrides, seeds):
-        chunks = [(scene, list(overrides), range(i, seeds, 2)) for i in range(2)]
-        return [r for part in pool.map(seed_sweep, chunks) for r in part]
+        futures = _PREFETCHED.pop((scene, tuple(overrides), seeds), None) or _submit(scene, overrides, seeds)
+        return [r for fut in futures for r in fut.result()]
     return run

@@ -108,7 +108,9 @@ def _calibrate(sweep_seeds, scene, overrides, lat, seeds):
     return err, sig, crlb, absolute
 
 
-@pytest.mark.parametrize("scene,overrides,lat", CASES, ids=[f"{c[0]}{c[2]}" for c in CASES])
+@pytest.mark.parametrize("scene,overrides,lat", [
+    pytest.param(*c, marks=pytest.mark.seed_sweep(c[0], c[1] + [f"site.latitude_deg={c[2]}"], 40), id=f"{c[0]}{c[2]}")
+    for c in CASES])
 def test_n_known_estimates_are_calibrated_40_seeds(sweep_seeds, scene, overrides, lat):
     # rms(err/σ)² of 40 calibrated draws is χ²₄₀/40: its 0.05 % and 99.95 % points bound rms/σ
     # (0.67, 1.35); σ and the bound come from the same mode and differ by the noise the record shows

@@ -101,8 +101,15 @@ def test_too_short_or_flat_record_is_refused_clearly():
 # the default run (spread 1/sqrt(120) = 9 %: the same 1.3 bound is still 3.3 spreads; measured
 # 2026-11-30: rms/sigma = 0.969, 1.038, 0.975 with 60 seeds against 1.000, 1.002, 1.021 with 200), the
 # 200-seed runs there in `pytest -m slow` (the whole suite must stay under 15 min on 2 cores).
-CALIBRATION_CASES = [(48.8462, 200), (-33.9, 200), (5.0, 60), (70.0, 60), (85.0, 60)] + [
-    pytest.param(lat, 200, marks=pytest.mark.slow, id=f"{lat}-200-slow") for lat in (5.0, 70.0, 85.0)]
+def _calibration(lat, seeds, *marks):
+    """One case, its seed sweep declared (submitted to the session's pool when collection ends)."""
+    sweep = pytest.mark.seed_sweep("quet_paris", [f"site.latitude_deg={lat}"], seeds)
+    return pytest.param(lat, seeds, marks=(sweep, *marks), id=f"{lat}-{seeds}" + ("-slow" if marks else ""))
+
+
+CALIBRATION_CASES = [_calibration(lat, n) for lat, n in ((48.8462, 200), (-33.9, 200), (5.0, 60), (70.0, 60),
+                                                         (85.0, 60))] + [
+    _calibration(lat, 200, pytest.mark.slow) for lat in (5.0, 70.0, 85.0)]
 
 
 @pytest.mark.parametrize("lat,seeds", CALIBRATION_CASES)

@@ -27,10 +27,16 @@ def sweep(sweep_seeds):
 # 200 seeds for one site per instrument set, 100 for its mirror in the other hemisphere in the
 # default run (rms/σ measured 2026-11-30 at 100 seeds: 1.006 and 1.026; the [0.8, 1.2] band is 2.8
 # sampling spreads of 1/sqrt(200) = 7 % there), 200 in `pytest -m slow` (the suite's 15-min budget).
-COS_CASES = [("quet_gyroscopes", 60.0, 200), ("quet_gyroscopes", -33.87, 100), ("gimbal_paris", 48.8462, 200),
-             ("gimbal_paris", -48.8462, 100)] + [
-    pytest.param(sc, lat, 200, marks=pytest.mark.slow, id=f"{sc}-{lat}-200-slow")
-    for sc, lat in (("quet_gyroscopes", -33.87), ("gimbal_paris", -48.8462))]
+def _cos_case(scene, lat, seeds, *marks):
+    """One case, its seed sweep declared (submitted to the session's pool when collection ends)."""
+    sweep = pytest.mark.seed_sweep(scene, [f"site.latitude_deg={lat}"], seeds)
+    return pytest.param(scene, lat, seeds, marks=(sweep, *marks),
+                        id=f"{scene}-{lat}-{seeds}" + ("-slow" if marks else ""))
+
+
+COS_CASES = [_cos_case(*c) for c in (("quet_gyroscopes", 60.0, 200), ("quet_gyroscopes", -33.87, 100),
+                                     ("gimbal_paris", 48.8462, 200), ("gimbal_paris", -48.8462, 100))] + [
+    _cos_case(sc, lat, 200, pytest.mark.slow) for sc, lat in (("quet_gyroscopes", -33.87), ("gimbal_paris", -48.8462))]
 
 
 @pytest.mark.parametrize("scene,lat,seeds", COS_CASES)
