@@ -66,12 +66,15 @@ def ctx():
 
 # ----------------------------------------------------------------------------- seeded sweeps
 # The seeded calibrations (hundreds of sensor seeds of one simulated truth each) are CPU work on a
-# process pool. One pool serves the whole session (spawning one costs seconds of imports), and the
-# sweeps a test declares with ``@pytest.mark.seed_sweep(scene, overrides, n)`` are submitted to it
-# when collection ends, in test order: they run on the cores the serial session leaves idle, and the
-# test collects them. A sweep's numbers do not depend on when or where it runs (each task simulates
-# its own truth; each seed's noise comes from its own generator, ``sensors.scene_rng``).
+# process pool. One pool serves the whole session (spawning one costs seconds of imports). The sweeps
+# tests declare with ``@pytest.mark.seed_sweep(scene, overrides, n)`` are all submitted to it, in test
+# order, when the first such test starts: they then run on the cores the serial session leaves idle
+# while the tests between them run, and each test collects its own. (Not earlier: the tests before it
+# include wall-clock targets — the bench's plot, the ROS suite — that must not share the cores.) A
+# sweep's numbers do not depend on when or where it runs (each task simulates its own truth; each
+# seed's noise comes from its own generator, ``sensors.scene_rng``).
 _POOL = []
+_DECLARED = []         # (scene, overrides, n) of every declared sweep of the session, in test order
 _PREFETCHED = {}       # (scene, overrides, n) -> [future of each chunk]
 
 
@@ -92,15 +95,24 @@ def _submit(scene, overrides, seeds):
     return [_pool().submit(seed_sweep, c) for c in _chunks(scene, overrides, seeds)]
 
 
+def _key(mark):
+    return mark.args[0], tuple(mark.args[1]), mark.args[2]
+
+
 def pytest_collection_finish(session):
-    """Submit every declared seed sweep of the selected tests, in test order."""
-    if session.config.option.collectonly:
-        return
+    """Note every declared seed sweep of the selected tests, in test order."""
     for item in session.items:
         for mark in item.iter_markers("seed_sweep"):
-            key = (mark.args[0], tuple(mark.args[1]), mark.args[2])
-            if key not in _PREFETCHED:
-                _PREFETCHED[key] = _submit(*key)
+            if _key(mark) not in _DECLARED:
+                _DECLARED.append(_key(mark))
+
+
+def pytest_runtest_setup(item):
+    """At the first test that declares a sweep, submit every declared sweep of the session."""
+    if _DECLARED and item.get_closest_marker("seed_sweep") is not None:
+        for key in _DECLARED:
+            _PREFETCHED[key] = _submit(*key)
+        _DECLARED.clear()
 
 
 def pytest_sessionfinish(session):
@@ -119,7 +131,8 @@ def sweep_seeds():
     """``sweep_seeds(scene, overrides, n)``: the estimate dicts of seeds 0..n-1 of one scene, through
     :func:`gyro_instrument.estimators.pipeline.seed_sweep` on the session's pool in two chunks (even
     seeds, then odd), in the order 0, 2, 4, ..., 1, 3, 5, ...; a sweep the test declared with
-    ``@pytest.mark.seed_sweep(scene, overrides, n)`` was submitted when collection ended."""
+    ``@pytest.mark.seed_sweep(scene, overrides, n)`` was submitted when the first declaring test
+    started."""
     def run(scene, overrides, seeds):
         futures = _PREFETCHED.pop((scene, tuple(overrides), seeds), None) or _submit(scene, overrides, seeds)
         return [r for fut in futures for r in fut.result()]
