@@ -160,7 +160,7 @@ def check_run_memory(scene) -> None:
     from gyro_instrument.core.memory import available_bytes, check_memory, sample_count
     from gyro_instrument.instruments import REGISTRY
     types = [spec[0] for spec in scene.instruments.values()]
-    if not all(getattr(REGISTRY.get(t), "STREAMS", False) for t in types):
+    if not all(REGISTRY[t].STREAMS for t in types):
         check_memory(scene)
         return
     n = sample_count(scene)

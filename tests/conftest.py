@@ -62,3 +62,78 @@ def ctx():
     rclpy.init(context=context, args=[])
     yield context
     rclpy.shutdown(context=context)
+
+
+# ----------------------------------------------------------------------------- seeded sweeps
+# The seeded calibrations (hundreds of sensor seeds of one simulated truth each) are CPU work on a
+# process pool. One pool serves the whole session (spawning one costs seconds of imports). The sweeps
+# tests declare with ``@pytest.mark.seed_sweep(scene, overrides, n)`` are all submitted to it, in test
+# order, when the first such test starts: they then run on the cores the serial session leaves idle
+# while the tests between them run, and each test collects its own. (Not earlier: the tests before it
+# include wall-clock targets — the bench's plot, the ROS suite — that must not share the cores.) A
+# sweep's numbers do not depend on when or where it runs (each task simulates its own truth; each
+# seed's noise comes from its own generator, ``sensors.scene_rng``).
+_POOL = []
+_DECLARED = []         # (scene, overrides, n) of every declared sweep of the session, in test order
+_PREFETCHED = {}       # (scene, overrides, n) -> [future of each chunk]
+
+
+def _pool():
+    if not _POOL:
+        from gyro_instrument.core.parallel import process_executor
+        _POOL.append(process_executor(2))
+    return _POOL[0]
+
+
+def _chunks(scene, overrides, seeds):
+    """Two tasks per sweep (even seeds, odd seeds: one simulation of the truth each)."""
+    return [(scene, list(overrides), range(i, seeds, 2)) for i in range(2)]
+
+
+def _submit(scene, overrides, seeds):
+    from gyro_instrument.estimators.pipeline import seed_sweep
+    return [_pool().submit(seed_sweep, c) for c in _chunks(scene, overrides, seeds)]
+
+
+def _key(mark):
+    return mark.args[0], tuple(mark.args[1]), mark.args[2]
+
+
+def pytest_collection_finish(session):
+    """Note every declared seed sweep of the selected tests, in test order."""
+    for item in session.items:
+        for mark in item.iter_markers("seed_sweep"):
+            if _key(mark) not in _DECLARED:
+                _DECLARED.append(_key(mark))
+
+
+def pytest_runtest_setup(item):
+    """At the first test that declares a sweep, submit every declared sweep of the session."""
+    if _DECLARED and item.get_closest_marker("seed_sweep") is not None:
+        for key in _DECLARED:
+            _PREFETCHED[key] = _submit(*key)
+        _DECLARED.clear()
+
+
+def pytest_sessionfinish(session):
+    if _POOL:
+        _POOL.pop().shutdown(wait=True, cancel_futures=True)
+
+
+@pytest.fixture(scope="session")
+def pool():
+    """The session's spawned process pool (two workers, the CI machine's cores)."""
+    return _pool()
+
+
+@pytest.fixture(scope="session")
+def sweep_seeds():
+    """``sweep_seeds(scene, overrides, n)``: the estimate dicts of seeds 0..n-1 of one scene, through
+    :func:`gyro_instrument.estimators.pipeline.seed_sweep` on the session's pool in two chunks (even
+    seeds, then odd), in the order 0, 2, 4, ..., 1, 3, 5, ...; a sweep the test declared with
+    ``@pytest.mark.seed_sweep(scene, overrides, n)`` was submitted when the first declaring test
+    started."""
+    def run(scene, overrides, seeds):
+        futures = _PREFETCHED.pop((scene, tuple(overrides), seeds), None) or _submit(scene, overrides, seeds)
+        return [r for fut in futures for r in fut.result()]
+    return run

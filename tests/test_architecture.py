@@ -71,8 +71,14 @@ def test_core_never_imports_rclpy_at_runtime():
 # ----------------------------------------------------------------------------- issue 12: the protocol
 #: What an instrument type can do is declared on its class (gyro_instrument/instruments/base.py);
 #: outside instruments/ nothing may switch on a type's name or look for a hook by name.
-PROTOCOL_HOOKS = ("check_params", "check_effects", "directing_model", "measured_angles", "pendulum_length_m",
-                  "JOINTS", "MEASURED_CHANNELS", "IS_PENDULUM", "SIMULATOR_NODE", "MECHANICS")
+#: The protocol's members are every public name the Instrument class declares (class attributes such as
+#: COLUMNS, STREAMS, JOINTS and the hooks), read off the class so a member added there is covered here.
+def _protocol_members():
+    from gyro_instrument.instruments.base import Instrument
+    return frozenset(n for n in vars(Instrument) if not n.startswith("_"))
+
+
+PROTOCOL_HOOKS = _protocol_members()
 
 
 def _type_names():
@@ -130,10 +136,18 @@ def test_the_type_name_check_catches_the_tables_it_replaced():
              'ok = inst.type_name == "plane_gyroscope"',
              'ok = inst.type_name in ("spherical_pendulum", "x")',
              'm = getattr(inst, "directing_model", None)',
-             'ok = hasattr(cls, "check_params")']
+             'ok = hasattr(cls, "check_params")',
+             'ok = getattr(REGISTRY.get(t), "STREAMS", False)',
+             'known = [c.name for c in getattr(inst, "COLUMNS", ())]']
     for src in cases:
         assert type_name_switches(ast.parse(src), names), src
     assert not type_name_switches(ast.parse('help = "e.g. --set instruments.p2.type=spherical_pendulum"'), names)
+
+
+def test_the_protocol_list_holds_what_the_class_declares():
+    """The members issue 23 found missing are in it, and with them the older hooks."""
+    assert {"STREAMS", "COLUMNS", "JOINTS", "MEASURED_CHANNELS", "IS_PENDULUM", "SIMULATOR_NODE", "MECHANICS",
+            "check_params", "check_effects", "directing_model", "measured_angles", "pendulum_length_m"} <= PROTOCOL_HOOKS
 
 
 def test_every_registered_instrument_declares_the_protocol():

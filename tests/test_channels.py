@@ -4,8 +4,10 @@ A channel no test reads is a channel that can be wrong (issue 17: the compound p
 ``spin_rate`` broke Quet's eq. (55) by three orders of magnitude while the dynamics were right).
 Each test below declares, with :func:`reads`, the instrument type and the channels it checks, and
 fails unless it actually reads them from a simulation (:func:`simulate` records the reads);
-:func:`test_every_channel_is_checked` fails when a column of a registered instrument type is
-declared by no test. Puiseux's body is covered by tests/test_puiseux*.py (another module).
+:func:`test_every_declared_column_is_simulated_in_si_and_its_rates_are_derivatives` checks every
+declared column of every registered type generically (simulated, finite, SI, rates the derivatives
+of their angles), so a new column needs no edit here. Puiseux's body is covered by
+tests/test_puiseux*.py (another module).
 
 Derivatives of channels are taken with quintic interpolating splines on samples a few hundred
 per period: their relative error is ~(ω Δt)⁵ / 720 (< 1e-12 here), far below every tolerance;
@@ -411,14 +413,64 @@ def test_predictions_report_magnitudes_unsigned(build, type_name, site):
                                                 "counterclockwise seen from above")
 
 
+# ----------------------------------------------------------------------------- every column, from its declaration
+
+#: SI units a column may declare (angles in rad, rates in rad/s, lengths in m, "1" for a direction
+#: cosine or other pure number): the architecture's "SI inside".
+SI_UNITS = {"rad", "rad/s", "m", "1"}
+
+
+def rate_pairs(cls):
+    """(angle column, rate column) pairs read off the declarations: a ``<stem>_rate`` column in rad/s
+    and a ``<stem>`` or ``<stem>_angle`` column in rad (``angle``/``angle_rate``,
+    ``outer_angle``/``outer_rate``)."""
+    units = {c.name: c.unit for c in cls.COLUMNS}
+    pairs = []
+    for name, unit in units.items():
+        if name.endswith("_rate") and unit == "rad/s":
+            stem = name[:-len("_rate")]
+            pairs += [(a, name) for a in (stem, stem + "_angle") if units.get(a) == "rad"]
+    return pairs
+
+
+@pytest.mark.parametrize("type_name", sorted(set(REGISTRY) - ELSEWHERE))
+def test_every_declared_column_is_simulated_in_si_and_its_rates_are_derivatives(build, type_name):
+    # Generic over the instruments' declared COLUMNS, so a new instrument or column is checked without
+    # an edit here: at its defaults with the exact model (4 s at 400 Hz, −33.87°), every declared
+    # column is simulated, one finite sample per time, nothing undeclared; each unit is SI; and each
+    # declared rate is the time derivative of its declared angle (quintic spline: relative error
+    # ~(ωΔt)⁵/720 < 1e-12; the integrators' rtol ≤ 1e-10 — measured ≤ 7e-9 of the largest rate — so
+    # 1e-6 of the largest rate, and 1e-12 rad/s when the rate is zero throughout). A rate in the
+    # wrong unit, sign or scale, or a rate column fed from another state, fails.
+    cls = REGISTRY[type_name]
+    assert {c.unit for c in cls.COLUMNS} <= SI_UNITS, [(c.name, c.unit) for c in cls.COLUMNS]
+    effects = tuple(e for e in ("earth_rotation", "centrifugal", "finite_amplitude") if e in cls.SUPPORTED_EFFECTS)
+    t = np.arange(0.0, 4.0, 1.0 / 400.0)
+    c = build(cls, SOUTH, effects).simulate(t).columns
+    assert set(c) == {col.name for col in cls.COLUMNS}
+    for col in cls.COLUMNS:
+        v = np.asarray(c[col.name])
+        assert v.shape == t.shape and np.all(np.isfinite(v)), col.name
+        if col.unit == "1":
+            assert np.all(np.abs(v) <= 1.0 + 1e-12), col.name
+    for angle, rate in rate_pairs(cls):
+        scale = max(np.max(np.abs(c[rate])), 1e-6)
+        err = np.max(np.abs(inner(derivative(t, c[angle]) - c[rate])))
+        assert err < 1e-6 * scale, (angle, rate, err, scale)
+
+
 # ----------------------------------------------------------------------------- the meta-test
 
 def test_every_channel_is_checked():
-    # Issue 17: every reported channel of every instrument type is read by a check above (puiseux's
-    # in tests/test_puiseux*.py). A new instrument or column fails here until a check reads it.
-    missing = {name: sorted({c.name for c in cls.COLUMNS} - DECLARED.get(name, set()))
+    # Issue 17: every reported channel of every instrument type is checked (puiseux's in
+    # tests/test_puiseux*.py): by the generic test above, from its declaration, and where a physics
+    # check reads it, by that check (issue 23: a new column needs no edit here, only an SI unit).
+    missing = {name: sorted(c.name for c in cls.COLUMNS if c.unit not in SI_UNITS)
                for name, cls in REGISTRY.items() if name not in ELSEWHERE}
     missing = {k: v for k, v in missing.items() if v}
-    assert not missing, f"channels no test in tests/test_channels.py checks: {missing}"
+    assert not missing, f"channels the generic check cannot read (unit not SI): {missing}"
+    # the rate rule finds the pairs it is meant for (so it can fail)
+    assert rate_pairs(PlaneGyroscope) == [("angle", "angle_rate")]
+    assert set(rate_pairs(GimbalGyroscope)) == {("outer_angle", "outer_rate"), ("inner_angle", "inner_rate")}
     stale = {name: sorted(cols - {c.name for c in REGISTRY[name].COLUMNS}) for name, cols in DECLARED.items()}
     assert not any(stale.values()), f"declared checks of channels that do not exist: {stale}"

@@ -14,9 +14,7 @@ import numpy as np
 import pytest
 
 from gyro_instrument.cli import main
-from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.estimators.latitude import HEMISPHERE_UNDETERMINED, RateMeasurement, solve_latitude
-from gyro_instrument.estimators.pipeline import seed_sweep
 
 N = 7.2921150e-5     # IERS conventional mean angular velocity of the Earth, rad/s
 #: γ̂ is located by Brent's bounded search (latitude._mode), whose termination is sqrt(eps)|γ| + xatol
@@ -92,12 +90,6 @@ def test_a_non_rotating_scene_does_not_take_n_as_known(capsys):
     assert r["earth_rate_known"] is False and r["latitude_deg"] is None
 
 
-def _sweep(scene, overrides, seeds):
-    chunks = [(scene, overrides, range(i, seeds, 2)) for i in range(2)]
-    with process_executor(2) as ex:
-        return [r for part in ex.map(seed_sweep, chunks) for r in part]
-
-
 #: (scene, overrides, truth |γ| or γ): a pendulum alone (sign measured) and one horizontal gyroscope
 #: (|γ|), each at two latitudes of opposite sign
 CASES = [("foucault_pantheon", ["duration_s=1800"], 48.8462), ("foucault_pantheon", ["duration_s=1800"], -33.87),
@@ -105,8 +97,8 @@ CASES = [("foucault_pantheon", ["duration_s=1800"], 48.8462), ("foucault_pantheo
          ("quet_gyroscopes", ["instruments.gyro_meridian=null"], -33.87)]
 
 
-def _calibrate(scene, overrides, lat, seeds):
-    rs = _sweep(scene, overrides + [f"site.latitude_deg={lat}"], seeds)
+def _calibrate(sweep_seeds, scene, overrides, lat, seeds):
+    rs = sweep_seeds(scene, overrides + [f"site.latitude_deg={lat}"], seeds)
     assert all(r["earth_rate_known"] for r in rs)
     absolute = rs[0]["latitude_is_absolute"]
     truth = abs(lat) if absolute else lat
@@ -116,13 +108,15 @@ def _calibrate(scene, overrides, lat, seeds):
     return err, sig, crlb, absolute
 
 
-@pytest.mark.parametrize("scene,overrides,lat", CASES, ids=[f"{c[0]}{c[2]}" for c in CASES])
-def test_n_known_estimates_are_calibrated_40_seeds(scene, overrides, lat):
+@pytest.mark.parametrize("scene,overrides,lat", [
+    pytest.param(*c, marks=pytest.mark.seed_sweep(c[0], c[1] + [f"site.latitude_deg={c[2]}"], 40), id=f"{c[0]}{c[2]}")
+    for c in CASES])
+def test_n_known_estimates_are_calibrated_40_seeds(sweep_seeds, scene, overrides, lat):
     # rms(err/σ)² of 40 calibrated draws is χ²₄₀/40: its 0.05 % and 99.95 % points bound rms/σ
     # (0.67, 1.35); σ and the bound come from the same mode and differ by the noise the record shows
     # against the sensor model's (gyroscope: the fit's residual over 12 000 samples, ±1 %)
     from scipy.stats import chi2
-    err, sig, crlb, absolute = _calibrate(scene, overrides, lat, 40)
+    err, sig, crlb, absolute = _calibrate(sweep_seeds, scene, overrides, lat, 40)
     assert absolute == scene.startswith("quet")          # cos γ is even, sin γ is not
     lo, hi = (math.sqrt(chi2.ppf(q, 40) / 40) for q in (5e-4, 1 - 5e-4))
     assert lo <= math.sqrt(np.mean((err / sig) ** 2)) <= hi
@@ -131,10 +125,10 @@ def test_n_known_estimates_are_calibrated_40_seeds(scene, overrides, lat):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scene,overrides,lat", CASES, ids=[f"{c[0]}{c[2]}" for c in CASES])
-def test_n_known_estimates_are_calibrated_200_seeds(scene, overrides, lat):
+def test_n_known_estimates_are_calibrated_200_seeds(sweep_seeds, scene, overrides, lat):
     # Acceptance of issue 22: rms error / σ in [0.8, 1.2] (4 sampling spreads of 1/√400), σ / bound
     # in [0.95, 1.1] for every seed
-    err, sig, crlb, absolute = _calibrate(scene, overrides, lat, 200)
+    err, sig, crlb, absolute = _calibrate(sweep_seeds, scene, overrides, lat, 200)
     assert 0.8 <= math.sqrt(np.mean((err / sig) ** 2)) <= 1.2
     assert np.all((sig / crlb >= 0.95) & (sig / crlb <= 1.1))
 

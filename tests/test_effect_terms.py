@@ -118,17 +118,41 @@ def test_every_effect_declares_known_kinds_and_implements_their_hooks():
         assert cls.SUPPORTED_EFFECTS == {e for e, ec in EFFECTS.items() if ec.MECHANICS & cls.MECHANICS}
 
 
-def test_supported_effects_are_unchanged_by_the_derivation():
-    """The derived sets are the ones each instrument declared before issue 12 (msg_docs/instruments.md)."""
-    expected = {
-        "plane_gyroscope": {"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"},
-        "spherical_pendulum": {"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"},
-        "compound_pendulum": {"earth_rotation", "centrifugal", "pivot_damping", "spin_decay"},
-        "free_gyroscope": {"earth_rotation"},
-        "puiseux_body": set(),
-        "gimbal_gyroscope": {"earth_rotation", "centrifugal", "ring_inertia", "spin_decay", "pivot_damping"},
-    }
-    assert {t: set(INSTRUMENTS[t].SUPPORTED_EFFECTS) for t in expected} == expected
+#: a shipped scene holding each instrument type (its effects are replaced in the test below)
+SCENE_OF_TYPE = {"plane_gyroscope": "quet_gyroscopes", "spherical_pendulum": "foucault_pantheon",
+                 "free_gyroscope": "free_gyroscope", "puiseux_body": "puiseux_spheroid",
+                 "gimbal_gyroscope": "gimbal_paris"}
+
+
+def _users(effect_cls):
+    """Instrument types whose declared kinds meet the effect's (derived from MECHANICS alone)."""
+    return sorted(t for t, c in INSTRUMENTS.items() if effect_cls.MECHANICS & c.MECHANICS)
+
+
+@pytest.mark.parametrize("effect", sorted(EFFECTS))
+def test_supported_effects_follow_the_declared_mechanics(effect):
+    """Derived, not frozen (a new effect needs no edit here; what each instrument supports is recorded
+    in the generated msg_docs/instruments.md, whose staleness tests/test_docs.py checks): every registered
+    effect reaches some instrument through its MECHANICS, every kind an instrument declares is one some
+    effect contributes to, and a scene accepts the effect on an instrument whose kinds it meets and
+    refuses it — naming exactly the derived instruments — on one whose kinds it does not. Fails when an
+    effect or an instrument is registered with kinds the other side does not have (a typo, a kind
+    dropped), or the scene check disagrees with the declarations."""
+    from gyro_instrument.core.errors import SceneError
+    cls = EFFECTS[effect]
+    users = _users(cls)
+    assert users, f"{effect}: its kinds {sorted(cls.MECHANICS)} are summed by no instrument"
+    for tname, icls in INSTRUMENTS.items():
+        assert icls.MECHANICS <= {k for ec in EFFECTS.values() for k in ec.MECHANICS}, tname
+    assert set(SCENE_OF_TYPE) <= set(INSTRUMENTS)
+    setting = f"effects.{effect}={EFFECT_PARAMS.get(effect, '{}')}"
+    for tname, scene in SCENE_OF_TYPE.items():
+        over = ["effects=null", setting]
+        if tname in users:
+            load_scene(scene, over)
+        else:
+            with pytest.raises(SceneError, match="instruments that support it: " + ", ".join(users)):
+                load_scene(scene, over)
 
 
 def test_terms_are_summed_in_registry_order_whatever_the_scene_order():

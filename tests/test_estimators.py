@@ -7,7 +7,6 @@ Reference: physics_notes 'Estimation' — var(ω̂) ≥ 24σ²/(A²Δt²N(N²−
 
 import json
 import math
-from gyro_instrument.core.parallel import process_executor
 
 import numpy as np
 import pytest
@@ -16,7 +15,7 @@ from gyro_instrument.cli import main
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.period import (EstimationError, count_oscillations, crlb_omega,
                                                fit_oscillation)
-from gyro_instrument.estimators.pipeline import estimate_records, measure, seed_sweep, simulate_truth
+from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
 from gyro_instrument.scenes import load_scene
 
 
@@ -102,22 +101,27 @@ def test_too_short_or_flat_record_is_refused_clearly():
 # the default run (spread 1/sqrt(120) = 9 %: the same 1.3 bound is still 3.3 spreads; measured
 # 2026-11-30: rms/sigma = 0.969, 1.038, 0.975 with 60 seeds against 1.000, 1.002, 1.021 with 200), the
 # 200-seed runs there in `pytest -m slow` (the whole suite must stay under 15 min on 2 cores).
-CALIBRATION_CASES = [(48.8462, 200), (-33.9, 200), (5.0, 60), (70.0, 60), (85.0, 60)] + [
-    pytest.param(lat, 200, marks=pytest.mark.slow, id=f"{lat}-200-slow") for lat in (5.0, 70.0, 85.0)]
+def _calibration(lat, seeds, *marks):
+    """One case, its seed sweep declared (submitted to the session's pool when collection ends)."""
+    sweep = pytest.mark.seed_sweep("quet_paris", [f"site.latitude_deg={lat}"], seeds)
+    return pytest.param(lat, seeds, marks=(sweep, *marks), id=f"{lat}-{seeds}" + ("-slow" if marks else ""))
+
+
+CALIBRATION_CASES = [_calibration(lat, n) for lat, n in ((48.8462, 200), (-33.9, 200), (5.0, 60), (70.0, 60),
+                                                         (85.0, 60))] + [
+    _calibration(lat, 200, pytest.mark.slow) for lat in (5.0, 70.0, 85.0)]
 
 
 @pytest.mark.parametrize("lat,seeds", CALIBRATION_CASES)
-def test_latitude_uncertainty_is_calibrated_over_seeds(lat, seeds):
+def test_latitude_uncertainty_is_calibrated_over_seeds(sweep_seeds, lat, seeds):
     # Issue 3 acceptance: default run within 3σ; σ within 1.5× the Cramér–Rao bound; over the
     # seeded runs the rms error within 1.3× the reported σ (see CALIBRATION_CASES for the sampling
-    # spread), for the latitude and the Earth rate.
-    chunks = [("quet_paris", [f"site.latitude_deg={lat}"], range(i, seeds, 2)) for i in range(2)]
-    with process_executor(2) as ex:
-        results = [r for part in ex.map(seed_sweep, chunks) for r in part]
+    # spread), for the latitude and the Earth rate. The seeds run on the session's process pool.
+    results = sweep_seeds("quet_paris", [f"site.latitude_deg={lat}"], seeds)
     rows = np.array([(r["latitude_deg"] - lat, r["latitude_sigma_deg"], r["crlb"]["latitude_deg"],
                       r["earth_rate_rad_s"] - r["truth"]["earth_rate_rad_s"], r["earth_rate_sigma_rad_s"])
                      for r in results])
-    seeds = [s for _, _, part in chunks for s in part]
+    seeds = [*range(0, seeds, 2), *range(1, seeds, 2)]        # sweep_seeds' order
     err, sig, crlb, nerr, nsig = rows.T
     d = seeds.index(load_scene("quet_paris").seed)
     assert abs(err[d]) < 3 * sig[d]          # the scene's default seed

@@ -15,28 +15,32 @@ import numpy as np
 import pytest
 
 from gyro_instrument.cli import main
-from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.estimators.latitude import HEMISPHERE_UNDETERMINED, RateMeasurement, solve_latitude
-from gyro_instrument.estimators.pipeline import seed_sweep
 
 
-def sweep(scene, overrides, seeds=200):
-    chunks = [(scene, overrides, range(i, seeds, 2)) for i in range(2)]
-    with process_executor(2) as ex:
-        return [r for part in ex.map(seed_sweep, chunks) for r in part]
+@pytest.fixture
+def sweep(sweep_seeds):
+    """Seeds 0..n-1 of a scene on the session's process pool (conftest ``sweep_seeds``)."""
+    return sweep_seeds
 
 
 # 200 seeds for one site per instrument set, 100 for its mirror in the other hemisphere in the
 # default run (rms/σ measured 2026-11-30 at 100 seeds: 1.006 and 1.026; the [0.8, 1.2] band is 2.8
 # sampling spreads of 1/sqrt(200) = 7 % there), 200 in `pytest -m slow` (the suite's 15-min budget).
-COS_CASES = [("quet_gyroscopes", 60.0, 200), ("quet_gyroscopes", -33.87, 100), ("gimbal_paris", 48.8462, 200),
-             ("gimbal_paris", -48.8462, 100)] + [
-    pytest.param(sc, lat, 200, marks=pytest.mark.slow, id=f"{sc}-{lat}-200-slow")
-    for sc, lat in (("quet_gyroscopes", -33.87), ("gimbal_paris", -48.8462))]
+def _cos_case(scene, lat, seeds, *marks):
+    """One case, its seed sweep declared (submitted to the session's pool when collection ends)."""
+    sweep = pytest.mark.seed_sweep(scene, [f"site.latitude_deg={lat}"], seeds)
+    return pytest.param(scene, lat, seeds, marks=(sweep, *marks),
+                        id=f"{scene}-{lat}-{seeds}" + ("-slow" if marks else ""))
+
+
+COS_CASES = [_cos_case(*c) for c in (("quet_gyroscopes", 60.0, 200), ("quet_gyroscopes", -33.87, 100),
+                                     ("gimbal_paris", 48.8462, 200), ("gimbal_paris", -48.8462, 100))] + [
+    _cos_case(sc, lat, 200, pytest.mark.slow) for sc, lat in (("quet_gyroscopes", -33.87), ("gimbal_paris", -48.8462))]
 
 
 @pytest.mark.parametrize("scene,lat,seeds", COS_CASES)
-def test_cos_latitude_instruments_report_abs_latitude_calibrated(scene, lat, seeds):
+def test_cos_latitude_instruments_report_abs_latitude_calibrated(sweep, scene, lat, seeds):
     # Acceptance of issue 11: rms error / reported σ in [0.8, 1.2] (an rms from 200 draws has a
     # relative sampling spread of 1/√400 = 5 %: the band is 4 spreads; see COS_CASES for 100) and
     # every σ within [0.95, 1.1] of its Cramér–Rao bound (σ and the bound come from the same mode and
@@ -60,7 +64,7 @@ def test_cos_latitude_instruments_report_abs_latitude_calibrated(scene, lat, see
     assert np.all((nsig / ncrlb >= 0.95) & (nsig / ncrlb <= 1.1))
 
 
-def test_assumed_hemisphere_signs_the_same_mode():
+def test_assumed_hemisphere_signs_the_same_mode(sweep):
     # estimator.hemisphere = south: the mirror of the |γ| estimate, with the same σ and bound.
     over = ["site.latitude_deg=-33.87"]
     free = sweep("quet_gyroscopes", over, seeds=4)
@@ -73,7 +77,7 @@ def test_assumed_hemisphere_signs_the_same_mode():
         assert abs(b["latitude_deg"] + 33.87) < 5 * b["latitude_sigma_deg"]
 
 
-def test_pendulum_decides_the_hemisphere_and_overrules_a_wrong_assumption():
+def test_pendulum_decides_the_hemisphere_and_overrules_a_wrong_assumption(sweep):
     # quet_paris at -33.87° with the user's assumption "north": k = n sin γ < 0 (sec. 2) decides.
     r = sweep("quet_paris", ["site.latitude_deg=-33.87", "estimator.hemisphere=north"], seeds=2)[0]
     assert r["hemisphere"] == "south" and r["latitude_is_absolute"] is False
@@ -81,7 +85,7 @@ def test_pendulum_decides_the_hemisphere_and_overrules_a_wrong_assumption():
     assert abs(r["latitude_deg"] + 33.87) < 5 * r["latitude_sigma_deg"]
 
 
-def test_tilted_gyroscope_plane_is_sign_sensitive():
+def test_tilted_gyroscope_plane_is_sign_sensitive(sweep):
     # A directing plane with normal (0, 1, 1)/√2 (ENU: tilted 45° in the meridian) has
     # sin ω = |sin(γ − 45°)|, not even in γ. Beside the horizontal (cos γ) and meridian (1) planes it
     # decides the hemisphere: at −33.87° it reads sin(78.87°) = 0.981, at +33.87° only 0.193.
@@ -92,7 +96,7 @@ def test_tilted_gyroscope_plane_is_sign_sensitive():
     assert abs(r["latitude_deg"] + 33.87) < 5 * r["latitude_sigma_deg"]
 
 
-def test_two_exact_fits_in_opposite_hemispheres_are_both_reported():
+def test_two_exact_fits_in_opposite_hemispheres_are_both_reported(sweep):
     # Horizontal and tilted planes alone: two unknowns (n, γ), two measurements, and the ratio
     # |sin(γ − 45°)| / cos γ = 0.981 / 0.830 = 1.18 of −33.87° is met again in the north where the
     # ratio climbs from 0 at 45° to infinity at 90°: tan γ − 1 = 1.18·√2 gives γ = 69.5°. Both fit
@@ -114,7 +118,7 @@ def test_text_output_states_the_hemisphere(capsys):
     assert "estimator.hemisphere" in out
 
 
-def test_near_the_equator_cos_is_flat_so_no_local_sigma():
+def test_near_the_equator_cos_is_flat_so_no_local_sigma(sweep):
     # Gyroscope pair at 0.05°: 1 − cos γ = γ²/2 = 3.8e-7, about one σ of cos γ (item 9 measures it
     # to 4.3e-7 in 600 s), so the Δχ² = 9 region reaches the equator (unless a 4σ draw): σ is null
     # with the reason, and the Δχ² = 9 interval [0, ~0.1°] contains the true |γ|.

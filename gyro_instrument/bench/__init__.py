@@ -3,7 +3,7 @@
 Writes CSV files, PNG plots (when matplotlib is installed: the ``plot`` extra; the CSVs never
 need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 
-* ``work_precision.csv`` (:mod:`.studies`) — error at the end of the run against a tight reference
+* ``work_precision.csv`` (:mod:`.work_precision`) — error at the end of the run against a tight reference
   versus CPU time, per fidelity tier and setting:
 
   - the Foucault pendulum (67 m, 2°, a sidereal day at 20 Hz; 1 h with ``--quick``): Binet's

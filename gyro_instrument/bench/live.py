@@ -32,7 +32,7 @@ SHORT_S = 3600.0
 
 
 def _loopback(cmd):
-    """(command, environment) kept on loopback (as :func:`.studies.suite_real_time_factor`)."""
+    """(command, environment) kept on loopback (as :func:`.work_precision.suite_real_time_factor`)."""
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
     if os.geteuid() == 0 and shutil.which("unshare") and shutil.which("ip") and not env.get("GYRO_IN_NETNS"):

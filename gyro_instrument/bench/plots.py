@@ -57,11 +57,6 @@ def write_plots(out_dir) -> list:
     return written
 
 
-def matplotlib_available() -> bool:
-    """True when matplotlib can be imported."""
-    return _pyplot() is not None
-
-
 def _pyplot():
     try:
         import matplotlib

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError
-from gyro_instrument.core.integrate import Trajectory
+from gyro_instrument.core.trajectory import Trajectory
 
 # The DOP853 tableau: Hairer's 8(5,3) Runge-Kutta pair with its 7th-order dense output (E. Hairer,
 # S. P. Norsett, G. Wanner, "Solving Ordinary Differential Equations I", 2nd ed., Springer 1993,

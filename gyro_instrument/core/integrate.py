@@ -1,49 +1,29 @@
 """Integration driver: method versus driver, as in scipy.integrate's ``OdeSolver``.
 
-``integrate`` runs any right-hand side through ``scipy.integrate.solve_ivp`` (dense output
-evaluated at the requested sample times), counts right-hand-side evaluations itself and
-measures wall and CPU time, and returns a :class:`Trajectory`. ``method="DOP853-scalar"`` runs
-the same DOP853 on a small state held in Python floats (:mod:`gyro_instrument.core.dop853`).
+:class:`Integration` is a resumable run of ``dy/dt = rhs(t, y)``: scipy's ``OdeSolver`` (any
+``solve_ivp`` method, DOP853 by default) stepped by this driver toward the run's end, each
+:meth:`~Integration.advance` returning the states at the next block of sample times from the dense
+output of the steps that reach them, so the steps and samples are those of one ``solve_ivp`` call
+however the run is cut into blocks. The driver counts right-hand-side evaluations itself and
+measures wall and CPU time; every block comes back as a :class:`~gyro_instrument.core.trajectory.Trajectory`.
+:func:`integration` picks the driver (``method="DOP853-scalar"``: the same DOP853 on a small state
+held in Python floats, :class:`gyro_instrument.core.dop853.ScalarDOP853`); :func:`integrate` is
+one block over the whole run. :func:`reporting` and :func:`report` carry a long run's progress to
+a caller (the CLI's progress line).
 """
 
 import contextvars
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from gyro_instrument.core.dop853 import ScalarDOP853
 from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.trajectory import Trajectory
 
-
-@dataclass
-class Trajectory:
-    """Result of an integration.
-
-    Attributes
-    ----------
-    t : ndarray, shape (m,)
-        Sample times in seconds.
-    y : ndarray, shape (n, m)
-        State at the sample times.
-    nfev : int
-        Number of right-hand-side evaluations (counted by the driver).
-    wall_time_s, cpu_time_s : float
-        Elapsed wall-clock and process CPU time of the integration.
-    method : str
-        Integrator name.
-    meta : dict
-        Free-form information (tolerances, step counts).
-    """
-
-    t: np.ndarray
-    y: np.ndarray
-    nfev: int
-    wall_time_s: float
-    cpu_time_s: float
-    method: str
-    meta: dict = field(default_factory=dict)
+__all__ = ["SCALAR_DOP853", "Integration", "Trajectory", "integrate", "integration", "report", "reporting"]
 
 
 _REPORTER = contextvars.ContextVar("gyro_instrument_progress", default=None)
@@ -216,7 +196,6 @@ def integration(rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max
     if method == SCALAR_DOP853:
         if max_step != np.inf:
             raise IntegrationError(f"method {SCALAR_DOP853} takes no max_step (got {max_step!r})")
-        from gyro_instrument.core.dop853 import ScalarDOP853   # it imports Trajectory from here
         return ScalarDOP853(rhs, y0, t0, t_end, rtol=rtol, atol=atol)
     return Integration(rhs, y0, t0, t_end, method=method, rtol=rtol, atol=atol, max_step=max_step)
 

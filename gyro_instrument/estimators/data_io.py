@@ -169,7 +169,7 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
                                       f"at least two distinct times are needed (a wrong --time-column?)")
     # columns the instrument writes but the estimator does not read (angle_rate, swing_azimuth ...)
     # are passed over silently; columns of no instrument or channel of the scene are noted
-    known = {f"{n}.{c.name}" for n, inst in insts.items() for c in getattr(inst, "COLUMNS", ())}
+    known = {f"{n}.{c.name}" for n, inst in insts.items() for c in inst.COLUMNS}
     unknown = [c for c in cols if c != TIME_COLUMN and c not in used and c not in known]
     if unknown:
         shown = ", ".join(unknown[:8]) + (f" and {len(unknown) - 8} more" if len(unknown) > 8 else "")
