@@ -146,7 +146,7 @@ def test_the_type_name_check_catches_the_tables_it_replaced():
 
 def test_the_protocol_list_holds_what_the_class_declares():
     """The members issue 23 found missing are in it, and with them the older hooks."""
-    assert {"STREAMS", "COLUMNS", "JOINTS", "MEASURED_CHANNELS", "IS_PENDULUM", "SIMULATOR_NODE", "MECHANICS",
+    assert {"STREAMS", "COLUMNS", "JOINTS", "MEASURED_CHANNELS", "OBSERVATION", "SIMULATOR_NODE", "MECHANICS",
             "check_params", "check_effects", "directing_model", "measured_angles", "pendulum_length_m"} <= PROTOCOL_HOOKS
 
 
@@ -157,9 +157,9 @@ def test_every_registered_instrument_declares_the_protocol():
     for name, cls in REGISTRY.items():
         assert cls.type_name == name and cls.summary and cls.SIMULATOR_NODE, name
         assert cls.MECHANICS <= MECHANICS, name
-        assert cls.JOINTS[:len(cls.MEASURED_CHANNELS)] or cls.IS_PENDULUM, name
-        assert len(cls.JOINTS) == len(cls.MEASURED_CHANNELS) + (2 if cls.IS_PENDULUM else 1), name
-        if cls.IS_PENDULUM:
+        layout = cls.OBSERVATION.layout_of(cls)
+        assert layout.names == tuple(cls.JOINTS) and layout.measured == tuple(cls.MEASURED_CHANNELS), name
+        if cls.OBSERVATION.SHOWS_BOB_POSITION:
             assert cls.pendulum_length_m is not Instrument.pendulum_length_m, name
             assert {"x_east", "y_north"} <= {c.name for c in cls.COLUMNS}, name
         else:

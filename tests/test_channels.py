@@ -407,7 +407,7 @@ def test_predictions_report_magnitudes_unsigned(build, type_name, site):
         assert found, f"{type_name}: no magnitude to check in {sorted(pred)}"
         negative = [(k, v) for k, v in found if v < 0.0]
         assert not negative, f"{type_name} {kw} at {site.latitude_deg:g}°: magnitudes reported signed: {negative}"
-        if cls.IS_PENDULUM:
+        if cls.OBSERVATION.SHOWS_BOB_POSITION:
             k = site.k_vertical_rad_s
             assert pred["precession_sense"] == ("clockwise seen from above" if k > 0 else
                                                 "counterclockwise seen from above")

@@ -312,7 +312,9 @@ def test_a_second_clock_owner_is_refused_and_a_namespaced_one_prints_the_remap(c
     assert "-r /clock:=/ship1/clock" in out_ship and "publish_clock refused" not in out_ship, out_ship
     refused = [o for o in outs if "publish_clock refused: another node already publishes /clock" in o]
     assert len(refused) == 2, outs[2]
-    assert "ticks seen from it" in outs[2], outs[2]
+    # the late third owner refuses either on the ticks it saw while waiting or, when discovery under load
+    # delivered none in its wait, on the name order; both are the documented refusal (msg_docs/topics.md)
+    assert "ticks seen from it" in outs[2] or "it was named first" in outs[2], outs[2]
     assert all(y > x for x, y in zip(ticks, ticks[1:])) and len(ticks) == 101, (len(ticks), outs)   # 5 s at 20 Hz
 
 

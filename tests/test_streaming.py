@@ -128,7 +128,7 @@ def test_compound_pendulum_streams_bit_for_bit():
 def test_scene_instruments_stream_bit_for_bit(scene, over):
     sc = load_scene(scene, ["duration_s=30"] + over)
     for inst in build_instruments(sc).values():
-        if inst.STREAMS and not inst.IS_PENDULUM:
+        if inst.STREAMS and not inst.OBSERVATION.SHOWS_BOB_POSITION:
             _assert_stream_equals_simulate(inst, sample_times(sc))
 
 

@@ -46,7 +46,7 @@ def render():
                 f"Supported effects: {', '.join(sorted(cls.SUPPORTED_EFFECTS)) or 'none (exact model)'}"
                 f" (it sums the terms of: {', '.join(sorted(cls.MECHANICS)) or 'none'}).", "",
                 f"Measured: {', '.join(f'`{c}`' for c in cls.MEASURED_CHANNELS)}"
-                f"{' (deflections x/l, y/l: a pendulum)' if cls.IS_PENDULUM else ''}; "
+                f"{' (deflections x/l, y/l: a pendulum)' if cls.OBSERVATION.SHOWS_BOB_POSITION else ''}; "
                 f"JointState joints: {', '.join(f'`{j}`' for j in cls.JOINTS)}; published by `{cls.SIMULATOR_NODE}`"
                 f"{'; estimable through its directing model' if 'directing_model' in vars(cls) else ''}.", "",
                 "| parameter | default | valid | meaning |", "|---|---|---|---|"]

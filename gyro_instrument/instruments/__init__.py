@@ -27,8 +27,8 @@ def register(cls) -> type:
         When ``cls`` is not an Instrument subclass, its ``type_name`` is empty or taken, or its
         protocol is incomplete: no ``SIMULATOR_NODE``, ``JOINTS`` that do not fit its observation's
         joint layout (:meth:`~.observation.Observation.layout_of`: the measured channels, the joints
-        derived from them, a rotor joint if it has one), a measured channel whose true value is not a
-        column, or ``IS_PENDULUM`` not its observation's ``SHOWS_BOB_POSITION``.
+        derived from them, a rotor joint if it has one), or a measured channel whose true value is not a
+        column.
     """
     if not (isinstance(cls, type) and issubclass(cls, Instrument)):
         raise ValueError(f"register: {cls!r} is not an Instrument subclass")
@@ -48,9 +48,6 @@ def register(cls) -> type:
     if not set(obs.true_columns(cls)) <= columns:
         raise ValueError(f"register: {name} MEASURED_CHANNELS {cls.MEASURED_CHANNELS} are read from the columns "
                          f"{obs.true_columns(cls)} ({obs.__name__}), which must be columns ({', '.join(sorted(columns))})")
-    if cls.IS_PENDULUM != obs.SHOWS_BOB_POSITION:
-        raise ValueError(f"register: {name} IS_PENDULUM {cls.IS_PENDULUM} contradicts its observation "
-                         f"{obs.__name__} (SHOWS_BOB_POSITION {obs.SHOWS_BOB_POSITION})")
     REGISTRY[name] = cls
     return cls
 

@@ -17,8 +17,6 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
                          layout, the sensor draws, how a record becomes a measurement
                          (:meth:`Instrument.observation` builds it); everything outside
                          ``instruments/`` asks the observation
-``IS_PENDULUM``          kept for ros/ until it asks the observation: equals the observation's
-                         ``SHOWS_BOB_POSITION`` (checked by ``register``)
 ``SIMULATOR_NODE``       the ROS simulator node that hosts it
 ``check_params``,        parameter checks beyond each parameter's own range (classmethods,
 ``check_effects``        called by scene loading for every instrument)
@@ -239,11 +237,6 @@ class Instrument:
         The :class:`~.observation.Observation` subclass that :meth:`observation` builds (default
         :class:`~.observation.SwingRate`: a directing swing when :meth:`directing_model` gives one,
         else measured angles and a rotor).
-    IS_PENDULUM : bool
-        A bob on a rod of length :meth:`pendulum_length_m`: its ``COLUMNS`` include ``x_east`` and
-        ``y_north`` (m), its two measured channels are the deflections x/l, y/l (east, north), it
-        is estimated by the Foucault method, its spin is not measured and a bob position is
-        published.
     SIMULATOR_NODE : str
         The ROS simulator node (an entry point in setup.py) that publishes it:
         ``gyrocompass_sim``, ``pendulum_sim`` or ``top_sim``.
@@ -258,7 +251,6 @@ class Instrument:
     MEASURED_CHANNELS: ClassVar[tuple] = ()
     JOINTS: ClassVar[tuple] = ()
     OBSERVATION: ClassVar[type] = SwingRate
-    IS_PENDULUM: ClassVar[bool] = False
     SIMULATOR_NODE: ClassVar[str] = ""
     #: True when :meth:`axis_direction_enu` gives the rotor axis (published as ``<name>/axis_direction``)
     SHOWS_AXIS: ClassVar[bool] = False
@@ -328,7 +320,7 @@ class Instrument:
         return None
 
     def pendulum_length_m(self) -> float:
-        """For a pendulum (``IS_PENDULUM``): the length l (m) whose ratio to the bob's east and north
+        """For a pendulum (observed by :class:`~.observation.PlanePrecession`): the length l (m) whose ratio to the bob's east and north
         displacements is the measured deflection. Raises NotImplementedError otherwise."""
         raise NotImplementedError(f"{self.type_name} is not a pendulum")
 

@@ -128,7 +128,6 @@ class SphericalPendulum(SwingDynamics, Instrument):
     COLUMNS = PENDULUM_COLUMNS
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
-    IS_PENDULUM = True
     OBSERVATION = PlanePrecession
     SIMULATOR_NODE = "pendulum_sim"
 
@@ -350,7 +349,6 @@ class CompoundPendulum(Instrument):
                                                              "is constant (sec. 3 §VI eq. 55)"),)
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
-    IS_PENDULUM = True
     OBSERVATION = PlanePrecession
     SIMULATOR_NODE = "pendulum_sim"
 
