@@ -27,11 +27,12 @@ from sensor_msgs.msg import JointState
 
 from gyro_instrument import api, effects, instruments
 from gyro_instrument.cli import main
-from gyro_instrument.cli.simulate import simulate_scene
+from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.effect import CONSERVATIVE, DAMPING, FRAME_RATE, POINT_MASS, SPIN, Effect, Scales, bound_hooks
 from gyro_instrument.core.integrate import integrate
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import normal_gravity_m_s2
+from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation
 from gyro_instrument.instruments.observation import Observation, SwingRate
@@ -99,7 +100,7 @@ class PendulousSwing(SwingRate):
 
     def rate_from_swing(self, T0, rho_mean) -> tuple:
         K = (math.pi / T0) ** 2
-        b = self.gain / rho_mean
+        b = self.gain / abs(rho_mean)
         y = 2.0 * K / (b + math.sqrt(b * b + 4.0 * K))
         return y, (K / b) / y - 1.0
 
@@ -128,7 +129,8 @@ class PendulousGyrocompass(Instrument):
     summary = "pendulous (Anschütz) gyrocompass: K = P n cos(latitude) / (C rho) (test of docs/extending.md)"
     PARAMS = (Param("pendulosity_n_m", default=20.0, low=0.0, open_low=True, doc="P = m g d, N m"),
               Param("axial_inertia_kg_m2", default=1.0e-4, low=0.0, open_low=True, doc="C, kg m^2"),
-              Param("spin_rate_rad_s", default=100.0, low=0.0, open_low=True, doc="rho0, rad/s (H = C rho)"),
+              Param("spin_rate_rad_s", default=100.0, low=-1.0e6, high=1.0e6,
+                    doc="rho0, rad/s (H = C rho; negative: H toward the axis's south end, which then seeks north)"),
               Param("initial_azimuth_deg", default=5.0, low=-60.0, high=60.0,
                     doc="alpha0: the axis's azimuth east of north at release (level), degrees"))
     MECHANICS = frozenset({FRAME_RATE, SPIN})
@@ -140,8 +142,14 @@ class PendulousGyrocompass(Instrument):
     OBSERVATION = PendulousSwing
     SIMULATOR_NODE = "gyrocompass_sim"
 
+    @classmethod
+    def check_params(cls, prefix, p) -> None:
+        if p["spin_rate_rad_s"] == 0.0:
+            raise SceneError(f"{prefix}.spin_rate_rad_s", 0.0, "must be nonzero: no angular momentum, no compass")
+
     def _H(self):
-        return self.p.axial_inertia_kg_m2 * self.p.spin_rate_rad_s
+        """|H| = C |ρ|, N m s (either sense of spin: the end H points along seeks north)."""
+        return self.p.axial_inertia_kg_m2 * abs(self.p.spin_rate_rad_s)
 
     def _K(self, n):
         """Restoring constant (rad/s)² at Earth rate n: (P/H + n cos γ) n cos γ."""
@@ -163,8 +171,8 @@ class PendulousGyrocompass(Instrument):
         K = self._K(n)
         return {"period_law_s": law, "swing_duration_small_s": math.pi / math.sqrt(K) if K > 0 else math.inf}
 
-    def expected_swing(self):
-        from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
+    def expected_swing(self) -> ExpectedSwing | None:
+        """Period 2 T0 F(α0) (the pendulum's amplitude factor) and amplitude α0; None without n."""
         T0 = self.predictions()["swing_duration_small_s"]
         a = abs(math.radians(self.p.initial_azimuth_deg))
         if not math.isfinite(T0):
@@ -292,7 +300,8 @@ def test_registration(registered):
     # the 1980 series against WGS-84's closed form (core/site.py): its rounded coefficients (9.780327
     # against 9.7803253359 at the equator) put it 1.3e-6 to 2.1e-6 m/s² above, 0.2 mGal at most
     for lat in np.linspace(0.0, 90.0, 19):
-        assert igf1980_m_s2(math.radians(lat)) - normal_gravity_m_s2(math.radians(lat)) == pytest.approx(1.7e-6, abs=5e-7)
+        lat = math.radians(lat)
+        assert igf1980_m_s2(lat) - normal_gravity_m_s2(lat) == pytest.approx(1.7e-6, abs=5e-7)
 
 
 def test_describe(suite_file):
@@ -307,18 +316,29 @@ def test_describe(suite_file):
     assert ins["torsion"]["predictions"]["period_s"] == pytest.approx(2 * math.pi * math.sqrt(2e-3 / 5e-3))
 
 
+def _crossing_period(t, x):
+    """Full period (s) from the zero crossings of ``x`` (linear interpolation), half a period apart."""
+    i = np.nonzero(np.diff(np.sign(x)))[0]
+    tc = t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
+    return 2.0 * (tc[-1] - tc[0]) / (tc.size - 1)
+
+
 def test_the_compass_swings_at_its_own_law(registered):
-    """The integrated motion swings in T = 2π √(H/(P n cos γ)) (to n H/P = 2.4e-8 and the amplitude
-    law), not in Quet's: its azimuth's zero crossings are half a period apart."""
-    scene = scene_from_data(COMPASS)
-    inst = build_instruments(scene)["compass"]
+    """The integrated motion swings in T = 2π √(H/(P n cos γ)) times the pendulum's amplitude factor
+    (to n H/P = 2.4e-8), and twice the spin lengthens it by √2 (K ∝ 1/ρ; Quet's law would shorten it)."""
     t = np.linspace(0.0, 200.0, 20001)
-    a = inst.simulate(t).columns["azimuth"]
-    i = np.nonzero(np.diff(np.sign(a)))[0]
-    tc = t[i] - a[i] * (t[i + 1] - t[i]) / (a[i + 1] - a[i])
-    from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-    law = inst.predictions()["period_law_s"] * finite_amplitude_factor(math.radians(5.0))
-    assert 2.0 * np.mean(np.diff(tc)) == pytest.approx(law, rel=2e-6)
+    periods = []
+    for spin in (100.0, 200.0):
+        data = json.loads(json.dumps(COMPASS))
+        data["instruments"]["compass"]["spin_rate_rad_s"] = spin
+        inst = build_instruments(scene_from_data(data))["compass"]
+        periods.append(_crossing_period(t, inst.simulate(t).columns["azimuth"]))
+        law = inst.predictions()["period_law_s"] * finite_amplitude_factor(math.radians(5.0))
+        assert periods[-1] == pytest.approx(law, rel=2e-6)
+    assert periods[1] / periods[0] == pytest.approx(math.sqrt(2.0), rel=2e-6)
+    # the spin reversed: H points along the axis's south end, the same swing about south (magnitudes unsigned)
+    data["instruments"]["compass"]["spin_rate_rad_s"] = -200.0
+    assert build_instruments(scene_from_data(data))["compass"].predictions() == inst.predictions()
 
 
 def test_latitude_from_the_period_over_seeds(registered):
@@ -356,10 +376,7 @@ def test_normal_gravity_keeps_the_fast_path_and_lengthens_the_swing(registered):
         inst = build_instruments(_pendulum_only(*names))["pendulum"]
         assert inst.chosen_integrator(30.0)[0] == "parareal"
         sim = inst.simulate(t)
-        x = sim.columns["x_east"]
-        i = np.nonzero(np.diff(np.sign(x)))[0]
-        tc = t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
-        period[names[-1]] = (sim.extra["period_s"], 2.0 * (tc[-1] - tc[0]) / (tc.size - 1))
+        period[names[-1]] = (sim.extra["period_s"], _crossing_period(t, sim.columns["x_east"]))
     g, g_lat = 9.80665, igf1980_m_s2(math.radians(LATITUDE_DEG))
     ratio = math.sqrt(g / g_lat)
     assert period["normal_gravity"][0] / period["finite_amplitude"][0] == pytest.approx(ratio, rel=1e-10)
@@ -446,7 +463,8 @@ def test_a_torsion_pendulum_run_records_and_replays_without_an_earth_rate(regist
     capsys.readouterr()
     assert run_main(["run", path, "--bag", bag, "--json", "--quiet"]) == 0
     live = json.loads(capsys.readouterr().out)
-    twist = [deserialize_message(d, JointState).position[0] for _, _, _, d in read_messages(bag, ["/torsion/joint_states"])]
+    twist = [deserialize_message(d, JointState).position[0]
+             for _, _, _, d in read_messages(bag, ["/torsion/joint_states"])]
     assert len(twist) == 1201 and twist[0] == pytest.approx(math.radians(10.0), abs=5e-4)     # 1e-4 rad noise
     replayed = api.replay_bag(bag)
     for r in (live, replayed):
