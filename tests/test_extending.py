@@ -22,8 +22,6 @@ import math
 import numpy as np
 import pytest
 import yaml
-from rclpy.serialization import deserialize_message
-from sensor_msgs.msg import JointState
 
 from gyro_instrument import api, effects, instruments
 from gyro_instrument.cli import main
@@ -37,9 +35,6 @@ from gyro_instrument.estimators.pipeline import estimate_records, measure, simul
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation
 from gyro_instrument.instruments.observation import Observation, SwingRate
 from gyro_instrument.scenes import build_instruments, scene_from_data
-
-pytestmark = pytest.mark.ros      # one test starts the ROS suite (rclpy and DDS, on loopback)
-
 
 # ---------------------------------------------------------------------------------------------- (c) effect
 def igf1980_m_s2(latitude_rad) -> float:
@@ -424,10 +419,13 @@ def test_the_torsion_pendulum_alone_says_it_measures_no_earth_rate(registered, t
     assert np.max(np.abs(th - exact)) < 1e-9
 
 
+@pytest.mark.ros      # starts the ROS suite (rclpy and DDS, on loopback)
 def test_recorder_node_and_replay(suite_file, tmp_path, capsys):
     """``gyro-instrument run SCENE --bag`` (the suite in this process, so the node classes see the
     registered types): the recorder node writes every instrument's joints, and ``replay`` of the bag
     gives the live estimate."""
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
     from gyro_instrument.recording.mcap_io import read_messages
     from gyro_instrument.ros.cli import main as run_main
     bag = str(tmp_path / "extending.mcap")
@@ -453,9 +451,12 @@ def test_recorder_node_and_replay(suite_file, tmp_path, capsys):
     assert replayed["instruments"]["pendulum"] == live["instruments"]["pendulum"]
 
 
+@pytest.mark.ros      # starts the ROS suite (rclpy and DDS, on loopback)
 def test_a_torsion_pendulum_run_records_and_replays_without_an_earth_rate(registered, tmp_path, capsys):
     """A scene of the torsion pendulum alone through the recorder node and ``replay``: its twist is
     recorded, and both estimates say there is no Earth-rate measurement (latitude null, no failure)."""
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
     from gyro_instrument.recording.mcap_io import read_messages
     from gyro_instrument.ros.cli import main as run_main
     path = _write(tmp_path, _torsion_only(), "torsion")
