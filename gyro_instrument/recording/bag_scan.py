@@ -72,6 +72,14 @@ def check_mcap(path, field="bag") -> None:
                                       f"found {head.hex(' ')}")
 
 
+def _crc32(buf, start, end, block=1 << 18) -> int:
+    """CRC-32 of ``buf[start:end]`` computed block by block: never a copy of the whole range."""
+    crc = 0
+    for a in range(start, end, block):
+        crc = zlib.crc32(buf[a:min(a + block, end)], crc)
+    return crc
+
+
 def _stream(data):
     return ReadDataStream(BytesIO(data))
 
@@ -120,7 +128,7 @@ class _Scanner:
                                    f"the data section was read record by record")
             return
         if footer.summary_crc != 0:
-            crc = zlib.crc32(buf[start:fpos + 25])
+            crc = _crc32(buf, start, fpos + 25)
             if crc != footer.summary_crc:
                 self.scan.notes.append(f"summary section (bytes {start}-{fpos + _FOOTER_LEN}) failed its CRC: "
                                        f"ignored; the data section was read record by record")
@@ -316,7 +324,7 @@ class _Scanner:
         scan = self.scan
         try:
             de = DataEnd.read(_stream(body))
-            if de.data_section_crc and zlib.crc32(self.buf[:pos]) != de.data_section_crc:
+            if de.data_section_crc and _crc32(self.buf, 0, pos) != de.data_section_crc:
                 scan.notes.append("data section failed its CRC (data-end record)"
                                   + ("" if self.raw_damage else ": the damage is outside every chunk's "
                                      "contents (record headers, metadata or indexes); every chunk checked"))
