@@ -12,6 +12,7 @@ the scan did before, grows the peak by at least the 7 N extra messages' bytes (7
 8.4 MB; 27 MB measured on that scan), so the assertion tells the two apart by two orders of
 magnitude.
 """
+
 import gc
 import tracemalloc
 
