@@ -64,7 +64,7 @@ class PlayerNode(SceneNode):
         for note in scan.notes:
             self.get_logger().warning(f"bag {bag}: {note}")
         classes = self._classes(bag, scan)
-        self._plan = play_plan(bag, scan)       # the scan is not kept: an intact bag is read as played
+        self._plan = play_plan(bag, scan)       # offsets only: every file is read as it is played
         del scan
         self._restart_stream()
         for tp, n in self.skipped.items():
