@@ -17,6 +17,11 @@
 * reads the damage a previous ``recover`` wrote into the file (metadata record
   ``gyro_instrument_damage``), so a recovered file still says what it lost.
 
+It keeps where the intact messages are (one
+:class:`~gyro_instrument.recording.scan_result.Container` per intact chunk or run of message
+records, and per channel its count), not the messages: readers read them back from those
+offsets in log-time order, so neither the scan nor a reader holds the bag in memory.
+
 A file cut short (no footer: a recorder killed without its provisional end, a copy taken
 mid-write) is read up to its last complete record and flagged ``truncated``; that is the
 "interrupted" case, reported as a note rather than as damage.
