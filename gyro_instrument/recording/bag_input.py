@@ -9,8 +9,10 @@ directory that the ``metadata.yaml`` does not list. Writing is :mod:`.bag_layout
 """
 
 import dataclasses
+import heapq
 import os
 import re
+from collections.abc import Iterator
 
 import yaml
 
@@ -149,12 +151,30 @@ def bag_inputs(path) -> tuple:
 @dataclasses.dataclass
 class BagSetScan(BagScan):
     """A bag directory read file by file (each one CRC-checked by ``scan_bag``) and merged:
-    schemas and channels renumbered across files, messages in log-time order (ties: file order),
-    the metadata records of every file (repeats dropped; status records of the last file), losses
-    and notes of every file naming the file."""
+    schemas and channels renumbered across files (``channel_maps``: per file, its channel id ->
+    the merged one), messages in log-time order (ties: file order; read back file by file as
+    they are iterated, see :meth:`iter_keyed`), the metadata records of every file (repeats
+    dropped; status records of the last file), losses and notes of every file naming the file."""
 
     files: list = dataclasses.field(default_factory=list)
     file_scans: list = dataclasses.field(default_factory=list)
+    channel_maps: list = dataclasses.field(default_factory=list)
+
+    @property
+    def message_count(self) -> int:
+        return sum(s.message_count for s in self.file_scans)
+
+    def iter_keyed(self) -> Iterator:
+        """(log_time, (file index, container offset), index, Message) of every intact message of
+        every file, channels renumbered, in log-time order (ties: file order); each file is read
+        container by container (:meth:`BagScan.iter_keyed`)."""
+        def one(k, scan, cmap):
+            for t, pos, i, msg in scan.iter_keyed():
+                if msg.channel_id in cmap:
+                    msg = dataclasses.replace(msg, channel_id=cmap[msg.channel_id])
+                yield t, (k, pos), i, msg
+        return heapq.merge(*(one(k, s, cmap) for k, (s, cmap) in enumerate(zip(self.file_scans,
+                                                                               self.channel_maps))))
 
     def damage_dicts(self, epoch_ns) -> list:
         out = []
@@ -185,10 +205,11 @@ def _merge(path, files, scans, notes):
                 channel_ids[key] = len(channel_ids) + 1
                 merged.channels[channel_ids[key]] = dataclasses.replace(ch, id=channel_ids[key], schema_id=sid)
             cmap[cid] = channel_ids[key]
-        for t, pos, i, msg in s.messages:
-            if msg.channel_id in cmap:
-                msg = dataclasses.replace(msg, channel_id=cmap[msg.channel_id])
-            merged.messages.append((t, (k, pos), i, msg))
+        merged.channel_maps.append(cmap)
+        for cid, (n, (t, pos, i), t_max) in s.channel_stats.items():
+            st = merged.channel_stats.setdefault(cmap.get(cid, cid), [0, (t, (k, pos), i), t_max])
+            st[0] += n
+            st[1], st[2] = min(st[1], (t, (k, pos), i)), max(st[2], t_max)
         last = k == len(files) - 1
         for rec in s.metadata:
             if rec.name == STATUS_RECORD:
@@ -210,7 +231,6 @@ def _merge(path, files, scans, notes):
                 merged.notes.append(f"{base} (not the last file) was cut short: read up to its last complete record")
             elif s.state not in ("split", "complete", None):
                 merged.notes.append(f"{base} (not the last file) has status '{s.state}'")
-    merged.messages.sort(key=lambda x: x[:3])
     merged.summary_ok = all(s.summary_ok for s in scans)
     merged.data_end = scans[-1].data_end
     merged.truncated = scans[-1].truncated

@@ -17,6 +17,11 @@
 * reads the damage a previous ``recover`` wrote into the file (metadata record
   ``gyro_instrument_damage``), so a recovered file still says what it lost.
 
+It keeps where the intact messages are (one
+:class:`~gyro_instrument.recording.scan_result.Container` per intact chunk or run of message
+records, and per channel its count), not the messages: readers read them back from those
+offsets in log-time order, so neither the scan nor a reader holds the bag in memory.
+
 A file cut short (no footer: a recorder killed without its provisional end, a copy taken
 mid-write) is read up to its last complete record and flagged ``truncated``; that is the
 "interrupted" case, reported as a note rather than as damage.
@@ -37,11 +42,15 @@ from mcap.stream_reader import CRCValidationError, breakup_chunk
 
 from gyro_instrument.core.errors import SceneError
 # the scan's result types live in scan_result; re-exported here, where the callers have found them
-from gyro_instrument.recording.scan_result import DAMAGE_RECORD, STATUS_RECORD, BagScan, Damage
+from gyro_instrument.recording.scan_result import DAMAGE_RECORD, STATUS_RECORD, BagScan, Container, Damage
 
 MAGIC = b"\x89MCAP0\r\n"
 _KNOWN = {int(op) for op in Opcode}
 _FOOTER_LEN = 1 + 8 + 20          # opcode, length, summary_start, summary_offset_start, summary_crc
+#: a run of message records outside chunks becomes a new container after this many records or
+#: bytes, so that reading one back holds no more than a chunk's worth
+RUN_RECORDS = 1024
+RUN_BYTES = 1 << 20
 
 
 def check_mcap(path, field="bag") -> None:
@@ -68,6 +77,14 @@ def check_mcap(path, field="bag") -> None:
                                       f"found {head.hex(' ')}")
 
 
+def _crc32(buf, start, end, block=1 << 18) -> int:
+    """CRC-32 of ``buf[start:end]`` computed block by block: never a copy of the whole range."""
+    crc = 0
+    for a in range(start, end, block):
+        crc = zlib.crc32(buf[a:min(a + block, end)], crc)
+    return crc
+
+
 def _stream(data):
     return ReadDataStream(BytesIO(data))
 
@@ -89,12 +106,13 @@ class _Scanner:
         self.size = len(buf)
         self.footer = None
         self.summary_start = None
-        self.chunk_index = {}        # chunk_start_offset -> ChunkIndex (intact summary only)
+        self.chunk_index = {}        # chunk_start_offset -> (chunk_length, message start, end time) (intact summary)
         self.index_offsets = []      # record offsets the intact summary points at
         self.summary_schemas = {}
         self.summary_channels = {}
         self.raw_damage = []         # (offset, end or None, reason, "span" | "record")
         self.no_crc = 0
+        self.run = None              # [t_min, pos, end, count, t_max] of the run of message records being read
 
     # ------------------------------------------------------------------ summary
     def read_summary(self):
@@ -115,7 +133,7 @@ class _Scanner:
                                    f"the data section was read record by record")
             return
         if footer.summary_crc != 0:
-            crc = zlib.crc32(buf[start:fpos + 25])
+            crc = _crc32(buf, start, fpos + 25)
             if crc != footer.summary_crc:
                 self.scan.notes.append(f"summary section (bytes {start}-{fpos + _FOOTER_LEN}) failed its CRC: "
                                        f"ignored; the data section was read record by record")
@@ -132,7 +150,8 @@ class _Scanner:
                 body = buf[pos + 9:end]
                 if op == Opcode.CHUNK_INDEX:
                     ci = ChunkIndex.read(_stream(body))
-                    chunk_index[ci.chunk_start_offset] = ci
+                    chunk_index[ci.chunk_start_offset] = (ci.chunk_length, ci.message_start_time,
+                                                          ci.message_end_time)
                     offsets.append(ci.chunk_start_offset)
                 elif op == Opcode.METADATA_INDEX:
                     offsets.append(MetadataIndex.read(_stream(body)).offset)
@@ -227,11 +246,11 @@ class _Scanner:
         """Continue after a damaged record at ``pos`` only when its length is corroborated."""
         ci = self.chunk_index.get(pos)
         if ci is not None:
-            return ci.chunk_length == 9 + length
+            return ci[0] == 9 + length
         return _framed(self.buf, pos + 9 + length, limit) and pos + 9 + length < limit
 
     def read_data(self) -> None:
-        """Walk the data section record by record into ``self.scan`` (schemas, channels, messages,
+        """Walk the data section record by record into ``self.scan`` (schemas, channels, message containers,
         metadata), resynchronising after framing damage and noting every lost span in ``raw_damage``;
         stops at the data-end record, the footer, or the end of a file cut short (``truncated``)."""
         buf, scan = self.buf, self.scan
@@ -287,13 +306,20 @@ class _Scanner:
             nxt = self.resync(pos, limit)
             self.raw_damage.append((pos, nxt, reason + "; record length untrustworthy", "span"))
             return nxt
+        count, t_min, t_max = 0, None, None
         for i, rec in enumerate(records):
             if isinstance(rec, Schema):
                 scan.schemas[rec.id] = rec
             elif isinstance(rec, Channel):
                 scan.channels[rec.id] = rec
             elif isinstance(rec, Message):
-                scan.messages.append((rec.log_time, pos, i, rec))
+                t = rec.log_time
+                self._count(rec.channel_id, (t, pos, i))
+                count += 1
+                t_min = t if t_min is None or t < t_min else t_min
+                t_max = t if t_max is None or t > t_max else t_max
+        if count:
+            scan.containers.append(Container(t_min, pos, length, True, count, t_max))
         if consumed != length and not _framed(self.buf, end, limit):
             end = pos + 9 + consumed       # a flipped length on an intact chunk
         return end
@@ -303,7 +329,7 @@ class _Scanner:
         scan = self.scan
         try:
             de = DataEnd.read(_stream(body))
-            if de.data_section_crc and zlib.crc32(self.buf[:pos]) != de.data_section_crc:
+            if de.data_section_crc and _crc32(self.buf, 0, pos) != de.data_section_crc:
                 scan.notes.append("data section failed its CRC (data-end record)"
                                   + ("" if self.raw_damage else ": the damage is outside every chunk's "
                                      "contents (record headers, metadata or indexes); every chunk checked"))
@@ -326,34 +352,62 @@ class _Scanner:
                 c = Channel.read(st)
                 scan.channels[c.id] = c
             elif op == Opcode.MESSAGE:
-                scan.messages.append((None, pos, 0, Message.read(st, length)))
+                self._loose_message(Message.read(st, length), pos, end)
             elif op == Opcode.METADATA:
                 scan.metadata.append(Metadata.read(st))
         except Exception as exc:
             self.raw_damage.append((pos, end, f"{Opcode(op).name.lower()} record unreadable "
                                               f"({exc.__class__.__name__})", "record"))
 
+    def _count(self, cid, key):
+        """Count a message of channel ``cid`` whose (log_time, pos, index) is ``key``."""
+        st = self.scan.channel_stats.get(cid)
+        if st is None:
+            self.scan.channel_stats[cid] = [1, key, key[0]]
+            return
+        st[0] += 1
+        st[1] = min(st[1], key)
+        st[2] = max(st[2], key[0])
+
+    def _loose_message(self, msg, pos, end):
+        """A message record outside chunks (bytes ``pos`` .. ``end``): counted into the run of
+        adjacent message records it continues, or a new run."""
+        t = msg.log_time
+        self._count(msg.channel_id, (t, pos, 0))
+        run = self.run
+        if run is not None and run[2] == pos and run[3] < RUN_RECORDS and end - run[1] <= RUN_BYTES:
+            run[0], run[2], run[3], run[4] = min(run[0], t), end, run[3] + 1, max(run[4], t)
+            return
+        self._end_run()
+        self.run = [t, pos, end, 1, t]
+
+    def _end_run(self):
+        if self.run is not None:
+            t_min, pos, end, count, t_max = self.run
+            self.scan.containers.append(Container(t_min, pos, end - pos, False, count, t_max))
+            self.run = None
+
     # ------------------------------------------------------------------ spans
     def spans(self):
         scan = self.scan
-        by_pos = sorted((p, t) for t, p, _, _ in scan.messages)
         for offset, end, reason, kind in self.raw_damage:
             d = Damage(offset=offset, length=None if end is None else end - offset, reason=reason)
             scan.damaged.append(d)
             if kind != "span":         # a metadata or schema record: no messages in it
                 continue
             hi = self.size if end is None else end
-            idx = [ci for o, ci in self.chunk_index.items() if offset <= o < hi]
+            idx = [(o, ci) for o, ci in self.chunk_index.items() if offset <= o < hi]
             if self.scan.summary_ok and idx:
-                d.lost_from_ns = min(ci.message_start_time for ci in idx)
-                d.lost_to_ns = max(ci.message_end_time for ci in idx)
+                d.lost_from_ns = min(ci[1] for _, ci in idx)
+                d.lost_to_ns = max(ci[2] for _, ci in idx)
                 d.span_from = "chunk index"
-                d.chunk_offsets = tuple(sorted(ci.chunk_start_offset for ci in idx))
+                d.chunk_offsets = tuple(sorted(o for o, _ in idx))
             elif self.scan.summary_ok and not d.reason.startswith("chunk"):
                 d.reason += "; the summary's index puts no chunk in it"    # message indexes only
             else:
-                before = [t for p, t in by_pos if p < offset]
-                after = [t for p, t in by_pos if p >= hi]
+                # a container lies wholly before or after a damaged stretch (runs end at anything unread)
+                before = [c.t_max for c in scan.containers if c.pos < offset]
+                after = [c.t_min for c in scan.containers if c.pos >= hi]
                 d.lost_from_ns = max(before) if before else None
                 d.lost_to_ns = min(after) if after else None
                 d.span_from = "neighbouring messages"
@@ -364,17 +418,14 @@ class _Scanner:
             scan.schemas.setdefault(sid, s)
         for cid, c in self.summary_channels.items():
             scan.channels.setdefault(cid, c)
-        # messages outside chunks carry their own log time
-        scan.messages = [(m.log_time if t is None else t, p, i, m) for t, p, i, m in scan.messages]
+        self._end_run()
         self.spans()
-        orphans = [m for _, _, _, m in scan.messages if m.channel_id not in scan.channels]
+        orphans = [st for cid, st in scan.channel_stats.items() if cid not in scan.channels]
         if orphans:
-            times = [m.log_time for m in orphans]
-            scan.damaged.append(Damage(offset=None, length=None, lost_from_ns=min(times), lost_to_ns=max(times),
-                                       span_from="neighbouring messages",
-                                       reason=f"{len(orphans)} intact messages on channels defined only in a "
-                                              f"damaged record"))
-        scan.messages.sort(key=lambda x: x[:3])
+            scan.damaged.append(Damage(offset=None, length=None, lost_from_ns=min(st[1][0] for st in orphans),
+                                       lost_to_ns=max(st[2] for st in orphans), span_from="neighbouring messages",
+                                       reason=f"{sum(st[0] for st in orphans)} intact messages on channels "
+                                              f"defined only in a damaged record"))
         if self.no_crc:
             scan.notes.append(f"{self.no_crc} chunks carry no CRC (written without one): their contents could "
                               f"not be checked")
@@ -393,6 +444,11 @@ class _Scanner:
 
 def scan_bag(path, field="bag") -> "BagScan":
     """Read every intact record of an MCAP file, checking every CRC; see the module docstring.
+
+    The result keeps where the intact messages are, not the messages (see
+    :class:`~gyro_instrument.recording.scan_result.BagScan`): its memory grows with the number of
+    chunks (one :class:`~gyro_instrument.recording.scan_result.Container` each), while scanning
+    holds one chunk at a time.
 
     Parameters
     ----------

@@ -21,8 +21,9 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import EPOCH_NS
+from gyro_instrument.recording.topics import JOINT_STATE_TYPE, joint_topic
 
-JOINT_STATE = "sensor_msgs/msg/JointState"
+JOINT_STATE = JOINT_STATE_TYPE
 
 
 def parse_topic_remaps(items, insts, field="--topic") -> dict:
@@ -108,7 +109,7 @@ def _match_topics(insts, remaps, by_topic, report):
         joints = _required_joints(inst)
         if joints is None:
             continue
-        topic = remaps.get(name, f"/{name}/joint_states")
+        topic = remaps.get(name, "/" + joint_topic(name))
         types = by_topic.get(topic)
         if not types:
             report["unmatched"][name] = f"no topic {topic} in the bag" + ("" if name in remaps else

@@ -13,7 +13,10 @@ recorder killed with SIGKILL leaves a file every reader opens, up to its last co
 Reader: ``read_messages`` yields (topic, type, log_time_ns, cdr bytes) in log-time order, every
 chunk's CRC checked (:mod:`.bag_scan`): a damaged chunk is skipped, never read, and the intact
 chunks after it are; a file truncated some other way (no footer) is read up to its last complete
-record. ``recover`` rewrites only intact records and records what was lost in the new file.
+record. The scan keeps where the intact messages are, not the messages: every reader here reads
+them back from the file as it yields them, so memory does not grow with the bag (a few hundred
+bytes per chunk for the scan's index, plus the chunks that overlap in log time). ``recover``
+rewrites only intact records and records what was lost in the new file.
 """
 
 import copy
@@ -331,8 +334,8 @@ def read_messages(path, topics=None, scan=None) -> Iterator:
 def play_plan(path, scan) -> list:
     """How :func:`stream_messages` reads each file of a bag: [(file, None)] for a file found intact
     (summary read, no damage, no note: read chunk by chunk by the MCAP reader, in log-time order) or
-    [(file, its scan)] for one that is not (its intact records from the scan). Holding the plan and
-    not the scan lets an intact bag's messages be released as they are played."""
+    [(file, its scan)] for one that is not (its intact chunks and records read back from the
+    offsets the scan kept, skipping the damaged ones, in log-time order)."""
     files = getattr(scan, "files", None) or [path]
     scans = getattr(scan, "file_scans", None) or [scan]
     return [(f, None if (s.summary_ok and s.data_end and not s.damaged and not s.truncated and not s.notes) else s)
@@ -352,7 +355,8 @@ def _file_messages(k, path, scan):
 def stream_messages(plan) -> Iterator:
     """Yield (topic, type_name, log_time_ns, cdr_bytes) of every intact message of a bag in log-time
     order (ties: file order), as :func:`read_messages` does, reading the files of ``plan``
-    (:func:`play_plan`) as they are needed: memory holds the chunks being read, not the bag."""
+    (:func:`play_plan`) as they are needed: memory holds the chunks being read (those overlapping
+    in log time), not the bag."""
     for t, _, _, tp, ty, data in heapq.merge(*(_file_messages(k, f, s) for k, (f, s) in enumerate(plan))):
         yield tp, ty, t, data
 
@@ -367,10 +371,11 @@ def damage_record(scan, epoch_ns) -> dict:
             "status": str(scan.recorded_status or scan.state), "source": os.path.basename(scan.path)}
 
 
-def _write_intact(fo, scan, records, lossy, epoch_ns):
+def _write_intact(fo, scan, lossy, epoch_ns) -> int:
     """Write to the open binary file ``fo`` a complete, indexed (ZSTD chunks, data CRCs) MCAP of
-    what ``scan`` found intact: its schemas and channels, the messages ``records`` and its metadata,
-    the old damage record replaced by a fresh :func:`damage_record` when ``lossy``."""
+    what ``scan`` found intact: its schemas and channels, its messages (read back as they are
+    written) and its metadata, the old damage record replaced by a fresh :func:`damage_record` when
+    ``lossy``; returns the number of messages written."""
     w = Writer(fo, compression=CompressionType.ZSTD, enable_data_crcs=True)
     w.start(profile=scan.header.profile if scan.header else "ros2", library="gyro_instrument recover")
     schema_ids, channel_ids = {}, {}
@@ -384,11 +389,14 @@ def _write_intact(fo, scan, records, lossy, epoch_ns):
     for rec in scan.metadata:
         if rec.name != DAMAGE_RECORD:       # merged into the new one below
             w.add_metadata(rec.name, dict(rec.metadata))
-    for _, channel, m in records:
+    n = 0
+    for _, channel, m in scan.records():
         w.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
+        n += 1
     if lossy:
         w.add_metadata(DAMAGE_RECORD, damage_record(scan, epoch_ns))
     w.finish()
+    return n
 
 
 def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
@@ -428,8 +436,7 @@ def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
     from gyro_instrument.core.scene import EPOCH_NS
     epoch_ns = EPOCH_NS if epoch_ns is None else epoch_ns
     scan = scan or scan_bag(damaged)
-    records = list(scan.records())
-    if not records:
+    if not any(n for _, _, n in scan.channel_counts()):
         lost = f"; {len(scan.damaged)} damaged stretches" if scan.damaged else ""
         raise SceneError("bag", damaged, f"holds no intact message{lost}: nothing recovered, nothing written")
     lossy = bool(scan.damaged or scan.truncated or scan.notes or any(r.name == DAMAGE_RECORD for r in scan.metadata))
@@ -437,11 +444,11 @@ def recover(damaged, out, scan=None, epoch_ns=None) -> tuple:
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{os.path.basename(out)}.", suffix=".partial")
     try:
         with os.fdopen(fd, "wb") as fo:
-            _write_intact(fo, scan, records, lossy, epoch_ns)
+            n = _write_intact(fo, scan, lossy, epoch_ns)
         os.chmod(tmp, 0o644)
         os.replace(tmp, out)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
-    return len(records), scan
+    return n, scan

@@ -1,7 +1,13 @@
 """``player``: :class:`PlayerNode` republishes a bag's intact messages (every chunk's CRC checked;
-what was lost is logged with its log-time span) in log-time order, streamed from the MCAP reader
-(:func:`~gyro_instrument.recording.mcap_io.stream_messages`), driving ``clock``; waits for its
+what was lost is logged with its log-time span) in log-time order, driving ``clock``; waits for its
 subscribers, exits at the end (or loops).
+
+Memory is bounded whatever the bag's size: the start-up scan
+(:func:`~gyro_instrument.recording.bag_layout.scan_path`) keeps per-chunk offsets, times and counts,
+not messages, and play streams (:func:`~gyro_instrument.recording.mcap_io.stream_messages`) an
+intact file chunk by chunk through the MCAP reader and a damaged one container by container from
+the scan's offsets, skipping the damaged chunks; what is held at once is the chunks that overlap
+in log time (tests/test_player_memory.py measures it).
 """
 
 import os
@@ -10,7 +16,7 @@ import time
 from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.recording.bag_layout import scan_path
-from gyro_instrument.recording.mcap_io import play_plan, read_messages, stream_messages
+from gyro_instrument.recording.mcap_io import play_plan, stream_messages
 from gyro_instrument.recording.topics import CLOCK
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
@@ -58,7 +64,7 @@ class PlayerNode(SceneNode):
         for note in scan.notes:
             self.get_logger().warning(f"bag {bag}: {note}")
         classes = self._classes(bag, scan)
-        self._plan = play_plan(bag, scan)       # the scan is not kept: an intact bag is read as played
+        self._plan = play_plan(bag, scan)       # offsets only: every file is read as it is played
         del scan
         self._restart_stream()
         for tp, n in self.skipped.items():
@@ -93,16 +99,18 @@ class PlayerNode(SceneNode):
 
     def _classes(self, bag, scan):
         """{relative topic: message class or None (type not installed)} in the order the topics
-        first appear; counts :attr:`total` and the messages :attr:`skipped`."""
+        first appear; counts :attr:`total` and the messages :attr:`skipped` from the scan's
+        per-channel counts (nothing is read)."""
         classes = {}
-        for tp, ty, _, _ in read_messages(bag, scan=scan):
+        for schema, channel, n in scan.channel_counts():
+            tp = channel.topic
             topic = tp.lstrip("/")
             if topic not in classes:
-                classes[topic] = self._message_class(bag, tp, ty)
+                classes[topic] = self._message_class(bag, tp, schema.name if schema else "")
             if classes[topic] is None:
-                self.skipped[tp] = self.skipped.get(tp, 0) + 1
+                self.skipped[tp] = self.skipped.get(tp, 0) + n
             else:
-                self.total += 1
+                self.total += n
         return classes
 
     def _restart_stream(self):
