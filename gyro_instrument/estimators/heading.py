@@ -147,16 +147,17 @@ def earth_rate_body_covariance(azimuth_rad: float, sigma_rad: float, site: Site,
             + earth_rate_sigma_rad_s ** 2 * np.outer(j_n, j_n))
 
 
-def _checked(name: str, value, *, optional: bool, positive: bool) -> float | None:
-    """``value`` as a float, or None when allowed; SceneError naming the field otherwise."""
+def _checked(name: str, value, *, optional: bool, positive: bool | None) -> float | None:
+    """``value`` as a finite float (> 0 if ``positive``, ≥ 0 if False, any sign if None), or None
+    when ``optional``; SceneError naming the field otherwise."""
     if value is None and optional:
         return None
     try:
         v = float(value)
     except (TypeError, ValueError):
         v = math.nan
-    if not math.isfinite(v) or (v <= 0.0 if positive else v < 0.0):
-        rng = "a finite number > 0" if positive else "a finite number >= 0"
+    if not math.isfinite(v) or (positive is not None and (v <= 0.0 if positive else v < 0.0)):
+        rng = {True: "a finite number > 0", False: "a finite number >= 0", None: "a finite number"}[positive]
         raise SceneError(name, value, rng + (" (or None: not known)" if optional else "") + ", radians / SI")
     return v
 
@@ -192,7 +193,7 @@ def imu_fields(azimuth_rad: float | None, sigma_rad: float | None, site: Site, *
     SceneError
         A non-finite azimuth, a σ ≤ 0 or non-finite, a negative or non-finite levelling/site σ.
     """
-    a = None if azimuth_rad is None else _finite("north.azimuth_rad", azimuth_rad)
+    a = _checked("north.azimuth_rad", azimuth_rad, optional=True, positive=None)
     s = _checked("north.sigma_rad", sigma_rad, optional=True, positive=True)
     lev = _checked("imu.level_sigma_rad", level_sigma_rad, optional=True, positive=False)
     s_lat = _checked("site.latitude_sigma_rad", latitude_sigma_rad, optional=False, positive=False)
@@ -207,13 +208,3 @@ def imu_fields(azimuth_rad: float | None, sigma_rad: float | None, site: Site, *
     rate_cov = earth_rate_body_covariance(a, s, site, s_lat, s_n)
     return ImuFields(orientation_xyzw(a), orient_cov, rate, tuple(float(v) for v in rate_cov.ravel()))
 
-
-def _finite(name: str, value) -> float:
-    """``value`` as a finite float (any sign); SceneError naming the field otherwise."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if not math.isfinite(v):
-        raise SceneError(name, value, "must be a finite number (radians, clockwise from true north)")
-    return v
