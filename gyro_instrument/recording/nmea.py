@@ -1,6 +1,6 @@
 """NMEA 0183 true heading (``$HEHDT``) sentences, and a UDP sender for them (pure Python).
 
-Sentence (NMEA 0183 v4.11, HDT "Heading – True"; talker ``HE`` = north-seeking gyro)::
+Sentence (NMEA 0183 HDT, "Heading – True"; talker ``HE`` = heading, north-seeking gyro)::
 
     $HEHDT,<heading>,T*<hh><CR><LF>
 
@@ -9,12 +9,15 @@ Sentence (NMEA 0183 v4.11, HDT "Heading – True"; talker ``HE`` = north-seeking
   rounded first and wrapped after, so 359.96 at one decimal is ``0.0``, never ``360.0``.
 - ``<hh>``: the checksum, the XOR of every character between ``$`` and ``*`` (both excluded), as
   two upper-case hexadecimal digits.
-- A sentence is at most 82 characters including ``$`` and ``<CR><LF>``; 6 decimals give 25.
+- A sentence is at most 82 characters including ``$`` and ``<CR><LF>``; 6 decimals give 24.
 
 :func:`hehdt_sentence` returns the sentence without ``<CR><LF>``; :class:`NmeaUdpSender` sends each
-sentence as one UDP datagram ending in ``<CR><LF>`` (as navigation software listening on UDP,
-e.g. OpenCPN, takes it). The sender takes any HOST:PORT a user gives (IANA assigns port 10110 to
-``nmea-0183``); tests, CI and demos send to loopback only.
+sentence as one UDP datagram ending in ``<CR><LF>`` (the usual framing of NMEA over plain UDP,
+as chart plotters listening on a UDP port take it). The sender takes any HOST:PORT a user gives
+(IANA assigns port 10110 to ``nmea-0183``); tests, CI and demos send to loopback only.
+
+One decimal (0.1° = 360″) is coarser than a converged gyrocompass estimate (arcseconds): a caller
+that wants the estimate's resolution asks for 3 (3.6″) or 4 decimals.
 """
 
 import math
