@@ -108,7 +108,7 @@ def test_every_effect_declares_known_kinds_and_implements_their_hooks():
     hook contributes nothing); each instrument supports exactly the effects meeting its kinds."""
     hooks = {"point_mass": "point_mass_term", "rigid_body": "rigid_body_torque", "damping": "damping_torque",
              "spin": "spin_torque", "restoring_law": "restoring_law", "carrier_inertia": "carrier_inertia",
-             "frame_rate": "frame_rate_rad_s"}
+             "frame_rate": "frame_rate_rad_s", "torsion": "torsion_term"}
     assert set(hooks) == MECHANICS
     for name, cls in EFFECTS.items():
         assert cls.MECHANICS and cls.MECHANICS <= MECHANICS, name
@@ -119,9 +119,11 @@ def test_every_effect_declares_known_kinds_and_implements_their_hooks():
 
 
 def test_supported_effects_are_unchanged_by_the_derivation():
-    """The derived sets are the ones each instrument declared before issue 12 (msg_docs/instruments.md)."""
+    """The derived sets are the ones each instrument declared before issue 12 (msg_docs/instruments.md),
+    and the torsion tape of issue 24 on the plane gyroscope."""
     expected = {
-        "plane_gyroscope": {"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"},
+        "plane_gyroscope": {"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping",
+                            "tape_torsion", "tape_drift"},
         "spherical_pendulum": {"earth_rotation", "centrifugal", "finite_amplitude", "air_drag"},
         "compound_pendulum": {"earth_rotation", "centrifugal", "pivot_damping", "spin_decay"},
         "free_gyroscope": {"earth_rotation"},
