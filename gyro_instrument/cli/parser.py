@@ -216,8 +216,10 @@ def _add_study_commands(sub):
                         "instruments.gyro_meridian.spin_rate_turn_s=200); duration_s is what is planned")
     p.add_argument("--target", dest="targets", action="append", default=[], metavar="NAME=VALUE",
                    help="a 1-sigma accuracy wanted (repeatable): latitude_arcsec, latitude_deg, latitude_rad, "
-                        "earth_rate_rad_s or earth_rate_deg_h, e.g. --target latitude_arcsec=1 --target "
-                        "earth_rate_rad_s=1e-10")
+                        "earth_rate_rad_s, earth_rate_deg_h, or the mount azimuth of a horizontal gyroscope "
+                        "(north): azimuth_arcsec, azimuth_mgon, azimuth_deg (the time per north method and for the "
+                        "fit), e.g. --target latitude_arcsec=1 --target earth_rate_rad_s=1e-10 --target "
+                        "azimuth_arcsec=3")
     p.add_argument("--noise-factor", dest="noise_factors", action="append", type=float, default=None,
                    metavar="X", help="sensitivity: replan with the sensor noise times X (repeatable; default 0.1 and 10)")
     p.add_argument("--rate-factor", dest="rate_factors", action="append", type=float, default=None,
