@@ -142,8 +142,10 @@ def north_lines(n) -> list:
     if n.get("mount_azimuth_deg") is None:
         return [f"north: not determined ({n.get('reason') or 'see the methods'}); azimuth in "
                 f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
-    lines = [f"north: scale zero of {n['instrument']} at azimuth {n['mount_azimuth_deg']:.6f}° +/- "
-             f"{_fmt(n['sigma_arcsec'], '.3g')}\" (fit; Cramer-Rao {_fmt(n['crlb_arcsec'], '.3g')}\")"]
+    what = n["instrument"] or f"the field book {n.get('field_book')}"
+    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    lines = [f"north: scale zero of {what} at azimuth {n['mount_azimuth_deg']:.6f}° +/- "
+             f"{_fmt(n['sigma_arcsec'], '.3g')}\" ({how}" + (f" {n['crlb_arcsec']:.3g}\")" if n.get("crlb_arcsec") is not None else ")")]
     for name, m in n.get("methods", {}).items():
         lines.append(f"  {name:<13} {m['mount_azimuth_deg']:.6f}° +/- {_fmt(m['sigma_arcsec'], '.3g')}\"  "
                      f"({m['n_used']} used; needs {m['needs']})")
