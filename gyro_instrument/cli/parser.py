@@ -134,9 +134,15 @@ def _add_scene_commands(sub):
     p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
                    help="with --data: unit of a numeric time column, converted to s (default s; not for a "
                         "Parquet timestamp or duration, which carries its unit)")
-    p.add_argument("--angle-unit", default="rad", choices=["rad", "deg"],
+    p.add_argument("--angle-unit", default=None, choices=["rad", "deg"],
                    help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
-                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s)")
+                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s); "
+                        "with --reversal-points: the unit of a bare reading column")
+    p.add_argument("--reversal-points", metavar="FILE.csv",
+                   help="estimate north from a field book instead of simulating: a CSV of turning-point readings "
+                        "of the circle (clockwise), one a row, header reading_<unit> (rad, mrad, deg, gon, mgon, "
+                        "arcmin, arcsec), optional time_s, tape_reading_<unit>, tape_time_s; gives the Schuler "
+                        "mean and Lavrov's estimate with their sigma from the scatter (msg_docs/estimate.md)")
     p.add_argument("--column", dest="columns", action="append", default=[], metavar="NAME=SOURCE",
                    help="with --data: read the table's column SOURCE as the channel column NAME, e.g. "
                         "--column gyro_horizontal.angle=Theta (repeatable)")

@@ -137,15 +137,38 @@ def print_estimate(r, stream=None) -> None:
     flush()
 
 
+def north_lines(n) -> list:
+    """The ``north`` block as lines: the mount azimuth with its σ and bound, then each method."""
+    if n.get("mount_azimuth_deg") is None:
+        return [f"north: not determined ({n.get('reason') or 'see the methods'}); azimuth in "
+                f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
+    what = n["instrument"] or f"the field book {n.get('field_book')}"
+    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    lines = [f"north: scale zero of {what} at azimuth {n['mount_azimuth_deg']:.6f}° +/- "
+             f"{_fmt(n['sigma_arcsec'], '.3g')}\" ({how}" + (f" {n['crlb_arcsec']:.3g}\")" if n.get("crlb_arcsec") is not None else ")")]
+    for name, m in n.get("methods", {}).items():
+        lines.append(f"  {name:<13} {m['mount_azimuth_deg']:.6f}° +/- {_fmt(m['sigma_arcsec'], '.3g')}\"  "
+                     f"({m['n_used']} used; needs {m['needs']})")
+    for name, why in n.get("refused", {}).items():
+        lines.append(f"  {name:<13} refused: {why}")
+    if n.get("tape"):
+        t = n["tape"]
+        lines.append(f"  tape: D_B/D_K = {t['ratio_db_dk']:.4g} +/- {t['ratio_sigma']:.2g}, zero reads "
+                     f"{t['zero_reading_deg']:.6f}° (rotor-off swing {t['instrument']}); every centre corrected")
+    return lines
+
+
 def estimate_headline(r) -> list:
-    """The estimate's answer as lines: the latitude (or why there is none) and each pendulum's
-    measured swing-plane rate in °/h with its full turn in hours."""
+    """The estimate's answer as lines: north first when a horizontal gyroscope gives it
+    (:func:`north_lines`), the latitude (or why there is none) and each pendulum's measured
+    swing-plane rate in °/h with its full turn in hours."""
     lat = r.get("latitude_deg")
+    lines = north_lines(r["north"]) if r.get("north") else []
     if lat is None:
-        lines = [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
+        lines += [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
     else:
         sig = r.get("latitude_sigma_deg")
-        lines = [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
+        lines += [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
                  f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
     for name, e in r.get("instruments", {}).items():
         k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None

@@ -22,8 +22,21 @@ AZIMUTH = "azimuth"
 ROTOR_OFF = "rotor_off"
 
 
+def _on_scale(obs, out) -> dict:
+    """``out`` with the swing angle read on the scale: u + M (``mount_reading_rad``)."""
+    m = obs.instrument.mount_reading_rad
+    if m:
+        out["angle"] = out["angle"] + m
+    return out
+
+
 class TapeSwing(RotorObservation):
-    """A suspended gyroscope with its rotor stopped: a torsion pendulum on its tape (no Earth rate)."""
+    """A suspended gyroscope with its rotor stopped: a torsion pendulum on its tape (no Earth rate),
+    read on the same scale (u + M)."""
+
+    def true_values(self, columns) -> dict:
+        """The scale reading u + M (rad)."""
+        return _on_scale(self, super().true_values(columns))
 
     def unmeasured_reason(self) -> str:
         return f"{self.name} swings with its rotor off: a torsion pendulum on its tape, read for the tape zero"
@@ -56,10 +69,7 @@ class HorizontalSwing(SwingRate):
 
     def true_values(self, columns) -> dict:
         """The scale reading u + M (rad): Quet's u offset by the mount (``mount_azimuth_deg``)."""
-        out = super().true_values(columns)
-        if self.mount_reading_rad:
-            out[self.angle_channel] = out[self.angle_channel] + self.mount_reading_rad
-        return out
+        return _on_scale(self, super().true_values(columns))
 
     def companions(self) -> dict:
         """{record key: instrument name} of the other records the azimuth engine reads: the rotor-off

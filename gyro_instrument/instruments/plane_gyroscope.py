@@ -164,10 +164,13 @@ class PlaneGyroscope(Instrument):
             return
         D_K = self.directing_constant_n_m()
         if self.has("earth_rotation") and D_B >= D_K:
+            per_cos = self.C * self.p.spin_rate_rad_s * self.site.earth_rate_rad_s
+            lim = math.degrees(math.acos(D_B / per_cos)) if 0 < D_B < per_cos else None
+            where = f"; for this tape |site.latitude_deg| < {lim:.4g}" if lim is not None else ""
             raise SceneError(f"effects.tape_torsion.torsion_constant_n_m_rad", D_B,
                              f"must be < D_K = C rho0 n cos(latitude) = {D_K:.6g} N m/rad of {self.name} at latitude "
                              f"{self.site.latitude_deg:g} deg: a tape at least as stiff cancels or reverses the directing "
-                             f"torque's hold on the swing centre (N = c + (D_B/D_K)(c - Z))")
+                             f"torque's hold on the swing centre (N = c + (D_B/D_K)(c - Z)){where}")
 
     def tape_ratio(self) -> float:
         """D_B/D_K of the scene (nan without rotor or directing torque)."""
