@@ -387,8 +387,9 @@ class AzimuthModel:
 
     @property
     def min_record_s(self) -> float:
-        """One full swing: the shortest record the estimator's north block accepts."""
-        return 2.0 * math.pi / self.omega
+        """One full swing (of the rotor-off swing too, with a tape: its fit gives the tape zero and
+        period): the shortest record the estimator's north block accepts."""
+        return 2.0 * math.pi / min(self.omega, self.off[0] if self.off else self.omega)
 
     def record(self, T, rate_hz, off=False) -> tuple:
         """(t, u): the noise-free model record on the scene's sample grid over T s (rotor-off with ``off``)."""
