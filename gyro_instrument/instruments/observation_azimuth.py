@@ -14,7 +14,7 @@ estimate for the tape zero and the tape's stiffness (``companions``).
 import math
 from typing import ClassVar
 
-from gyro_instrument.instruments.observation import RotorObservation, SwingRate
+from gyro_instrument.instruments.observation import RateEstimate, RotorObservation, SwingRate
 
 #: Measurement kind: the azimuth of a scale's zero from a swing centre on the meridian.
 AZIMUTH = "azimuth"
@@ -53,7 +53,7 @@ class HorizontalSwing(SwingRate):
     ALSO_MEASURES: ClassVar[tuple] = (AZIMUTH,)
 
     @classmethod
-    def of(cls, inst):
+    def of(cls, inst) -> "RotorObservation":
         """A :class:`HorizontalSwing` for a flat horizontal plane with the rotor on; :class:`TapeSwing`
         with the rotor stopped; :meth:`SwingRate.of` otherwise."""
         if getattr(inst, "is_cone", True) or inst.p.plane != "horizontal":
@@ -88,7 +88,7 @@ class HorizontalSwing(SwingRate):
         k = (math.pi / T0) ** 2 - self.tape_constant_per_inertia
         return super().rate_from_swing(math.pi / math.sqrt(k) if k > 0 else math.inf, rho_mean)
 
-    def measured_rate(self, T0, sig_T0, crlb_T0, rho_mean):
+    def measured_rate(self, T0, sig_T0, crlb_T0, rho_mean) -> "RateEstimate":
         """:meth:`SwingRate.measured_rate`; with a tape the relative σ and bound grow by K/(K − D_B/A)
         (the tape's part of K is known, the swing's σ falls on the gyroscope's part alone)."""
         r = super().measured_rate(T0, sig_T0, crlb_T0, rho_mean)
@@ -96,4 +96,4 @@ class HorizontalSwing(SwingRate):
             return r
         K = (math.pi / T0) ** 2
         f = K / (K - self.tape_constant_per_inertia) if K > self.tape_constant_per_inertia else math.inf
-        return type(r)(r.value, r.sigma * f, r.crlb * f, r.extra)
+        return RateEstimate(r.value, r.sigma * f, r.crlb * f, r.extra)
