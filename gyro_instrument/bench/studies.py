@@ -581,10 +581,15 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
                           duration_s=120.0 if quick else None, executor=executor)
     write_effect_cost_csv(os.path.join(out_dir, "effect_cost.csv"), ec)
+    progress("north: accuracy versus observation time per method, systematic floors, the gyrotheodolite")
+    from gyro_instrument.bench.north_study import north_bench, north_lines, write_north_csv
+    ns, nsc = north_bench(quick, executor=executor)
+    write_north_csv(os.path.join(out_dir, "north_accuracy.csv"), os.path.join(out_dir, "north_gyrotheodolite.csv"),
+                    ns, nsc, _write)
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
-    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec)
+    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + north_lines(ns, nsc)
     return _write_summary(out_dir, lines, pngs)
 
 

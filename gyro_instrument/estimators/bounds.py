@@ -387,9 +387,10 @@ class AzimuthModel:
 
     @property
     def min_record_s(self) -> float:
-        """One full swing (of the rotor-off swing too, with a tape: its fit gives the tape zero and
-        period): the shortest record the estimator's north block accepts."""
-        return 2.0 * math.pi / min(self.omega, self.off[0] if self.off else self.omega)
+        """One full swing; with a tape two full swings of the rotor-off swing (its fit, which gives the
+        tape zero and period, starts from ≥ 3 complete reversal points, whatever the phase at which
+        the record starts): the shortest record the estimator's north block accepts."""
+        return max(2.0 * math.pi / self.omega, 4.0 * math.pi / self.off[0] if self.off else 0.0)
 
     def record(self, T, rate_hz, off=False) -> tuple:
         """(t, u): the noise-free model record on the scene's sample grid over T s (rotor-off with ``off``)."""
