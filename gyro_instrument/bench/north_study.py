@@ -80,8 +80,7 @@ def scene_north_rows(durations_s, seeds, scene="gyrotheodolite", overrides=(), e
     scene's north estimate (tape, drift, damping as the scene has them): the rms over ``seeds`` sensor
     draws (:func:`~gyro_instrument.estimators.pipeline.seed_sweep`), the mean reported σ, and the
     systematic floor (the noise-free run's error: :func:`~gyro_instrument.estimators.planner.noise_free_estimate`)."""
-    from gyro_instrument.core.parallel import process_executor
-    from gyro_instrument.estimators.pipeline import seed_sweep
+    from gyro_instrument.bench.studies import seed_sweeps
     from gyro_instrument.estimators.planner import noise_free_estimate
     from gyro_instrument.scenes import build_instruments, load_scene
     sc = load_scene(scene, list(overrides))
@@ -89,13 +88,7 @@ def scene_north_rows(durations_s, seeds, scene="gyrotheodolite", overrides=(), e
                 "horizontal")
     truth = build_instruments(sc)[gyro].p.mount_azimuth_deg
     jobs = [(scene, list(overrides) + [f"duration_s={d!r}"], list(range(seeds))) for d in durations_s]
-    own = executor is None
-    executor = executor or process_executor(min(len(jobs), 2))
-    try:
-        sweeps = list(executor.map(seed_sweep, jobs))
-    finally:
-        if own:
-            executor.shutdown()
+    sweeps = seed_sweeps(jobs, executor, min(len(jobs), 2))
     rows = []
     for d, results in zip(durations_s, sweeps):
         floor = _method_errors(noise_free_estimate(scene, list(overrides), d)[1], truth)

@@ -410,19 +410,25 @@ SITE_HEADER = ("latitude_deg", "rms_error_deg", "mean_sigma_deg", "crlb_deg", "r
                "crlb_earth_rate_rad_s")
 
 
+def seed_sweeps(jobs, executor=None, workers=None) -> list:
+    """``seed_sweep`` over ``jobs`` through ``executor`` (by default a process pool of ``workers``,
+    shut down after): one list of estimates per job."""
+    own = executor is None
+    executor = executor or process_executor(workers)
+    try:
+        return list(executor.map(seed_sweep, jobs))
+    finally:
+        if own:
+            executor.shutdown()
+
+
 def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None) -> list:
     """Rows :data:`SITE_HEADER`: quet_paris moved to each latitude (10 min per configuration),
     rms errors over seeds against the reported σ and the Cramér–Rao bound — one
     ``seed_sweep`` job per site through the executor (any ``concurrent.futures`` executor)."""
     jobs = [("quet_paris", [f"site.latitude_deg={lat}", f"duration_s={60.0 * minutes}"], range(n_seeds))
             for lat in latitudes_deg]
-    own = executor is None
-    executor = executor or process_executor()
-    try:
-        results = list(executor.map(seed_sweep, jobs))
-    finally:
-        if own:
-            executor.shutdown()
+    results = seed_sweeps(jobs, executor)
     rows = []
     for lat, res in zip(latitudes_deg, results):
         dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r["latitude_deg"] is not None]

@@ -317,23 +317,7 @@ class Planner:
             return None, self.bounds(t_min, counting)[0].get(f"{quantity}_reason", "not determined")
         if s0 <= target:
             return t_min, "the estimator's shortest record already meets the target"
-        lo, hi = t_min, t_min
-        while True:
-            hi = min(hi * 4.0, MAX_OBSERVATION_S)
-            s = self.sigma(quantity, hi, counting)
-            if s is not None and s <= target:
-                break
-            if hi >= MAX_OBSERVATION_S:
-                return None, f"not reached within {MAX_OBSERVATION_S:g} s ({MAX_OBSERVATION_S / YEAR_S:.0f} years)"
-            lo = hi
-        while hi / lo > 1.0 + 1e-4:
-            mid = math.sqrt(lo * hi)
-            s = self.sigma(quantity, mid, counting)
-            if s is not None and s <= target:
-                hi = mid
-            else:
-                lo = mid
-        return hi, ""
+        return shortest_time(lambda T: self.sigma(quantity, T, counting), t_min, target, 4.0, 1e-4)
 
     def slope(self, quantity, T, factor=2.0) -> float | None:
         """d ln σ / d ln T around T, the secant from T/factor to T·factor (−3/2 in the long-record
@@ -549,19 +533,29 @@ def solve_azimuth(model, sensor, target_rad, method="fit") -> tuple:
     def sig(T):
         return azimuth_sigmas(model, T, sensor)[method] if method != "fit" else tape_combined(
             model, _centre_bound(model, T, sensor), T, sensor)
-    lo = hi = model.min_record_s
-    if sig(lo) <= target_rad:
-        return lo, "one full swing (the shortest record) already meets the target"
+    if sig(model.min_record_s) <= target_rad:
+        return model.min_record_s, "one full swing (the shortest record) already meets the target"
+    return shortest_time(sig, model.min_record_s, target_rad, 2.0, 1e-3)
+
+
+def shortest_time(sigma_of, t_min, target, grow, rel) -> tuple:
+    """Shortest T > ``t_min`` with ``sigma_of(T)`` (None: not determined) ≤ ``target``, σ(t_min) being
+    above it: T × ``grow`` until met (at most :data:`MAX_OBSERVATION_S`), then bisection in log T to
+    ``rel``. Returns (T or None, note)."""
+    def met(T):
+        s = sigma_of(T)
+        return s is not None and s <= target
+    lo = hi = t_min
     while True:
-        hi = min(hi * 2.0, MAX_OBSERVATION_S)
-        if sig(hi) <= target_rad:
+        hi = min(hi * grow, MAX_OBSERVATION_S)
+        if met(hi):
             break
         if hi >= MAX_OBSERVATION_S:
             return None, f"not reached within {MAX_OBSERVATION_S:g} s ({MAX_OBSERVATION_S / YEAR_S:.0f} years)"
         lo = hi
-    while hi / lo > 1.0 + 1e-3:
+    while hi / lo > 1.0 + rel:
         mid = math.sqrt(lo * hi)
-        if sig(mid) <= target_rad:
+        if met(mid):
             hi = mid
         else:
             lo = mid
