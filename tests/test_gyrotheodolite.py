@@ -35,6 +35,13 @@ def test_default_mount_reads_quet_u_and_a_mount_offsets_the_reading():
     assert np.allclose(r1["angle"] - r0["angle"], math.radians(-60.0), atol=1e-12)
 
 
+def test_without_a_stated_mount_the_estimate_is_as_before():
+    scene = _quet()
+    truth = simulate_truth(scene)
+    res = estimate_records(scene, truth[1], measure(scene, truth, 5))
+    assert "north" not in res and "north" not in res["instruments"]["gyro_horizontal"]
+
+
 def test_north_block_recovers_the_mount_azimuth():
     scene = _quet(["instruments.gyro_horizontal.mount_azimuth_deg=123.4"])
     truth = simulate_truth(scene)
@@ -90,7 +97,7 @@ def test_bad_input_exits_2_naming_field_value_and_range(sets, words, capsys):
 
 
 def test_at_the_pole_north_is_null_with_the_whole_circle():
-    scene = _quet(["site.latitude_deg=90"])
+    scene = _quet(["site.latitude_deg=90", "instruments.gyro_horizontal.mount_azimuth_deg=10.0"])
     truth = simulate_truth(scene)
     res = estimate_records(scene, truth[1], measure(scene, truth, 1))
     n = res["north"]

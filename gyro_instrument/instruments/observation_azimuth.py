@@ -49,7 +49,8 @@ class HorizontalSwing(SwingRate):
     tape hangs it (K = (π/T0)² − D_B/A, D_B the scene's tape constant).
     """
 
-    #: Measurement kinds beside ``MEASUREMENT`` the estimator runs the engines of.
+    #: Measurement kinds beside ``MEASUREMENT`` the estimator runs the engines of: an azimuth when the
+    #: scene states the mount (``mount_azimuth_deg``) or hangs the gyroscope on a tape (set per instance).
     ALSO_MEASURES: ClassVar[tuple] = (AZIMUTH,)
 
     @classmethod
@@ -66,6 +67,8 @@ class HorizontalSwing(SwingRate):
         super().__init__(inst, model)
         self.mount_reading_rad = inst.mount_reading_rad
         self.tape_constant_per_inertia = inst.tape[0] / inst.p.transverse_inertia_kg_m2
+        if inst.p.mount_azimuth_deg is None and not self.has_tape():
+            self.ALSO_MEASURES = ()
 
     def true_values(self, columns) -> dict:
         """The scale reading u + M (rad): Quet's u offset by the mount (``mount_azimuth_deg``)."""

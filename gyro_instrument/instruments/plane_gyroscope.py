@@ -27,7 +27,7 @@ Horizontal plane, as a gyrocompass (issue 24): the scale the measured ``angle`` 
 zero at azimuth ``mount_azimuth_deg`` M (clockwise from true north) and reads like Quet's u,
 counter-clockwise seen from above, so the reading is u + M (M wrapped to (−180°, 180°]; true north
 reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −angle = azimuth − M).
-M = 0 reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
+M = 0 (or M unstated: then the estimate reports no north) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
 mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
 c = (D_K N + D_B Z)/(D_K + D_B) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
 with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
@@ -100,9 +100,11 @@ class PlaneGyroscope(Instrument):
               doc="DOP853 driver of the reduced model: scalar (Python floats, ~5x faster on its 3 components), "
                   "vector (scipy's solve_ivp on arrays; the same steps, equal to rounding), auto: scalar; the "
                   "hinge chain (model: chain, a cone) always runs vector"),
-        Param("mount_azimuth_deg", default=0.0, low=0.0, high=360.0, open_high=True,
+        Param("mount_azimuth_deg", default=None, low=0.0, high=360.0, open_high=True,
               doc="horizontal plane: azimuth (clockwise from true north) of the scale's zero; the measured "
-                  "angle reads u + this (wrapped to (-180, 180] degrees), so true north reads +this"),
+                  "angle reads u + this (wrapped to (-180, 180] degrees), so true north reads +this, and the "
+                  "estimate reports it (north). Unstated (null): reads as 0, no north block (every estimate "
+                  "as before issue 24)"),
         Param("rotor_off_instrument", kind="str", default="",
               doc="with tape_torsion: the scene's instrument that is this gyroscope swung with the rotor off "
                   "(spin_rate_rad_s: 0), whose swing gives the tape zero and D_B"),
@@ -121,9 +123,9 @@ class PlaneGyroscope(Instrument):
     def check_params(cls, prefix, p) -> None:
         if p["plane"] == "custom" and p["normal_enu"] is None:
             raise SceneError(f"{prefix}.normal_enu", None, "is required when plane = custom (3 numbers, ENU)")
-        if p["mount_azimuth_deg"] and (p["plane"] != "horizontal" or p["cone_half_angle_deg"] < 90.0):
+        if p["mount_azimuth_deg"] is not None and (p["plane"] != "horizontal" or p["cone_half_angle_deg"] < 90.0):
             raise SceneError(f"{prefix}.mount_azimuth_deg", p["mount_azimuth_deg"],
-                             "must be 0 unless plane = horizontal (a flat plane: the scale's zero is an azimuth)")
+                             "must be left out unless plane = horizontal (a flat plane: the scale's zero is an azimuth)")
 
     @classmethod
     def check_effects(cls, prefix, params, effect_names) -> None:
@@ -143,7 +145,8 @@ class PlaneGyroscope(Instrument):
         self.is_cone = self.p.cone_half_angle_deg < 90.0
         self.C = self.p.inertia_ratio * self.p.transverse_inertia_kg_m2
         #: the scale's reading of true north, rad: M wrapped to (−π, π] (module docstring)
-        self.mount_reading_rad = math.pi - (math.pi - self.p.mount_azimuth_rad) % (2.0 * math.pi)
+        mount = math.radians(self.p.mount_azimuth_deg or 0.0)
+        self.mount_reading_rad = math.pi - (math.pi - mount) % (2.0 * math.pi)
         self.tape = self._tape()
         self._check_tape()
 
