@@ -25,7 +25,7 @@ setup(
     extras_require={
         "ros": ROS,
         "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
-                       "dask[distributed]>=2023.1"],
+                       "dask[distributed]>=2023.1", "pynmea2==1.19.0"],
         "plot": ["matplotlib>=3.6"],
         "cluster": ["dask[distributed]>=2023.1"],
     },

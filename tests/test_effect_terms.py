@@ -108,7 +108,7 @@ def test_every_effect_declares_known_kinds_and_implements_their_hooks():
     hook contributes nothing); each instrument supports exactly the effects meeting its kinds."""
     hooks = {"point_mass": "point_mass_term", "rigid_body": "rigid_body_torque", "damping": "damping_torque",
              "spin": "spin_torque", "restoring_law": "restoring_law", "carrier_inertia": "carrier_inertia",
-             "frame_rate": "frame_rate_rad_s"}
+             "frame_rate": "frame_rate_rad_s", "torsion": "torsion_term"}
     assert set(hooks) == MECHANICS
     for name, cls in EFFECTS.items():
         assert cls.MECHANICS and cls.MECHANICS <= MECHANICS, name

@@ -55,3 +55,98 @@ def north_accuracy_vs_time(durations_s, period_s=20.0, amplitude_rad=0.05, dampi
                          "floor_rad": float(floor[name].centre_rad - centre_rad) if name in floor else math.nan,
                          "n_ok": int(e.size), "refused": ""})
     return rows
+
+
+# ----------------------------------------------------------------------------- the emulated gyrotheodolite
+#: The north methods of the estimate's ``north.methods``, in the order the tables show them.
+METHODS = ("schuler_mean", "lavrov", "transit", "fit")
+ARCSEC_PER_RAD = 648000.0 / math.pi
+
+
+def _method_errors(result, truth_deg) -> dict:
+    """{method: (azimuth error ″, reported σ ″)} of one estimate's ``north`` block (errors wrapped)."""
+    block = result.get("north") or {}
+    out = {}
+    for name, m in (block.get("methods") or {}).items():
+        if m.get("mount_azimuth_deg") is None:
+            continue
+        err = ((m["mount_azimuth_deg"] - truth_deg + 180.0) % 360.0 - 180.0) * 3600.0
+        out[name.split("+")[0]] = (err, m.get("sigma_arcsec"))
+    return out
+
+
+def scene_north_rows(durations_s, seeds, scene="gyrotheodolite", overrides=(), executor=None) -> list:
+    """Rows ``{duration_s, method, rms_error_arcsec, mean_sigma_arcsec, floor_arcsec, n_ok}`` of a shipped
+    scene's north estimate (tape, drift, damping as the scene has them): the rms over ``seeds`` sensor
+    draws (:func:`~gyro_instrument.estimators.pipeline.seed_sweep`), the mean reported σ, and the
+    systematic floor (the noise-free run's error: :func:`~gyro_instrument.estimators.planner.noise_free_estimate`)."""
+    from gyro_instrument.bench.studies import seed_sweeps
+    from gyro_instrument.estimators.planner import noise_free_estimate
+    from gyro_instrument.scenes import build_instruments, load_scene
+    sc = load_scene(scene, list(overrides))
+    gyro = next(n for n, i in build_instruments(sc).items() if i.p.spin_rate_rad_s and getattr(i.p, "plane", "") ==
+                "horizontal")
+    truth = build_instruments(sc)[gyro].p.mount_azimuth_deg
+    jobs = [(scene, list(overrides) + [f"duration_s={d!r}"], list(range(seeds))) for d in durations_s]
+    sweeps = seed_sweeps(jobs, executor, min(len(jobs), 2))
+    rows = []
+    for d, results in zip(durations_s, sweeps):
+        floor = _method_errors(noise_free_estimate(scene, list(overrides), d)[1], truth)
+        per = [_method_errors(r, truth) for r in results]
+        for name in METHODS:
+            vals = [p[name] for p in per if name in p]
+            e = np.array([v[0] for v in vals])
+            s = np.array([v[1] for v in vals if v[1] is not None])
+            rows.append({"duration_s": float(d), "method": name, "n_ok": len(vals),
+                         "rms_error_arcsec": float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan,
+                         "mean_sigma_arcsec": float(np.mean(s)) if s.size else math.nan,
+                         "floor_arcsec": floor.get(name, (math.nan,))[0]})
+    return rows
+
+
+def north_bench(quick=False, executor=None) -> tuple:
+    """The bench's north study: (synthetic rows, scene rows).
+
+    Synthetic (:func:`north_accuracy_vs_time`): a swing like the gyrotheodolite scene's (full period
+    480 s, amplitude 0.017 rad, 20″ noise at 1 Hz), undamped; damped (δ = 9.26e-5 1/s, the scene's
+    pivot damping at τ = 3 h); damped with a centre drifting 20″/h — accuracy against observation time
+    per method and each method's systematic floor under each (28 min: seven turning points, as the
+    Fennel KT1's figure). Scene (:func:`scene_north_rows`): the shipped ``gyrotheodolite`` (tape, its
+    drift, damping) at 50 min (the rotor-off swing's fit needs three of its reversal points) and 60 min.
+    """
+    seeds = 8 if quick else 40
+    durations = (1680.0, 3600.0) if quick else (960.0, 1680.0, 2400.0, 3600.0, 7200.0)
+    cases = {"undamped": {}, "damped": {"damping_per_s": 9.26e-5},
+             "damped+drift": {"damping_per_s": 9.26e-5, "drift_rad_s": 20.0 / ARCSEC_PER_RAD / 3600.0}}
+    synth = []
+    for label, kw in cases.items():
+        for r in north_accuracy_vs_time(durations, period_s=480.0, amplitude_rad=0.017, noise_rad=1e-4,
+                                        sample_rate_hz=1.0, mark_offset_rad=2e-4, seeds=seeds, **kw):
+            synth.append({"case": label, **r})
+    scene = scene_north_rows((3000.0, 3600.0), 8 if quick else 40, executor=executor)
+    return synth, scene
+
+
+def north_lines(synth, scene) -> list:
+    """summary.md's north tables (″)."""
+    a = ARCSEC_PER_RAD
+    lines = ["", "## North: accuracy versus observation time per method (synthetic swing, arcsec)", "",
+             "| case | T (min) | method | rms error | mean σ | Cramér–Rao | systematic floor |", "|---|---|---|---|---|---|---|"]
+    for r in synth:
+        if r.get("method") == "all":
+            continue
+        lines.append(f"| {r['case']} | {r['duration_s'] / 60:.0f} | {r['method']} | {r['rms_error_rad'] * a:.3g} | "
+                     f"{r['mean_sigma_rad'] * a:.3g} | {r['crlb_rad'] * a:.3g} | {r['floor_rad'] * a:+.2g} |")
+    lines += ["", "## North: the shipped gyrotheodolite scene (tape, drift, damping; arcsec)", "",
+              "| T (min) | method | rms error | mean σ | noise-free error (floor) | seeds |", "|---|---|---|---|---|---|"]
+    lines += [f"| {r['duration_s'] / 60:.0f} | {r['method']} | {r['rms_error_arcsec']:.3g} | {r['mean_sigma_arcsec']:.3g} | "
+              f"{r['floor_arcsec']:+.2g} | {r['n_ok']} |" for r in scene]
+    return lines
+
+
+def write_north_csv(path_synth, path_scene, synth, scene, write) -> None:
+    """The two CSVs through the bench's atomic writer ``write(path, header, rows)``."""
+    h1 = ("case", "duration_s", "method", "rms_error_rad", "mean_sigma_rad", "crlb_rad", "floor_rad", "n_ok", "refused")
+    write(path_synth, h1, [tuple(r.get(k, "") for k in h1) for r in synth])
+    h2 = ("duration_s", "method", "rms_error_arcsec", "mean_sigma_arcsec", "floor_arcsec", "n_ok")
+    write(path_scene, h2, [tuple(r[k] for k in h2) for r in scene])

@@ -143,19 +143,25 @@ SITE_HEADER = ("latitude_deg", "rms_error_deg", "mean_sigma_deg", "crlb_deg", "r
                "crlb_earth_rate_rad_s")
 
 
+def seed_sweeps(jobs, executor=None, workers=None) -> list:
+    """``seed_sweep`` over ``jobs`` through ``executor`` (by default a process pool of ``workers``,
+    shut down after): one list of estimates per job."""
+    own = executor is None
+    executor = executor or process_executor(workers)
+    try:
+        return list(executor.map(seed_sweep, jobs))
+    finally:
+        if own:
+            executor.shutdown()
+
+
 def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None) -> list:
     """Rows :data:`SITE_HEADER`: quet_paris moved to each latitude (10 min per configuration),
     rms errors over seeds against the reported σ and the Cramér–Rao bound — one
     ``seed_sweep`` job per site through the executor (any ``concurrent.futures`` executor)."""
     jobs = [("quet_paris", [f"site.latitude_deg={lat}", f"duration_s={60.0 * minutes}"], range(n_seeds))
             for lat in latitudes_deg]
-    own = executor is None
-    executor = executor or process_executor()
-    try:
-        results = list(executor.map(seed_sweep, jobs))
-    finally:
-        if own:
-            executor.shutdown()
+    results = seed_sweeps(jobs, executor)
     rows = []
     for lat, res in zip(latitudes_deg, results):
         dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r["latitude_deg"] is not None]
@@ -301,20 +307,21 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     own = executor is None
     executor = executor or process_executor()
     try:
-        ot, floors, pl, ss, ec = _sweep_studies(out_dir, quick, progress, executor)
+        ot, floors, pl, ss, ec, north = _sweep_studies(out_dir, quick, progress, executor)
     finally:
         if own:
             executor.shutdown()
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
-    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec)
+    from gyro_instrument.bench.north_study import north_lines
+    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + north_lines(*north)
     return _write_summary(out_dir, lines, pngs)
 
 
 def _sweep_studies(out_dir, quick, progress, executor) -> tuple:
     """The seeded studies through ``executor``, each written to its CSV: (observation-time rows,
-    floor rows, planner rows, site-sweep rows, effect-cost rows)."""
+    floor rows, planner rows, site-sweep rows, effect-cost rows, north-study rows)."""
     from gyro_instrument.bench.effect_cost import effect_cost_rows, write_effect_cost_csv
     progress("observation time")
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
@@ -334,7 +341,12 @@ def _sweep_studies(out_dir, quick, progress, executor) -> tuple:
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
                           duration_s=120.0 if quick else None, executor=executor)
     write_effect_cost_csv(os.path.join(out_dir, "effect_cost.csv"), ec)
-    return ot, floors, pl, ss, ec
+    progress("north: accuracy versus observation time per method, systematic floors, the gyrotheodolite")
+    from gyro_instrument.bench.north_study import north_bench, write_north_csv
+    north = north_bench(quick, executor=executor)
+    write_north_csv(os.path.join(out_dir, "north_accuracy.csv"), os.path.join(out_dir, "north_gyrotheodolite.csv"),
+                    *north, _write)
+    return ot, floors, pl, ss, ec, north
 
 
 def _speed_studies(out_dir, wp, quick, progress) -> tuple:

@@ -146,12 +146,14 @@ def estimate_command(args) -> int:
                                         + (f" ({args.data} carries none: no Parquet metadata 'gyro_instrument."
                                            f"scene_yaml', no .scene.yaml beside it)" if args.data else ""))
     scene = scene or scene_from_args(args)
+    if args.reversal_points:
+        return _field_book_estimate(args, scene)
     table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
-                   "--angle-unit": (args.angle_unit, "rad"), "--column": (args.columns, []),
+                   "--angle-unit": (args.angle_unit, None), "--column": (args.columns, []),
                    "--separator": (args.separator, None)}
     if args.data:
         from gyro_instrument.estimators.data_io import TableOptions, estimate_data
-        options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit, args.columns,
+        options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad", args.columns,
                                           args.separator)
         result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)
     elif given := [(flag, v) for flag, (v, default) in table_flags.items() if v != default]:
@@ -164,6 +166,24 @@ def estimate_command(args) -> int:
         print(json.dumps(result, indent=2))
     else:
         print_estimate(result)
+    return 0
+
+
+def _field_book_estimate(args, scene) -> int:
+    """``estimate --reversal-points FILE --scene SCENE``: north from a field book (no simulation)."""
+    from gyro_instrument.estimators.north_estimate import field_book_block
+    if args.data:
+        raise SceneError("--reversal-points", args.reversal_points, "reads a field book: leave --data out")
+    result = {"scene": scene.name, "field_book": args.reversal_points,
+              "north": field_book_block(args.reversal_points, args.angle_unit, args.time_unit)}
+    if args.json:
+        print(json.dumps(to_jsonable(result), indent=2))
+    else:
+        from gyro_instrument.cli.text import north_lines, wrapped_writer
+        w, flush = wrapped_writer(sys.stdout)
+        for line in north_lines(result["north"]):
+            w(f"{line}\n")
+        flush()
     return 0
 
 

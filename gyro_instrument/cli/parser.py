@@ -134,9 +134,15 @@ def _add_scene_commands(sub):
     p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
                    help="with --data: unit of a numeric time column, converted to s (default s; not for a "
                         "Parquet timestamp or duration, which carries its unit)")
-    p.add_argument("--angle-unit", default="rad", choices=["rad", "deg"],
+    p.add_argument("--angle-unit", default=None, choices=["rad", "deg"],
                    help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
-                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s)")
+                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s); "
+                        "with --reversal-points: the unit of a bare reading column")
+    p.add_argument("--reversal-points", metavar="FILE.csv",
+                   help="estimate north from a field book instead of simulating: a CSV of turning-point readings "
+                        "of the circle (clockwise), one a row, header reading_<unit> (rad, mrad, deg, gon, mgon, "
+                        "arcmin, arcsec), optional time_s, tape_reading_<unit>, tape_time_s; gives the Schuler "
+                        "mean and Lavrov's estimate with their sigma from the scatter (msg_docs/estimate.md)")
     p.add_argument("--column", dest="columns", action="append", default=[], metavar="NAME=SOURCE",
                    help="with --data: read the table's column SOURCE as the channel column NAME, e.g. "
                         "--column gyro_horizontal.angle=Theta (repeatable)")
@@ -216,8 +222,10 @@ def _add_study_commands(sub):
                         "instruments.gyro_meridian.spin_rate_turn_s=200); duration_s is what is planned")
     p.add_argument("--target", dest="targets", action="append", default=[], metavar="NAME=VALUE",
                    help="a 1-sigma accuracy wanted (repeatable): latitude_arcsec, latitude_deg, latitude_rad, "
-                        "earth_rate_rad_s or earth_rate_deg_h, e.g. --target latitude_arcsec=1 --target "
-                        "earth_rate_rad_s=1e-10")
+                        "earth_rate_rad_s, earth_rate_deg_h, or the mount azimuth of a horizontal gyroscope "
+                        "(north): azimuth_arcsec, azimuth_mgon, azimuth_deg (the time per north method and for the "
+                        "fit), e.g. --target latitude_arcsec=1 --target earth_rate_rad_s=1e-10 --target "
+                        "azimuth_arcsec=3")
     p.add_argument("--noise-factor", dest="noise_factors", action="append", type=float, default=None,
                    metavar="X", help="sensitivity: replan with the sensor noise times X (repeatable; default 0.1 and 10)")
     p.add_argument("--rate-factor", dest="rate_factors", action="append", type=float, default=None,
@@ -304,6 +312,11 @@ def add_run_command(sub) -> None:
     p.add_argument("--namespace", metavar="NS", default="",
                    help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
                         "NS/...; suites in different namespaces run side by side")
+    p.add_argument("--nmea-udp", metavar="HOST:PORT", default=None,
+                   help="send the heading of the scene's first horizontal gyroscope (its scale zero's azimuth) as "
+                        "NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT ([IPV6]:PORT; IANA's "
+                        "NMEA port is 10110): at each reversal point as the estimate converges and with the final "
+                        "estimate (the estimator's parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

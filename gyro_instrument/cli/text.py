@@ -137,15 +137,38 @@ def print_estimate(r, stream=None) -> None:
     flush()
 
 
+def north_lines(n) -> list:
+    """The ``north`` block as lines: the mount azimuth with its σ and bound, then each method."""
+    if n.get("mount_azimuth_deg") is None:
+        return [f"north: not determined ({n.get('reason') or 'see the methods'}); azimuth in "
+                f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
+    what = n["instrument"] or f"the field book {n.get('field_book')}"
+    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    lines = [f"north: scale zero of {what} at azimuth {n['mount_azimuth_deg']:.6f}° +/- "
+             f"{_fmt(n['sigma_arcsec'], '.3g')}\" ({how}" + (f" {n['crlb_arcsec']:.3g}\")" if n.get("crlb_arcsec") is not None else ")")]
+    for name, m in n.get("methods", {}).items():
+        lines.append(f"  {name:<13} {m['mount_azimuth_deg']:.6f}° +/- {_fmt(m['sigma_arcsec'], '.3g')}\"  "
+                     f"({m['n_used']} used; needs {m['needs']})")
+    for name, why in n.get("refused", {}).items():
+        lines.append(f"  {name:<13} refused: {why}")
+    if n.get("tape"):
+        t = n["tape"]
+        lines.append(f"  tape: D_B/D_K = {t['ratio_db_dk']:.4g} +/- {t['ratio_sigma']:.2g}, zero reads "
+                     f"{t['zero_reading_deg']:.6f}° (rotor-off swing {t['instrument']}); every centre corrected")
+    return lines
+
+
 def estimate_headline(r) -> list:
-    """The estimate's answer as lines: the latitude (or why there is none) and each pendulum's
-    measured swing-plane rate in °/h with its full turn in hours."""
+    """The estimate's answer as lines: north first when a horizontal gyroscope gives it
+    (:func:`north_lines`), the latitude (or why there is none) and each pendulum's measured
+    swing-plane rate in °/h with its full turn in hours."""
     lat = r.get("latitude_deg")
+    lines = north_lines(r["north"]) if r.get("north") else []
     if lat is None:
-        lines = [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
+        lines += [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
     else:
         sig = r.get("latitude_sigma_deg")
-        lines = [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
+        lines += [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
                  f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
     for name, e in r.get("instruments", {}).items():
         k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
@@ -264,6 +287,9 @@ def print_plan(d, stream=None) -> None:
     for name, why in d.get("not_used", {}).items():
         w(f"  {name}: not used ({why})\n")
     for e in d["targets"]:
+        if e["quantity"] == "azimuth":
+            _print_azimuth_target(e, w)
+            continue
         unit = e["target"].split("_", 1)[1] if e["target"].startswith("latitude") else e["target"][len("earth_rate_"):]
         unit = unit.replace("_", "/")
         w(f"\ntarget {e['target']} = {e['value']:g} (1 sigma):\n")
@@ -311,3 +337,36 @@ def print_plan(d, stream=None) -> None:
             w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
               f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
               + (f"; {v['null']} null" if v["null"] else "") + "\n")
+
+
+def _print_azimuth_target(e, w) -> None:
+    """An azimuth target of the plan: the fit's time, each north method's, the floor, the check."""
+    unit = e["target"][len("azimuth_"):]
+    w(f"\ntarget {e['target']} = {e['value']:g} (1 sigma):\n")
+    if e.get("observation_s") is None:
+        w(f"  not reachable: {e.get('reason')}\n")
+        return
+    w(f"  observe {human_duration(e['observation_s'])} with {e['instrument']} ({e['samples_per_instrument']} samples): "
+      f"the full-record fit at the Cramer-Rao bound of the centre, {e['planned_sigma']:.4g} {unit}; limited by "
+      f"{e['limited_by']}\n")
+    w("      method          T for the target          sigma at the fit's T\n")
+    for name, m in e["methods"].items():
+        t = human_duration(m["observation_s"]) if m["observation_s"] is not None else f"null ({m['note']})"
+        ratio = f" ({m['over_fit']:.3g}x the fit's)" if m.get("over_fit") and name != "fit" else ""
+        w(f"    {name:<14} {t + ratio:<28} {_fmt(m['sigma_at_plan'], '.4g')} {unit}\n")
+    fl = e.get("floor")
+    if fl:
+        if fl.get("bias") is None:
+            w(f"  floor: {fl.get('reason')}\n")
+        else:
+            state = "below the target" if fl["reachable"] else "NOT REACHABLE" + (
+                f": set by {fl['set_by']}" if fl.get("set_by") else "")
+            w(f"  floor: the noise-free estimate's azimuth is off by {fl['bias']:.3g} {unit} at the planned T: {state}\n")
+    v = e.get("verify")
+    if v:
+        w(f"  verify: {v['used']} seeds at the planned T: the fit's rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
+          f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
+          + (f"; {v['null']} null" if v["null"] else "") + "\n")
+        for name, m in v.get("methods", {}).items():
+            w(f"    {name:<14} rms {_fmt(m['achieved_rms'], '.4g')} {unit}, planned {_fmt(m['planned_sigma'], '.4g')} "
+              f"(achieved/planned {_fmt(m['achieved_over_planned'], '.3f')})\n")

@@ -25,6 +25,9 @@ declare is never called):
                     in the motion (absent: massless carriers)
 ``frame_rate``      :meth:`Effect.frame_rate_rad_s`: the rotation rate of the Earth-fixed frame, for
                     closed forms that carry every order in it (absent: 0)
+``torsion``         :meth:`Effect.torsion_term`: an elastic suspension (a torsion tape) on a swinging
+                    hinge: its stiffness D (N m/rad), its zero on the instrument's scale and the zero's
+                    drift rate; the hinge torque is −ΣD · (reading − ΣZ(t))
 ==================  ==================================================================================
 
 Contributions are summed in the registry's order (:func:`gyro_instrument.effects.canonical_order`),
@@ -69,9 +72,10 @@ SPIN = "spin"
 RESTORING_LAW = "restoring_law"
 CARRIER_INERTIA = "carrier_inertia"
 FRAME_RATE = "frame_rate"
+TORSION = "torsion"
 
 #: Every kind of mechanics an effect may contribute to (see the module docstring).
-MECHANICS = frozenset((POINT_MASS, RIGID_BODY, DAMPING, SPIN, RESTORING_LAW, CARRIER_INERTIA, FRAME_RATE))
+MECHANICS = frozenset((POINT_MASS, RIGID_BODY, DAMPING, SPIN, RESTORING_LAW, CARRIER_INERTIA, FRAME_RATE, TORSION))
 
 
 CONSERVATIVE = "conservative"
@@ -83,7 +87,7 @@ CAPABILITIES = frozenset((CONSERVATIVE, DEFAULT_ON))
 #: The hook of each kind of mechanics (the Effect method an instrument calls for it).
 HOOKS = {POINT_MASS: "point_mass_term", RIGID_BODY: "rigid_body_torque", DAMPING: "damping_torque",
          SPIN: "spin_torque", RESTORING_LAW: "restoring_law", CARRIER_INERTIA: "carrier_inertia",
-         FRAME_RATE: "frame_rate_rad_s"}
+         FRAME_RATE: "frame_rate_rad_s", TORSION: "torsion_term"}
 
 
 @dataclass(frozen=True)
@@ -104,6 +108,9 @@ class Scales:
         The release amplitude, rad.
     ring_inertia_ratio : float
         (C1 + A2)/A of a gimbal's rings, 0 without rings.
+    torsion_share : float
+        The share of the restoring constant an elastic suspension (a torsion tape) gives,
+        D_B / (D_K + D_B); 0 without one.
     """
 
     earth_rate_rad_s: float
@@ -112,6 +119,7 @@ class Scales:
     gyro_rate_rad_s: float | None = None
     amplitude_rad: float = 0.0
     ring_inertia_ratio: float = 0.0
+    torsion_share: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -242,6 +250,13 @@ class Effect:
         """``frame_rate``: the rotation rate (rad/s) this effect gives the Earth-fixed frame at
         ``ctx.site``."""
         raise NotImplementedError(f"{self.name} declares no frame rate")
+
+    def torsion_term(self, ctx) -> tuple:
+        """``torsion``: ``(stiffness_n_m_per_rad, zero_rad, zero_rate_rad_s)`` this effect adds to an
+        elastic suspension of a swinging hinge: the hinge torque is −D (q_scale − Z0 − Ż t), D, Z0 and
+        Ż the sums over the active ``torsion`` effects, q_scale the hinge angle read on the
+        instrument's scale (rad), t the time since release (s)."""
+        raise NotImplementedError(f"{self.name} declares no torsion term")
 
     def __repr__(self):
         return f"{type(self).__name__}({self.params})"

@@ -13,6 +13,8 @@ from gyro_instrument.effects.finite_amplitude import FiniteAmplitude
 from gyro_instrument.effects.pivot_damping import PivotDamping
 from gyro_instrument.effects.ring_inertia import RingInertia
 from gyro_instrument.effects.spin_decay import SpinDecay
+from gyro_instrument.effects.tape_drift import TapeDrift
+from gyro_instrument.effects.tape_torsion import TapeTorsion
 
 REGISTRY = {}
 
@@ -57,8 +59,8 @@ def canonical_order(effects) -> dict:
     return dict(sorted(effects.items(), key=lambda item: order.get(item[0], len(order))))
 
 
-for _cls in (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag):
+for _cls in (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag, TapeTorsion, TapeDrift):
     register(_cls)
 
 __all__ = ["REGISTRY", "AirDrag", "Centrifugal", "EarthRotation", "FiniteAmplitude", "PivotDamping",
-           "RingInertia", "SpinDecay", "canonical_order", "register", "unregister"]
+           "RingInertia", "SpinDecay", "TapeDrift", "TapeTorsion", "canonical_order", "register", "unregister"]

@@ -698,12 +698,13 @@ def tape_corrected(estimate, tape_zero_rad, ratio, ratio_sigma=0.0, tape_zero_si
 
 
 # ----------------------------------------------------------------------------- all together
-def north_methods(t, u, noise_sigma_rad=None, mark_rad=None) -> tuple:
+def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tuple:
     """Every method on one record: ({name: NorthEstimate}, {name: why it was refused}).
 
     Names: ``schuler_mean`` and ``lavrov`` (on the reversal points, σ propagated from their σ),
     ``transit`` (the mark: ``mark_rad``, default the Schuler mean — a mark set near the centre, as
-    a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``.
+    a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``
+    (with a linear drift of the centre when ``drift``: the centre at the mean sample time).
     """
     rp = reversal_points(t, u, noise_sigma_rad)
     out, refused = {}, {}
@@ -711,7 +712,7 @@ def north_methods(t, u, noise_sigma_rad=None, mark_rad=None) -> tuple:
             "lavrov": lambda: lavrov(rp.readings_rad, rp.sigmas_rad),
             "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None
                                               else mark_rad, noise_sigma_rad),
-            "fit": lambda: fit_record(t, u, noise_sigma_rad)}
+            "fit": lambda: fit_record(t, u, noise_sigma_rad, drift=drift)}
     for name, run in runs.items():
         try:
             out[name] = run()

@@ -21,10 +21,12 @@ from gyro_instrument.estimators.combine import classic_methods, combined, null_c
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
+from gyro_instrument.estimators.north_estimate import best_block, north_entry
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
 from gyro_instrument.estimators.swing import swing_estimate
 from gyro_instrument.instruments.observation import (CORRECTIONS, ELLIPSE_CORRECTION, FINITE_AMPLITUDE_CORRECTIONS,
                                                      PLANE_RATE, SWING_RATE)
+from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
@@ -58,12 +60,13 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
               "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": site.earth_rate_rad_s},
               "instruments": {}, "methods": {}}
-    meas, gyros, pend, checks = [], {}, None, []
+    meas, gyros, pend, checks, norths = [], {}, None, [], []
     sensor = SensorModel.from_scene(scene)
     for name, inst in insts.items():
         obs = inst.observation()
         try:
             est, m = _instrument_estimate(name, obs, records[name], corrections, checks, sensor)
+            norths += _also_measured(obs, est, records, corrections, checks, sensor)
         except InadequateData as exc:
             if len(insts) > 1:
                 exc.add_hint(f"or leave {name} out: --set instruments.{name}=null")
@@ -81,6 +84,8 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     else:
         result.update(null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                      "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
+    if norths:
+        result["north"] = best_block(norths)
     classic_methods(result, gyros, pend, scene.estimator.get("earth_rate"))
     entry = hemisphere_entry(result.get("hemisphere"), result.get("hemisphere_basis", ""), site.latitude_deg)
     result["checks"] = checks + ([entry] if entry else [])
@@ -96,6 +101,25 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)
     return engine(obs, rec, corrections, checks, sensor)
+
+
+def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
+    """The engines of the kinds an observation measures beside its ``MEASUREMENT``
+    (``ALSO_MEASURES``: an azimuth), on its record and its companions' (``companions()``: record key ->
+    instrument name); each result goes into the instrument's entry under the kind's key
+    (:data:`ALSO_KEYS`). Returns the ``north`` blocks."""
+    kinds = getattr(obs, "ALSO_MEASURES", ())
+    if not kinds or not obs.has_record(records[obs.name]):
+        return []
+    rec = dict(records[obs.name])
+    for key, other in obs.companions().items():
+        rec[key] = records.get(other)
+    out = []
+    for kind in kinds:
+        block, _ = ENGINES[kind](obs, rec, corrections, checks, sensor)
+        est[ALSO_KEYS[kind]] = block
+        out.append(block)
+    return out
 
 
 def _pendulum_estimate(obs, rec, corrections, checks, sensor):
@@ -141,7 +165,11 @@ def known_earth_rate(scene, insts, meas) -> tuple:
 #: The fit for each measurement kind an observation declares
 #: (:data:`~gyro_instrument.instruments.observation.SWING_RATE`, ``PLANE_RATE``): ``engine(observation,
 #: record, corrections, checks, sensor) -> (entry, RateMeasurement or None)``.
-ENGINES = {SWING_RATE: swing_estimate, PLANE_RATE: _pendulum_estimate}
+#: An azimuth (:data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH`): the ``north`` block of a
+#: horizontal gyroscope (:func:`.north_estimate.north_entry`; its second item is always None).
+ENGINES = {SWING_RATE: swing_estimate, PLANE_RATE: _pendulum_estimate, AZIMUTH: north_entry}
+#: The key of the estimate entry each ``ALSO_MEASURES`` kind's result goes under.
+ALSO_KEYS = {AZIMUTH: "north"}
 
 
 def seed_sweep(job) -> list:

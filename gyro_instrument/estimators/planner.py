@@ -20,17 +20,24 @@ from gyro_instrument import effects
 from gyro_instrument.core.effect import FRAME_RATE
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, GYRO_MIN_CYCLES,  # noqa: F401
-                                               MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
-                                               Planner, SensorSpec, combined, counting_sigma, instrument_models,
-                                               instrument_sigma, samples, sine_fit_covariance)
+                                               MAX_OBSERVATION_S, NORTH_LAWS, NORTH_METHODS, PENDULUM_MIN_PERIODS,
+                                               YEAR_S, InstrumentModel, Planner, SensorSpec, azimuth_sigmas, combined,
+                                               counting_sigma, instrument_models, instrument_sigma, samples,
+                                               sine_fit_covariance, solve_azimuth)
+from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
 DEG_H_RAD_S = math.pi / (180.0 * 3600.0)
 
-#: Target names: quantity, the factor from the unit to SI (rad or rad/s).
+#: one milligon (1e-3 gon, 400 gon to the circle: the unit of the Gyromat's datasheet), rad
+MGON_RAD = math.pi / 200.0e3
+
+#: Target names: quantity, the factor from the unit to SI (rad or rad/s). ``azimuth_*``: the mount
+#: azimuth of a horizontal gyroscope (the estimate's ``north`` block; :func:`plan_azimuth`).
 TARGETS = {"latitude_arcsec": ("latitude", ARCSEC_RAD), "latitude_deg": ("latitude", math.pi / 180.0),
            "latitude_rad": ("latitude", 1.0), "earth_rate_rad_s": ("earth_rate", 1.0),
-           "earth_rate_deg_h": ("earth_rate", DEG_H_RAD_S)}
+           "earth_rate_deg_h": ("earth_rate", DEG_H_RAD_S), "azimuth_arcsec": ("azimuth", ARCSEC_RAD),
+           "azimuth_mgon": ("azimuth", MGON_RAD), "azimuth_deg": ("azimuth", math.pi / 180.0)}
 
 
 def parse_targets(specs) -> list:
@@ -120,25 +127,44 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
                 raise SceneError(what, f, "must be a positive finite number")
     scene = load_scene(scene_arg, list(overrides))
     models, skipped = instrument_models(scene)
-    if not models:
-        raise SceneError("scene", scene_arg, "has no instrument that measures an Earth rate (a gyroscope with a "
-                                             "directing line or a pendulum, with earth_rotation): nothing to plan"
-                         + (f" ({'; '.join(f'{k}: {v}' for k, v in skipped.items())})" if skipped else ""))
+    azimuth = any(TARGETS[name][0] == "azimuth" for name, _, _ in targets)
+    az_models, az_skipped = instrument_models(scene, (AZIMUTH,)) if azimuth else ([], {})
+    if not models and not az_models:
+        what = ("a horizontal gyroscope with earth_rotation (its swing centre is north)" if azimuth else
+                "an instrument that measures an Earth rate (a gyroscope with a directing line or a pendulum, with "
+                "earth_rotation)")
+        why = az_skipped if azimuth else skipped
+        raise SceneError("scene", scene_arg, f"has no {what}: nothing to plan"
+                         + (f" ({'; '.join(f'{k}: {v}' for k, v in why.items())})" if why else ""))
+    if azimuth and not az_models:
+        name = next(n for n, _, _ in targets if TARGETS[n][0] == "azimuth")
+        raise SceneError(f"--target {name}", scene_arg, "needs a horizontal gyroscope (plane_gyroscope, plane: horizontal, "
+                         "the rotor spinning, earth_rotation on: its swing centre is north); the scene has none"
+                         + (f" ({'; '.join(f'{k}: {v}' for k, v in az_skipped.items())})" if az_skipped else ""))
     sensor = SensorSpec.from_scene(scene)
     hemi = scene.estimator.get("hemisphere")
-    planner = Planner(models, sensor, hemi)
+    planner = Planner(models, sensor, hemi) if models else None
     out = {"scene": scene.name, "source": scene.source, "overrides": list(overrides),
            "latitude_deg": scene.site.latitude_deg, "earth_rate_rad_s": scene.site.earth_rate_rad_s,
            "sensor": {"noise_rad": sensor.noise_rad, "quantization_rad": sensor.quantization_rad,
                       "effective_noise_rad": sensor.sigma_rad, "spin_noise_rad_s": sensor.spin_noise_rad_s,
                       "dropout_fraction": sensor.dropout_fraction, "sample_rate_hz": sensor.rate_hz},
            "instruments": {m.name: _model_dict(m) for m in models},
-           "not_used": skipped, "min_record_s": planner.min_record_s(), "targets": []}
+           "not_used": skipped, "min_record_s": planner.min_record_s() if planner else None, "targets": []}
+    if azimuth:
+        out["north_instruments"] = {m.name: _azimuth_dict(m) for m in az_models}
     for name, value, si in targets:
         if progress:
             progress(f"planning {name} = {value:g}")
-        out["targets"].append(_plan_target(scene_arg, overrides, planner, name, value, si, noise_factors,
-                                           rate_factors, floor))
+        if TARGETS[name][0] == "azimuth":
+            out["targets"].append(plan_azimuth(scene_arg, overrides, az_models, az_skipped, sensor, name, value, si,
+                                               floor))
+        elif planner is None:
+            out["targets"].append({"target": name, "value": value, "quantity": TARGETS[name][0],
+                                   "observation_s": None, "reason": "no instrument of the scene measures an Earth rate"})
+        else:
+            out["targets"].append(_plan_target(scene_arg, overrides, planner, name, value, si, noise_factors,
+                                               rate_factors, floor))
     return out
 
 
@@ -152,6 +178,65 @@ def _model_dict(m):
     else:
         d["amplitude_rad"] = m.amplitude
     return d
+
+
+def _azimuth_dict(m):
+    d = {"kind": m.kind, "measures": "mount azimuth: the swing centre on the scale is true north",
+         "period_s": 2 * math.pi / m.omega, "amplitude_rad": m.amplitude, "damping_per_s": m.damping,
+         "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
+         "drift_fitted": m.drift}
+    if m.tape_ratio:
+        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0]})
+    return d
+
+
+def _finite(x):
+    return None if x is None or not math.isfinite(x) else x
+
+
+def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
+    """The plan of an azimuth target: per horizontal gyroscope the fit's T at the Cramér–Rao bound of
+    the centre (:func:`.bounds.solve_azimuth`); for the instrument that needs the least (the one the
+    estimate's top-level ``north`` would carry), T per north method by its σ law, each method's σ at
+    the fit's T, σ(T) on a log grid, and the systematic floor (the noise-free estimate's azimuth error
+    at the fit's T). ``observation_s`` is the fit's."""
+    entry = {"target": name, "value": value, "quantity": "azimuth"}
+    if not models:
+        entry.update({"observation_s": None, "reason": "no horizontal gyroscope measures an azimuth"
+                      + (f" ({'; '.join(f'{k}: {v}' for k, v in skipped.items())})" if skipped else "")})
+        return entry
+    solved = {m.name: solve_azimuth(m, sensor, si) for m in models}
+    ok = [m for m in models if solved[m.name][0] is not None]
+    if not ok:
+        entry.update({"observation_s": None, "reason": "; ".join(f"{k}: {v[1]}" for k, v in solved.items())})
+        return entry
+    m = min(ok, key=lambda x: solved[x.name][0])
+    T, note = solved[m.name]
+    at_plan = azimuth_sigmas(m, T, sensor)
+    entry.update({"instrument": m.name, "mount_azimuth_deg_truth": math.degrees(m.mount_azimuth_rad),
+                  "observation_s": T, "samples_per_instrument": samples(T, sensor.rate_hz),
+                  "planned_sigma": at_plan["fit"] / TARGETS[name][1], "note": note or None,
+                  "limited_by": "one full swing (the shortest record)" if note else "noise (Cramer-Rao bound of the centre)",
+                  "per_instrument_observation_s": {k: v[0] for k, v in solved.items()}, "methods": {}})
+    for method in NORTH_METHODS:
+        Tm, why = (T, note) if method == "fit" else solve_azimuth(m, sensor, si, method)
+        sig_m = None if Tm is None else azimuth_sigmas(m, Tm, sensor)[method]
+        entry["methods"][method] = {
+            "observation_s": Tm, "planned_sigma": _finite(None if sig_m is None else sig_m / TARGETS[name][1]),
+            "sigma_at_plan": _finite(at_plan[method] / TARGETS[name][1]),
+            "over_fit": None if Tm is None else Tm / T, "law": NORTH_LAWS[method], "note": why or None}
+    entry["dependence"] = _azimuth_dependence(m, sensor, name, T)
+    if floor:
+        entry["floor"] = systematic_floor(scene_arg, overrides, T, "azimuth", si, name, ref=(m.name, m.mount_azimuth_rad))
+    return entry
+
+
+def _azimuth_dependence(m, sensor, name, T):
+    """σ of every north method on a log grid from one swing to 16 × the plan (the unit of ``name``)."""
+    grid = sorted({*np.geomspace(m.min_record_s, max(16.0 * T, 2.0 * m.min_record_s), 9).tolist(), T})
+    rows = [{"observation_s": t, "sigma": {k: _finite(v / TARGETS[name][1]) for k, v in azimuth_sigmas(m, t, sensor).items()}}
+            for t in grid]
+    return {"curve": rows, "law": "every method ~ T^-1/2 once many swings are in the record; the fit lowest"}
 
 
 def _plan_target(scene_arg, overrides, planner, name, value, si, noise_factors, rate_factors, floor):
@@ -225,8 +310,22 @@ def _counting(planner, quantity, si):
     return d
 
 
-def _bias(result, quantity):
-    """The noise-free estimate's error in SI (rad or rad/s), or None."""
+def _azimuth_error(result, ref, method="fit"):
+    """Error (rad, wrapped to (−π, π]) of ``method``'s mount azimuth for instrument ``ref[0]`` (true
+    azimuth ``ref[1]`` rad) in an estimate, or None: the instrument's ``north`` block (else the
+    top-level one)."""
+    name, truth = ref
+    block = (result.get("instruments", {}).get(name) or {}).get("north") or result.get("north") or {}
+    deg = block.get("mount_azimuth_deg") if method == "fit" else (block.get("methods", {}).get(method) or {}).get(
+        "mount_azimuth_deg")
+    return None if deg is None else math.remainder(math.radians(deg) - truth, 2.0 * math.pi)
+
+
+def _bias(result, quantity, ref=None):
+    """The noise-free estimate's error in SI (rad or rad/s), or None; an azimuth's against ``ref`` =
+    (instrument, true mount azimuth rad) (:func:`_azimuth_error`)."""
+    if quantity == "azimuth":
+        return _azimuth_error(result, ref)
     truth = result["truth"]
     if quantity == "latitude":
         lat = result.get("latitude_deg")
@@ -247,14 +346,15 @@ def noise_free_estimate(scene_arg, overrides, T) -> tuple:
     return scene, estimate_records(scene, truth[1], measure(scene, truth))
 
 
-def systematic_floor(scene_arg, overrides, T, quantity, si, name) -> dict:
+def systematic_floor(scene_arg, overrides, T, quantity, si, name, ref=None) -> dict:
     """The estimator's noise-free bias at T against the target; when it exceeds the target, the bias
-    with each of the scene's effects (but ``earth_rotation``) switched off names the one that sets it."""
+    with each of the scene's effects (but ``earth_rotation``) switched off names the one that sets it.
+    ``ref``: (instrument, true mount azimuth rad) for an azimuth target."""
     try:
         scene, r = noise_free_estimate(scene_arg, overrides, T)
     except SceneError as exc:
         return {"bias": None, "reason": f"noise-free run at {T:.6g} s not possible: {exc}"}
-    b = _bias(r, quantity)
+    b = _bias(r, quantity, ref)
     d = {"bias": _quantity_value(quantity, b, name), "observation_s": T}
     if b is None:
         d["reason"] = r.get("reason") or "the noise-free estimate is null"
@@ -267,7 +367,7 @@ def systematic_floor(scene_arg, overrides, T, quantity, si, name) -> dict:
                 continue
             try:
                 _, r2 = noise_free_estimate(scene_arg, list(overrides) + [f"effects.{eff}=null"], T)
-                b2 = _bias(r2, quantity)
+                b2 = _bias(r2, quantity, ref)
             except SceneError:
                 continue
             culprits.append({"effect": eff, "bias_without": _quantity_value(quantity, b2, name)})
@@ -281,16 +381,18 @@ def systematic_floor(scene_arg, overrides, T, quantity, si, name) -> dict:
 
 
 # ----------------------------------------------------------------------------- verification
-def _errors(results, quantity):
-    errs = [_bias(r, quantity) for r in results]
+def _errors(results, quantity, ref=None):
+    errs = [_bias(r, quantity, ref) for r in results]
     return [e for e in errs if e is not None], sum(e is None for e in errs)
 
 
-def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, chunk=None) -> dict:
+def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, chunk=None, ref=None) -> dict:
     """Seeded Monte Carlo at observation time T: ``n_seeds`` sensor draws of one simulation per
     chunk (:func:`~gyro_instrument.estimators.pipeline.seed_sweep` through ``executor``, by default
     :func:`~gyro_instrument.core.parallel.process_executor`); ``progress(done, total)`` after each
-    chunk. Returns {quantity: (rms error in SI, number of seeds used, number null)}."""
+    chunk. Returns {quantity: (rms error in SI, number of seeds used, number null)}; with ``ref`` =
+    (instrument, true mount azimuth rad) also ``azimuth`` (the fit's) and ``azimuth_methods``
+    {method: (rms rad, used, null)} for every north method."""
     from gyro_instrument.core.parallel import process_executor
     from gyro_instrument.estimators.pipeline import seed_sweep
     over = list(overrides) + [f"duration_s={T!r}"]
@@ -307,11 +409,15 @@ def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, c
     finally:
         if own:
             executor.shutdown()
-    out = {}
-    for quantity in ("latitude", "earth_rate"):
-        errs, null = _errors(results, quantity)
-        rms = float(np.sqrt(np.mean(np.square(errs)))) if errs else None
-        out[quantity] = (rms, len(errs), null)
+    def rms_of(errs, null):
+        return (float(np.sqrt(np.mean(np.square(errs)))) if errs else None, len(errs), null)
+    out = {q: rms_of(*_errors(results, q)) for q in ("latitude", "earth_rate")}
+    if ref is not None:
+        out["azimuth"] = rms_of(*_errors(results, "azimuth", ref))
+        out["azimuth_methods"] = {}
+        for method in NORTH_METHODS:
+            errs = [_azimuth_error(r, ref, method) for r in results]
+            out["azimuth_methods"][method] = rms_of([e for e in errs if e is not None], sum(e is None for e in errs))
     return out
 
 
@@ -326,11 +432,20 @@ def verify_plan(result, n_seeds=100, executor=None, progress=None) -> dict:
         if progress:
             progress(f"verify {name}: {n_seeds} seeds at {T:.6g} s per configuration")
         rep = (lambda d, n: progress(f"  {d}/{n} seeds")) if progress else None
-        got = verify(result["source"], result["overrides"], T, n_seeds, executor, rep)
+        ref = (entry["instrument"], math.radians(entry["mount_azimuth_deg_truth"])) if entry["quantity"] == "azimuth" \
+            else None
+        got = verify(result["source"], result["overrides"], T, n_seeds, executor, rep, ref=ref)
         rms, used, null = got[entry["quantity"]]
         v = _quantity_value(entry["quantity"], rms, name)
         entry["verify"] = {"seeds": n_seeds, "used": used, "null": null, "achieved_rms": v,
                            "target": entry["value"], "planned_sigma": entry["planned_sigma"],
                            "achieved_over_target": None if v is None else v / entry["value"],
                            "achieved_over_planned": None if v is None else v / entry["planned_sigma"]}
+        if ref is not None:
+            entry["verify"]["methods"] = {
+                k: {"achieved_rms": _quantity_value("azimuth", r, name), "used": u, "null": n0,
+                    "planned_sigma": entry["methods"][k]["sigma_at_plan"],
+                    "achieved_over_planned": None if r is None or not entry["methods"][k]["sigma_at_plan"] else
+                    _quantity_value("azimuth", r, name) / entry["methods"][k]["sigma_at_plan"]}
+                for k, (r, u, n0) in got["azimuth_methods"].items()}
     return result

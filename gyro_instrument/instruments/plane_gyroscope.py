@@ -22,6 +22,16 @@ Cone (``cone_half_angle_deg`` < 90): T = π √(sin ε / (μ n ρ0 sin ω)) (sec
 printed second equation lacks a factor sin ε, the period is right). Integrated with the
 generic :class:`~gyro_instrument.instruments.chain.HingeChain`; u is then the azimuth of
 the axis about the cone axis, from the half-plane toward Earth's north axis.
+
+Horizontal plane, as a gyrocompass (issue 24): the scale the measured ``angle`` is read on has its
+zero at azimuth ``mount_azimuth_deg`` M (clockwise from true north) and reads like Quet's u,
+counter-clockwise seen from above, so the reading is u + M (M wrapped to (−180°, 180°]; true north
+reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −angle = azimuth − M).
+M = 0 (or M unstated: then the estimate reports no north) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
+mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
+c = (D_K N + D_B Z)/(D_K + D_B) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
+with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
+"North finding").
 """
 
 import math
@@ -34,10 +44,10 @@ from gyro_instrument.core.integrate import integrate, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN, Scales
+from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN, TORSION, Scales
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
-from gyro_instrument.instruments.observation import SwingRate
+from gyro_instrument.instruments.observation_azimuth import HorizontalSwing
 
 
 def plane_normal_enu(plane, normal_enu, site) -> np.ndarray:
@@ -90,11 +100,19 @@ class PlaneGyroscope(Instrument):
               doc="DOP853 driver of the reduced model: scalar (Python floats, ~5x faster on its 3 components), "
                   "vector (scipy's solve_ivp on arrays; the same steps, equal to rounding), auto: scalar; the "
                   "hinge chain (model: chain, a cone) always runs vector"),
+        Param("mount_azimuth_deg", default=None, low=0.0, high=360.0, open_high=True,
+              doc="horizontal plane: azimuth (clockwise from true north) of the scale's zero; the measured "
+                  "angle reads u + this (wrapped to (-180, 180] degrees), so true north reads +this, and the "
+                  "estimate reports it (north). Unstated (null): reads as 0, no north block (every estimate "
+                  "as before issue 24)"),
+        Param("rotor_off_instrument", kind="str", default="",
+              doc="with tape_torsion: the scene's instrument that is this gyroscope swung with the rotor off "
+                  "(spin_rate_rad_s: 0), whose swing gives the tape zero and D_B"),
     )
-    MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, RESTORING_LAW})
+    MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, RESTORING_LAW, TORSION})
     MEASURED_CHANNELS = ("angle",)
     JOINTS = ("axis", "rotor")
-    OBSERVATION = SwingRate
+    OBSERVATION = HorizontalSwing
     SHOWS_AXIS = True
     SIMULATOR_NODE = "gyrocompass_sim"
     COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),
@@ -105,6 +123,20 @@ class PlaneGyroscope(Instrument):
     def check_params(cls, prefix, p) -> None:
         if p["plane"] == "custom" and p["normal_enu"] is None:
             raise SceneError(f"{prefix}.normal_enu", None, "is required when plane = custom (3 numbers, ENU)")
+        if p["mount_azimuth_deg"] is not None and (p["plane"] != "horizontal" or p["cone_half_angle_deg"] < 90.0):
+            raise SceneError(f"{prefix}.mount_azimuth_deg", p["mount_azimuth_deg"],
+                             "must be left out unless plane = horizontal (a flat plane: the scale's zero is an azimuth)")
+
+    @classmethod
+    def check_effects(cls, prefix, params, effect_names) -> None:
+        """The tape (``torsion``) acts in the reduced model of the horizontal plane only (``tape_drift``
+        alone has no stiffness to act through: it changes nothing)."""
+        tape = {"tape_torsion", "tape_drift"} & set(effect_names)
+        if not tape:
+            return
+        if params["plane"] != "horizontal" or params["cone_half_angle_deg"] < 90.0 or params["model"] == "chain":
+            raise SceneError(f"{prefix}.effects", sorted(tape), "a torsion tape hangs a horizontal gyroscope: "
+                             "needs plane = horizontal, no cone and model = reduced")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
@@ -112,12 +144,60 @@ class PlaneGyroscope(Instrument):
         self.frame, self.sin_omega = plane_frame(self.normal, site)
         self.is_cone = self.p.cone_half_angle_deg < 90.0
         self.C = self.p.inertia_ratio * self.p.transverse_inertia_kg_m2
+        #: the scale's reading of true north, rad: M wrapped to (−π, π] (module docstring)
+        mount = math.radians(self.p.mount_azimuth_deg or 0.0)
+        self.mount_reading_rad = math.pi - (math.pi - mount) % (2.0 * math.pi)
+        self.tape = self._tape()
+        self._check_tape()
+
+    def _tape(self) -> tuple:
+        """(D_B N m/rad, Z0 rad, Ż rad/s): the sums of the active ``torsion`` effects' terms."""
+        terms = [e.torsion_term(self.context) for e in self.effects_of(TORSION)]
+        return tuple(float(sum(x)) for x in zip(*terms)) if terms else (0.0, 0.0, 0.0)
+
+    def directing_constant_n_m(self) -> float:
+        """D_K = C ρ0 n sin ω, the directing torque per radian at the site (N m/rad; 0 without
+        ``earth_rotation``): Quet's μ n ρ0 sin ω (eq. 9) times A."""
+        return self.C * self.p.spin_rate_rad_s * self.model_earth_rate() * self.sin_omega
+
+    def _check_tape(self) -> None:
+        """Refuse a tape that cancels, reverses or outweighs the directing torque (the rotor on)."""
+        D_B = self.tape[0]
+        if not D_B or not self.p.spin_rate_rad_s:
+            return
+        D_K = self.directing_constant_n_m()
+        if self.has("earth_rotation") and D_B >= D_K:
+            per_cos = self.C * self.p.spin_rate_rad_s * self.site.earth_rate_rad_s
+            lim = math.degrees(math.acos(D_B / per_cos)) if 0 < D_B < per_cos else None
+            where = f"; for this tape |site.latitude_deg| < {lim:.4g}" if lim is not None else ""
+            raise SceneError(f"effects.tape_torsion.torsion_constant_n_m_rad", D_B,
+                             f"must be < D_K = C rho0 n cos(latitude) = {D_K:.6g} N m/rad of {self.name} at latitude "
+                             f"{self.site.latitude_deg:g} deg: a tape at least as stiff cancels or reverses the directing "
+                             f"torque's hold on the swing centre (N = c + (D_B/D_K)(c - Z)){where}")
+
+    def tape_ratio(self) -> float:
+        """D_B/D_K of the scene (nan without rotor or directing torque)."""
+        D_K = self.directing_constant_n_m()
+        return self.tape[0] / D_K if D_K else math.nan
 
     # ---------------------------------------------------------------- predictions
     def _swing_duration_small_s(self, n):
-        """Eq. (9) (or the cone form) at Earth rate ``n``."""
+        """Eq. (9) (or the cone form) at Earth rate ``n``; with a torsion tape π/√(K + D_B/A)."""
+        if self.tape[0]:
+            k = self.p.inertia_ratio * n * self.p.spin_rate_rad_s * self.sin_omega + self.tape[0] / self.p.transverse_inertia_kg_m2
+            return math.pi / math.sqrt(k) if k > 0 else math.inf
         return swing_duration_small_s(self.p.inertia_ratio, n, self.p.spin_rate_rad_s, self.sin_omega,
                                       math.sin(self.p.cone_half_angle_rad) if self.is_cone else 1.0)
+
+    def tape_predictions(self) -> dict:
+        """With a torsion tape: D_B/D_K, the rotor-off swing duration π√(A/D_B) (s) and the swing centre's
+        offset from north c − N = (D_B/(D_K + D_B))(Z − N) on the scale (rad, at the start)."""
+        D_B, Z, _ = self.tape
+        D_K = self.directing_constant_n_m()
+        N = self.mount_reading_rad
+        return {"tape_ratio": D_B / D_K if D_K else None,
+                "rotor_off_swing_duration_s": math.pi * math.sqrt(self.p.transverse_inertia_kg_m2 / D_B),
+                "centre_offset_rad": D_B / (D_K + D_B) * (Z - N)}
 
     def predictions(self) -> dict:
         """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients, for
@@ -132,6 +212,8 @@ class PlaneGyroscope(Instrument):
                "swing_duration_s": T0 * factor if math.isfinite(T0) else math.inf,
                "period_s": 2.0 * T0,
                "conserved_spin_rad_s": self.p.spin_rate_rad_s + n * self.sin_omega * math.cos(self.p.initial_angle_rad)}
+        if self.tape[0]:
+            out.update(self.tape_predictions())
         T_site = self._swing_duration_small_s(self.site.earth_rate_rad_s)
         rest = " (only the O(n²) centrifugal term acts)" if self.has("centrifugal") else ""
         return with_notes(out, self.missing_effect_note(
@@ -146,7 +228,7 @@ class PlaneGyroscope(Instrument):
         import numpy as np
         from gyro_instrument.core.site import plane_frame
         R, _ = plane_frame(self.normal, self.site)
-        u = np.asarray(position)[:, 0]
+        u = np.asarray(position)[:, 0] - self.mount_reading_rad
         return np.cos(u)[:, None] * R[:, 0] + np.sin(u)[:, None] * R[:, 1]
 
     def expected_swing(self) -> "ExpectedSwing | None":
@@ -174,7 +256,13 @@ class PlaneGyroscope(Instrument):
         T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
         return Scales(earth_rate_rad_s=n, gyro_rate_rad_s=abs(self.p.inertia_ratio * self.p.spin_rate_rad_s) or None,
                 restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) else 0.0,
-                amplitude_rad=abs(self.p.initial_angle_rad), duration_s=duration_s)
+                amplitude_rad=abs(self.p.initial_angle_rad), duration_s=duration_s,
+                torsion_share=self._torsion_share())
+
+    def _torsion_share(self) -> float:
+        """D_B / (D_K + D_B) (0 without a tape; 1 with the rotor off)."""
+        total = self.directing_constant_n_m() + self.tape[0]
+        return self.tape[0] / total if self.tape[0] and total > 0 else 0.0
 
     # ---------------------------------------------------------------- models
     def reduced_rhs_scalar(self) -> Callable:
@@ -182,6 +270,7 @@ class PlaneGyroscope(Instrument):
         listed effects::
 
             ü = −μ p ρ s − (μ − 1) p² cos u · s − d u̇     (eq. 2; O(n²) term: ``centrifugal``)
+                − (D_B/A)(u + M − Z0 − Ż t)                  (a torsion tape: ``tape_torsion``, ``tape_drift``)
             ρ̇ = p sin u · u̇ − ρ / τ_s                       (eq. 3; spin decay: ``spin_decay``)
 
         with p = n sin ω, s = sin u (``finite_amplitude``; u for Quet's small-swing form) and d the
@@ -193,11 +282,21 @@ class PlaneGyroscope(Instrument):
         pr = p if rot else 0.0                                           # eq. (3)
         b = (mu - 1.0) * p * p if self.has("centrifugal") else 0.0       # the dropped O(n²) term
         damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
+        kb = self.tape[0] / self.p.transverse_inertia_kg_m2                 # tape: −(D_B/A)(u + M − Z0 − Ż t)
+        zb = self.tape[1] - self.mount_reading_rad
+        zr = self.tape[2]
         tau_s = self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
         decay = 1.0 / tau_s if tau_s else 0.0
         sin, cos = math.sin, math.cos
 
-        if self.restoring_law() is not None:       # finite_amplitude: sin u
+        if kb:
+            law = sin if self.restoring_law() is not None else (lambda x: x)
+
+            def rhs(t, u, ud, rho):
+                su = law(u)
+                return (ud, -(a * rho + b * cos(u)) * su - kb * (u - zb - zr * t) - damp * ud,
+                        pr * sin(u) * ud - decay * rho)
+        elif self.restoring_law() is not None:       # finite_amplitude: sin u
             def rhs(t, u, ud, rho):
                 su = sin(u)
                 return ud, -(a * rho + b * cos(u)) * su - damp * ud, pr * su * ud - decay * rho
@@ -231,7 +330,8 @@ class PlaneGyroscope(Instrument):
     #: The effects :meth:`reduced_rhs_scalar` is derived for by hand. With any other active effect
     #: (one registered later for a kind this instrument sums) the hinge chain, which sums every
     #: active effect's terms, is integrated instead, as for a cone.
-    REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping"})
+    REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping",
+                                 "tape_torsion", "tape_drift"})
 
     STREAMS = True
 

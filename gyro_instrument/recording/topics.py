@@ -9,6 +9,8 @@ No rclpy here: the recorder, the player, replay, the bench and the views read th
 
 from dataclasses import dataclass
 
+from gyro_instrument.instruments.observation_azimuth import AZIMUTH
+
 CLOCK = "clock"
 CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
 DIAGNOSTICS = "diagnostics"
@@ -22,6 +24,7 @@ ESTIMATOR_TOPICS = {
 }
 
 #: the last part of an instrument's topics, ``<instrument>/<suffix>``
+HEADING = "heading"
 JOINT_STATES = "joint_states"
 BOB_POSITION = "bob_position"
 CONTACT_POINT = "contact_point"
@@ -33,6 +36,7 @@ JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
 POINT_TYPE = "geometry_msgs/msg/PointStamped"
 VECTOR_TYPE = "geometry_msgs/msg/Vector3Stamped"
 MARKER_TYPE = "visualization_msgs/msg/MarkerArray"
+IMU_TYPE = "sensor_msgs/msg/Imu"
 
 #: frame of ENU vectors at the site (REP-105 'map'-like local frame)
 SITE_FRAME = "site_enu"
@@ -139,12 +143,37 @@ def scene_publications(insts) -> list:
     return [p for name, inst in insts.items() for p in publications(name, inst)]
 
 
+def heading_topic(instrument) -> str:
+    """``<instrument>/heading``: the estimator's ``sensor_msgs/Imu`` of a horizontal gyroscope's
+    reference direction (msg_docs/topics.md)."""
+    return instrument_topic(instrument, HEADING)
+
+
+def heading_frame(instrument) -> str:
+    """Header frame of an instrument's heading: its body frame, x along the scale's zero, y left, z up."""
+    return f"{instrument}_scale"
+
+
+def measures_azimuth(inst) -> bool:
+    """True when the instrument's observation measures an azimuth (a horizontal gyroscope with its
+    rotor on: ``ALSO_MEASURES`` holds ``AZIMUTH``); needs the instrument, not its class."""
+    return not isinstance(inst, type) and AZIMUTH in getattr(inst.observation(), "ALSO_MEASURES", ())
+
+
+def estimator_topics(insts) -> dict:
+    """The estimator's topics for these instruments, with their types: :data:`ESTIMATOR_TOPICS` and
+    the heading of every instrument that measures an azimuth (:func:`heading_topic`)."""
+    out = dict(ESTIMATOR_TOPICS)
+    out.update({heading_topic(name): IMU_TYPE for name, inst in insts.items() if measures_azimuth(inst)})
+    return out
+
+
 def scene_topics(insts) -> dict:
     """All topics the suite publishes for these instruments, with their types: the clock, the
-    instruments' (:func:`publications`), the estimator's."""
+    instruments' (:func:`publications`), the estimator's (:func:`estimator_topics`)."""
     out = {CLOCK: CLOCK_TYPE}
     out.update({p.topic: p.type_name for p in scene_publications(insts)})
-    out.update(ESTIMATOR_TOPICS)
+    out.update(estimator_topics(insts))
     return out
 
 

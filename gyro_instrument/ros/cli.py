@@ -57,13 +57,17 @@ def _command(core_cli, argv):
     elif args.bag_format or args.max_bag_size or args.max_bag_duration:
         raise SceneError("--bag", None, "is needed by --bag-format, --max-bag-size and --max-bag-duration")
     api.check_run_options(args.namespace, args.real_time_factor, args.window_s)
+    if args.nmea_udp:
+        from gyro_instrument.recording.nmea import resolve_udp_target
+        resolve_udp_target(args.nmea_udp)
     from gyro_instrument.ros.suite import run_suite
     progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
     result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
                               command=" ".join(["gyro-instrument"] + full), progress=progress,
                               overwrite=args.overwrite, bag_format=bag_format,
                               max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
-                              namespace=args.namespace, ros_args=ros_args, window_s=args.window_s)
+                              namespace=args.namespace, ros_args=ros_args, window_s=args.window_s,
+                              nmea_udp=args.nmea_udp or "")
     if result is None:
         print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
         return 3

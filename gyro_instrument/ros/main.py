@@ -10,7 +10,8 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy._rclpy_pybind11 import RCLError
 
 from gyro_instrument.instruments import REGISTRY, simulator_kinds
-from gyro_instrument.recording.topics import CLOCK, CLOCK_TYPE, ESTIMATOR_TOPICS, VISUAL_PERIOD_S, publications
+from gyro_instrument.recording.topics import (CLOCK, CLOCK_TYPE, ESTIMATOR_TOPICS, IMU_TYPE, VISUAL_PERIOD_S, heading_frame,
+                                              heading_topic, publications)
 from gyro_instrument.ros import params as P
 
 #: the nodes that are not simulators (a simulator's help is derived from the instruments it hosts)
@@ -20,7 +21,9 @@ _SUMMARIES = {
     "player": "Plays an MCAP bag back to DDS, driving clock; exits at the end (or loops).",
 }
 _TOPICS = {
-    "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()],
+    "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()]
+                 + [f"{heading_topic('<gyro>')} ({IMU_TYPE}, {heading_frame('<gyro>')}): a horizontal gyroscope's heading, "
+                    f"at each reversal point and with the estimate"],
     "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
     "player": ["the bag's topics (relative names), clock"],
 }

@@ -10,7 +10,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Float64
 
 from gyro_instrument.core.scene import EPOCH_NS
@@ -71,6 +71,24 @@ def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad) -> Vector3Stamped:
         msg.vector.x = 0.0
         msg.vector.y = earth_rate_rad_s * math.cos(latitude_rad)
         msg.vector.z = earth_rate_rad_s * math.sin(latitude_rad)
+    return msg
+
+
+def imu(t_ns, frame_id, fields) -> Imu:
+    """sensor_msgs/Imu from :class:`~gyro_instrument.estimators.heading.ImuFields` (copied field by
+    field: quaternion x, y, z, w; covariances row-major)."""
+    msg = Imu()
+    msg.header.stamp = stamp(t_ns)
+    msg.header.frame_id = frame_id
+    q = msg.orientation
+    q.x, q.y, q.z, q.w = (float(v) for v in fields.orientation_xyzw)
+    msg.orientation_covariance = [float(v) for v in fields.orientation_covariance]
+    w = msg.angular_velocity
+    w.x, w.y, w.z = (float(v) for v in fields.angular_velocity_xyz_rad_s)
+    msg.angular_velocity_covariance = [float(v) for v in fields.angular_velocity_covariance]
+    a = msg.linear_acceleration
+    a.x, a.y, a.z = (float(v) for v in fields.linear_acceleration_xyz_m_s2)
+    msg.linear_acceleration_covariance = [float(v) for v in fields.linear_acceleration_covariance]
     return msg
 
 

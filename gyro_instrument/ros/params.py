@@ -142,6 +142,12 @@ ESTIMATOR = SCENE + [
     Spec("publish_period_s", "double", 0.0, "also publish the estimate every this many s of wall time; 0: once, "
                                             "when every expected sample (or the last clock tick) has arrived",
          0.0, 86400.0, read_only=True),
+    Spec("nmea_udp", "string", "", "HOST:PORT ([IPV6]:PORT) to send NMEA 0183 $HEHDT true-heading sentences to, one "
+                                   "UDP datagram per heading published (the first horizontal gyroscope's mount "
+                                   "azimuth: at each reversal point and with the final estimate); empty: none. "
+                                   "IANA's port for NMEA over UDP is 10110", read_only=True),
+    Spec("nmea_decimals", "int", 3, "decimals of the $HEHDT heading in degrees (3: 0.001 deg = 3.6 arcsec)", 0, 6,
+         read_only=True),
 ]
 #: The recorder's parameters that may be set until its recording starts (a value refused at start-up
 #: corrected at runtime starts it), and are refused once it records (a recording has one scene and

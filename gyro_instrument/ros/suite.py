@@ -30,6 +30,7 @@ from gyro_instrument.api import check_run_memory, check_window  # noqa: F401  (r
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
 from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 
@@ -61,7 +62,7 @@ def _params(scene, overrides, duration_s, **extra):
 
 def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
               timeout_s=10.0, progress=None, batch=None, overwrite=False, bag_format=None, max_bag_size=0,
-              max_bag_duration_s=0.0, namespace="", ros_args=(), window_s=DEFAULT_WINDOW_S) -> tuple:
+              max_bag_duration_s=0.0, namespace="", ros_args=(), window_s=DEFAULT_WINDOW_S, nmea_udp="") -> tuple:
     """Run the scene's nodes; return (estimate dict, stats dict).
 
     The simulators integrate one window of ``window_s`` simulated seconds at a time
@@ -81,6 +82,9 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     suites in different namespaces run side by side. ``ros_args``: the arguments after
     ``--ros-args`` (remapping, log levels, ``-p`` for parameters the suite does not set itself),
     applied to every node.
+
+    ``nmea_udp``: HOST:PORT the estimator sends ``$HEHDT`` sentences to (its parameter ``nmea_udp``;
+    checked and resolved before any node starts).
 
     ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
     of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
@@ -104,6 +108,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     if bag:
         bag_format = api.check_bag(scene, bag, bag_format, overwrite, max_bag_size, max_bag_duration_s, field="bag")
     check_window(window_s)
+    if nmea_udp:
+        resolve_udp_target(nmea_udp)                      # exit 2 naming --nmea-udp before any node starts
     check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
     stop, handlers = _install_stop_handlers()
@@ -113,7 +119,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     nodes = []
     try:
         sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s)
-        est = EstimatorNode(context=context, **ns, parameter_overrides=_params(scene, overrides, duration_s))
+        est = EstimatorNode(context=context, **ns, parameter_overrides=_params(
+            scene, overrides, duration_s, **({"nmea_udp": str(nmea_udp)} if nmea_udp else {})))
         rec = RecorderNode(context=context, reorder=False, **ns, parameter_overrides=_params(
             scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), command=command,
             format=bag_format or "", max_bag_size=int(max_bag_size or 0),
@@ -278,14 +285,14 @@ def _finalize(est, rec, ex, timeout_s):
     """Compute the estimate (:meth:`EstimatorNode.finalize`); with a recorder, wait (up to
     ``timeout_s``) for the estimator's result messages to reach it, then close the bag with the
     estimate in its metadata. Returns the estimate (None when there is none)."""
-    base = rec.received() if rec else 0
     result = est.finalize()
     if rec:
-        # the estimate's messages, or the refusal's one /diagnostics status
-        want = base + (len([t for t in rec.counts if t not in rec.sample_topics]) if result is not None
-                       else int(est.refusal is not None))
+        # every message the estimator published on a recorded topic (the estimate's, the headings at
+        # the reversal points, or the refusal's one /diagnostics status)
+        def delivered():
+            return all(rec.counts[t] >= n for t, n in est.sent.items() if t in rec.counts)
         t_wait = time.monotonic() + timeout_s
-        while rec.received() < want and time.monotonic() < t_wait:
+        while not delivered() and time.monotonic() < t_wait:
             ex.spin_once(timeout_sec=0.001)
         meta = {"estimate_json": json.dumps(result, default=str) if result else ""}
         if est.refusal is not None:

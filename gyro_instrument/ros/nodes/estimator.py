@@ -2,6 +2,13 @@
 4096 kept as bytes) into arrays of what it fits
 (:class:`~gyro_instrument.recording.joint_buffer.JointBuffer`) and calls the core estimator; run
 alone it publishes once every expected sample has arrived.
+
+Heading (issue 24): for each horizontal gyroscope (and its rotor-off companion) a
+:class:`~gyro_instrument.estimators.north_live.NorthTracker` is given the tail of the record about
+four times per swing; at each new reversal point the live north (the Schuler mean so far) goes out
+as ``sensor_msgs/Imu`` on ``<gyro>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`)
+and, with parameter ``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's ``north`` block (the
+fit) replaces it. The work per joint message is bounded: a tail of 1.75 swings every quarter swing.
 """
 
 import math
@@ -10,11 +17,16 @@ import time
 from rclpy.serialization import deserialize_message
 
 from gyro_instrument.core.memory import sample_count
+from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
+from gyro_instrument.estimators.heading import imu_fields
+from gyro_instrument.estimators.north_live import NorthTracker, live_north
 from gyro_instrument.estimators.pipeline import estimable, estimate_records
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
-from gyro_instrument.recording.topics import CLOCK, DIAGNOSTICS, ESTIMATOR_TOPICS, joint_names, joint_topic
+from gyro_instrument.recording.nmea import NmeaUdpSender
+from gyro_instrument.recording.topics import (CLOCK, DIAGNOSTICS, estimator_topics, heading_frame, heading_topic,
+                                              joint_names, joint_topic, measures_azimuth)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.ros.nodes.base import LATCHED, RELIABLE_ALL, STEADY, SceneNode
@@ -42,14 +54,28 @@ class EstimatorNode(SceneNode):
         self._clock_done_at = None
         self._last_input = None
         self.runs = 0
+        self.sent = {}          # messages published per (resolved) topic
+        self.trackers = {}      # instrument -> NorthTracker (horizontal gyroscopes and their rotor-off swings)
+        self.tape_of = {}       # horizontal gyroscope -> its rotor-off companion
+        self._due = {}          # instrument -> samples at which its tracker is next given the tail
+        self.nmea = None
         if self.load():
             self.prepare()
+
+    def _buffered(self) -> set:
+        """The instruments whose joint states the estimator keeps: the estimable ones and the records
+        they read beside their own (``companions()``: a gyroscope's rotor-off swing)."""
+        names = {n for n, inst in self.insts.items() if estimable(inst)}
+        for n in list(names):
+            names.update(v for v in getattr(self.insts[n].observation(), "companions", dict)().values() if v in self.insts)
+        return names
 
     def prepare(self) -> None:
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
+        buffered = self._buffered()
         for name, inst in self.insts.items():
-            if estimable(inst):
+            if name in buffered:
                 # records_from_joints reads the measured channels and the last joint's velocity
                 self.buffers[name] = JointBuffer(m.joint_state_layout(
                     joint_names(name, inst)), keep=len(inst.MEASURED_CHANNELS))
@@ -59,11 +85,85 @@ class EstimatorNode(SceneNode):
                 self.subs[sub.topic_name] = sub
         # sim time from the clock: the stamp of an estimate that used no sample
         self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
-        for topic, type_name in ESTIMATOR_TOPICS.items():
+        for topic, type_name in estimator_topics(self.insts).items():
             self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, LATCHED)
+        self._prepare_heading()
         period = float(self.get_parameter("publish_period_s").value)
         if period > 0:
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
+
+    def _prepare_heading(self) -> None:
+        """A tracker per horizontal gyroscope and per rotor-off companion, and the NMEA sender."""
+        sigma = self.scene.sensor.get("noise_rad") or None
+        for name, inst in self.insts.items():
+            if not measures_azimuth(inst) or name not in self.buffers:
+                continue
+            swing = inst.predictions().get("swing_duration_small_s", math.inf)
+            if not (math.isfinite(swing) and swing > 0):
+                continue
+            self.trackers[name] = NorthTracker(swing, sigma)
+            other = inst.observation().companions().get("rotor_off")
+            if other in self.buffers:
+                self.tape_of[name] = other
+                self.trackers[other] = NorthTracker(inst.tape_predictions()["rotor_off_swing_duration_s"], sigma)
+        for name, tr in self.trackers.items():
+            self._due[name] = self._every(tr)
+        target = str(self.value("nmea_udp", "") or "")
+        if target and self.trackers:
+            try:
+                self.nmea = NmeaUdpSender(target, field="nmea_udp")
+            except SceneError as exc:
+                self.get_logger().error(f"{exc}; no NMEA sentences are sent")
+
+    def _every(self, tracker) -> int:
+        """Samples between two looks at a tracker's tail: a quarter swing (at least 1)."""
+        return max(int(0.25 * tracker.swing_s * self.scene.sample_rate_hz), 1)
+
+    def _track(self, name) -> None:
+        """Give ``name``'s tracker the tail of its record when due; publish the live heading of the
+        horizontal gyroscope(s) it serves when it found a new reversal point."""
+        buf, tr = self.buffers[name], self.trackers[name]
+        if len(buf) < self._due[name]:
+            return
+        self._due[name] = len(buf) + self._every(tr)
+        t_ns, pos, vel = buf.arrays()
+        k = max(int(t_ns.size - tr.window_s() * self.scene.sample_rate_hz) - 1, 0)
+        rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+        if not tr.update(rec["t"], -rec["angle"]):
+            return
+        for gyro in [g for g in self.trackers if g == name or self.tape_of.get(g) == name]:
+            if gyro in self.tape_of.values():
+                continue
+            est = live_north(self.trackers[gyro], self.trackers.get(self.tape_of.get(gyro)))
+            if est is not None:
+                self._publish_heading(gyro, int(t_ns[-1]), est.mount_azimuth_rad, est.sigma_rad)
+
+    def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (and a ``$HEHDT`` for the first gyroscope)."""
+        fields = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
+        self._send(heading_topic(name), m.imu(t_ns, heading_frame(name), fields))
+        if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
+            try:
+                self.nmea.send_heading(math.degrees(azimuth_rad), int(self.value("nmea_decimals", 3)))
+            except OSError as exc:
+                self.get_logger().warning(f"nmea_udp: {exc}", throttle_duration_sec=10.0)
+
+    def _send(self, topic, msg) -> None:
+        """Publish on one of the estimator's topics, counted (:attr:`sent`, by resolved name)."""
+        pub = self.pubs[topic]
+        pub.publish(msg)
+        self.sent[pub.topic_name] = self.sent.get(pub.topic_name, 0) + 1
+
+    def _final_headings(self, r, t) -> None:
+        """The final estimate's heading per horizontal gyroscope: its ``north`` block (the fit), or
+        not provided (Imu.msg: covariance element 0 = −1) when it has none."""
+        for name in self.trackers:
+            if name in self.tape_of.values():
+                continue
+            block = (r.get("instruments", {}).get(name) or {}).get("north") or {}
+            deg, sig = block.get("mount_azimuth_deg"), block.get("sigma_arcsec")
+            self._publish_heading(name, t, None if deg is None else math.radians(deg),
+                                  None if sig is None or deg is None else math.radians(sig / 3600.0))
 
     def teardown(self) -> None:
         for t in self.timers_:
@@ -75,6 +175,10 @@ class EstimatorNode(SceneNode):
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
         self._last_input = None
+        self.trackers, self.tape_of, self._due = {}, {}, {}
+        if self.nmea is not None:
+            self.nmea.close()
+            self.nmea = None
 
     def new_run(self, why) -> None:
         """The run restarted (the clock went back: a scene change or restart of the clock owner):
@@ -89,6 +193,9 @@ class EstimatorNode(SceneNode):
         self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
         self.buffers = {name: new for name, (_, new) in split.items()}
         self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
+        for name, tr in self.trackers.items():
+            self.trackers[name] = NorthTracker(tr.swing_s, tr.noise_sigma_rad)
+            self._due[name] = len(self.buffers[name]) + self._every(tr)
 
     def restart(self) -> None:
         super().restart()
@@ -190,6 +297,8 @@ class EstimatorNode(SceneNode):
         self._last_input = time.monotonic()
         if buf.layout.matches(data):
             buf.add_raw(data)
+            if name in self.trackers:
+                self._track(name)
             if self.standalone and len(buf) >= self.expected:
                 self._check_complete()
             return
@@ -207,6 +316,8 @@ class EstimatorNode(SceneNode):
             self._reject(name, f"joints {list(names)} do not match {list(expected)}")
             return
         self.buffers[name].add(m.stamp_to_release_ns(msg.header.stamp), list(msg.position), list(msg.velocity))
+        if name in self.trackers:
+            self._track(name)
         if self.standalone and len(self.buffers[name]) >= self.expected:
             self._check_complete()
 
@@ -233,7 +344,7 @@ class EstimatorNode(SceneNode):
         except InadequateData as exc:  # the data fail an adequacy check: said on /diagnostics, no number
             self.refusal = exc
             self.get_logger().error(str(exc))
-            self.pubs[DIAGNOSTICS].publish(m.diagnostics(
+            self._send(DIAGNOSTICS, m.diagnostics(
                 self.stamp_ns(), "gyro_instrument/estimator", False, str(exc),
                 {"refused_by_check": exc.field, "rejected_messages": self.rejected}))
             return None
@@ -246,16 +357,17 @@ class EstimatorNode(SceneNode):
         t = self.stamp_ns()
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
-        self.pubs["estimator/earth_rate_enu"].publish(m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        self._send("estimator/earth_rate_enu", m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
         text = r.get("method") or r.get("reason", "")
-        self.pubs[DIAGNOSTICS].publish(m.diagnostics(
+        self._send(DIAGNOSTICS, m.diagnostics(
             t, "gyro_instrument/estimator", r.get("method") is not None and short is None,
             text if short is None else f"{short}; {text}",
             {"latitude_deg": r.get("latitude_deg"), "latitude_sigma_deg": r.get("latitude_sigma_deg"),
              "earth_rate_rad_s": r.get("earth_rate_rad_s"), "carried_by": r.get("carried_by"),
              "rejected_messages": self.rejected, "wrong_topic_types": self.check_topic_types()}))
-        self.pubs["estimator/latitude_rad"].publish(m.float64(lat))
-        self.pubs["estimator/latitude_sigma_rad"].publish(m.float64(sig))
-        self.pubs["estimator/earth_rate_rad_s"].publish(m.float64(r.get("earth_rate_rad_s")))
-        self.pubs["estimator/earth_rate_sigma_rad_s"].publish(m.float64(r.get("earth_rate_sigma_rad_s")))
+        self._send("estimator/latitude_rad", m.float64(lat))
+        self._send("estimator/latitude_sigma_rad", m.float64(sig))
+        self._send("estimator/earth_rate_rad_s", m.float64(r.get("earth_rate_rad_s")))
+        self._send("estimator/earth_rate_sigma_rad_s", m.float64(r.get("earth_rate_sigma_rad_s")))
+        self._final_headings(r, t)
         return r

@@ -17,7 +17,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
 from gyro_instrument.recording.mcap_io import DiskFull, qos_yaml
-from gyro_instrument.recording.topics import ESTIMATOR_TOPICS, MARKER_TYPE, scene_topics, sparse_topics, visual_every
+from gyro_instrument.recording.topics import MARKER_TYPE, estimator_topics, scene_topics, sparse_topics, visual_every
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.ros.nodes.base import RELIABLE_ALL, STEADY, SceneNode
@@ -150,6 +150,7 @@ class RecorderNode(SceneNode):
         n = sample_count(self.scene)
         n_markers = len(range(0, n, visual_every(self.scene.sample_rate_hz)))
         sparse = sparse_topics(self.insts)
+        estimates = estimator_topics(self.insts)
         self.stamped = set()
         self.marker_topics = set()
         self.sample_topics = set()
@@ -165,7 +166,7 @@ class RecorderNode(SceneNode):
                 self.marker_topics.add(name)
             elif types[topic] != "std_msgs/msg/Float64":
                 self.stamped.add(name)
-            if topic not in ESTIMATOR_TOPICS:
+            if topic not in estimates:
                 self.sample_topics.add(name)
             # what the scene publishes: every sample on clock and the instruments' topics, and at
             # least one estimate on each estimator topic

@@ -1,0 +1,157 @@
+"""Heading out over real DDS and UDP (issue 24 item 5), on loopback (tools/loopback; UDP to 127.0.0.1 only).
+
+One suite run of quet_paris's horizontal gyroscope alone (one swing 12.8 s, σ = 1e-4 rad at 20 Hz),
+its scale zero at 211.3° (the southern half: the yaw wraps), for 120 s: about nine reversal points.
+The suite's recorder (its subscription matched before sim time starts) holds every ``sensor_msgs/Imu``
+the estimator published on ``/gyro_horizontal/heading``; an independent subscriber (its own rclpy
+context, TRANSIENT_LOCAL: it may match the estimator after its first messages under load) gets at
+least the last; a UDP socket on 127.0.0.1 reads the ``$HEHDT`` sentences, parsed by pynmea2.
+
+References, each independent of the code under test: scipy's ``Rotation`` (where the quaternion
+sends the body's forward axis; a compass azimuth is the ENU direction (sin A, cos A, 0)); the scene's
+mount azimuth; the Earth rate n and latitude of the site; Imu.msg's covariance conventions.
+Tolerances: the headings are within 4 σ of the truth (σ the message's own, from its covariance: a
+4-σ miss of a Gaussian has probability 6e-5); rates to 1e-12 relative (a few double operations); a
+written heading within half its last decimal plus 4 σ of the value.
+"""
+
+import math
+import socket
+import threading
+import time
+
+import pynmea2
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from scipy.spatial.transform import Rotation
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import Imu
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.site import Site
+from gyro_instrument.recording.mcap_io import read_messages
+from gyro_instrument.ros.suite import run_suite
+
+pytestmark = pytest.mark.ros
+
+MOUNT_DEG = 211.3
+SCENE = ["instruments.gyro_meridian=null", "instruments.pendulum=null",
+         f"instruments.gyro_horizontal.mount_azimuth_deg={MOUNT_DEG}", "seed=11"]
+DURATION_S = 120.0
+LATITUDE_DEG = 48.8462           # quet_paris
+
+
+def azimuth_of(msg) -> float:
+    """Compass azimuth (deg, [0, 360)) of the body's forward axis, by scipy (scalar-last, as the message)."""
+    q = msg.orientation
+    fwd = Rotation.from_quat([q.x, q.y, q.z, q.w]).apply([1.0, 0.0, 0.0])
+    return math.degrees(math.atan2(fwd[0], fwd[1])) % 360.0
+
+
+def miss_deg(a, b) -> float:
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+@pytest.fixture(scope="module")
+def heading_run(tmp_path_factory):
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    node = rclpy.create_node("heading_listener", context=ctx)
+    got = []
+    qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    node.create_subscription(Imu, "/gyro_horizontal/heading", got.append, qos)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node)
+    stop = threading.Event()
+    spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
+    spinner.start()
+    udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    udp.bind(("127.0.0.1", 0))
+    udp.settimeout(0.2)
+    bag = str(tmp_path_factory.mktemp("heading") / "h.mcap")
+    try:
+        result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag, nmea_udp=f"127.0.0.1:{udp.getsockname()[1]}")
+        sentences = []
+        while True:
+            try:
+                sentences.append(udp.recv(4096).decode("ascii"))
+            except socket.timeout:
+                break
+        t0 = time.monotonic()
+        while not got and time.monotonic() - t0 < 10:
+            time.sleep(0.05)
+        time.sleep(0.2)
+    finally:
+        stop.set()
+        spinner.join()
+        udp.close()
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    recorded = [deserialize_message(data, Imu) for topic, _, _, data in read_messages(bag)
+                if topic == "/gyro_horizontal/heading"]
+    return result, stats, recorded, sentences, bag, list(got)
+
+
+def test_heading_converges_on_the_mount_azimuth(heading_run):
+    result, stats, msgs = heading_run[:3]
+    assert len(msgs) >= 5                         # live at each reversal point from the third, then the final
+    truth = MOUNT_DEG
+    for msg in msgs:
+        sigma_deg = math.degrees(math.sqrt(msg.orientation_covariance[8]))
+        assert miss_deg(azimuth_of(msg), truth) < 4 * sigma_deg
+        assert msg.header.frame_id == "gyro_horizontal_scale"
+    live = [math.sqrt(m.orientation_covariance[8]) for m in msgs[:-1]]
+    assert all(b <= a * (1 + 1e-9) for a, b in zip(live, live[1:]))    # the Schuler mean's σ falls with ν
+    # the last message is the final estimate's north block (the fit): its azimuth and σ
+    final, block = msgs[-1], result["north"]
+    assert azimuth_of(final) == pytest.approx(block["mount_azimuth_deg"], abs=1e-9)
+    assert math.sqrt(final.orientation_covariance[8]) == pytest.approx(math.radians(block["sigma_arcsec"] / 3600),
+                                                                        rel=1e-9)
+    assert math.sqrt(final.orientation_covariance[8]) < live[-1]         # the fit beats the Schuler mean
+
+
+def test_imu_fields_follow_rep_103_145_and_imu_msg(heading_run):
+    msgs = heading_run[2]
+    site = Site.from_degrees(LATITUDE_DEG)
+    n, lat = site.earth_rate_rad_s, math.radians(LATITUDE_DEG)
+    for msg in msgs:
+        w = msg.angular_velocity
+        assert math.hypot(w.x, w.y, w.z) == pytest.approx(n, rel=1e-12)
+        assert w.z == pytest.approx(n * math.sin(lat), rel=1e-12)              # the up axis: n sin(latitude)
+        a = math.radians(azimuth_of(msg))                                       # forward: n cos(lat) cos(A)
+        assert w.x == pytest.approx(n * math.cos(lat) * math.cos(a), abs=1e-9 * n)
+        assert msg.linear_acceleration_covariance[0] == -1.0                   # not provided
+        assert msg.orientation_covariance[0] > 0 and msg.orientation_covariance[8] > 0
+        assert msg.header.stamp.sec > 1_000_000_000                             # sim time from the epoch
+
+
+def test_nmea_hehdt_sentences_parse_and_match_the_imu(heading_run):
+    _, _, msgs, sentences = heading_run[:4]
+    assert len(sentences) == len(msgs)            # one datagram per heading published
+    for text, msg in zip(sentences, msgs):
+        assert text.endswith("\r\n")
+        s = pynmea2.parse(text.strip(), check=True)
+        assert s.sentence_type == "HDT" and s.talker == "HE" and s.hdg_true == "T"
+        sigma_deg = math.degrees(math.sqrt(msg.orientation_covariance[8]))
+        assert miss_deg(float(s.heading), azimuth_of(msg)) <= 0.0005 + 1e-9
+        assert miss_deg(float(s.heading), MOUNT_DEG) < 4 * sigma_deg + 0.0005
+
+
+def test_an_independent_subscriber_gets_the_same_messages(heading_run):
+    _, stats, msgs, _, _, listened = heading_run
+    assert len(msgs) == stats["recorded"]["/gyro_horizontal/heading"]
+    # what the independent subscriber got is the tail of what was published, the final estimate last
+    assert 1 <= len(listened) <= len(msgs)
+    tail = msgs[len(msgs) - len(listened):]
+    for a, b in zip(listened, tail):
+        assert (a.header.stamp.sec, a.header.stamp.nanosec) == (b.header.stamp.sec, b.header.stamp.nanosec)
+        assert list(a.orientation_covariance) == list(b.orientation_covariance)
+        assert (a.orientation.z, a.orientation.w) == (b.orientation.z, b.orientation.w)
+
+
+def test_a_bad_nmea_target_is_refused_before_any_node_starts():
+    with pytest.raises(SceneError, match="--nmea-udp"):
+        run_suite("quet_paris", SCENE, 10.0, nmea_udp="127.0.0.1:70000")
