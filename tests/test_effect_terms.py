@@ -149,7 +149,13 @@ def test_supported_effects_follow_the_declared_mechanics(effect):
     for tname, scene in SCENE_OF_TYPE.items():
         over = ["effects=null", setting]
         if tname in users:
-            load_scene(scene, over)
+            try:
+                load_scene(scene, over)
+            except SceneError as exc:
+                # a type may take an effect in some configurations only (check_effects: a torsion tape
+                # hangs a horizontal gyroscope, not quet_gyroscopes' meridian one): refused for the
+                # configuration, never as unsupported
+                assert "instruments that support it" not in str(exc), exc
         else:
             with pytest.raises(SceneError, match="instruments that support it: " + ", ".join(users)):
                 load_scene(scene, over)

@@ -19,7 +19,8 @@ import pytest
 from gyro_instrument.cli import main as cli_main
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.bounds import PROBES, AzimuthModel, SensorSpec, azimuth_sigmas, solve_azimuth
+from gyro_instrument.estimators.bounds import PROBES, SensorSpec
+from gyro_instrument.estimators.bounds_azimuth import AzimuthModel, azimuth_sigmas, solve_azimuth
 from gyro_instrument.estimators.planner import ARCSEC_RAD, parse_targets, plan, verify_plan
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 

@@ -20,10 +20,10 @@ from gyro_instrument import effects
 from gyro_instrument.core.effect import FRAME_RATE
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, GYRO_MIN_CYCLES,  # noqa: F401
-                                               MAX_OBSERVATION_S, NORTH_LAWS, NORTH_METHODS, PENDULUM_MIN_PERIODS,
-                                               YEAR_S, InstrumentModel, Planner, SensorSpec, azimuth_sigmas, combined,
-                                               counting_sigma, instrument_models, instrument_sigma, samples,
-                                               sine_fit_covariance, solve_azimuth)
+                                               MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
+                                               Planner, SensorSpec, combined, counting_sigma, instrument_models,
+                                               instrument_sigma, samples, sine_fit_covariance)
+from gyro_instrument.estimators.bounds_azimuth import NORTH_LAWS, NORTH_METHODS, azimuth_sigmas, solve_azimuth
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
@@ -196,7 +196,7 @@ def _finite(x):
 
 def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
     """The plan of an azimuth target: per horizontal gyroscope the fit's T at the Cramér–Rao bound of
-    the centre (:func:`.bounds.solve_azimuth`); for the instrument that needs the least (the one the
+    the centre (:func:`.bounds_azimuth.solve_azimuth`); for the instrument that needs the least (the one the
     estimate's top-level ``north`` would carry), T per north method by its σ law, each method's σ at
     the fit's T, σ(T) on a log grid, and the systematic floor (the noise-free estimate's azimuth error
     at the fit's T). ``observation_s`` is the fit's."""

@@ -1,0 +1,92 @@
+"""North from the swing of a horizontal gyroscope: the oscillation centre is the meridian.
+
+Quet 1853, sec. 4 §1, item 1: a body of revolution spinning about its axis, the axis free to turn
+in a *horizontal* directing plane, is in relative equilibrium only along the meridian (stable when
+the spin is in the Earth's sense), and item 6: away from it the axis swings about the meridian like
+a pendulum (eq. 8, small swings of duration T = π/√(μ n ρ0 sin ω), eq. 9, sin ω = cos γ). A
+surveyor's gyrotheodolite (Wild GAK1, Fennel KT1, DMT Gyromat) is this gyroscope hung on a torsion
+tape; the centre of its swing, read on the instrument's scale, gives north.
+
+Sign convention (the scale of issue 24, item 1)
+-----------------------------------------------
+* Azimuth: clockwise from true north seen from above (east = +90°), in [0, 2π).
+* ``mount_azimuth``: the azimuth of the instrument's scale zero.
+* The swing angle ``u`` read on the scale (rad) is the azimuth of the rotor axis's north-seeking
+  end (the end that rests on the meridian's north when the spin is in the Earth's sense) *less*
+  the mount azimuth: u = azimuth(axis) − mount_azimuth, wrapped to (−π, π]. So u grows clockwise,
+  like the azimuth (Quet's own u of eq. 4 is measured from ``ox`` toward ``oy``, to the *left* of
+  ``ox``: counter-clockwise; u_here = −u_Quet for a scale whose zero is on ``ox``).
+* True north (azimuth 0) therefore reads u_N = −mount_azimuth on the scale, and the estimate
+  sought is mount_azimuth = (−u_N) mod 2π (:func:`mount_azimuth_rad`).
+* Without a torsion tape the swing centre c *is* u_N. With a tape (torsion constant D_B, tape zero
+  Z on the scale) the centre is pulled toward Z: c = (D_K u_N + D_B Z)/(D_K + D_B), hence
+  u_N = c + (D_B/D_K)(c − Z) (:func:`tape_corrected`; physics_notes "North finding").
+
+The methods (issue 24, item 3), each returning a :class:`NorthEstimate`
+------------------------------------------------------------------------
+=========================  ====================================  ===========================================
+method                     needs                                 bias (first order)
+=========================  ====================================  ===========================================
+:func:`schuler_mean`       ≥ 3 reversal points (≥ 4 for a σ      none for a linear decay of the amplitude;
+                           from the scatter)                     exponential decay q per swing: second order,
+                                                                 d1 (1−q)² (1 − (−q)^(ν−2)) / (4 (1+q)(ν−2))
+                                                                 (:func:`schuler_bias`); a linear drift of the
+                                                                 centre gives the centre at the weighted mean
+                                                                 time (symmetric weights)
+:func:`lavrov`             ≥ 3 consecutive reversal points       none for an exponential (geometric) decay:
+                           (≥ 4 for a σ from the scatter)        exact; a linear decay: second order
+:func:`transit_method`     ≥ 3 transits of a mark inside the     none at the mark = centre (the zeros of a
+                           swing (one period) and the            damped sine are equally spaced); the sine
+                           amplitude (from reversal points)      law x0 = A sin(π Δt / (2T)) is exact undamped
+:func:`fit_record`         ≥ 2 reversal points to start (about   none for the model c + A e^(−δt) cos(ωt + φ)
+                           one swing); σ at the Cramér–Rao       (+ drift); var(c) ≈ σ²/N for a long record
+                           bound                                 (:func:`crlb_centre`)
+=========================  ====================================  ===========================================
+
+Tape torque biases every centre alike (the swing centre is not north); :func:`tape_corrected`
+removes it with the ratio from the rotor-on and rotor-off periods (:func:`tape_ratio`). Sources:
+Quet 1853 sec. 4 §1; physics_notes.md "North finding" (the Schuler mean is Freiberger
+Forschungshefte A 303 eq. 31b; the transit form N = N' + c·a·Δt with c ≈ π/(2T)); the GAK1
+procedures are described in K. P. Logan, *Determining an azimuth with a gyrotheodolite*, U.S. Army
+ETL-0440 (1986). The derivations used here are written out in each function's docstring.
+"""
+
+import numpy as np
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.estimators.north.base import (  # noqa: F401
+    TWO_PI, NorthEstimate, ReversalPoints, mount_azimuth_rad, damped_swing, _sides, _runs,
+    _coarse_level, _local_poly, _poly_root, _basis, _coarse_extrema, _refined_extrema,
+    reversal_points, half_period, _finite, _noise)
+from gyro_instrument.estimators.north.means import (  # noqa: F401
+    schuler_weights, schuler_bias, _scatter_sigma, _readings, schuler_mean, lavrov_triples,
+    _geometric, _geometric_jac, lavrov)
+from gyro_instrument.estimators.north.timing import (  # noqa: F401
+    transit_offset, transit_times, transit_method)
+from gyro_instrument.estimators.north.fit import (  # noqa: F401
+    _fit_jacobian, _fit_model, _fit_start, fit_record, crlb_centre, crlb_centre_long, tape_ratio,
+    tape_corrected)
+
+
+# ----------------------------------------------------------------------------- all together
+def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tuple:
+    """Every method on one record: ({name: NorthEstimate}, {name: why it was refused}).
+
+    Names: ``schuler_mean`` and ``lavrov`` (on the reversal points, σ propagated from their σ),
+    ``transit`` (the mark: ``mark_rad``, default the Schuler mean — a mark set near the centre, as
+    a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``
+    (with a linear drift of the centre when ``drift``: the centre at the mean sample time).
+    """
+    rp = reversal_points(t, u, noise_sigma_rad)
+    out, refused = {}, {}
+    runs = {"schuler_mean": lambda: schuler_mean(rp.readings_rad, rp.sigmas_rad),
+            "lavrov": lambda: lavrov(rp.readings_rad, rp.sigmas_rad),
+            "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None
+                                              else mark_rad, noise_sigma_rad),
+            "fit": lambda: fit_record(t, u, noise_sigma_rad, drift=drift)}
+    for name, run in runs.items():
+        try:
+            out[name] = run()
+        except (SceneError, KeyError, np.linalg.LinAlgError) as exc:
+            refused[name] = str(exc)
+    return out, refused

@@ -1,0 +1,155 @@
+"""The full-record fit at the Cramér–Rao bound, and the torsion tape's correction.
+
+Part of :mod:`gyro_instrument.estimators.north` (its docstring states the sign convention and
+the sources).
+"""
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.estimators.north.base import TWO_PI, NorthEstimate, reversal_points, _finite
+from gyro_instrument.estimators.north.means import schuler_mean
+
+
+# ----------------------------------------------------------------------------- the full-record fit
+def _fit_jacobian(tau, p, damping, drift):
+    """Columns ∂u/∂(c, a, b, ω[, δ][, d]) of u = c + d τ + e^(−δτ)(a cos ωτ + b sin ωτ)."""
+    _, a, b, w = p[:4]
+    dl = p[4] if damping else 0.0
+    E = np.exp(-dl * tau)
+    co, si = np.cos(w * tau), np.sin(w * tau)
+    cols = [np.ones_like(tau), E * co, E * si, E * tau * (b * co - a * si)]
+    if damping:
+        cols.append(-tau * E * (a * co + b * si))
+    if drift:
+        cols.append(tau)
+    return np.column_stack(cols)
+
+
+def _fit_model(tau, p, damping, drift):
+    c, a, b, w = p[:4]
+    dl = p[4] if damping else 0.0
+    return c + (p[-1] * tau if drift else 0.0) + np.exp(-dl * tau) * (a * np.cos(w * tau) + b * np.sin(w * tau))
+
+
+def _fit_start(tau, u, rp, damping, drift):
+    """Starting parameters: ω from the reversal-point spacing, δ from the decay of their deviations,
+    then c, a, b (and d) by linear least squares."""
+    w = math.pi / rp.half_period_s
+    dev = np.abs(rp.readings_rad - schuler_mean(rp.readings_rad).centre_rad)
+    dl = float(-np.polyfit(rp.times_s, np.log(dev), 1)[0]) if damping and rp.readings_rad.size >= 3 else 0.0
+    E = np.exp(-dl * tau)
+    cols = [np.ones_like(tau), E * np.cos(w * tau), E * np.sin(w * tau)] + ([tau] if drift else [])
+    lin, *_ = np.linalg.lstsq(np.column_stack(cols), u, rcond=None)
+    return np.array(list(lin[:3]) + [w] + ([dl] if damping else []) + ([lin[3]] if drift else []))
+
+
+def fit_record(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=None) -> NorthEstimate:
+    """Swing centre by nonlinear least squares of the whole record (at the Cramér–Rao bound).
+
+    Model u(t) = c + d·τ + A e^(−δτ) cos(ωτ + φ), τ = t − t_ref (t_ref the mean sample time unless
+    given; with ``drift`` the centre is reported at t_ref), written linearly in a = A cos φ,
+    b = −A sin φ. Least squares is the maximum-likelihood estimate in white Gaussian noise, so its
+    covariance σ² (JᵀJ)⁻¹ is the inverse Fisher information: σ(c) is the Cramér–Rao bound at the
+    estimate (:func:`crlb_centre`; ≈ σ/√N for a long record). σ: the given sensor σ, else the
+    residual rms with N − p degrees of freedom.
+    """
+    t, u = _finite(t, u)
+    rp = reversal_points(t, u, noise_sigma_rad)
+    t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
+    tau = t - t_ref
+    p0 = _fit_start(tau, u, rp, damping, drift)
+    sol = least_squares(lambda p: _fit_model(tau, p, damping, drift) - u, p0,
+                        jac=lambda p: _fit_jacobian(tau, p, damping, drift), method="lm", xtol=1e-14)
+    J = _fit_jacobian(tau, sol.x, damping, drift)
+    inv = np.linalg.inv(J.T @ J)
+    if noise_sigma_rad is not None:
+        sigma, src = float(noise_sigma_rad), "inverse Fisher information at the estimate (sensor σ given)"
+    else:
+        sigma = math.sqrt(2.0 * sol.cost / (t.size - sol.x.size))
+        src = f"inverse Fisher information, σ from the residuals ({t.size - sol.x.size} dof)"
+    sig_c = sigma * math.sqrt(inv[0, 0])
+    w, sw = sol.x[3], sigma * math.sqrt(inv[3, 3])
+    notes = (f"t_ref = {t_ref:.9g} s", f"amplitude {math.hypot(sol.x[1], sol.x[2]):.6g} rad at t_ref",
+             f"damping {sol.x[4] if damping else 0.0:.6g} 1/s", f"residual rms {math.sqrt(2 * sol.cost / t.size):.6g} rad")
+    return NorthEstimate("fit", float(sol.x[0]), sig_c, src, int(t.size), "about one swing (≥ 2 reversal points) "
+                         "to start; any record after that", notes, TWO_PI / w, TWO_PI * sw / w ** 2, sig_c)
+
+
+def crlb_centre(t, amplitude_rad, omega_rad_s, noise_sigma_rad, damping_per_s=0.0, phase_rad=0.0,
+                fit_damping=True, drift=False, t_ref_s=None) -> float:
+    """Cramér–Rao bound on σ(c) for the model of :func:`fit_record` sampled at ``t`` (rad).
+
+    Fisher information I = JᵀJ/σ² (J the Jacobian of the model in (c, a, b, ω[, δ][, d]) at the true
+    parameters, white Gaussian noise σ); bound √[I⁻¹]_cc. Closed form for an undamped record of
+    many whole cycles: the constant column is orthogonal to cos, sin, τ cos and a centred τ, so
+    [I⁻¹]_cc → σ²/N: σ(c) ≥ σ/√N (:func:`crlb_centre_long`). Next order, K whole cycles with ω (and
+    δ) fitted: the ω/δ columns span τ cos ωτ and τ sin ωτ, and over τ ∈ [−L/2, L/2] the constant
+    overlaps τ sin ωτ by L/ω against norms² L and L³/24: correlation² 24/(ωL)² = 6/(π²K²), so
+    σ(c) ≈ (σ/√N)(1 + 3/(π²K²)) (checked in tests/test_north_methods.py).
+    """
+    t = np.asarray(t, dtype=float)
+    t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
+    tau = t - t_ref
+    a, b = amplitude_rad * math.cos(phase_rad), -amplitude_rad * math.sin(phase_rad)
+    J = _fit_jacobian(tau, np.array([0.0, a, b, omega_rad_s, damping_per_s] + ([0.0] if drift else [])), True, drift)
+    if not fit_damping:                     # δ known: its column leaves the information matrix
+        J = np.delete(J, 4, axis=1)
+    return float(noise_sigma_rad * math.sqrt(np.linalg.inv(J.T @ J)[0, 0]))
+
+
+def crlb_centre_long(noise_sigma_rad, n_samples) -> float:
+    """σ/√N: the bound on σ(c) for an undamped record of many whole cycles (:func:`crlb_centre`)."""
+    return float(noise_sigma_rad / math.sqrt(n_samples))
+
+
+# ----------------------------------------------------------------------------- the torsion tape
+def tape_ratio(period_on_s, period_off_s, period_on_sigma_s=0.0, period_off_sigma_s=0.0) -> tuple:
+    """D_B/D_K from the rotor-on and rotor-off periods, and its σ.
+
+    The suspended body (moment of inertia J about the vertical) swings rotor-off on the tape alone,
+    a torsion pendulum ω_off² = D_B/J, and rotor-on under tape and directing torque,
+    ω_on² = (D_K + D_B)/J (D_K = C ρ0 n cos γ, Quet sec. 4 §1 eq. 8 times A; physics_notes). Hence
+    D_B/D_K = ω_off²/(ω_on² − ω_off²) = T_on²/(T_off² − T_on²) (note: T_on²/T_off² alone is
+    D_B/(D_K + D_B), not D_B/D_K). Either both full periods or both half periods.
+
+    Returns
+    -------
+    (ratio, sigma) : tuple of float
+        σ propagated from the periods' σ: ∂r/∂T_on = 2 T_on T_off²/(T_off² − T_on²)²,
+        ∂r/∂T_off = −2 T_off T_on²/(T_off² − T_on²)².
+    """
+    if not (period_on_s > 0 and math.isfinite(period_on_s)):
+        raise SceneError("period_on_s", period_on_s, "must be a finite period > 0 (s)")
+    if not (math.isfinite(period_off_s) and period_off_s > period_on_s):
+        raise SceneError("period_off_s", period_off_s, f"must exceed the rotor-on period {period_on_s:.6g} s: "
+                         "a tape at least as stiff as the directing torque cancels or reverses it "
+                         "(D_K = J(ω_on² − ω_off²) ≤ 0)")
+    x, y = period_on_s ** 2, period_off_s ** 2
+    r = x / (y - x)
+    dr_on, dr_off = 2 * period_on_s * y / (y - x) ** 2, -2 * period_off_s * x / (y - x) ** 2
+    return float(r), float(math.hypot(dr_on * period_on_sigma_s, dr_off * period_off_sigma_s))
+
+
+def tape_corrected(estimate, tape_zero_rad, ratio, ratio_sigma=0.0, tape_zero_sigma_rad=0.0) -> NorthEstimate:
+    """The north reading from a swing centre under tape torsion: N = c + (D_B/D_K)(c − Z).
+
+    The centre of the rotor-on swing is the torque balance c = (D_K N + D_B Z)/(D_K + D_B)
+    (physics_notes "North finding"), solved for N. σ² = (1+r)² σ_c² + r² σ_Z² + (c − Z)² σ_r², the
+    three independent (Z from the rotor-off swing, r from the two periods, c from the rotor-on
+    swing). ``estimate``: a :class:`NorthEstimate` of the rotor-on centre.
+    """
+    c, r = estimate.centre_rad, float(ratio)
+    if not (r >= 0 and math.isfinite(r)):
+        raise SceneError("tape_ratio", ratio, "D_B/D_K must be finite and ≥ 0")
+    north = c + r * (c - tape_zero_rad)
+    sig = None if estimate.sigma_rad is None else float(math.sqrt(
+        ((1 + r) * estimate.sigma_rad) ** 2 + (r * tape_zero_sigma_rad) ** 2 + ((c - tape_zero_rad) * ratio_sigma) ** 2))
+    return NorthEstimate(estimate.method + "+tape", float(north), sig,
+                         estimate.sigma_source + "; with the tape zero's and the ratio's σ", estimate.n_used,
+                         estimate.needs + "; a rotor-off swing (tape zero and period)",
+                         estimate.notes + (f"tape: D_B/D_K = {r:.6g}, zero {tape_zero_rad:.9g} rad",),
+                         estimate.period_s, estimate.period_sigma_s, None)
