@@ -111,7 +111,7 @@ def _azimuth_model(scene, obs):
     if isinstance(shape, str):
         return None, f"{shape}: {obs.null_reason}"
     w, A, d, ph, c = shape
-    model = AzimuthModel(obs.name, w, A, d, ph, c, drift=inst.has("tape_drift"),
+    model = AzimuthModel(obs.name, w, A, d, ph, c, drift=obs.centre_drifts(),
                          mount_azimuth_rad=float(inst.p.mount_azimuth_rad))
     if obs.has_tape():
         other = obs.companions().get("rotor_off")

@@ -130,7 +130,7 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
     sigma = sensor.effective_sigma_rad() if sensor is not None else 0.0
     sigma = sigma if sigma > 0 else None
     ests, refused = north.north_methods(t, -np.asarray(rec["angle"], dtype=float), sigma,
-                                        drift=inst.has("tape_drift"))
+                                        drift=obs.centre_drifts())
     if "fit" not in ests:
         return null_block(name, f"the fit was refused: {refused.get('fit')}") | {"refused": refused}, None
     fit = ests["fit"]

@@ -84,6 +84,11 @@ class HorizontalSwing(SwingRate):
         """True when a torsion tape hangs the gyroscope."""
         return bool(self.tape_constant_per_inertia)
 
+    def centre_drifts(self) -> bool:
+        """True when the swing's centre moves during the record (the tape zero drifts,
+        ``tape_drift``): the full-record fit then fits a linear drift of the centre."""
+        return self.instrument.has("tape_drift")
+
     def rate_from_swing(self, T0, rho_mean) -> tuple:
         """:meth:`SwingRate.rate_from_swing` with the tape's D_B/A taken out of K = (π/T0)²."""
         if not self.has_tape():
