@@ -118,13 +118,28 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
 
     ``rec`` holds ``t`` and ``angle`` (rad) and, with a tape, the rotor-off companion's record under
     :data:`~gyro_instrument.instruments.observation_azimuth.ROTOR_OFF`. Returns (block, None): an
-    azimuth is not an Earth-rate measurement. Raises InadequateData (one swing outlasts the record)
-    or SceneError (a tape without its rotor-off swing).
+    azimuth is not an Earth-rate measurement. When the scene asks for north (``obs.north_asked``: a
+    stated ``mount_azimuth_deg`` or a tape) raises InadequateData (one swing outlasts the record) or
+    SceneError (a tape without its rotor-off swing); when it does not (mount 0 by default), an
+    inadequate record gives the null block with its reason instead (issue 24 item 1: every estimate
+    with a horizontal gyroscope reports ``north``, and none is refused for it).
     """
+    if getattr(obs, "north_asked", True):
+        return _north_block(obs, rec, sensor), None
+    try:
+        return _north_block(obs, rec, sensor), None
+    except InadequateData as exc:
+        return null_block(obs.name, exc.check["detail"]), None
+    except (SceneError, np.linalg.LinAlgError, ValueError) as exc:
+        return null_block(obs.name, str(exc)), None
+
+
+def _north_block(obs, rec, sensor) -> dict:
+    """The ``north`` block (:func:`north_entry`); raises as it says."""
     inst, name = obs.instrument, obs.name
     T = inst.predictions()["swing_duration_small_s"]
     if not (math.isfinite(T) and T > 0):
-        return null_block(name, f"no directing torque: {obs.null_reason}; without earth_rotation none is simulated"), None
+        return null_block(name, f"no directing torque: {obs.null_reason}; without earth_rotation none is simulated")
     t = np.asarray(rec["t"], dtype=float)
     _check_swing(name, inst, t)
     sigma = sensor.effective_sigma_rad() if sensor is not None else 0.0
@@ -132,7 +147,7 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
     ests, refused = north.north_methods(t, -np.asarray(rec["angle"], dtype=float), sigma,
                                         drift=obs.centre_drifts())
     if "fit" not in ests:
-        return null_block(name, f"the fit was refused: {refused.get('fit')}") | {"refused": refused}, None
+        return null_block(name, f"the fit was refused: {refused.get('fit')}") | {"refused": refused}
     fit = ests["fit"]
     ratio, tape = 0.0, None
     if obs.has_tape():
@@ -140,13 +155,12 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
         ests = {k: north.tape_corrected(v, zero, ratio, rs, zs) for k, v in ests.items()}
     crlb = None if fit.crlb_rad is None else fit.crlb_rad * (1.0 + ratio)
     best = ests["fit"]
-    block = {"instrument": name, "mount_azimuth_deg": _deg(best.centre_rad), "sigma_arcsec": _arcsec(best.sigma_rad),
-             "crlb_arcsec": _arcsec(crlb), "method": "fit", "tape": tape,
-             "methods": {k: _method_entry(v, crlb if k == "fit" else None) for k, v in ests.items()},
-             "refused": refused,
-             "notes": ["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
-                       "(Quet's u), true north reads +mount_azimuth"]}
-    return block, None
+    return {"instrument": name, "mount_azimuth_deg": _deg(best.centre_rad), "sigma_arcsec": _arcsec(best.sigma_rad),
+            "crlb_arcsec": _arcsec(crlb), "method": "fit", "tape": tape,
+            "methods": {k: _method_entry(v, crlb if k == "fit" else None) for k, v in ests.items()},
+            "refused": refused,
+            "notes": ["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
+                      "(Quet's u), true north reads +mount_azimuth"]}
 
 
 def best_block(blocks) -> dict | None:

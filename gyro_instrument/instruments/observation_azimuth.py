@@ -49,8 +49,9 @@ class HorizontalSwing(SwingRate):
     tape hangs it (K = (π/T0)² − D_B/A, D_B the scene's tape constant).
     """
 
-    #: Measurement kinds beside ``MEASUREMENT`` the estimator runs the engines of: an azimuth when the
-    #: scene states the mount (``mount_azimuth_deg``) or hangs the gyroscope on a tape (set per instance).
+    #: Measurement kinds beside ``MEASUREMENT`` the estimator runs the engines of: an azimuth, always
+    #: (issue 24 item 1: every estimate with a horizontal gyroscope reports ``north``; the mount
+    #: defaults to 0, the scale's zero on true north).
     ALSO_MEASURES: ClassVar[tuple] = (AZIMUTH,)
 
     @classmethod
@@ -67,8 +68,9 @@ class HorizontalSwing(SwingRate):
         super().__init__(inst, model)
         self.mount_reading_rad = inst.mount_reading_rad
         self.tape_constant_per_inertia = inst.tape[0] / inst.p.transverse_inertia_kg_m2
-        if inst.p.mount_azimuth_deg is None and not self.has_tape():
-            self.ALSO_MEASURES = ()
+        #: True when the scene asks for north (states ``mount_azimuth_deg`` or hangs the gyroscope on a
+        #: tape): an inadequate record is then refused (exit 2); otherwise ``north`` is null with its reason.
+        self.north_asked = inst.p.mount_azimuth_deg is not None or self.has_tape()
 
     def true_values(self, columns) -> dict:
         """The scale reading u + M (rad): Quet's u offset by the mount (``mount_azimuth_deg``)."""
