@@ -15,6 +15,7 @@ from gyro_instrument.cli import main
 from gyro_instrument.estimators import north
 from gyro_instrument.estimators.field_book import write_field_book
 from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+from gyro_instrument.instruments.observation_azimuth import HorizontalSwing
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
@@ -35,11 +36,45 @@ def test_default_mount_reads_quet_u_and_a_mount_offsets_the_reading():
     assert np.allclose(r1["angle"] - r0["angle"], math.radians(-60.0), atol=1e-12)
 
 
-def test_without_a_stated_mount_the_estimate_is_as_before():
+def _without_north(res):
+    res = dict(res, instruments={k: {kk: vv for kk, vv in v.items() if kk != "north"}
+                                 for k, v in res["instruments"].items()})
+    res.pop("north", None)
+    return res
+
+
+def test_without_a_stated_mount_north_reads_mount_0_and_nothing_else_changes(monkeypatch):
+    """Issue 24 item 1: every estimate with a horizontal gyroscope reports north; the default mount 0
+    (the scale's zero on true north) keeps every other result of the estimate as it was without it."""
     scene = _quet()
     truth = simulate_truth(scene)
-    res = estimate_records(scene, truth[1], measure(scene, truth, 5))
-    assert "north" not in res and "north" not in res["instruments"]["gyro_horizontal"]
+    recs = measure(scene, truth, 5)
+    res = estimate_records(scene, truth[1], recs)
+    n = res["north"]
+    assert n is res["instruments"]["gyro_horizontal"]["north"]
+    assert abs(_wrap_arcsec(n["mount_azimuth_deg"], 0.0)) < 5 * n["sigma_arcsec"]
+    monkeypatch.setattr(HorizontalSwing, "ALSO_MEASURES", ())
+    before = estimate_records(scene, truth[1], recs)
+    assert "north" not in before and _without_north(res) == before
+
+
+@pytest.mark.parametrize("sets,words", [
+    (["duration_s=5"], ["one swing lasts", "observe >="]),
+    (["site.latitude_deg=89.99"], ["one swing lasts", "site.latitude_deg = 89.99"]),
+])
+def test_unasked_north_on_an_inadequate_record_is_null_with_its_reason(sets, words, capsys):
+    """No stated mount, no tape: a record shorter than one swing gives north null with the reason
+    (never an exit 2, never a failed check); with a stated mount the same record is refused."""
+    scene = _quet(sets)
+    truth = simulate_truth(scene)
+    res = estimate_records(scene, truth[1], measure(scene, truth, 2))
+    n = res["north"]
+    assert n["mount_azimuth_deg"] is None and n["interval_deg"] == [0.0, 360.0]
+    assert all(w in n["reason"] for w in words), n["reason"]
+    assert not [c for c in res["checks"] if c["check"] == "north"]
+    args = ["estimate", "quet_gyroscopes", "--set", "instruments.gyro_meridian=null"]
+    args += [x for s in sets + ["instruments.gyro_horizontal.mount_azimuth_deg=10"] for x in ("--set", s)]
+    assert main(args) == 2 and "one swing lasts" in capsys.readouterr().err
 
 
 def test_north_block_recovers_the_mount_azimuth():
