@@ -27,7 +27,8 @@ Horizontal plane, as a gyrocompass (issue 24): the scale the measured ``angle`` 
 zero at azimuth ``mount_azimuth_deg`` M (clockwise from true north) and reads like Quet's u,
 counter-clockwise seen from above, so the reading is u + M (M wrapped to (−180°, 180°]; true north
 reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −angle = azimuth − M).
-M = 0 (or M unstated: then the estimate reports no north) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
+M = 0 (or M unstated, read as 0: the estimate still reports north, null with its reason when the
+record cannot give it) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
 mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
 c = (D_K N + D_B Z)/(D_K + D_B) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
 with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
@@ -103,8 +104,9 @@ class PlaneGyroscope(Instrument):
         Param("mount_azimuth_deg", default=None, low=0.0, high=360.0, open_high=True,
               doc="horizontal plane: azimuth (clockwise from true north) of the scale's zero; the measured "
                   "angle reads u + this (wrapped to (-180, 180] degrees), so true north reads +this, and the "
-                  "estimate reports it (north). Unstated (null): reads as 0, no north block (every estimate "
-                  "as before issue 24)"),
+                  "estimate reports it (north). Unstated (null): reads as 0 and every other result is as before "
+                  "issue 24; north is then null with its reason when the record cannot give it (shorter than "
+                  "one swing, no directing torque, a fit refused) where a stated mount is refused (exit 2)"),
         Param("rotor_off_instrument", kind="str", default="",
               doc="with tape_torsion: the scene's instrument that is this gyroscope swung with the rotor off "
                   "(spin_rate_rad_s: 0), whose swing gives the tape zero and D_B"),
