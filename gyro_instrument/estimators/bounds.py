@@ -157,7 +157,7 @@ RATE_KINDS = (SWING_RATE, PLANE_RATE)
 
 def measured_kinds(obs) -> tuple:
     """Every measurement kind an observation declares: its ``MEASUREMENT`` and ``ALSO_MEASURES``."""
-    return (obs.MEASUREMENT,) + tuple(getattr(obs, "ALSO_MEASURES", ()))
+    return (obs.MEASUREMENT,) + tuple(obs.ALSO_MEASURES)
 
 
 @dataclass(frozen=True)

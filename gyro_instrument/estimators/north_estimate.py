@@ -124,7 +124,7 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
     inadequate record gives the null block with its reason instead (issue 24 item 1: every estimate
     with a horizontal gyroscope reports ``north``, and none is refused for it).
     """
-    if getattr(obs, "north_asked", True):
+    if obs.north_asked:
         return _north_block(obs, rec, sensor), None
     try:
         return _north_block(obs, rec, sensor), None

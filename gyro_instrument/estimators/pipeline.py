@@ -108,7 +108,7 @@ def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
     (``ALSO_MEASURES``: an azimuth), on its record and its companions' (``companions()``: record key ->
     instrument name); each result goes into the instrument's entry under the kind's key
     (:data:`ALSO_KEYS`). Returns the ``north`` blocks."""
-    kinds = getattr(obs, "ALSO_MEASURES", ())
+    kinds = obs.ALSO_MEASURES
     if not kinds or not obs.has_record(records[obs.name]):
         return []
     rec = dict(records[obs.name])

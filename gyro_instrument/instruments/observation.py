@@ -134,6 +134,9 @@ class Observation:
 
     #: The measurement kind (:data:`SWING_RATE`, :data:`PLANE_RATE`) or None: no Earth rate.
     MEASUREMENT: ClassVar[str | None] = None
+    #: Kinds measured beside ``MEASUREMENT`` from the same record (an azimuth:
+    #: :class:`~.observation_azimuth.HorizontalSwing`); () for most observations.
+    ALSO_MEASURES: ClassVar[tuple] = ()
     #: Joints after the measured ones, computed from them (see :class:`JointLayout`).
     DERIVED_JOINTS: ClassVar[tuple] = ()
     #: True when a last rotor joint carries the spin channel.

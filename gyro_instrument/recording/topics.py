@@ -157,7 +157,7 @@ def heading_frame(instrument) -> str:
 def measures_azimuth(inst) -> bool:
     """True when the instrument's observation measures an azimuth (a horizontal gyroscope with its
     rotor on: ``ALSO_MEASURES`` holds ``AZIMUTH``); needs the instrument, not its class."""
-    return not isinstance(inst, type) and AZIMUTH in getattr(inst.observation(), "ALSO_MEASURES", ())
+    return not isinstance(inst, type) and AZIMUTH in inst.observation().ALSO_MEASURES
 
 
 def estimator_topics(insts) -> dict:
