@@ -21,7 +21,7 @@ setup(
         (f"share/{PACKAGE}/msg_docs", glob("msg_docs/*.md")),
     ],
     python_requires=">=3.10",
-    install_requires=["numpy>=1.24", "scipy>=1.10", "pyyaml>=6", "pyarrow>=12"],
+    install_requires=["numpy>=1.24", "scipy>=1.10", "numba>=0.60", "pyyaml>=6", "pyarrow>=12"],
     extras_require={
         "ros": ROS,
         "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
