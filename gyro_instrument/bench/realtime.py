@@ -33,8 +33,11 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.scenes import build_instruments, load_scene, shipped_scene_names
 
-#: Simulated seconds per CPU second every configuration must reach (issue 13 item 5).
-GOAL = 10.0
+#: Simulated seconds per CPU second every configuration must reach (issue 27 item 1; issue 13 asked 10).
+GOAL = 100.0
+
+#: Most probes :func:`_sized_duration` runs to size one configuration's runs.
+SIZING_PROBES = 4
 
 #: Parameters whose choices are an instrument's configurations and integrator variants.
 VARIANT_PARAMS = ("configuration", "integrator", "model")
@@ -87,14 +90,20 @@ def _timed_simulate(scene_name, name, overrides, duration_s):
 
 
 def _sized_duration(scene_name, name, overrides, each_cpu_s, probe_s):
-    """Simulated seconds of one run of ~``each_cpu_s`` CPU: a probe of ``probe_s`` simulated seconds,
-    scaled (at most the scene's ``duration_s``; the probe's length when it already costs half of it).
+    """Simulated seconds of one run of ~``each_cpu_s`` CPU, at most the scene's ``duration_s``.
+
+    A probe of ``probe_s`` simulated seconds is lengthened (at least doubled each time, at most
+    :data:`SIZING_PROBES` probes) until it costs half of ``each_cpu_s``: a run whose cost is mostly
+    a fixed start-up (the parareal path's first window, a driver's set-up) is not scaled linearly
+    from a probe that measured only that start-up, so the factor is the instrument's running rate.
     Raises SceneError when the scene checks refuse the configuration."""
     full = load_scene(scene_name, overrides).duration_s
     d = min(full, probe_s)
-    _, _, cpu, _ = _timed_simulate(scene_name, name, overrides, d)
-    if cpu < 0.5 * each_cpu_s and d < full:
-        d = min(full, d * each_cpu_s / max(cpu, 1e-3))
+    for _ in range(SIZING_PROBES):
+        _, _, cpu, _ = _timed_simulate(scene_name, name, overrides, d)
+        if cpu >= 0.5 * each_cpu_s or d >= full:
+            break
+        d = min(full, d * max(2.0, each_cpu_s / max(cpu, 1e-3)))
     return d
 
 
@@ -235,7 +244,7 @@ def summary_lines(rt, wp) -> list:
     """Markdown for ``summary.md`` (and the README's table)."""
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     below = [r for r in rt if r[11] is False]
-    lines = ["## Real-time factor of every instrument configuration (simulated s per CPU s; goal >= 10)", "",
+    lines = [f"## Real-time factor of every instrument configuration (simulated s per CPU s; goal >= {GOAL:g})", "",
              f"Each shipped scene's instruments as shipped and with each other `configuration`, `integrator` "
              f"and `model` choice, at the scene's sample rate and tolerance; the median of three interleaved runs of ~1 s of CPU each "
              f"(load average {load:.1f} during the run). {len(below)} below the goal.", "",
