@@ -93,12 +93,13 @@ def _sized_duration(scene_name, name, overrides, each_cpu_s, probe_s):
     """Simulated seconds of one run of ~``each_cpu_s`` CPU, at most the scene's ``duration_s``.
 
     A probe of ``probe_s`` simulated seconds is lengthened (at least doubled each time, at most
-    :data:`SIZING_PROBES` probes) until it costs half of ``each_cpu_s``: a run whose cost is mostly
+    :data:`SIZING_PROBES` probes, after one untimed warm-up) until it costs half of ``each_cpu_s``: a run whose cost is mostly
     a fixed start-up (the parareal path's first window, a driver's set-up) is not scaled linearly
     from a probe that measured only that start-up, so the factor is the instrument's running rate.
     Raises SceneError when the scene checks refuse the configuration."""
     full = load_scene(scene_name, overrides).duration_s
     d = min(full, probe_s)
+    _timed_simulate(scene_name, name, overrides, d)      # warm-up: first imports, compiled kernels' cache
     for _ in range(SIZING_PROBES):
         _, _, cpu, _ = _timed_simulate(scene_name, name, overrides, d)
         if cpu >= 0.5 * each_cpu_s or d >= full:
