@@ -8,16 +8,18 @@ from Quet's comparison pendulum). The module docstring of :mod:`gyro_instrument.
 gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
 """
 
+import functools
 import math
 import time
 from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from gyro_instrument.core import dop853, jit
 from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import POINT_MASS
 from gyro_instrument.core.integrate import Trajectory, integration
-from gyro_instrument.core.parareal import dense_output, hermite_rows
+from gyro_instrument.core.parareal import compiled_hermite_samples, dense_output, hermite_rows
 from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
 from gyro_instrument.instruments.pendulum_theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
                                                          quarter_period_s)
@@ -56,6 +58,103 @@ def _swing_frames(U, w0sq):
         R[:, b, b], R[:, b, b + 1], R[:, b + 1, b], R[:, b + 1, b + 1] = c, -s, s, c
         R[:, b + 2, b + 2] = 1.0
     return R
+
+
+def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
+    """Kernel: ``n`` swings of ``m`` fixed RK8 steps of size ``h`` (s) one after the other from ``y0``
+    = [r, v] (m, m/s, ENU), on the equations of :meth:`SwingDynamics.rhs_exact` with the point-mass
+    terms given as the linear map ``lin`` (3 × 6, acting on [δr, v], :func:`linear_point_mass_map`).
+
+    The same fixed-step formula as :func:`gyro_instrument.core.parareal.rk8_batch` (DOP853's
+    8th-order tableau ``a`` (12 × 12), ``b`` (12,)), taken serially: this is the sequential fine
+    solution that Newton-parareal converges to. Fills ``ys``, ``fs`` (shape (n, m + 1, 6): states
+    and derivatives at every step of every swing, the last point of a swing repeated as the first
+    of the next; swing-major, so that consecutive samples read nearby memory), the layout of
+    :func:`~gyro_instrument.core.parareal.hermite_samples`.
+    ``consts`` = (g (m/s²), a_b = 2 √(g/l) (1/s), b²/2 = g / (2 l) (1/s²), l² (m²), z_rest = −l (m)).
+    Plain Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
+    g, a_b, half_b2, l2, zr = consts[0], consts[1], consts[2], consts[3], consts[4]
+    k = np.empty((12, 6))
+    y = y0.copy()
+    yt = np.empty(6)
+    for i in range(n * m + 1):
+        j, step = i // m, i % m
+        for s in range(12):
+            if s == 0:
+                yt[:] = y
+            else:
+                for c in range(6):
+                    acc = 0.0
+                    for r in range(s):
+                        acc += a[s, r] * k[r, c]
+                    yt[c] = y[c] + acc * h
+            x, yy, z, vx, vy, vz = yt[0], yt[1], yt[2], yt[3], yt[4], yt[5]
+            dz = z - zr
+            fx = lin[0, 0] * x + lin[0, 1] * yy + lin[0, 2] * dz + lin[0, 3] * vx + lin[0, 4] * vy + lin[0, 5] * vz
+            fy = lin[1, 0] * x + lin[1, 1] * yy + lin[1, 2] * dz + lin[1, 3] * vx + lin[1, 4] * vy + lin[1, 5] * vz
+            fz = -g + (lin[2, 0] * x + lin[2, 1] * yy + lin[2, 2] * dz + lin[2, 3] * vx + lin[2, 4] * vy
+                       + lin[2, 5] * vz)
+            r2 = x * x + yy * yy + z * z
+            rv = x * vx + yy * vy + z * vz
+            lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv + half_b2 * (r2 - l2)) / r2
+            k[s, 0], k[s, 1], k[s, 2] = vx, vy, vz
+            k[s, 3], k[s, 4], k[s, 5] = fx - lam * x, fy - lam * yy, fz - lam * z
+            if s == 0:
+                if j < n:
+                    ys[j, step] = y
+                    fs[j, step] = k[0]
+                if step == 0 and j > 0:
+                    ys[j - 1, m] = y
+                    fs[j - 1, m] = k[0]
+                if i == n * m:
+                    return
+        for c in range(6):
+            acc = 0.0
+            for s in range(12):
+                acc += b[s] * k[s, c]
+            y[c] = y[c] + acc * h
+
+
+@functools.cache
+def compiled_swing_grid() -> Callable:
+    """:func:`swing_grid` compiled (:func:`~gyro_instrument.core.jit.compiled`: numba with its cache), or
+    the plain function when compilation is off."""
+    return jit.compiled(swing_grid)
+
+
+def linear_point_mass_map(terms, scale_r, scale_v) -> np.ndarray | None:
+    """The sum of point-mass terms f(δr, v) as a 3 × 6 matrix ``L`` (f = L [δr, v]) when it is linear,
+    else None.
+
+    Columns are the terms at the unit vectors (exact for a linear term: Coriolis −2 Ω × v and the
+    centrifugal gradient −Ω × (Ω × δr) are). The sum is accepted when it vanishes at 0 and matches
+    ``L u`` to 1e-12 of ``|L| |u|`` at two random probes ``u`` on the motion's scales ``scale_r`` (m) and
+    ``scale_v`` (m/s) and 1000 times them (a quadratic term would differ by its own size)."""
+    def total(u):
+        out = np.zeros(3)
+        for term in terms:
+            out += np.array(term(*u), dtype=float)
+        return out
+    lin = np.column_stack([total(np.eye(6)[i]) for i in range(6)])
+    if np.any(total(np.zeros(6)) != 0.0):
+        return None
+    rng = np.random.default_rng(27)
+    for mag in (1.0, 1e3):
+        u = mag * rng.standard_normal(6) * np.array([scale_r] * 3 + [scale_v] * 3)
+        want = lin @ u
+        if not np.all(np.isfinite(want)) or np.max(np.abs(total(u) - want)) > 1e-12 * np.max(np.abs(lin)) * np.sum(np.abs(u)):
+            return None
+    return lin
+
+
+def _fill_samples(grid, rows, segment_s, tau, out) -> None:
+    """Positions and velocities at ``tau`` (s from the window's start) into ``out`` (6, len(tau)):
+    :func:`~gyro_instrument.core.parareal.dense_output` on its table ``rows``, or with ``rows`` None its
+    compiled kernel :func:`~gyro_instrument.core.parareal.hermite_samples` (the same doubles)."""
+    if rows is None:
+        compiled_hermite_samples()(grid[0], grid[1], 3, segment_s, tau, out)
+    else:
+        out[:] = dense_output(grid, segment_s, tau, 3, rows=rows)
 
 
 class SwingDynamics:
@@ -242,6 +341,36 @@ class SwingDynamics:
                                  span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
+    def compiled_swings(self, scale_r, scale_v) -> tuple | None:
+        """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: kernels compiled
+        (:func:`~gyro_instrument.core.jit.enabled`) and the active point-mass terms linear
+        (:func:`linear_point_mass_map` on the motion's scales, m and m/s); else None (Newton-parareal
+        on numpy, :meth:`_parareal_window`)."""
+        if not jit.enabled():
+            return None
+        lin = linear_point_mass_map(self.point_mass_terms(), scale_r, scale_v)
+        if lin is None:
+            return None
+        g, l = self.context.gravity_m_s2, self.p.length_m
+        consts = np.array([g, 2.0 * math.sqrt(g / l), 0.5 * (g / l), l * l, -l])
+        return compiled_swing_grid(), lin, consts
+
+    def _serial_window(self, compiled, y_start, n_seg, period, span):
+        """The fast path compiled: :func:`swing_grid` over ``n_seg`` swings from ``y_start``, the
+        sequential fine solution (what :meth:`_parareal_window` converges to, with no shooting error).
+        Returns (grid, info, end state) as :meth:`_parareal_window`."""
+        from gyro_instrument.core.integrate import report
+        kernel, lin, consts = compiled
+        m = self.p.segment_steps
+        ys, fs = np.empty((n_seg, m + 1, 6)), np.empty((n_seg, m + 1, 6))
+        kernel(np.array(y_start, dtype=float), period / m, m, n_seg, lin, consts, dop853.A, dop853.B, ys, fs)
+        if not (np.all(np.isfinite(ys)) and np.all(np.isfinite(fs))):
+            from gyro_instrument.core.errors import IntegrationError
+            raise IntegrationError("compiled RK8: a swing became non-finite")
+        report(span[1])
+        info = {"iterations": 1, "changes": [], "rhs_columns": n_seg * m * dop853.N_STAGES + 1, "compiled": True}
+        return (ys, fs), info, ys[-1, -1].copy()
+
     def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
         """The fast path (:mod:`gyro_instrument.core.parareal`), window by window of whole swings.
 
@@ -261,6 +390,7 @@ class SwingDynamics:
         per = self.WINDOW_SWINGS
         scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
         w0sq = self.context.gravity_m_s2 / self.p.length_m
+        compiled = self.compiled_swings(scale[0], scale[3])
         window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
         passes = 0
         for t in blocks:
@@ -270,25 +400,31 @@ class SwingDynamics:
             seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
             win = seg // per
             y = np.empty((6, t.size))
-            for w in range(int(win[0]), int(win[-1]) + 1):
+            first = int(win[0])
+            bounds = np.searchsorted(win, np.arange(first, int(win[-1]) + 2))   # the blocks increase: win too
+            for w in range(first, int(win[-1]) + 1):
                 while window < w:            # every window in turn: the state is carried through all
                     window += 1
                     n_seg = min(per, n_total - window * per)
                     span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
                     grid = rows = None               # the previous window's grid is not needed any more
-                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
-                    rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
+                    if compiled is None:
+                        grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
+                        rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
+                    else:
+                        grid, info, y_next = self._serial_window(compiled, y_next, n_seg, period, span)
                     evals += info["rhs_columns"]
                     passes += info["iterations"]
-                sel = win == w
-                if sel.any():
-                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3, rows=rows)
+                a, b = bounds[w - first], bounds[w - first + 1]
+                if b > a:
+                    _fill_samples(grid, rows, period, tau[a:b] - (w * per) * period, y[:, a:b])
             pos, vel = y[:3], y[3:]
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
             c0 = None
+            how = "compiled, serial" if compiled is not None else f"{passes} parareal passes"
             traj = Trajectory(t, y, evals, wall, cpu,
-                              f"parareal RK8 ({self.p.segment_steps} steps/period, {passes} passes in "
+                              f"fast path RK8 ({self.p.segment_steps} steps/period, {how} in "
                               f"{window + 1} window{'s' if window else ''})")
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
                                                    "period_s": period, "segments": n_total})
