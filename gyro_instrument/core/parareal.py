@@ -230,32 +230,39 @@ def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray
     return out
 
 
-def hermite_samples(ys, fs, npos, segment_s, tau, out) -> None:
+def hermite_samples(ys, fs, npos, segment_s, t, t0, offset, out) -> None:
     """Kernel: :func:`dense_output` sample by sample, straight from the grid ``(ys, fs)`` (shape
     (segments, m + 1, d), states and derivatives at every step: the grid of :func:`parareal` with its
     segment axis first, so that consecutive samples read nearby memory) without the table of
     :func:`hermite_rows`: the same operations in the same order (the step's quintic coefficients,
-    then Horner's scheme), so the same doubles. ``tau``: times (s) from the start of segment 0;
-    ``out`` (2 npos, len(tau)) receives positions and velocities. Plain Python on floats and arrays,
-    compiled by :func:`~gyro_instrument.core.jit.compiled` (one pass, no temporaries)."""
+    then Horner's scheme), so the same doubles. Sample times ``t`` (s, increasing), taken from the
+    start of segment 0 as (t − t0) − offset; ``out`` (2 npos, len(t)) receives positions and velocities. Plain Python on floats and arrays,
+    compiled by :func:`~gyro_instrument.core.jit.compiled` (one pass, no temporaries; each step's
+    coefficients computed once for its run of consecutive samples)."""
     m, n_seg = ys.shape[1] - 1, ys.shape[0]
     h = segment_s / m
     hh = h * h
-    for i in range(tau.size):
-        tt = tau[i]
+    coef = np.empty((6, npos))           # the current step's r0, v0, a0 / 2, c3, c4, c5 (hermite_rows)
+    cur = -1
+    for i in range(t.size):
+        tt = (t[i] - t0) - offset
         seg = min(max(int(math.floor(tt / segment_s)), 0), n_seg - 1)
         tl = tt - seg * segment_s
         j = min(max(int(math.floor(tl / h)), 0), m - 1)
         s = tl / h - j
+        if seg * m + j != cur:           # samples in time order: a step's coefficients once for its samples
+            cur = seg * m + j
+            for c in range(npos):
+                r0, r1 = ys[seg, j, c], ys[seg, j + 1, c]
+                v0, v1 = h * ys[seg, j, npos + c], h * ys[seg, j + 1, npos + c]
+                a0, a1 = hh * fs[seg, j, npos + c], hh * fs[seg, j + 1, npos + c]
+                d = r1 - r0
+                coef[0, c], coef[1, c], coef[2, c] = r0, v0, 0.5 * a0
+                coef[3, c] = 10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1
+                coef[4, c] = -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1
+                coef[5, c] = 6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1
         for c in range(npos):
-            r0, r1 = ys[seg, j, c], ys[seg, j + 1, c]
-            v0, v1 = h * ys[seg, j, npos + c], h * ys[seg, j + 1, npos + c]
-            a0, a1 = hh * fs[seg, j, npos + c], hh * fs[seg, j + 1, npos + c]
-            d = r1 - r0
-            ha0 = 0.5 * a0
-            c3 = 10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1
-            c4 = -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1
-            c5 = 6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1
+            r0, v0, ha0, c3, c4, c5 = coef[0, c], coef[1, c], coef[2, c], coef[3, c], coef[4, c], coef[5, c]
             out[c, i] = r0 + s * (v0 + s * (ha0 + s * (c3 + s * (c4 + s * c5))))
             out[npos + c, i] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
 

@@ -8,6 +8,7 @@ from Quet's comparison pendulum). The module docstring of :mod:`gyro_instrument.
 gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
 """
 
+import bisect
 import functools
 import math
 import time
@@ -63,7 +64,7 @@ def _swing_frames(U, w0sq):
 def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
     """Kernel: ``n`` swings of ``m`` fixed RK8 steps of size ``h`` (s) one after the other from ``y0``
     = [r, v] (m, m/s, ENU), on the equations of :meth:`SwingDynamics.rhs_exact` with the point-mass
-    terms given as the linear map ``lin`` (3 × 6, acting on [δr, v], :func:`linear_point_mass_map`).
+    terms given as the affine map ``lin`` (3 × 7: [δr, v, 1], :func:`linear_point_mass_map`).
 
     The same fixed-step formula as :func:`gyro_instrument.core.parareal.rk8_batch` (DOP853's
     8th-order tableau ``a`` (12 × 12), ``b`` (12,)), taken serially: this is the sequential fine
@@ -74,6 +75,10 @@ def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
     ``consts`` = (g (m/s²), a_b = 2 √(g/l) (1/s), b²/2 = g / (2 l) (1/s²), l² (m²), z_rest = −l (m)).
     Plain Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
     g, a_b, half_b2, l2, zr = consts[0], consts[1], consts[2], consts[3], consts[4]
+    # the map's entries as scalars: loads the compiler cannot hoist past the stores to k (aliasing)
+    x0, x1, x2, x3, x4, x5, x6 = lin[0, 0], lin[0, 1], lin[0, 2], lin[0, 3], lin[0, 4], lin[0, 5], lin[0, 6]
+    y0_, y1, y2, y3, y4, y5, y6 = lin[1, 0], lin[1, 1], lin[1, 2], lin[1, 3], lin[1, 4], lin[1, 5], lin[1, 6]
+    z0, z1, z2, z3, z4, z5, z6 = lin[2, 0], lin[2, 1], lin[2, 2], lin[2, 3], lin[2, 4], lin[2, 5], lin[2, 6]
     k = np.empty((12, 6))
     y = y0.copy()
     yt = np.empty(6)
@@ -90,10 +95,9 @@ def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
                     yt[c] = y[c] + acc * h
             x, yy, z, vx, vy, vz = yt[0], yt[1], yt[2], yt[3], yt[4], yt[5]
             dz = z - zr
-            fx = lin[0, 0] * x + lin[0, 1] * yy + lin[0, 2] * dz + lin[0, 3] * vx + lin[0, 4] * vy + lin[0, 5] * vz
-            fy = lin[1, 0] * x + lin[1, 1] * yy + lin[1, 2] * dz + lin[1, 3] * vx + lin[1, 4] * vy + lin[1, 5] * vz
-            fz = -g + (lin[2, 0] * x + lin[2, 1] * yy + lin[2, 2] * dz + lin[2, 3] * vx + lin[2, 4] * vy
-                       + lin[2, 5] * vz)
+            fx = x0 * x + x1 * yy + x2 * dz + x3 * vx + x4 * vy + x5 * vz + x6
+            fy = y0_ * x + y1 * yy + y2 * dz + y3 * vx + y4 * vy + y5 * vz + y6
+            fz = -g + (z0 * x + z1 * yy + z2 * dz + z3 * vx + z4 * vy + z5 * vz + z6)
             r2 = x * x + yy * yy + z * z
             rv = x * vx + yy * vy + z * vz
             lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv + half_b2 * (r2 - l2)) / r2
@@ -123,38 +127,40 @@ def compiled_swing_grid() -> Callable:
 
 
 def linear_point_mass_map(terms, scale_r, scale_v) -> np.ndarray | None:
-    """The sum of point-mass terms f(δr, v) as a 3 × 6 matrix ``L`` (f = L [δr, v]) when it is linear,
-    else None.
+    """The sum of point-mass terms f(δr, v) as a 3 × 7 matrix ``L`` (f = L[:, :6] [δr, v] + L[:, 6], m/s²)
+    when it is affine in the state, else None.
 
-    Columns are the terms at the unit vectors (exact for a linear term: Coriolis −2 Ω × v and the
-    centrifugal gradient −Ω × (Ω × δr) are). The sum is accepted when it vanishes at 0 and matches
-    ``L u`` to 1e-12 of ``|L| |u|`` at two random probes ``u`` on the motion's scales ``scale_r`` (m) and
-    ``scale_v`` (m/s) and 1000 times them (a quadratic term would differ by its own size)."""
+    The constant column is the sum at 0, the others the sum at the unit vectors less it (exact for
+    a linear term: Coriolis −2 Ω × v and the centrifugal gradient −Ω × (Ω × δr) are). The map is
+    accepted when it matches the sum to 1e-12 of its size at two random probes ``u`` on the
+    motion's scales ``scale_r`` (m) and ``scale_v`` (m/s) and at 1000 times them (a quadratic term
+    would differ by its own size there)."""
     def total(u):
         out = np.zeros(3)
         for term in terms:
             out += np.array(term(*u), dtype=float)
         return out
-    lin = np.column_stack([total(np.eye(6)[i]) for i in range(6)])
-    if np.any(total(np.zeros(6)) != 0.0):
-        return None
+    const = total(np.zeros(6))
+    lin = np.column_stack([total(np.eye(6)[i]) - const for i in range(6)] + [const])
     rng = np.random.default_rng(27)
     for mag in (1.0, 1e3):
         u = mag * rng.standard_normal(6) * np.array([scale_r] * 3 + [scale_v] * 3)
-        want = lin @ u
-        if not np.all(np.isfinite(want)) or np.max(np.abs(total(u) - want)) > 1e-12 * np.max(np.abs(lin)) * np.sum(np.abs(u)):
+        want = lin[:, :6] @ u + const
+        size = np.max(np.abs(lin[:, :6])) * np.sum(np.abs(u)) + np.max(np.abs(const))
+        if not np.all(np.isfinite(want)) or np.max(np.abs(total(u) - want)) > 1e-12 * size:
             return None
     return lin
 
 
-def _fill_samples(grid, rows, segment_s, tau, out) -> None:
-    """Positions and velocities at ``tau`` (s from the window's start) into ``out`` (6, len(tau)):
+def _fill_samples(grid, rows, segment_s, t, t0, offset, out) -> None:
+    """Positions and velocities at times ``t`` into ``out`` (6, len(t)), from a window's grid whose first
+    segment starts at ``t0 + offset`` (s; the time taken as (t − t0) − offset):
     :func:`~gyro_instrument.core.parareal.dense_output` on its table ``rows``, or with ``rows`` None its
     compiled kernel :func:`~gyro_instrument.core.parareal.hermite_samples` (the same doubles)."""
     if rows is None:
-        compiled_hermite_samples()(grid[0], grid[1], 3, segment_s, tau, out)
+        compiled_hermite_samples()(grid[0], grid[1], 3, segment_s, t, t0, offset, out)
     else:
-        out[:] = dense_output(grid, segment_s, tau, 3, rows=rows)
+        out[:] = dense_output(grid, segment_s, (t - t0) - offset, 3, rows=rows)
 
 
 class SwingDynamics:
@@ -343,7 +349,7 @@ class SwingDynamics:
 
     def compiled_swings(self, scale_r, scale_v) -> tuple | None:
         """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: kernels compiled
-        (:func:`~gyro_instrument.core.jit.enabled`) and the active point-mass terms linear
+        (:func:`~gyro_instrument.core.jit.enabled`) and the active point-mass terms affine
         (:func:`linear_point_mass_map` on the motion's scales, m and m/s); else None (Newton-parareal
         on numpy, :meth:`_parareal_window`)."""
         if not jit.enabled():
@@ -355,16 +361,19 @@ class SwingDynamics:
         consts = np.array([g, 2.0 * math.sqrt(g / l), 0.5 * (g / l), l * l, -l])
         return compiled_swing_grid(), lin, consts
 
-    def _serial_window(self, compiled, y_start, n_seg, period, span):
+    def _serial_window(self, compiled, y_start, n_seg, period, span, buffers=None):
         """The fast path compiled: :func:`swing_grid` over ``n_seg`` swings from ``y_start``, the
         sequential fine solution (what :meth:`_parareal_window` converges to, with no shooting error).
-        Returns (grid, info, end state) as :meth:`_parareal_window`."""
+        Returns (grid, info, end state) as :meth:`_parareal_window`; the grid is written into
+        ``buffers`` (the previous window's grid, no longer needed) when they hold ``n_seg`` swings."""
         from gyro_instrument.core.integrate import report
         kernel, lin, consts = compiled
         m = self.p.segment_steps
-        ys, fs = np.empty((n_seg, m + 1, 6)), np.empty((n_seg, m + 1, 6))
+        if buffers is None or buffers[0].shape[0] < n_seg:
+            buffers = (np.empty((n_seg, m + 1, 6)), np.empty((n_seg, m + 1, 6)))
+        ys, fs = buffers[0][:n_seg], buffers[1][:n_seg]
         kernel(np.array(y_start, dtype=float), period / m, m, n_seg, lin, consts, dop853.A, dop853.B, ys, fs)
-        if not (np.all(np.isfinite(ys)) and np.all(np.isfinite(fs))):
+        if not np.all(np.isfinite(fs[-1, -1])):          # a non-finite state stays so to the window's end
             from gyro_instrument.core.errors import IntegrationError
             raise IntegrationError("compiled RK8: a swing became non-finite")
         report(span[1])
@@ -396,28 +405,30 @@ class SwingDynamics:
         for t in blocks:
             if c0 is None:
                 c0, w0t = time.process_time(), time.perf_counter()
-            tau = t - t0
-            seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
-            win = seg // per
             y = np.empty((6, t.size))
-            first = int(win[0])
-            bounds = np.searchsorted(win, np.arange(first, int(win[-1]) + 2))   # the blocks increase: win too
-            for w in range(first, int(win[-1]) + 1):
+
+            def win(i):                      # the window of sample i: its swing min(⌊(t − t0) / T⌋, last) // per
+                return min(max(math.floor((t[i] - t0) / period), 0), n_total - 1) // per
+            first, last = win(0), win(t.size - 1)
+            # the blocks increase, so the windows do: each window's samples are a slice (found by bisection)
+            bounds = [bisect.bisect_left(range(t.size), w, key=win) for w in range(first, last + 2)]
+            for w in range(first, last + 1):
                 while window < w:            # every window in turn: the state is carried through all
                     window += 1
                     n_seg = min(per, n_total - window * per)
                     span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
-                    grid = rows = None               # the previous window's grid is not needed any more
+                    rows = None                      # the previous window's grid is not needed any more
                     if compiled is None:
+                        grid = None
                         grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
                         rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
                     else:
-                        grid, info, y_next = self._serial_window(compiled, y_next, n_seg, period, span)
+                        grid, info, y_next = self._serial_window(compiled, y_next, n_seg, period, span, grid)
                     evals += info["rhs_columns"]
                     passes += info["iterations"]
                 a, b = bounds[w - first], bounds[w - first + 1]
                 if b > a:
-                    _fill_samples(grid, rows, period, tau[a:b] - (w * per) * period, y[:, a:b])
+                    _fill_samples(grid, rows, period, t[a:b], t0, (w * per) * period, y[:, a:b])
             pos, vel = y[:3], y[3:]
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
