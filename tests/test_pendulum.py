@@ -290,6 +290,7 @@ def test_parareal_fast_path_is_the_full_model(build, monkeypatch, compiled):
     # ~1e-11) and positions within 1e-9 l everywhere. The dense output (quintic Hermite between RK8
     # grid points) must keep the constraint (23) to 1e-9 l and the energy (24) to 1e-9 g l.
     from gyro_instrument.core import jit
+    monkeypatch.setattr(SphericalPendulum, "COMPILED_MIN_SWINGS", 1)     # compiled from the first swing
     if not compiled:
         monkeypatch.setattr(jit, "enabled", lambda: False)
     effects = FULL + ("centrifugal",)

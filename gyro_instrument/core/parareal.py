@@ -127,6 +127,13 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     n, d = U.shape[0] - 1, U.shape[1]
     U[0] = y0
     h = segment_s / steps
+    if n == 1:                  # one segment from the exact start: its fine pass is the solution
+        Y, ys, fs = rk8_batch(rhs, U[:1].T, h, steps, keep=True)
+        if not np.all(np.isfinite(Y)):
+            raise IntegrationError("parareal: a segment became non-finite")
+        U[1] = Y[:, 0]
+        report(span[1])
+        return U, (ys, fs), {"iterations": 1, "changes": [0.0], "rhs_columns": steps * _S + 1}
     nodes = np.unique(np.r_[np.arange(0, n, max(1, int(jacobian_stride))), n - 1])
     delta = 1e-7 * np.asarray(scale, dtype=float)
     eye = np.eye(d)

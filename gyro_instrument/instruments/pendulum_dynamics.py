@@ -347,12 +347,20 @@ class SwingDynamics:
                                  span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
-    def compiled_swings(self, scale_r, scale_v) -> tuple | None:
-        """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: kernels compiled
-        (:func:`~gyro_instrument.core.jit.enabled`) and the active point-mass terms affine
-        (:func:`linear_point_mass_map` on the motion's scales, m and m/s); else None (Newton-parareal
-        on numpy, :meth:`_parareal_window`)."""
-        if not jit.enabled():
+    #: Fewest swings of a run the fast path integrates compiled (:meth:`compiled_swings`). Loading
+    #: numba and its cached kernels costs a process ~0.7 s CPU once (numba's import 0.4 s, the first
+    #: kernel 0.25 s), while the numpy Newton-parareal costs ~0.2 ms per swing (a sidereal day of the
+    #: 67 m pendulum, 5 247 swings at 20 Hz: 1.05 s against 0.25 s compiled): shorter runs (the
+    #: shipped hour: 220 swings) stay on numpy, so that a command's first message is not delayed by
+    #: numba; runs of more than a window of swings are compiled.
+    COMPILED_MIN_SWINGS = 2048
+
+    def compiled_swings(self, scale_r, scale_v, swings) -> tuple | None:
+        """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: a run of at least
+        :attr:`COMPILED_MIN_SWINGS` ``swings``, kernels compiled (:func:`~gyro_instrument.core.jit.enabled`)
+        and the active point-mass terms affine (:func:`linear_point_mass_map` on the motion's scales,
+        m and m/s); else None (Newton-parareal on numpy, :meth:`_parareal_window`)."""
+        if swings < self.COMPILED_MIN_SWINGS or not jit.enabled():
             return None
         lin = linear_point_mass_map(self.point_mass_terms(), scale_r, scale_v)
         if lin is None:
@@ -399,7 +407,7 @@ class SwingDynamics:
         per = self.WINDOW_SWINGS
         scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
         w0sq = self.context.gravity_m_s2 / self.p.length_m
-        compiled = self.compiled_swings(scale[0], scale[3])
+        compiled = self.compiled_swings(scale[0], scale[3], n_total)
         window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
         passes = 0
         for t in blocks:
@@ -433,7 +441,7 @@ class SwingDynamics:
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
             c0 = None
-            how = "compiled, serial" if compiled is not None else f"{passes} parareal passes"
+            how = "compiled, serial" if compiled is not None else f"{passes} parareal pass{'es' if passes != 1 else ''}"
             traj = Trajectory(t, y, evals, wall, cpu,
                               f"fast path RK8 ({self.p.segment_steps} steps/period, {how} in "
                               f"{window + 1} window{'s' if window else ''})")
