@@ -18,7 +18,14 @@ iterations the first ``k`` segments equal the sequential fine solution exactly, 
 iteration stops when no segment start moves by more than ``tol`` (scaled), so the result is
 the fine solution of the *full* equations to that tolerance — no term is dropped. Dense output
 at any sample times comes from quintic Hermite interpolation of positions between the grid
-points (position, velocity and acceleration known at both ends).
+points (position, velocity and acceleration known at both ends): :func:`dense_output` on numpy,
+or :func:`hermite_samples`, the same doubles sample by sample, compiled.
+
+Compiled (numba, :mod:`gyro_instrument.core.jit`) there is no interpreter to amortise and a
+single core does the sequential fine integration in less CPU than parareal's ≥ 2 passes; the
+pendulum then integrates its swings serially (:func:`gyro_instrument.instruments.pendulum_dynamics.swing_grid`)
+and this module's Newton iteration is the path without numba (``GYRO_INSTRUMENT_JIT=0``) and for
+short runs.
 """
 
 import functools

@@ -3,8 +3,9 @@
 :class:`SwingDynamics` holds what :class:`~gyro_instrument.instruments.pendulum.SphericalPendulum`
 integrates: the Cartesian constrained right-hand side summing the active effects' point-mass terms
 (:meth:`SwingDynamics.rhs_exact`), the small-angle model (:meth:`SwingDynamics.rhs_linear`), the
-streamed adaptive DOP853 runs and the parareal fast path (windows of whole swings, Newton-parareal
-from Quet's comparison pendulum). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
+streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
+swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
+pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
 gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
 """
 
@@ -396,7 +397,10 @@ class SwingDynamics:
         as the guess); the first guess of each swing's start is the window's start turned by the
         apsidal angle per period (sec. 2 §III: the comparison pendulum). Newton-parareal then
         converges the starts on the full equations (:meth:`rhs_exact`, every listed effect), so the
-        result is the full model to ``shooting_tol``, not the comparison solution. The run's
+        result is the full model to ``shooting_tol``, not the comparison solution. A run of at least
+        :attr:`COMPILED_MIN_SWINGS` swings with numba (:meth:`compiled_swings`) integrates the same grid
+        compiled, swing after swing (:meth:`_serial_window`: the sequential fine solution that Newton
+        converges to, without its shooting error), and samples it with the compiled Hermite kernel. The run's
         ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
         from the fine end state of window w's last swing, so the state carried is the integrated one
         and the windows do not depend on how the samples are cut into blocks."""
