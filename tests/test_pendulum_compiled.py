@@ -118,7 +118,7 @@ def test_fast_path_streams_bit_for_bit(monkeypatch, compiled):
     t = np.arange(0.0, 150.0 + 1e-9, 0.05)
     one = p.simulate(t)
     parts = list(p.stream(np.array_split(t, 7), t_end=float(t[-1])))
-    assert ("compiled, serial" if compiled else "parareal pass") + " in 3 windows" in one.trajectory.method
+    assert ("compiled, serial" if compiled else "parareal passes") + " in 3 windows" in one.trajectory.method
     for key in one.columns:
         np.testing.assert_array_equal(np.concatenate([s.columns[key] for s in parts]), one.columns[key])
 
@@ -152,3 +152,17 @@ def test_compiled_reference_integrates_the_same_equations():
     np.testing.assert_array_equal(short[0], short[1])
     assert compiled_rk8_reference() is not rk8_reference
     assert math.isclose(float(np.linalg.norm(end[:3])), 67.0, rel_tol=1e-12)
+
+
+def test_compiled_reference_rows():
+    # The bench rows (quick: one hour, the fast path compiled although shorter than its minimum
+    # run): both end errors against DOP853 at rtol 1e-13 within the work-precision study's 1e-6 rad
+    # target with room (RK8 at 48 steps per swing: ~1e-13 over an hour), CPU measured, ratio formed.
+    from gyro_instrument.bench.compiled_reference import compiled_reference_rows
+    ref, fast = compiled_reference_rows(quick=True, progress=lambda line: None)
+    keys = {"case", "method", "simulated_s", "cpu_s", "cpu_system_s", "cpu_ratio", "goal", "met", "end_error_rad",
+            "numba"}
+    assert set(ref) == keys and set(fast) == keys
+    assert "compiled, serial" in fast["method"] and ref["numba"] == jit.status()
+    assert ref["end_error_rad"] < 1e-11 and fast["end_error_rad"] < 1e-11
+    assert ref["cpu_s"] > 0 and fast["cpu_ratio"] == pytest.approx(fast["cpu_s"] / ref["cpu_s"])
