@@ -280,13 +280,19 @@ def test_compound_pendulum_equivalent_length_eq57(build):
     assert np.polyfit(np.arange(ta.size), ta, 1)[0] / 2 == pytest.approx(Tq, rel=1e-6)
 
 
-def test_parareal_fast_path_is_the_full_model(build):
-    # The fast path (integrator: parareal) integrates every swing at once from Newton-converged
-    # swing starts; it drops no term, so over 2 h of the Pantheon pendulum (440 swings, the full
-    # model with the centrifugal gradient) it must agree with the adaptive DOP853 at rtol 1e-12:
-    # swing azimuth at the end within 1e-9 rad (the adaptive run's own error is ~1e-11) and
-    # positions within 1e-9 l everywhere. The dense output (quintic Hermite between RK8 grid
-    # points) must keep the constraint (23) to 1e-9 l and the energy (24) to 1e-9 g l.
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
+def test_parareal_fast_path_is_the_full_model(build, monkeypatch, compiled):
+    # The fast path (integrator: parareal) integrates every swing: compiled, one after the other
+    # (the sequential fine solution), or on numpy (GYRO_INSTRUMENT_JIT=0) all at once from
+    # Newton-converged swing starts; it drops no term, so over 2 h of the Pantheon pendulum (440
+    # swings, the full model with the centrifugal gradient) it must agree with the adaptive DOP853
+    # at rtol 1e-12: swing azimuth at the end within 1e-9 rad (the adaptive run's own error is
+    # ~1e-11) and positions within 1e-9 l everywhere. The dense output (quintic Hermite between RK8
+    # grid points) must keep the constraint (23) to 1e-9 l and the energy (24) to 1e-9 g l.
+    from gyro_instrument.core import jit
+    monkeypatch.setattr(SphericalPendulum, "COMPILED_MIN_SWINGS", 1)     # compiled from the first swing
+    if not compiled:
+        monkeypatch.setattr(jit, "enabled", lambda: False)
     effects = FULL + ("centrifugal",)
     t = np.arange(0.0, 7200.0 + 1e-9, 0.05)
     fast = build(SphericalPendulum, PARIS, effects, length_m=67.0, initial_deflection_deg=2.0,
@@ -295,9 +301,11 @@ def test_parareal_fast_path_is_the_full_model(build):
                 rtol=1e-12, integrator="adaptive").simulate(t)
     info = fast.extra["parareal"]
     assert fast.extra["segments"] >= 438
-    # Newton: each update is about the square of the previous (quadratic convergence)
-    ch = info["changes"]
-    assert ch[-1] <= 1e-9 and all(b < 10 * a * a + 1e-12 for a, b in zip(ch, ch[1:]))
+    assert ("compiled, serial" in fast.trajectory.method) == compiled
+    if not compiled:
+        # Newton: each update is about the square of the previous (quadratic convergence)
+        ch = info["changes"]
+        assert ch[-1] <= 1e-9 and all(b < 10 * a * a + 1e-12 for a, b in zip(ch, ch[1:]))
     dpos = np.max(np.abs(fast.extra["position_enu"] - ref.extra["position_enu"]))
     assert dpos < 1e-9 * 67.0
     assert abs(fast.columns["swing_azimuth"][-1] - ref.columns["swing_azimuth"][-1]) < 1e-9

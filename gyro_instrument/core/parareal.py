@@ -18,10 +18,19 @@ iterations the first ``k`` segments equal the sequential fine solution exactly, 
 iteration stops when no segment start moves by more than ``tol`` (scaled), so the result is
 the fine solution of the *full* equations to that tolerance — no term is dropped. Dense output
 at any sample times comes from quintic Hermite interpolation of positions between the grid
-points (position, velocity and acceleration known at both ends).
+points (position, velocity and acceleration known at both ends): :func:`dense_output` on numpy,
+or :func:`hermite_samples`, the same doubles sample by sample, compiled.
+
+Compiled (numba, :mod:`gyro_instrument.core.jit`) there is no interpreter to amortise and a
+single core does the sequential fine integration in less CPU than parareal's ≥ 2 passes; the
+pendulum then integrates its swings serially (:func:`gyro_instrument.instruments.pendulum_dynamics.swing_grid`)
+and this module's Newton iteration is the path without numba (``GYRO_INSTRUMENT_JIT=0``) and for
+short runs.
 """
 
+import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -125,6 +134,13 @@ def parareal(rhs, y0, segment_s, predictor, steps, scale, tol=1e-9, jacobian_str
     n, d = U.shape[0] - 1, U.shape[1]
     U[0] = y0
     h = segment_s / steps
+    if n == 1:                  # one segment from the exact start: its fine pass is the solution
+        Y, ys, fs = rk8_batch(rhs, U[:1].T, h, steps, keep=True)
+        if not np.all(np.isfinite(Y)):
+            raise IntegrationError("parareal: a segment became non-finite")
+        U[1] = Y[:, 0]
+        report(span[1])
+        return U, (ys, fs), {"iterations": 1, "changes": [0.0], "rhs_columns": steps * _S + 1}
     nodes = np.unique(np.r_[np.arange(0, n, max(1, int(jacobian_stride))), n - 1])
     delta = 1e-7 * np.asarray(scale, dtype=float)
     eye = np.eye(d)
@@ -214,9 +230,11 @@ def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray
     # slower: numpy's inner loops ran over npos = 3 elements)
     for a in range(0, t.size, chunk):
         tt = t[a:a + chunk]
-        seg = np.clip((tt // segment_s).astype(np.int64), 0, n_seg - 1)
+        # floor of the quotient (not floor division, whose fmod costs the compiled kernel half its time):
+        # a sample an ulp before a grid point may be taken from the next step, a continuous interpolant
+        seg = np.clip(np.floor(tt / segment_s).astype(np.int64), 0, n_seg - 1)
         tau = tt - seg * segment_s
-        j = np.clip((tau // h).astype(np.int64), 0, m - 1)
+        j = np.clip(np.floor(tau / h).astype(np.int64), 0, m - 1)
         s = tau / h - j
         p = rows.take(seg * m + j, axis=1)
         r0, v0, ha0, c3, c4, c5 = (p[i * npos:(i + 1) * npos] for i in range(6))
@@ -224,3 +242,48 @@ def dense_output(grid, segment_s, t, npos, chunk=16384, rows=None) -> np.ndarray
         # a0 = 2 (a0 / 2) exactly (a power of two)
         out[npos:, a:a + chunk] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
     return out
+
+
+def hermite_samples(ys, fs, npos, segment_s, t, t0, offset, out) -> None:
+    """Kernel: :func:`dense_output` sample by sample, straight from the grid ``(ys, fs)`` (shape
+    (segments, m + 1, d), states and derivatives at every step: the grid of :func:`parareal` with its
+    segment axis first, so that consecutive samples read nearby memory) without the table of
+    :func:`hermite_rows`: the same operations in the same order (the step's quintic coefficients,
+    then Horner's scheme), so the same doubles. Sample times ``t`` (s, increasing), taken from the
+    start of segment 0 as (t − t0) − offset; ``out`` (2 npos, len(t)) receives positions and velocities. Plain Python on floats and arrays,
+    compiled by :func:`~gyro_instrument.core.jit.compiled` (one pass, no temporaries; each step's
+    coefficients computed once for its run of consecutive samples)."""
+    m, n_seg = ys.shape[1] - 1, ys.shape[0]
+    h = segment_s / m
+    hh = h * h
+    coef = np.empty((6, npos))           # the current step's r0, v0, a0 / 2, c3, c4, c5 (hermite_rows)
+    cur = -1
+    for i in range(t.size):
+        tt = (t[i] - t0) - offset
+        seg = min(max(int(math.floor(tt / segment_s)), 0), n_seg - 1)
+        tl = tt - seg * segment_s
+        j = min(max(int(math.floor(tl / h)), 0), m - 1)
+        s = tl / h - j
+        if seg * m + j != cur:           # samples in time order: a step's coefficients once for its samples
+            cur = seg * m + j
+            for c in range(npos):
+                r0, r1 = ys[seg, j, c], ys[seg, j + 1, c]
+                v0, v1 = h * ys[seg, j, npos + c], h * ys[seg, j + 1, npos + c]
+                a0, a1 = hh * fs[seg, j, npos + c], hh * fs[seg, j + 1, npos + c]
+                d = r1 - r0
+                coef[0, c], coef[1, c], coef[2, c] = r0, v0, 0.5 * a0
+                coef[3, c] = 10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1
+                coef[4, c] = -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1
+                coef[5, c] = 6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1
+        for c in range(npos):
+            r0, v0, ha0, c3, c4, c5 = coef[0, c], coef[1, c], coef[2, c], coef[3, c], coef[4, c], coef[5, c]
+            out[c, i] = r0 + s * (v0 + s * (ha0 + s * (c3 + s * (c4 + s * c5))))
+            out[npos + c, i] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
+
+
+@functools.cache
+def compiled_hermite_samples() -> Callable:
+    """:func:`hermite_samples` compiled (:func:`~gyro_instrument.core.jit.compiled`), or the plain
+    function when compilation is off."""
+    from gyro_instrument.core import jit
+    return jit.compiled(hermite_samples)

@@ -117,8 +117,10 @@ class SphericalPendulum(SwingDynamics, Instrument):
                   "amplitude is "
                   "above the round-off floor), "
                   "else adaptive ('describe' says which and why); adaptive: DOP853 swing after swing; parareal: "
-                  "every swing period of a window at once (fixed-step RK8 batched over periods, Newton-parareal "
-                  "from Quet's comparison pendulum), the fast path for long runs of the full model"),
+                  "the fast path for long runs of the full model, a fixed-step RK8 over every swing period: "
+                  "compiled (numba) swing after swing for runs of 2048 swings or more, else every swing period "
+                  "of a window at once (batched over periods on numpy, Newton-parareal from Quet's comparison "
+                  "pendulum)"),
         Param("segment_steps", kind="int", default=48, low=8, high=100000,
               doc="parareal: RK8 steps per swing period"),
         Param("shooting_tol", default=1e-9, low=1e-14, high=1e-3,
@@ -186,8 +188,9 @@ class SphericalPendulum(SwingDynamics, Instrument):
             return "adaptive", (f"auto: a release at {self.p.initial_deflection_deg:g} deg is beyond the "
                                 f"{self.PARAREAL_AUTO_MAX_DEG:g} deg where parareal's {self.p.segment_steps}-step grid "
                                 f"is validated to its shooting tolerance")
-        return "parareal", ("auto: the full conservative model released from rest, the fast path (all swings of "
-                            "a window at once; DOP853 with integrator: adaptive)")
+        return "parareal", ("auto: the full conservative model released from rest, the fast path (a fixed-step RK8 "
+                            "over every swing: compiled for runs of 2048 swings or more, else all swings of a window "
+                            "at once on numpy; DOP853 with integrator: adaptive)")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)

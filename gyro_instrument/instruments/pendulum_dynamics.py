@@ -3,21 +3,25 @@
 :class:`SwingDynamics` holds what :class:`~gyro_instrument.instruments.pendulum.SphericalPendulum`
 integrates: the Cartesian constrained right-hand side summing the active effects' point-mass terms
 (:meth:`SwingDynamics.rhs_exact`), the small-angle model (:meth:`SwingDynamics.rhs_linear`), the
-streamed adaptive DOP853 runs and the parareal fast path (windows of whole swings, Newton-parareal
-from Quet's comparison pendulum). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
+streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
+swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
+pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
 gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
 """
 
+import bisect
+import functools
 import math
 import time
 from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from gyro_instrument.core import dop853, jit
 from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import POINT_MASS
 from gyro_instrument.core.integrate import Trajectory, integration
-from gyro_instrument.core.parareal import dense_output, hermite_rows
+from gyro_instrument.core.parareal import compiled_hermite_samples, dense_output, hermite_rows
 from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
 from gyro_instrument.instruments.pendulum_theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
                                                          quarter_period_s)
@@ -56,6 +60,108 @@ def _swing_frames(U, w0sq):
         R[:, b, b], R[:, b, b + 1], R[:, b + 1, b], R[:, b + 1, b + 1] = c, -s, s, c
         R[:, b + 2, b + 2] = 1.0
     return R
+
+
+def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
+    """Kernel: ``n`` swings of ``m`` fixed RK8 steps of size ``h`` (s) one after the other from ``y0``
+    = [r, v] (m, m/s, ENU), on the equations of :meth:`SwingDynamics.rhs_exact` with the point-mass
+    terms given as the affine map ``lin`` (3 × 7: [δr, v, 1], :func:`linear_point_mass_map`).
+
+    The same fixed-step formula as :func:`gyro_instrument.core.parareal.rk8_batch` (DOP853's
+    8th-order tableau ``a`` (12 × 12), ``b`` (12,)), taken serially: this is the sequential fine
+    solution that Newton-parareal converges to. Fills ``ys``, ``fs`` (shape (n, m + 1, 6): states
+    and derivatives at every step of every swing, the last point of a swing repeated as the first
+    of the next; swing-major, so that consecutive samples read nearby memory), the layout of
+    :func:`~gyro_instrument.core.parareal.hermite_samples`.
+    ``consts`` = (g (m/s²), a_b = 2 √(g/l) (1/s), b²/2 = g / (2 l) (1/s²), l² (m²), z_rest = −l (m)).
+    Plain Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
+    g, a_b, half_b2, l2, zr = consts[0], consts[1], consts[2], consts[3], consts[4]
+    # the map's entries as scalars: loads the compiler cannot hoist past the stores to k (aliasing)
+    x0, x1, x2, x3, x4, x5, x6 = lin[0, 0], lin[0, 1], lin[0, 2], lin[0, 3], lin[0, 4], lin[0, 5], lin[0, 6]
+    y0_, y1, y2, y3, y4, y5, y6 = lin[1, 0], lin[1, 1], lin[1, 2], lin[1, 3], lin[1, 4], lin[1, 5], lin[1, 6]
+    z0, z1, z2, z3, z4, z5, z6 = lin[2, 0], lin[2, 1], lin[2, 2], lin[2, 3], lin[2, 4], lin[2, 5], lin[2, 6]
+    k = np.empty((12, 6))
+    y = y0.copy()
+    yt = np.empty(6)
+    for i in range(n * m + 1):
+        j, step = i // m, i % m
+        for s in range(12):
+            if s == 0:
+                yt[:] = y
+            else:
+                for c in range(6):
+                    acc = 0.0
+                    for r in range(s):
+                        acc += a[s, r] * k[r, c]
+                    yt[c] = y[c] + acc * h
+            x, yy, z, vx, vy, vz = yt[0], yt[1], yt[2], yt[3], yt[4], yt[5]
+            dz = z - zr
+            fx = x0 * x + x1 * yy + x2 * dz + x3 * vx + x4 * vy + x5 * vz + x6
+            fy = y0_ * x + y1 * yy + y2 * dz + y3 * vx + y4 * vy + y5 * vz + y6
+            fz = -g + (z0 * x + z1 * yy + z2 * dz + z3 * vx + z4 * vy + z5 * vz + z6)
+            r2 = x * x + yy * yy + z * z
+            rv = x * vx + yy * vy + z * vz
+            lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv + half_b2 * (r2 - l2)) / r2
+            k[s, 0], k[s, 1], k[s, 2] = vx, vy, vz
+            k[s, 3], k[s, 4], k[s, 5] = fx - lam * x, fy - lam * yy, fz - lam * z
+            if s == 0:
+                if j < n:
+                    ys[j, step] = y
+                    fs[j, step] = k[0]
+                if step == 0 and j > 0:
+                    ys[j - 1, m] = y
+                    fs[j - 1, m] = k[0]
+                if i == n * m:
+                    return
+        for c in range(6):
+            acc = 0.0
+            for s in range(12):
+                acc += b[s] * k[s, c]
+            y[c] = y[c] + acc * h
+
+
+@functools.cache
+def compiled_swing_grid() -> Callable:
+    """:func:`swing_grid` compiled (:func:`~gyro_instrument.core.jit.compiled`: numba with its cache), or
+    the plain function when compilation is off."""
+    return jit.compiled(swing_grid)
+
+
+def linear_point_mass_map(terms, scale_r, scale_v) -> np.ndarray | None:
+    """The sum of point-mass terms f(δr, v) as a 3 × 7 matrix ``L`` (f = L[:, :6] [δr, v] + L[:, 6], m/s²)
+    when it is affine in the state, else None.
+
+    The constant column is the sum at 0, the others the sum at the unit vectors less it (exact for
+    a linear term: Coriolis −2 Ω × v and the centrifugal gradient −Ω × (Ω × δr) are). The map is
+    accepted when it matches the sum to 1e-12 of its size at two random probes ``u`` on the
+    motion's scales ``scale_r`` (m) and ``scale_v`` (m/s) and at 1000 times them (a quadratic term
+    would differ by its own size there)."""
+    def total(u):
+        out = np.zeros(3)
+        for term in terms:
+            out += np.array(term(*u), dtype=float)
+        return out
+    const = total(np.zeros(6))
+    lin = np.column_stack([total(np.eye(6)[i]) - const for i in range(6)] + [const])
+    rng = np.random.default_rng(27)
+    for mag in (1.0, 1e3):
+        u = mag * rng.standard_normal(6) * np.array([scale_r] * 3 + [scale_v] * 3)
+        want = lin[:, :6] @ u + const
+        size = np.max(np.abs(lin[:, :6])) * np.sum(np.abs(u)) + np.max(np.abs(const))
+        if not np.all(np.isfinite(want)) or np.max(np.abs(total(u) - want)) > 1e-12 * size:
+            return None
+    return lin
+
+
+def _fill_samples(grid, rows, segment_s, t, t0, offset, out) -> None:
+    """Positions and velocities at times ``t`` into ``out`` (6, len(t)), from a window's grid whose first
+    segment starts at ``t0 + offset`` (s; the time taken as (t − t0) − offset):
+    :func:`~gyro_instrument.core.parareal.dense_output` on its table ``rows``, or with ``rows`` None its
+    compiled kernel :func:`~gyro_instrument.core.parareal.hermite_samples` (the same doubles)."""
+    if rows is None:
+        compiled_hermite_samples()(grid[0], grid[1], 3, segment_s, t, t0, offset, out)
+    else:
+        out[:] = dense_output(grid, segment_s, (t - t0) - offset, 3, rows=rows)
 
 
 class SwingDynamics:
@@ -242,6 +348,47 @@ class SwingDynamics:
                                  span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
+    #: Fewest swings of a run the fast path integrates compiled (:meth:`compiled_swings`). Loading
+    #: numba and its cached kernels costs a process ~0.7 s CPU once (numba's import 0.4 s, the first
+    #: kernel 0.25 s), while the numpy Newton-parareal costs ~0.2 ms per swing (a sidereal day of the
+    #: 67 m pendulum, 5 247 swings at 20 Hz: 1.05 s against 0.25 s compiled): shorter runs (the
+    #: shipped hour: 220 swings) stay on numpy, so that a command's first message is not delayed by
+    #: numba; runs of more than a window of swings are compiled.
+    COMPILED_MIN_SWINGS = 2048
+
+    def compiled_swings(self, scale_r, scale_v, swings) -> tuple | None:
+        """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: a run of at least
+        :attr:`COMPILED_MIN_SWINGS` ``swings``, kernels compiled (:func:`~gyro_instrument.core.jit.enabled`)
+        and the active point-mass terms affine (:func:`linear_point_mass_map` on the motion's scales,
+        m and m/s); else None (Newton-parareal on numpy, :meth:`_parareal_window`)."""
+        if swings < self.COMPILED_MIN_SWINGS or not jit.enabled():
+            return None
+        lin = linear_point_mass_map(self.point_mass_terms(), scale_r, scale_v)
+        if lin is None:
+            return None
+        g, l = self.context.gravity_m_s2, self.p.length_m
+        consts = np.array([g, 2.0 * math.sqrt(g / l), 0.5 * (g / l), l * l, -l])
+        return compiled_swing_grid(), lin, consts
+
+    def _serial_window(self, compiled, y_start, n_seg, period, span, buffers=None):
+        """The fast path compiled: :func:`swing_grid` over ``n_seg`` swings from ``y_start``, the
+        sequential fine solution (what :meth:`_parareal_window` converges to, with no shooting error).
+        Returns (grid, info, end state) as :meth:`_parareal_window`; the grid is written into
+        ``buffers`` (the previous window's grid, no longer needed) when they hold ``n_seg`` swings."""
+        from gyro_instrument.core.integrate import report
+        kernel, lin, consts = compiled
+        m = self.p.segment_steps
+        if buffers is None or buffers[0].shape[0] < n_seg:
+            buffers = (np.empty((n_seg, m + 1, 6)), np.empty((n_seg, m + 1, 6)))
+        ys, fs = buffers[0][:n_seg], buffers[1][:n_seg]
+        kernel(np.array(y_start, dtype=float), period / m, m, n_seg, lin, consts, dop853.A, dop853.B, ys, fs)
+        if not np.all(np.isfinite(fs[-1, -1])):          # a non-finite state stays so to the window's end
+            from gyro_instrument.core.errors import IntegrationError
+            raise IntegrationError("compiled RK8: a swing became non-finite")
+        report(span[1])
+        info = {"iterations": 1, "changes": [], "rhs_columns": n_seg * m * dop853.N_STAGES + 1, "compiled": True}
+        return (ys, fs), info, ys[-1, -1].copy()
+
     def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
         """The fast path (:mod:`gyro_instrument.core.parareal`), window by window of whole swings.
 
@@ -250,7 +397,10 @@ class SwingDynamics:
         as the guess); the first guess of each swing's start is the window's start turned by the
         apsidal angle per period (sec. 2 §III: the comparison pendulum). Newton-parareal then
         converges the starts on the full equations (:meth:`rhs_exact`, every listed effect), so the
-        result is the full model to ``shooting_tol``, not the comparison solution. The run's
+        result is the full model to ``shooting_tol``, not the comparison solution. A run of at least
+        :attr:`COMPILED_MIN_SWINGS` swings with numba (:meth:`compiled_swings`) integrates the same grid
+        compiled, swing after swing (:meth:`_serial_window`: the sequential fine solution that Newton
+        converges to, without its shooting error), and samples it with the compiled Hermite kernel. The run's
         ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
         from the fine end state of window w's last swing, so the state carried is the integrated one
         and the windows do not depend on how the samples are cut into blocks."""
@@ -261,34 +411,43 @@ class SwingDynamics:
         per = self.WINDOW_SWINGS
         scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
         w0sq = self.context.gravity_m_s2 / self.p.length_m
+        compiled = self.compiled_swings(scale[0], scale[3], n_total)
         window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
         passes = 0
         for t in blocks:
             if c0 is None:
                 c0, w0t = time.process_time(), time.perf_counter()
-            tau = t - t0
-            seg = np.clip(np.floor(tau / period), 0, n_total - 1).astype(np.int64)
-            win = seg // per
             y = np.empty((6, t.size))
-            for w in range(int(win[0]), int(win[-1]) + 1):
+
+            def win(i):                      # the window of sample i: its swing min(⌊(t − t0) / T⌋, last) // per
+                return min(max(math.floor((t[i] - t0) / period), 0), n_total - 1) // per
+            first, last = win(0), win(t.size - 1)
+            # the blocks increase, so the windows do: each window's samples are a slice (found by bisection)
+            bounds = [bisect.bisect_left(range(t.size), w, key=win) for w in range(first, last + 2)]
+            for w in range(first, last + 1):
                 while window < w:            # every window in turn: the state is carried through all
                     window += 1
                     n_seg = min(per, n_total - window * per)
                     span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
-                    grid = rows = None               # the previous window's grid is not needed any more
-                    grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
-                    rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
+                    rows = None                      # the previous window's grid is not needed any more
+                    if compiled is None:
+                        grid = None
+                        grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
+                        rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
+                    else:
+                        grid, info, y_next = self._serial_window(compiled, y_next, n_seg, period, span, grid)
                     evals += info["rhs_columns"]
                     passes += info["iterations"]
-                sel = win == w
-                if sel.any():
-                    y[:, sel] = dense_output(grid, period, tau[sel] - (w * per) * period, 3, rows=rows)
+                a, b = bounds[w - first], bounds[w - first + 1]
+                if b > a:
+                    _fill_samples(grid, rows, period, t[a:b], t0, (w * per) * period, y[:, a:b])
             pos, vel = y[:3], y[3:]
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
             c0 = None
+            how = "compiled, serial" if compiled is not None else f"{passes} parareal pass{'es' if passes != 1 else ''}"
             traj = Trajectory(t, y, evals, wall, cpu,
-                              f"parareal RK8 ({self.p.segment_steps} steps/period, {passes} passes in "
+                              f"fast path RK8 ({self.p.segment_steps} steps/period, {how} in "
                               f"{window + 1} window{'s' if window else ''})")
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
                                                    "period_s": period, "segments": n_total})
