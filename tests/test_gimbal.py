@@ -365,9 +365,11 @@ def test_closed_form_is_the_chain(effects):
                 assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, (conf, axis)
 
 
-def test_closed_form_free_gimbal_equals_the_chain_run():
+@pytest.mark.parametrize("integrator", ["closed_form", "compiled"])
+def test_closed_form_free_gimbal_equals_the_chain_run(integrator):
     """The free gimbal with large excursions (the invariants test's release): closed form
-    (Fortran DOP853, sample to sample) against the chain (solve_ivp DOP853), both at rtol 1e-11,
+    (Fortran DOP853, sample to sample; or the compiled kernel through the compiled DOP853 with
+    dense output, ~same step count) against the chain (solve_ivp DOP853), both at rtol 1e-11,
     over 0.5 s. Each has a global error ~1e-11 rad on these O(1) rad excursions (rtol 1e-11 per
     step; ~100 steps for the chain, ~430 for the closed form stopping at the 201 samples, whose
     errors add); bound 1e-9 rad on the angles and 1e-9 relative on the rates (observed 1.8e-11 rad
@@ -376,9 +378,9 @@ def test_closed_form_free_gimbal_equals_the_chain_run():
                   initial_outer_angle_deg=20.0, initial_inner_angle_deg=-30.0,
                   initial_outer_rate_deg_s=300.0, initial_inner_rate_deg_s=200.0)
     t = np.linspace(0.0, 0.5, 201)
-    fast = make(**params).simulate(t)
+    fast = make(**params, integrator=integrator).simulate(t)
     ref = make(**params, integrator="hinge_chain").simulate(t)
-    assert fast.trajectory.meta["integrator"] == "closed_form"
+    assert fast.trajectory.meta["integrator"] == integrator
     assert ref.trajectory.meta["integrator"] == "hinge_chain"
     for k in ("outer_angle", "inner_angle", "rotor_angle"):
         assert np.max(np.abs(fast.columns[k] - ref.columns[k])) < 1e-9, k
@@ -455,8 +457,9 @@ def test_hinge_terms_linear_or_called():
             assert np.max(np.abs(np.array(f(0.0, *q, *v)) - ref)) < bound, sorted(extra)
 
 
+@pytest.mark.parametrize("integrator", ["closed_form", "compiled"])
 @pytest.mark.parametrize("configuration", ["locked", "outer_fixed", "free"])
-def test_stream_equals_simulate_bit_for_bit(configuration):
+def test_stream_equals_simulate_bit_for_bit(configuration, integrator):
     """Streaming (issue 13 item 1): the closed form's runs never let the blocks steer the steps (the
     free gimbal's reaches each sample by one Fortran DOP853 call from the previous sample; the
     locked and outer-fixed swings' steps with no end and keeps a step's dense output across
@@ -464,15 +467,17 @@ def test_stream_equals_simulate_bit_for_bit(configuration):
     round-off), and each block comes with
     the run's cumulative RHS count. (The counts themselves are not compared with the one-shot run:
     scipy's DOP853 spent 36 fewer evaluations on the second sample of the first run in a process,
-    with identical states.)"""
+    with identical states.) The compiled driver steps with no end and keeps its last step, as the
+    dense-output run does, for every configuration."""
     from gyro_instrument.core.scene import sample_blocks, sample_times
     from gyro_instrument.scenes import build_instruments, load_scene
     over = ["instruments.gimbal_locked.configuration=free"] if configuration == "free" else []
+    over += [f"instruments.{name}.integrator={integrator}" for name in ("gimbal_locked", "gimbal_outer_fixed")]
     duration = 1.5 if configuration == "free" else 30.0      # ~3 nutations per sample / ~2 swings
     scene = load_scene("gimbal_paris", [f"duration_s={duration}", "sample_rate_hz=50"] + over)
     g = build_instruments(scene)["gimbal_outer_fixed" if configuration == "outer_fixed" else "gimbal_locked"]
     assert g.p.configuration == configuration
-    assert g.STREAMS and g.integrator_choice()[0] == "closed_form"
+    assert g.STREAMS and g.integrator_choice()[0] == integrator
     one = g.simulate(sample_times(scene))
     for window_s in (0.07, 1.0):
         parts = list(g.stream(sample_blocks(scene, window_s)))
