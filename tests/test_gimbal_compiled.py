@@ -16,7 +16,7 @@ from gyro_instrument.core import jit
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments.gimbal import scaled_condition
-from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, compiled_kernels, free_kernel,
+from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, compiled_kernel, free_kernel,
                                                          held_kernel)
 from gyro_instrument.scenes import build_instruments, load_scene
 from tests.test_gimbal import EXACT, N, make
@@ -41,7 +41,7 @@ def test_kernels_are_the_chain_and_compiled_is_plain(effects):
                 g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
             chain = g.build_chain()
             name, p = g.kernel_params(chain)
-            kernel = compiled_kernels()[name]
+            kernel = compiled_kernel(name)
             assert kernel is not PLAIN[name]
             inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
             for _ in range(30):
@@ -127,7 +127,9 @@ def test_long_free_run_keeps_quets_integrals(axis):
 
 
 def test_auto_picks_compiled_and_falls_back():
-    """``auto`` runs the compiled kernels and ``describe`` says so (numba and its cache); a hinge
+    """``auto`` runs the compiled kernels for free rings and ``describe`` says so (numba and its
+    cache); the slow locked and outer-fixed swings keep the closed form, whose dense output already
+    runs thousands of times faster than real time, and never import numba (a subprocess); a hinge
     torque not linear in its rate does not fit them: auto falls back to the Python closed form,
     an explicit ``compiled`` is refused by name; with numba off (GYRO_INSTRUMENT_JIT=0) auto
     keeps the closed form (tested in a subprocess: the switch is read once per process)."""
@@ -161,11 +163,20 @@ def test_auto_picks_compiled_and_falls_back():
         GimbalGyroscope("g", SITE, p, effects)
     assert err.value.field == "g.integrator"
     code = ("from gyro_instrument.scenes import build_instruments, load_scene; "
-            "g = build_instruments(load_scene('gimbal_paris'))['gimbal_locked']; print(*g.integrator_choice(), sep='|')")
+            "g = build_instruments(load_scene('gimbal_paris', ['instruments.gimbal_locked.configuration=free']))"
+            "['gimbal_locked']; print(*g.integrator_choice(), sep='|')")
     env = dict(os.environ, GYRO_INSTRUMENT_JIT="0")
     res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True,
                          cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     assert res.stdout.startswith("closed_form|") and "GYRO_INSTRUMENT_JIT=0" in res.stdout
+    code = ("import sys; from gyro_instrument.core.scene import sample_times; "
+            "from gyro_instrument.scenes import build_instruments, load_scene; "
+            "scene = load_scene('gimbal_paris', ['duration_s=20']); "
+            "sims = [g.simulate(sample_times(scene)) for g in build_instruments(scene).values()]; "
+            "print(*[s.trajectory.meta['integrator'] for s in sims]); sys.exit('numba' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    assert res.stdout.split() == ["closed_form", "closed_form"]
 
 
 def test_spin_scale_free_gimbal_costs_a_few_evaluations_per_nutation():

@@ -27,6 +27,7 @@ identical up to round-off, and ~1000× slower.
 import functools
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -209,7 +210,12 @@ def _start(f, p, st, W, K, rtol, atol):
 def _advance(f, p, st, W, K, F, ts, out, rtol, atol):
     """States at the sample times ``ts`` (non-decreasing, from the previous call's last sample on)
     into ``out`` (n, len(ts)), stepping with no end from the state (st, W, K, F) and reading each
-    sample from the dense output of the step that covers it; a status code."""
+    sample from the dense output of the step that covers it (the first call starts the run:
+    :func:`_start`); a status code."""
+    if st[_NFEV] == 0.0:
+        status = _start(f, p, st, W, K, rtol, atol)
+        if status != OK:
+            return status
     i = 0
     m = ts.size
     while i < m:
@@ -260,9 +266,9 @@ def rhs_signature():
 
 @functools.cache
 def _namespace(compiled: bool) -> dict:
-    """The driver's functions bound to one namespace: compiled (callees first, :func:`_start` and
-    :func:`_advance` with the kernel's first-class function type, so one cached machine code serves
-    every kernel) when ``compiled`` and :func:`jit.enabled`, else the plain Python functions."""
+    """The driver's functions bound to one namespace: compiled (callees first, :func:`_advance` with
+    the kernel's first-class function type, so one cached machine code serves every kernel; one
+    cache entry to load, ~0.2 s) when ``compiled`` and :func:`jit.enabled`, else the plain Python functions."""
     import types as pytypes  # noqa: PLC0415
     ns = dict(globals())
     compiled = compiled and jit.enabled()
@@ -270,7 +276,6 @@ def _namespace(compiled: bool) -> dict:
     if compiled:
         from numba import types  # noqa: PLC0415 - lazy (numba's import cost)
         fty, vec, mat = types.FunctionType(rhs_signature()), types.float64[::1], types.float64[:, ::1]
-        signatures["_start"] = types.int64(fty, vec, vec, mat, mat, types.float64, types.float64)
         signatures["_advance"] = types.int64(fty, vec, vec, mat, mat, mat, vec, mat, types.float64, types.float64)
     for name in _FUNCTIONS:
         fn = globals()[name]
@@ -283,12 +288,11 @@ def _namespace(compiled: bool) -> dict:
     return ns
 
 
-def driver(compiled: bool = True) -> tuple:
-    """(start, advance): :func:`_start` and :func:`_advance`, compiled when ``compiled`` and numba
-    is enabled (:mod:`gyro_instrument.core.jit`; the first call on a machine compiles, ~10 s, later
-    processes load numba's cache), else plain Python (the reference the tests hold it to)."""
-    ns = _namespace(compiled)
-    return ns["_start"], ns["_advance"]
+def driver(compiled: bool = True) -> "Callable":
+    """:func:`_advance`, compiled when ``compiled`` and numba is enabled (:mod:`gyro_instrument.core.jit`;
+    the first call on a machine compiles, ~15 s, later processes load numba's cache), else plain
+    Python (the reference the tests hold it to)."""
+    return _namespace(compiled)["_advance"]
 
 
 class CompiledRun:
@@ -323,7 +327,7 @@ class CompiledRun:
     def __init__(self, kernel, params, y0, t0, rtol, atol, compiled=True) -> None:
         w0, c0 = time.perf_counter(), time.process_time()
         self.kernel, self.compiled = kernel, bool(compiled and jit.enabled())
-        self._start, self._advance = driver(self.compiled)
+        self._advance = driver(self.compiled)
         n = len(y0)
         self.p = np.ascontiguousarray(params, dtype=float)
         self.st = np.zeros(9)
@@ -331,10 +335,9 @@ class CompiledRun:
         self.W, self.K, self.F = np.zeros((6, n)), np.zeros((_NS + 4, n)), np.zeros((8, n))
         self.W[0] = np.asarray(y0, dtype=float)
         self.rtol, self.atol = max(float(rtol), 100 * np.finfo(float).eps), float(atol)
-        status = self._start(kernel, self.p, self.st, self.W, self.K, self.rtol, self.atol)
-        if status != OK:
-            raise IntegrationError(f"DOP853 (compiled) cannot start at t = {t0:.6g} s: the initial state or "
-                                   f"its derivative is not finite")
+        if not np.all(np.isfinite(self.W[0])):
+            raise IntegrationError(f"DOP853 (compiled) cannot start at t = {t0:.6g} s: the initial state "
+                                   f"{self.W[0].tolist()} is not finite")
         self.wall_time_s = time.perf_counter() - w0
         self.cpu_time_s = time.process_time() - c0
         self.meta = {"rtol": self.rtol, "atol": self.atol,
@@ -342,7 +345,7 @@ class CompiledRun:
 
     @property
     def nfev(self) -> int:
-        """Right-hand-side evaluations so far."""
+        """Right-hand-side evaluations so far (2 at the start: f(t0, y0) and the initial-step probe)."""
         return int(self.st[_NFEV])
 
     @property

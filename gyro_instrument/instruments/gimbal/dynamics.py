@@ -349,17 +349,19 @@ def held_kernel(t, y, p, dy):
         dy[2], dy[3] = f1 / a_inner, f2 / C
 
 
+#: The kernels by the name :func:`kernel_params` gives.
+KERNELS = {"free": free_kernel, "held": held_kernel}
+
+
 @functools.cache
-def compiled_kernels() -> dict:
-    """{"free": ..., "held": ...}: :func:`free_kernel` and :func:`held_kernel` compiled with
-    :func:`~gyro_instrument.core.dop853_jit.rhs_signature` (numba's cache; the plain functions when
-    :func:`gyro_instrument.core.jit.enabled` is False)."""
+def compiled_kernel(name) -> Callable:
+    """:data:`KERNELS` [``name``] compiled with :func:`~gyro_instrument.core.dop853_jit.rhs_signature`
+    (numba's cache: ~0.05 s to load), or the plain function when :func:`gyro_instrument.core.jit.enabled`
+    is False."""
     from gyro_instrument.core import dop853_jit, jit
     if not jit.enabled():
-        return {"free": free_kernel, "held": held_kernel}
-    sig = dop853_jit.rhs_signature()
-    return {name: jit.compiled(fn, signature_or_function=sig)
-            for name, fn in (("free", free_kernel), ("held", held_kernel))}
+        return KERNELS[name]
+    return jit.compiled(KERNELS[name], signature_or_function=dop853_jit.rhs_signature())
 
 
 def kernel_params(configuration, inertias, omega_base, coefficients, effects, held_angle, swing_inertias,

@@ -16,7 +16,7 @@ from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.instruments.base import Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link
 from gyro_instrument.core.dop853_jit import CompiledRun
-from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs, compiled_kernels,
+from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs, compiled_kernel,
                                                          kernel_params)
 from gyro_instrument.instruments.gimbal.theory import axial_momentum, quet_energy, spin_invariant, swing_inertias_kg_m2
 
@@ -84,7 +84,7 @@ class GimbalRuns:
         (DOP853 with dense output, steps never steered by the samples)."""
         name, params = self.kernel_params(chain)
         y0 = [float(v) for v in self.initial_state(chain)]
-        return CompiledRun(compiled_kernels()[name], params, y0, t0, self.p.rtol, ATOL)
+        return CompiledRun(compiled_kernel(name), params, y0, t0, self.p.rtol, ATOL)
 
     def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
         """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
