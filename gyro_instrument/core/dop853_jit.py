@@ -255,7 +255,7 @@ _FUNCTIONS = ("_rms_scaled", "_initial_step", "_stage_state", "_attempt", "_erro
               "_dense_coefficients", "_dense_value", "_start", "_advance")
 
 
-def rhs_signature():
+def rhs_signature() -> "numba.core.typing.templates.Signature":
     """numba's signature of a right-hand-side kernel, ``void(float64, float64[::1] y, float64[::1] p,
     float64[::1] dy)``: compile a kernel with ``jit.compiled(f, signature_or_function=rhs_signature())``
     so that :func:`driver` takes it. Imports numba (call only when :func:`jit.enabled`)."""

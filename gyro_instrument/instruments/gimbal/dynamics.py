@@ -1,4 +1,4 @@
-"""The gimbal's equations of motion in closed form, on Python floats (the fast right-hand side).
+"""The gimbal's equations of motion in closed form, on Python floats and as numba kernels (the fast right-hand side).
 
 The generic :class:`~gyro_instrument.instruments.chain.HingeChain` spends ~380 µs per evaluation
 on numpy calls on 3-vectors (three links, partial velocities, a 3×3 ``numpy.linalg.solve``); the
@@ -24,11 +24,21 @@ falls back to the chain. Hinge torques are the effects' own ``damping_torque`` /
 called with floats. ``tests/test_gimbal.py`` holds this function to the chain's right-hand side at
 random states to round-off, for every configuration and effect list.
 
-Two resumable drivers run it (``gyro-instrument bench``: ``gimbal_work_precision.csv``):
+The same equations as numba kernels (:func:`free_kernel`, :func:`held_kernel`: floats and a
+parameter array from :func:`kernel_params`, hinge torques linear in the rates — the forms
+:func:`linear_hinge_coefficient` measures; an effect of another form keeps the Python closed
+form) run through the compiled DOP853 of :mod:`gyro_instrument.core.dop853_jit`
+(``integrator: compiled``; ``auto`` for the free rings): ~90 ns per evaluation instead of ~1.5 µs
+of Python callback, 200-500x real time for the free rings where the Fortran driver below reaches
+11-21x (``gyro-instrument bench``: ``bench.spin_gimbal``). ``tests/test_gimbal_compiled.py``
+holds the kernels to the chain and the compiled to the plain function bit for bit.
+
+Two resumable drivers run the Python closed form (``gimbal_work_precision.csv``):
 :class:`ClosedFormRun`, Hairer's Fortran DOP853 from sample to sample, for the free rings (tens of
 steps per sample: the stage arithmetic in Fortran halves the CPU of the Python-float driver of
 :mod:`gyro_instrument.core.dop853`), and :class:`DenseRun`, scipy's DOP853 with dense output, for
-the slow locked and outer-fixed swings (a step covers many samples).
+the slow locked and outer-fixed swings (a step covers many samples; ``auto``'s choice there: no
+numba to load).
 """
 
 import functools
@@ -295,7 +305,7 @@ def closed_form_rhs(configuration, inertias, omega_base, coefficients, effects, 
 
 
 # ---------------------------------------------------------------- compiled kernels (numba)
-def free_kernel(t, y, p, dy):
+def free_kernel(t, y, p, dy) -> None:
     """The free rings' right-hand side as a numba kernel (:mod:`gyro_instrument.core.dop853_jit`'s
     ``f(t, y, p, dy)``): the arithmetic of :func:`_free_rhs` with the hinge torques linear in the
     rates (``p``: :func:`kernel_params`; y = ψ, θ, φ, ψ̇, θ̇, φ̇ in rad, rad/s)."""
@@ -319,7 +329,7 @@ def free_kernel(t, y, p, dy):
     dy[3], dy[4], dy[5] = psi_dd, g1 * inv_inner, f2 * inv_C - c * psi_dd
 
 
-def held_kernel(t, y, p, dy):
+def held_kernel(t, y, p, dy) -> None:
     """The locked (p[0] = 1: y = ψ, φ, ψ̇, φ̇) or outer-fixed (p[0] = 2: y = θ, φ, θ̇, φ̇) gimbal's
     right-hand side as a numba kernel: :func:`closed_form_rhs`'s ``forces`` with the hinge torques
     linear in the rates (``p``: :func:`kernel_params`; p[1] the held angle, rad)."""

@@ -4,7 +4,9 @@
 (which supplies the parameters, the inertias as simulated, the configuration's initial angles and
 the choice of integrator): it builds the generic :class:`~gyro_instrument.instruments.chain.HingeChain`
 (outer ring about PP', inner ring about NN', rotor about oQ; Quet 1853 sec. 4 §III), runs the closed
-form (:mod:`.dynamics`) or the chain, and turns states into columns and invariants (:mod:`.theory`).
+form (:mod:`.dynamics`: compiled kernels through :mod:`gyro_instrument.core.dop853_jit`, or Python
+floats through scipy's DOP853 drivers) or the chain, and turns states into columns and invariants
+(:mod:`.theory`).
 """
 
 import math
@@ -134,8 +136,8 @@ class GimbalRuns:
     def stream(self, blocks, **options) -> Iterator[Simulation]:
         """:meth:`simulate` block by block (see :meth:`Instrument.stream`).
 
-        With the closed form, one run (:meth:`closed_form_run`) advances over the blocks, its steps
-        never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
+        With the closed form, one run (:meth:`compiled_run` or :meth:`closed_form_run`) advances over
+        the blocks, its steps never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
         concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
         ``hinge_chain`` (the reference) integrates the whole run at once and slices it.
         """
