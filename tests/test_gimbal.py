@@ -21,6 +21,7 @@ from gyro_instrument.core.params import validate_params
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments.gimbal import GimbalGyroscope, scaled_condition
+from gyro_instrument.instruments.gimbal.dynamics import KERNELS, compiled_kernel
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
 SITE = Site.from_degrees(48.85)
@@ -329,6 +330,23 @@ def test_parameter_errors(raw, field, text):
 
 
 # ------------------------------------------------------------------ the closed form (issue 13 item 5)
+def random_states(g, chain, rng, count=30):
+    """``count`` random states y (angles in ±3 rad, rates in ±5 rad/s, the rotor's ×100), each with
+    the chain's right-hand side there and the bound 1000 eps κ max(S, |q̈|) of
+    :func:`test_closed_form_is_the_chain` (S = v (v + n) ΣI / min(A, C), κ the scaled condition
+    number of M)."""
+    inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
+    for _ in range(count):
+        q = rng.uniform(-3.0, 3.0, chain.nf)
+        v = rng.uniform(-5.0, 5.0, chain.nf)
+        v[-1] *= 100.0                         # the rotor spins fast
+        y = np.concatenate([q, v])
+        ref = chain.rhs(0.0, y)
+        scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
+                    np.max(np.abs(ref[chain.nf:])))
+        yield y, ref, 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
+
+
 @pytest.mark.parametrize("effects", [EXACT, ("earth_rotation", "ring_inertia", "pivot_damping", "spin_decay"),
                                      ("centrifugal",), ()], ids=lambda e: "+".join(e) or "none")
 def test_closed_form_is_the_chain(effects):
@@ -341,6 +359,10 @@ def test_closed_form_is_the_chain(effects):
     solve M q̈ = f, whose forward error is ~κ eps (κ ≲ 10 with ring inertia, up to ~1e5 for massless
     rings near the lock, where q̈ grows as 1/sin²θ); observed 0.74 eps κ max(S, |q̈|) at worst
     (5e-13 of the scale without κ). A wrong sign or a missing term is O(1e-3..1) of S.
+
+    The numba kernels of ``integrator: compiled`` (:func:`~.dynamics.free_kernel`,
+    :func:`~.dynamics.held_kernel`) are held to the same bound, and compiled to the plain Python
+    function bit for bit (the same operations in the same order, no fastmath).
     """
     rng = np.random.default_rng(13)
     for conf in ("free", "locked", "outer_fixed"):
@@ -351,18 +373,16 @@ def test_closed_form_is_the_chain(effects):
                 g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
             chain = g.build_chain()
             f, _ = g.closed_form(chain)
-            inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
-            for _ in range(30):
-                q = rng.uniform(-3.0, 3.0, chain.nf)
-                v = rng.uniform(-5.0, 5.0, chain.nf)
-                v[-1] *= 100.0                         # the rotor spins fast
-                y = np.concatenate([q, v])
-                ref = chain.rhs(0.0, y)
-                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
-                            np.max(np.abs(ref[chain.nf:])))
-                kappa = scaled_condition(g.mass_matrix(chain, q))
-                bound = 1000 * np.finfo(float).eps * kappa * scale
+            name, p = g.kernel_params(chain)
+            kernel = compiled_kernel(name)
+            assert kernel is not KERNELS[name]
+            for y, ref, bound in random_states(g, chain, rng):
                 assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, (conf, axis)
+                got, plain = np.empty_like(y), np.empty_like(y)
+                kernel(0.0, y, p, got)
+                KERNELS[name](0.0, y, p, plain)
+                np.testing.assert_array_equal(got, plain)
+                assert np.max(np.abs(got - ref)) < bound, (conf, axis)
 
 
 @pytest.mark.parametrize("integrator", ["closed_form", "compiled"])
@@ -446,15 +466,8 @@ def test_hinge_terms_linear_or_called():
         g = GimbalGyroscope("g", SITE, p, effects)
         chain = g.build_chain()
         f, _ = g.closed_form(chain)
-        inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
-        for _ in range(20):
-            q, v = rng.uniform(-3.0, 3.0, chain.nf), rng.uniform(-5.0, 5.0, chain.nf)
-            v[-1] *= 100.0
-            ref = chain.rhs(0.0, np.concatenate([q, v]))
-            scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
-                        np.max(np.abs(ref[chain.nf:])))
-            bound = 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
-            assert np.max(np.abs(np.array(f(0.0, *q, *v)) - ref)) < bound, sorted(extra)
+        for y, ref, bound in random_states(g, chain, rng, count=20):
+            assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, sorted(extra)
 
 
 @pytest.mark.parametrize("integrator", ["closed_form", "compiled"])

@@ -1,7 +1,7 @@
 """The gimbal's compiled kernels and driver (issue 27 item 1): ``integrator: compiled``.
 
-* the kernels (:func:`~gyro_instrument.instruments.gimbal.dynamics.free_kernel`, ``held_kernel``)
-  equal the generic chain's right-hand side (the closed form's test bound), compiled equal to plain;
+* the kernels equal the chain's right-hand side, compiled equal to plain: in
+  ``test_gimbal.test_closed_form_is_the_chain``;
 * the compiled DOP853 run agrees with the Fortran / scipy drivers of the closed form and with a
   tight reference (Hairer's DOP853 at rtol 1e-13, atol 1e-16) over ``gimbal_paris``'s runs;
 * Quet's integrals hold over a long free run; ``auto`` picks it and says why.
@@ -12,52 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from gyro_instrument.core import jit
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.effects import REGISTRY as EFFECTS
-from gyro_instrument.instruments.gimbal import scaled_condition
-from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, compiled_kernel, free_kernel,
-                                                         held_kernel)
+from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun
 from gyro_instrument.scenes import build_instruments, load_scene
-from tests.test_gimbal import EXACT, N, make
-
-PLAIN = {"free": free_kernel, "held": held_kernel}
-
-
-@pytest.mark.parametrize("effects", [EXACT, ("earth_rotation", "ring_inertia", "pivot_damping", "spin_decay"),
-                                     ("centrifugal",), ()], ids=lambda e: "+".join(e) or "none")
-def test_kernels_are_the_chain_and_compiled_is_plain(effects):
-    """At random states, every configuration, three PP' directions: the compiled kernel equals the
-    chain's right-hand side within the bound of ``test_gimbal.test_closed_form_is_the_chain``
-    (1000 eps κ S; a wrong sign or a missing term is O(1e-3..1) of S), and the compiled kernel
-    equals the plain Python function to the last bit (same operations, same order, no fastmath)."""
-    assert jit.enabled(), jit.status()
-    rng = np.random.default_rng(27)
-    for conf in ("free", "locked", "outer_fixed"):
-        for axis in ("vertical", "north_south", "polar"):
-            g = make(effects, configuration=conf, outer_axis=axis, inner_ring_axial_inertia_kg_m2=3.0e-4,
-                     integrator="compiled")
-            if "pivot_damping" in effects:
-                g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
-            chain = g.build_chain()
-            name, p = g.kernel_params(chain)
-            kernel = compiled_kernel(name)
-            assert kernel is not PLAIN[name]
-            inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
-            for _ in range(30):
-                q, v = rng.uniform(-3.0, 3.0, chain.nf), rng.uniform(-5.0, 5.0, chain.nf)
-                v[-1] *= 100.0
-                y = np.concatenate([q, v])
-                got, plain = np.empty_like(y), np.empty_like(y)
-                kernel(0.0, y, p, got)
-                PLAIN[name](0.0, y, p, plain)
-                np.testing.assert_array_equal(got, plain)
-                ref = chain.rhs(0.0, y)
-                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
-                            np.max(np.abs(ref[chain.nf:])))
-                bound = 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
-                assert np.max(np.abs(got - ref)) < bound, (conf, axis)
-
 
 CASES = {  # label: (instrument, overrides, duration s)
     "free": ("gimbal_locked", ["instruments.gimbal_locked.configuration=free"], 5.0),
