@@ -525,7 +525,7 @@ class GimbalGyroscope(GimbalRuns, Instrument):
             return "closed_form", f"auto: the compiled kernels would run uncompiled ({jit.status()})"
         return "compiled", (f"auto: the free rings' nutation needs ~1700 DOP853 steps per simulated second and the "
                             f"effects' terms fit the compiled kernels ({jit.status()}; the first run on a machine "
-                            f"compiles for ~15 s, later processes load numba and the cache in ~0.6 s): ~30x less "
+                            f"compiles for ~15 s, later processes load numba and the cache in ~0.6 s): 15-30x less "
                             f"CPU than the closed form on Python floats at the same rtol")
 
     def chosen_integrator(self, duration_s=None) -> tuple:
