@@ -21,6 +21,7 @@ from gyro_instrument.core.params import validate_params
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments.gimbal import GimbalGyroscope, scaled_condition
+from gyro_instrument.instruments.gimbal.dynamics import KERNELS, compiled_kernel
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
 SITE = Site.from_degrees(48.85)
@@ -329,6 +330,23 @@ def test_parameter_errors(raw, field, text):
 
 
 # ------------------------------------------------------------------ the closed form (issue 13 item 5)
+def random_states(g, chain, rng, count=30):
+    """``count`` random states y (angles in ±3 rad, rates in ±5 rad/s, the rotor's ×100), each with
+    the chain's right-hand side there and the bound 1000 eps κ max(S, |q̈|) of
+    :func:`test_closed_form_is_the_chain` (S = v (v + n) ΣI / min(A, C), κ the scaled condition
+    number of M)."""
+    inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
+    for _ in range(count):
+        q = rng.uniform(-3.0, 3.0, chain.nf)
+        v = rng.uniform(-5.0, 5.0, chain.nf)
+        v[-1] *= 100.0                         # the rotor spins fast
+        y = np.concatenate([q, v])
+        ref = chain.rhs(0.0, y)
+        scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
+                    np.max(np.abs(ref[chain.nf:])))
+        yield y, ref, 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
+
+
 @pytest.mark.parametrize("effects", [EXACT, ("earth_rotation", "ring_inertia", "pivot_damping", "spin_decay"),
                                      ("centrifugal",), ()], ids=lambda e: "+".join(e) or "none")
 def test_closed_form_is_the_chain(effects):
@@ -341,6 +359,10 @@ def test_closed_form_is_the_chain(effects):
     solve M q̈ = f, whose forward error is ~κ eps (κ ≲ 10 with ring inertia, up to ~1e5 for massless
     rings near the lock, where q̈ grows as 1/sin²θ); observed 0.74 eps κ max(S, |q̈|) at worst
     (5e-13 of the scale without κ). A wrong sign or a missing term is O(1e-3..1) of S.
+
+    The numba kernels of ``integrator: compiled`` (:func:`~.dynamics.free_kernel`,
+    :func:`~.dynamics.held_kernel`) are held to the same bound, and compiled to the plain Python
+    function bit for bit (the same operations in the same order, no fastmath).
     """
     rng = np.random.default_rng(13)
     for conf in ("free", "locked", "outer_fixed"):
@@ -351,23 +373,23 @@ def test_closed_form_is_the_chain(effects):
                 g.effects["pivot_damping"] = EFFECTS["pivot_damping"](time_constant_s=100.0)
             chain = g.build_chain()
             f, _ = g.closed_form(chain)
-            inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
-            for _ in range(30):
-                q = rng.uniform(-3.0, 3.0, chain.nf)
-                v = rng.uniform(-5.0, 5.0, chain.nf)
-                v[-1] *= 100.0                         # the rotor spins fast
-                y = np.concatenate([q, v])
-                ref = chain.rhs(0.0, y)
-                scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
-                            np.max(np.abs(ref[chain.nf:])))
-                kappa = scaled_condition(g.mass_matrix(chain, q))
-                bound = 1000 * np.finfo(float).eps * kappa * scale
+            name, p = g.kernel_params(chain)
+            kernel = compiled_kernel(name)
+            assert kernel is not KERNELS[name]
+            for y, ref, bound in random_states(g, chain, rng):
                 assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, (conf, axis)
+                got, plain = np.empty_like(y), np.empty_like(y)
+                kernel(0.0, y, p, got)
+                KERNELS[name](0.0, y, p, plain)
+                np.testing.assert_array_equal(got, plain)
+                assert np.max(np.abs(got - ref)) < bound, (conf, axis)
 
 
-def test_closed_form_free_gimbal_equals_the_chain_run():
+@pytest.mark.parametrize("integrator", ["closed_form", "compiled"])
+def test_closed_form_free_gimbal_equals_the_chain_run(integrator):
     """The free gimbal with large excursions (the invariants test's release): closed form
-    (Fortran DOP853, sample to sample) against the chain (solve_ivp DOP853), both at rtol 1e-11,
+    (Fortran DOP853, sample to sample; or the compiled kernel through the compiled DOP853 with
+    dense output, ~same step count) against the chain (solve_ivp DOP853), both at rtol 1e-11,
     over 0.5 s. Each has a global error ~1e-11 rad on these O(1) rad excursions (rtol 1e-11 per
     step; ~100 steps for the chain, ~430 for the closed form stopping at the 201 samples, whose
     errors add); bound 1e-9 rad on the angles and 1e-9 relative on the rates (observed 1.8e-11 rad
@@ -376,9 +398,9 @@ def test_closed_form_free_gimbal_equals_the_chain_run():
                   initial_outer_angle_deg=20.0, initial_inner_angle_deg=-30.0,
                   initial_outer_rate_deg_s=300.0, initial_inner_rate_deg_s=200.0)
     t = np.linspace(0.0, 0.5, 201)
-    fast = make(**params).simulate(t)
+    fast = make(**params, integrator=integrator).simulate(t)
     ref = make(**params, integrator="hinge_chain").simulate(t)
-    assert fast.trajectory.meta["integrator"] == "closed_form"
+    assert fast.trajectory.meta["integrator"] == integrator
     assert ref.trajectory.meta["integrator"] == "hinge_chain"
     for k in ("outer_angle", "inner_angle", "rotor_angle"):
         assert np.max(np.abs(fast.columns[k] - ref.columns[k])) < 1e-9, k
@@ -444,19 +466,13 @@ def test_hinge_terms_linear_or_called():
         g = GimbalGyroscope("g", SITE, p, effects)
         chain = g.build_chain()
         f, _ = g.closed_form(chain)
-        inertia = g.p.transverse_inertia_kg_m2 + g.C + g.A1 + g.C1 + g.A2 + g.C2
-        for _ in range(20):
-            q, v = rng.uniform(-3.0, 3.0, chain.nf), rng.uniform(-5.0, 5.0, chain.nf)
-            v[-1] *= 100.0
-            ref = chain.rhs(0.0, np.concatenate([q, v]))
-            scale = max(np.max(np.abs(v)) * (np.max(np.abs(v)) + N) * inertia / min(g.p.transverse_inertia_kg_m2, g.C),
-                        np.max(np.abs(ref[chain.nf:])))
-            bound = 1000 * np.finfo(float).eps * scaled_condition(g.mass_matrix(chain, q)) * scale
-            assert np.max(np.abs(np.array(f(0.0, *q, *v)) - ref)) < bound, sorted(extra)
+        for y, ref, bound in random_states(g, chain, rng, count=20):
+            assert np.max(np.abs(np.array(f(0.0, *y)) - ref)) < bound, sorted(extra)
 
 
+@pytest.mark.parametrize("integrator", ["closed_form", "compiled"])
 @pytest.mark.parametrize("configuration", ["locked", "outer_fixed", "free"])
-def test_stream_equals_simulate_bit_for_bit(configuration):
+def test_stream_equals_simulate_bit_for_bit(configuration, integrator):
     """Streaming (issue 13 item 1): the closed form's runs never let the blocks steer the steps (the
     free gimbal's reaches each sample by one Fortran DOP853 call from the previous sample; the
     locked and outer-fixed swings' steps with no end and keeps a step's dense output across
@@ -464,15 +480,17 @@ def test_stream_equals_simulate_bit_for_bit(configuration):
     round-off), and each block comes with
     the run's cumulative RHS count. (The counts themselves are not compared with the one-shot run:
     scipy's DOP853 spent 36 fewer evaluations on the second sample of the first run in a process,
-    with identical states.)"""
+    with identical states.) The compiled driver steps with no end and keeps its last step, as the
+    dense-output run does, for every configuration."""
     from gyro_instrument.core.scene import sample_blocks, sample_times
     from gyro_instrument.scenes import build_instruments, load_scene
     over = ["instruments.gimbal_locked.configuration=free"] if configuration == "free" else []
+    over += [f"instruments.{name}.integrator={integrator}" for name in ("gimbal_locked", "gimbal_outer_fixed")]
     duration = 1.5 if configuration == "free" else 30.0      # ~3 nutations per sample / ~2 swings
     scene = load_scene("gimbal_paris", [f"duration_s={duration}", "sample_rate_hz=50"] + over)
     g = build_instruments(scene)["gimbal_outer_fixed" if configuration == "outer_fixed" else "gimbal_locked"]
     assert g.p.configuration == configuration
-    assert g.STREAMS and g.integrator_choice()[0] == "closed_form"
+    assert g.STREAMS and g.integrator_choice()[0] == integrator
     one = g.simulate(sample_times(scene))
     for window_s in (0.07, 1.0):
         parts = list(g.stream(sample_blocks(scene, window_s)))

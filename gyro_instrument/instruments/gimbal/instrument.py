@@ -76,7 +76,7 @@ from gyro_instrument.instruments.gimbal.theory import (free_mass_matrix, locked_
 from gyro_instrument.instruments.observation import SwingRate
 
 CONFIGURATIONS = ("free", "locked", "outer_fixed")
-INTEGRATORS = ("auto", "closed_form", "hinge_chain")
+INTEGRATORS = ("auto", "compiled", "closed_form", "hinge_chain")
 
 OUTER_AXES = ("vertical", "north_south", "east_west", "polar", "custom")
 
@@ -188,12 +188,16 @@ class GimbalGyroscope(GimbalRuns, Instrument):
               doc="initial θ̇, degrees/s (must be 0 for locked)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
-              doc="closed_form: the gimbal's equations unrolled on floats (free rings: Hairer's Fortran "
-                  "DOP853 from sample to sample; locked, outer_fixed: scipy's DOP853 with dense output), "
-                  "streams block by block; hinge_chain: the generic hinge chain through solve_ivp's DOP853 "
-                  "(the reference; integrates the whole run before the first block); auto: closed_form "
-                  "unless an active effect's rigid-body terms are not the Earth rate's first- and "
-                  "second-order terms"),
+              doc="compiled: the gimbal's equations unrolled as numba kernels through a compiled DOP853 with "
+                  "dense output (core.dop853_jit; every configuration; the first run on a machine compiles, "
+                  "later runs load numba's cache); closed_form: the same equations on Python floats (free rings: "
+                  "Hairer's Fortran DOP853 from sample to sample; locked, outer_fixed: scipy's DOP853 with dense "
+                  "output); both stream block by block; hinge_chain: the generic hinge chain through solve_ivp's "
+                  "DOP853 (the reference; integrates the whole run before the first block); auto: compiled when "
+                  "numba is enabled, the rings are free and every active hinge torque is linear in its rate, else "
+                  "closed_form, unless "
+                  "an active effect's rigid-body terms are not the Earth rate's first- and second-order terms "
+                  "(then hinge_chain)"),
     )
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA})
     MEASURED_CHANNELS = ("outer_angle", "inner_angle")
@@ -333,6 +337,11 @@ class GimbalGyroscope(GimbalRuns, Instrument):
             raise SceneError(f"{name}.integrator", "closed_form",
                              "needs rigid-body effect terms of first and second order in the Earth rate "
                              "(earth_rotation, centrifugal); use auto or hinge_chain with these effects")
+        if self.p.integrator == "compiled" and not self.kernels_fit():
+            raise SceneError(f"{name}.integrator", "compiled",
+                             "needs rigid-body effect terms of first and second order in the Earth rate and hinge "
+                             "torques linear in their rates (earth_rotation, centrifugal, pivot_damping, spin_decay); "
+                             "use auto, closed_form or hinge_chain with these effects")
 
     def expected_swing(self) -> "ExpectedSwing | None":
         """Period 2 T of the configured swing (T' locked, T'' outer ring fixed; Quet sec. 4 §IV) and
@@ -480,19 +489,45 @@ class GimbalGyroscope(GimbalRuns, Instrument):
                 restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) and T0 > 0 else 0.0,
                 ring_inertia_ratio=ring_ratio, amplitude_rad=amp, duration_s=duration_s)
 
+    def kernels_fit(self) -> bool:
+        """True when the compiled kernels (:func:`~.dynamics.free_kernel`, :func:`~.dynamics.held_kernel`)
+        hold every active term: rigid-body terms c_l L + c_q Ω × IΩ and hinge torques linear in the rates."""
+        if self.rigid_body_coefficients is None:
+            return False
+        return self.kernel_params(self.build_chain()) is not None
+
     def integrator_choice(self) -> tuple:
         """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why.
 
-        ``closed_form`` (:mod:`.dynamics`) whenever the active effects' rigid-body terms are
-        c_l L + c_q Ω × IΩ (:func:`~.dynamics.rigid_body_coefficients`: true of every registered
-        effect); ``hinge_chain`` otherwise, or when the scene asks for it."""
+        ``compiled`` (numba kernels through :mod:`gyro_instrument.core.dop853_jit`) for the free
+        rings (whose nutation needs ~1700 steps per simulated second) when numba is enabled and
+        :meth:`kernels_fit`; else ``closed_form`` (:mod:`.dynamics`) whenever the
+        active effects' rigid-body terms are c_l L + c_q Ω × IΩ
+        (:func:`~.dynamics.rigid_body_coefficients`: true of every registered effect);
+        ``hinge_chain`` otherwise, or when the scene asks for it."""
+        from gyro_instrument.core import jit
         if self.p.integrator == "hinge_chain":
             return "hinge_chain", "chosen in the scene"
         if self.rigid_body_coefficients is None:
             return "hinge_chain", ("auto: an active effect's rigid-body terms are not the Earth rate's first- and "
                                    "second-order terms, which only the generic chain sums")
-        why = "chosen in the scene" if self.p.integrator == "closed_form" else \
-            "auto: the effects' terms fit the closed form (18-75x less CPU than the chain at the same rtol)"
-        return "closed_form", why
+        if self.p.integrator != "auto":
+            return self.p.integrator, f"chosen in the scene ({jit.status()})" if self.p.integrator == "compiled" \
+                else "chosen in the scene"
+        if self.p.configuration != "free":
+            return "closed_form", ("auto: the locked or outer-fixed swing is slow (a DOP853 step covers many samples): "
+                                   "scipy's DOP853 with dense output runs it thousands of times faster than real "
+                                   "time without loading numba (~0.6 s)")
+        if not self.kernels_fit():
+            return "closed_form", ("auto: an active hinge torque is not linear in its rate, which only the Python "
+                                   "closed form calls (16-75x less CPU than the chain at the same rtol)")
+        if not jit.enabled():
+            return "closed_form", f"auto: the compiled kernels would run uncompiled ({jit.status()})"
+        return "compiled", (f"auto: the free rings' nutation needs ~1700 DOP853 steps per simulated second and the "
+                            f"effects' terms fit the compiled kernels ({jit.status()}; the first run on a machine "
+                            f"compiles for ~15 s, later processes load numba and the cache in ~0.6 s): 15-30x less "
+                            f"CPU than the closed form on Python floats at the same rtol")
 
-
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """:meth:`integrator_choice` (``describe`` shows it)."""
+        return self.integrator_choice()

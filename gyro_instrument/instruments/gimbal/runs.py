@@ -4,7 +4,9 @@
 (which supplies the parameters, the inertias as simulated, the configuration's initial angles and
 the choice of integrator): it builds the generic :class:`~gyro_instrument.instruments.chain.HingeChain`
 (outer ring about PP', inner ring about NN', rotor about oQ; Quet 1853 sec. 4 §III), runs the closed
-form (:mod:`.dynamics`) or the chain, and turns states into columns and invariants (:mod:`.theory`).
+form (:mod:`.dynamics`: compiled kernels through :mod:`gyro_instrument.core.dop853_jit`, or Python
+floats through scipy's DOP853 drivers) or the chain, and turns states into columns and invariants
+(:mod:`.theory`).
 """
 
 import math
@@ -15,7 +17,9 @@ import numpy as np
 from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.instruments.base import Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link
-from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, DenseRun, closed_form_rhs
+from gyro_instrument.core.dop853_jit import CompiledRun
+from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs, compiled_kernel,
+                                                         kernel_params)
 from gyro_instrument.instruments.gimbal.theory import axial_momentum, quet_energy, spin_invariant, swing_inertias_kg_m2
 
 #: Absolute tolerance of both integrators (rad, rad/s), as before the closed form existed.
@@ -67,6 +71,23 @@ class GimbalRuns:
                               self.context)
         return rhs, [float(v) for v in self.initial_state(chain)]
 
+    def kernel_params(self, chain) -> "tuple | None":
+        """(kernel name, parameter array) of :func:`~.dynamics.kernel_params` for this gimbal, or None
+        when an effect's hinge torque is not linear in its rate (the compiled kernels do not fit)."""
+        held = {"locked": chain.links[1].locked_angle, "outer_fixed": chain.links[0].locked_angle}
+        inertias = (self.p.transverse_inertia_kg_m2, self.C, self.A1, self.C1, self.A2, self.C2)
+        return kernel_params(self.p.configuration, inertias, chain.omega_base, self.rigid_body_coefficients,
+                             self.effects.values(), held.get(self.p.configuration, 0.0), self.swing_inertias(),
+                             self.context)
+
+    def compiled_run(self, chain, t0) -> CompiledRun:
+        """The compiled closed form's resumable run from ``t0`` (s): :func:`~.dynamics.free_kernel` or
+        :func:`~.dynamics.held_kernel` through :class:`~gyro_instrument.core.dop853_jit.CompiledRun`
+        (DOP853 with dense output, steps never steered by the samples)."""
+        name, params = self.kernel_params(chain)
+        y0 = [float(v) for v in self.initial_state(chain)]
+        return CompiledRun(compiled_kernel(name), params, y0, t0, self.p.rtol, ATOL)
+
     def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
         """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
         DOP853 (:class:`~.dynamics.ClosedFormRun`) for the free rings, whose nutation takes tens of
@@ -103,16 +124,20 @@ class GimbalRuns:
             traj = integrate(chain.rhs, self.initial_state(chain), t, rtol=self.p.rtol, atol=ATOL)
             traj.meta.update(integrator=choice, reason=why)
             return self._simulation(traj.t, traj.y, traj, chain)
-        run = self.closed_form_run(chain, t[0])
+        run = self._run(choice, chain, t[0])
         span = float(t[-1] - t[0]) or 1.0
         y = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
-        return self._simulation(t, y, self._trajectory(run, t, y, why), chain)
+        return self._simulation(t, y, self._trajectory(run, t, y, choice, why), chain)
+
+    def _run(self, choice, chain, t0):
+        """The resumable run of ``choice`` (``compiled`` or ``closed_form``) from ``t0``."""
+        return self.compiled_run(chain, t0) if choice == "compiled" else self.closed_form_run(chain, t0)
 
     def stream(self, blocks, **options) -> Iterator[Simulation]:
         """:meth:`simulate` block by block (see :meth:`Instrument.stream`).
 
-        With the closed form, one run (:meth:`closed_form_run`) advances over the blocks, its steps
-        never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
+        With the closed form, one run (:meth:`compiled_run` or :meth:`closed_form_run`) advances over
+        the blocks, its steps never steered by the blocks, so the concatenated blocks equal :meth:`simulate` over the
         concatenated times bit for bit (``tests/test_gimbal.py``), and memory is one block.
         ``hinge_chain`` (the reference) integrates the whole run at once and slices it.
         """
@@ -126,13 +151,13 @@ class GimbalRuns:
             if run is None:
                 if b.size == 0:
                     continue
-                run = self.closed_form_run(chain, b[0])
+                run = self._run(choice, chain, b[0])
             y = run.advance(b)
-            yield self._simulation(b, y, self._trajectory(run, b, y, why), chain)
+            yield self._simulation(b, y, self._trajectory(run, b, y, choice, why), chain)
 
-    def _trajectory(self, run, t, y, why) -> Trajectory:
+    def _trajectory(self, run, t, y, choice, why) -> Trajectory:
         return Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
-                          dict(run.meta, integrator="closed_form", reason=why))
+                          dict(run.meta, integrator=choice, reason=why))
 
     def _simulation(self, t, y, traj, chain) -> Simulation:
         """Columns and Quet's angles from states ``y`` (chain layout, shape (2 nf, m))."""
