@@ -17,6 +17,7 @@ from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
+from gyro_instrument.instruments.puiseux.fixed_step import FixedStepRun, axis_state
 
 
 class ContactRuns:
@@ -120,8 +121,7 @@ class ContactRuns:
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
-        run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
-                          rtol=self.p.rtol if rtol is None else rtol, atol=atol)
+        run = self.integration_run(t0, t_end, self.p.rtol if rtol is None else rtol, atol, options.pop("integrator", None))
         carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
         for t in blocks:
             traj = run.advance(t)
@@ -148,6 +148,28 @@ class ContactRuns:
             extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
             extra["state"] = traj.y
             yield Simulation(t, columns, traj, extra=extra)
+
+    def integration_run(self, t0, t_end, rtol, atol, integrator=None):
+        """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
+        ``integrator`` overrides the parameter): DOP853 on :meth:`rhs`, or a fixed-step run of
+        :mod:`.fixed_step` with the same initial state."""
+        name = integrator or self.integrator_choice()[0]
+        if name == "dop853":
+            return integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853", rtol=rtol, atol=atol)
+        A, B, C = self.inertia
+        M, g, sf = self.p.mass_kg, self.context.gravity_m_s2, self.surface
+        y0 = self.initial_state()
+        w0 = float(np.linalg.norm(y0[4:]))
+        swing = self.scales(0.0).restoring_rate_rad_s
+        if name == "axis_rk8":
+            _, r = axis_state(y0)
+            params = (sf.sxx, sf.szz, sf.cz, A, C, r, M, g)
+            omega = abs(C * r) / A + swing + float(np.linalg.norm(axis_state(y0)[0][3:6]))
+        else:
+            S = (sf.sxx, sf.sxy, getattr(sf, "sxz", 0.0), sf.syy, getattr(sf, "syz", 0.0), sf.szz)
+            params = (A, B, C, M, g, *S, getattr(sf, "cx", 0.0), getattr(sf, "cy", 0.0), sf.cz)
+            omega = w0 * max(A, B, C) / min(A, B, C) + swing
+        return FixedStepRun(name, y0, t0, params, omega, rtol)
 
     def contact_columns(self, y, n, carry=None) -> dict:
         """The contact point and the turn about the vertical along a state history (sec. I and III).
