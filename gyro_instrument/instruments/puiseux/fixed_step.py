@@ -12,7 +12,7 @@ right-hand side. Here the same exact model is stepped by compiled kernels (:mod:
 Both take ``substeps`` equal steps of the 8th-order Runge–Kutta formula per sample interval, chosen
 from the fastest rate of the motion Ω (s⁻¹) so that h Ω ≤ :data:`H_OMEGA` (rtol / 1e-10)^(1/8)
 (the formula's local error goes as (h Ω)⁹; :data:`H_OMEGA` measured in
-:mod:`gyro_instrument.bench.spin_puis` so that the output angles stay within the scene's tolerance
+:mod:`gyro_instrument.bench.spin_puiseux` so that the output angles stay within the scene's tolerance
 of a DOP853 run at rtol 1e-13). The samples do not depend on how the run is cut into blocks.
 """
 

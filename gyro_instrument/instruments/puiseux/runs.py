@@ -160,7 +160,8 @@ class ContactRuns:
         M, g, sf = self.p.mass_kg, self.context.gravity_m_s2, self.surface
         y0 = self.initial_state()
         w0 = float(np.linalg.norm(y0[4:]))
-        swing = self.scales(0.0).restoring_rate_rad_s
+        # the fastest swing the gravity couple can drive, at most √(M g max|ρ − γ| / min moment)
+        swing = math.sqrt(M * g * max(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma)) / min(A, B, C))
         if name == "axis_rk8":
             _, r = axis_state(y0)
             params = (sf.sxx, sf.szz, sf.cz, A, C, r, M, g)
