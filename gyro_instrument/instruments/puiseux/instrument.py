@@ -1,5 +1,5 @@
 """Puiseux's body as an instrument: parameters, predictions (:mod:`.theory`), the exact model
-(:mod:`.dynamics`) integrated and sampled.
+(:mod:`.dynamics`) integrated and sampled (``integrator``: :meth:`PuiseuxBody.integrator_choice`).
 
 Earth rotation is ignored, as in the paper (``MECHANICS`` and so ``SUPPORTED_EFFECTS`` are
 empty): the simulated model is the exact nonlinear rigid body on the frictionless plane, with no
