@@ -4,23 +4,32 @@ The adaptive DOP853 run (``integrator: dop853``) resolves every turn of the spin
 right-hand side. Here the same exact model is stepped by compiled kernels (:mod:`.kernels`):
 
 * ``axis_rk8`` — a body of revolution (A = B and a surface of revolution about Gz: the ellipsoid with
-  α = β, or ρ = ρ' at δ = 0 with a centre on the axis) through its exact reduction by the conserved
+  α = β, or ρ = ρ'; and A = B) through its exact reduction by the conserved
   spin r (Puiseux eq. 6): the figure axis u and its velocity in the world, the spin angle a
   quadrature (:mod:`.kernels`). The step is set by the nutation, not by the spin.
 * ``rk8`` — any body: the exact equations of :mod:`.dynamics` (quaternion and body rate).
 
-Both take ``substeps`` equal steps of the 8th-order Runge–Kutta formula per sample interval, chosen
-from the fastest rate of the motion Ω (s⁻¹) so that h Ω ≤ :data:`H_OMEGA` (rtol / 1e-10)^(1/8)
-(the formula's local error goes as (h Ω)⁹; :data:`H_OMEGA` measured in
-:mod:`gyro_instrument.bench.spin_puiseux` so that the output angles stay within the scene's tolerance
-of a DOP853 run at rtol 1e-13). The samples do not depend on how the run is cut into blocks.
+Both take equal steps h of the 8th-order Runge–Kutta formula, the fewest per sample interval with
+h Ω ≤ :data:`H_OMEGA` (rtol / 1e-10)^(1/8) (the global error goes as h⁸), Ω (s⁻¹) a bound on the
+fastest rate of the motion: Ω_s + |C r|/A + |u̇(0)| for ``axis_rk8`` (the nutation), Ω_s +
+|w(0)| max(A, B, C)/min(A, B, C) for ``rk8`` (the spin seen in body axes), with
+Ω_s = √(M g max(|ρ − γ|, |ρ' − γ|)/min(A, B, C)) the fastest swing gravity can drive
+(:meth:`~.runs.ContactRuns.integration_run`). :data:`H_OMEGA` was measured with both shipped scenes
+sampled at 5 Hz (so that the step, not the sample spacing, sets h): the output angles stay at the
+error floor of the DOP853 rtol 1e-13 reference (≤ 6e-11 rad over 20-30 s) up to h Ω ≈ 0.3-0.5 and
+grow past it beyond; 0.25 keeps that margin. At the shipped 200 Hz one step per sample is already
+shorter (:mod:`gyro_instrument.bench.spin_puiseux` has the rows). The samples do not depend on how
+the run is cut into blocks.
 """
 
 import functools
 import math
+import time
+import types
 
 import numpy as np
 
+from gyro_instrument.core import dop853
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.quaternion import quat_mul, quat_to_matrix
 from gyro_instrument.core.trajectory import Trajectory
@@ -30,7 +39,7 @@ H_OMEGA = {"axis_rk8": 0.25, "rk8": 0.25}
 
 
 @functools.cache
-def fixed_step_kernels():
+def fixed_step_kernels() -> "types.ModuleType":
     """The module :mod:`.kernels`, imported (and so compiled) on first use only."""
     from gyro_instrument.instruments.puiseux import kernels  # noqa: PLC0415 - lazy: numba
 
@@ -101,24 +110,20 @@ class FixedStepRun:
 
     def advance(self, t) -> Trajectory:
         """States (q, w) at the sample times ``t`` (s, increasing, from the last one returned)."""
-        import time  # noqa: PLC0415
-
         c0 = time.process_time()
         k = fixed_step_kernels()
-        from gyro_instrument.core import dop853  # noqa: PLC0415 - the tableau only
-
         t = np.asarray(t, dtype=float)
         times = t if t.size and t[0] == self.t else np.concatenate([[self.t], t])
-        dt = np.diff(times).max() if times.size > 1 else 0.0
-        sub = max(1, math.ceil(dt / self.h_max)) if dt > 0.0 else 1
+        steps = np.maximum(1, np.ceil(np.diff(times) / self.h_max))
+        sub = int(steps.max()) if steps.size else 0
         model = k.AXIS if self.model == "axis_rk8" else k.BODY
-        xs = k.rk8_samples(model, self.x, times, sub, self.params, dop853.A, dop853.B)
+        xs = k.rk8_samples(model, self.x, times, self.h_max, self.params, dop853.A, dop853.B)
         if not np.all(np.isfinite(xs)):
             bad = times[np.argmax(~np.all(np.isfinite(xs), axis=0))]
             raise IntegrationError(f"{self.model}: non-finite state or axis pointing down near t = {bad:.6g} s "
                                    f"(integrator: dop853 has no such limit)")
         self.x, self.t = xs[:, -1].copy(), float(times[-1])
-        self.nsteps += sub * (times.size - 1)
+        self.nsteps += int(steps.sum())
         xs = xs[:, times.size - t.size:]
         y = body_states(xs, self.r) if self.model == "axis_rk8" else xs
         self.cpu_time_s += time.process_time() - c0

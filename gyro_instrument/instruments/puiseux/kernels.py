@@ -32,8 +32,8 @@ Two right-hand sides, one stepper
 
 The stepper :func:`rk8_samples` integrates either with a fixed-step 8th-order Runge–Kutta (the
 12-stage 8th-order formula of DOP853, Hairer, Nørsett & Wanner, Solving ODE I, sec. II.10: the
-tableau of :mod:`gyro_instrument.core.dop853`, passed in), ``substeps`` equal steps per sample
-interval, and writes the state at every sample time. The reduced state is projected back onto
+tableau of :mod:`gyro_instrument.core.dop853`, passed in), equal steps no longer than ``h_max`` in
+each sample interval, and writes the state at every sample time. The reduced state is projected back onto
 |u| = 1, u·v = 0 after every step (Hairer, Lubich & Wanner, Geometric Numerical Integration,
 sec. IV.4, standard projection: the order is kept; without it the drift off the manifold grows
 until the axis falls over within seconds).
@@ -142,9 +142,9 @@ def _project_axis(x):
 project_axis = jit.compiled(_project_axis)
 
 
-def _rk8_samples(model, y0, t, substeps, p, a, b):
-    """States at the sample times ``t`` (s; t[0] the initial time) from ``y0``: ``substeps`` equal
-    steps of the 8th-order formula per sample interval. Returns (n, m). Stops (the rest NaN) at a
+def _rk8_samples(model, y0, t, h_max, p, a, b):
+    """States at the sample times ``t`` (s; t[0] the initial time) from ``y0``: in each sample
+    interval, the fewest equal steps of the 8th-order formula not longer than ``h_max`` (s). Returns (n, m). Stops (the rest NaN) at a
     non-finite state or, for the reduced model, when the axis comes within 1e-9 of pointing down."""
     n, m = y0.size, t.size
     out = np.full((n, m), np.nan)
@@ -154,6 +154,7 @@ def _rk8_samples(model, y0, t, substeps, p, a, b):
     for j in range(n):
         out[j, 0] = y[j]
     for i in range(1, m):
+        substeps = max(1, math.ceil((t[i] - t[i - 1]) / h_max))
         h = (t[i] - t[i - 1]) / substeps
         for _ in range(substeps):
             rk8_step(model, y, h, p, a, b, k, tmp)

@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 
 from gyro_instrument.core.angles import NumpyUnwrapper
-from gyro_instrument.core.integrate import integration
+from gyro_instrument.core.integrate import Integration, integration
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Simulation, run_span
@@ -151,7 +151,7 @@ class ContactRuns:
             extra["state"] = traj.y
             yield Simulation(t, columns, traj, extra=extra)
 
-    def integration_run(self, t0, t_end, rtol, atol, integrator=None):
+    def integration_run(self, t0, t_end, rtol, atol, integrator=None) -> "Integration | FixedStepRun":
         """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
         ``integrator`` overrides the parameter): DOP853 on :meth:`rhs`, or a fixed-step run of
         :mod:`.fixed_step` with the same initial state."""
