@@ -15,7 +15,7 @@ import pytest
 
 from gyro_instrument.bench.spin_puiseux import angle_error, energy_drift, reference, work_precision_rows
 from gyro_instrument.core import jit
-from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.errors import IntegrationError, SceneError
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.instruments.puiseux import fixed_step
 from gyro_instrument.scenes import build_instruments, load_scene
@@ -59,6 +59,8 @@ def test_auto_picks_the_reduction_for_a_body_of_revolution_and_rk8_otherwise():
     assert name == "rk8" and "shape general" in why
     tri, _ = _body("puiseux_spheroid", ["instruments.spheroid.semi_axes_m=[0.1, 0.11, 0.2]"])
     assert tri.chosen_integrator()[0] == "rk8" and "alpha" in tri.chosen_integrator()[1]
+    low, _ = _body("puiseux_spheroid", ["instruments.spheroid.initial_tilt_deg=120"])
+    assert low.chosen_integrator()[0] == "rk8" and "below the horizontal" in low.chosen_integrator()[1]
     dop, _ = _body("puiseux_spheroid", ["instruments.spheroid.integrator=dop853"])
     assert dop.chosen_integrator() == ("dop853", "chosen in the scene")
 
@@ -212,3 +214,15 @@ def test_reduction_matches_the_exact_equations_at_large_tilts(overrides):
     assert angle_error(fast, ref) <= inst.p.rtol
     assert np.max(np.abs(fast.extra["normal_force_N"] - ref.extra["normal_force_N"])) <= 1e-9 * inst.p.mass_kg * 9.81
     assert energy_drift(fast) < 1e-12
+
+
+def test_the_reduction_stops_before_its_upside_down_singularity():
+    # Released at 169 degrees and tilting on at 200 deg/s, the reduced run stops with a message as the
+    # tilt passes 170 degrees, rather than lose accuracy near 180 (the swing frame's twist rate grows
+    # as 1/(1 + cos theta)).
+    inst, t = _body("puiseux_spheroid", ["duration_s=3", "instruments.spheroid.spin_rate_turn_s=0",
+                                         "instruments.spheroid.initial_tilt_deg=169",
+                                         "instruments.spheroid.initial_tilt_rate_deg_s=200",
+                                         "instruments.spheroid.integrator=axis_rk8"])
+    with pytest.raises(IntegrationError, match="tilted past 170 deg.*rk8 or dop853"):
+        inst.simulate(t)

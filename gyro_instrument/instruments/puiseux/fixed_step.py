@@ -120,8 +120,9 @@ class FixedStepRun:
         xs = k.rk8_samples(model, self.x, times, self.h_max, self.params, dop853.A, dop853.B)
         if not np.all(np.isfinite(xs)):
             bad = times[np.argmax(~np.all(np.isfinite(xs), axis=0))]
-            raise IntegrationError(f"{self.model}: non-finite state or axis pointing down near t = {bad:.6g} s "
-                                   f"(integrator: dop853 has no such limit)")
+            raise IntegrationError(f"{self.model}: non-finite state, or the axis tilted past "
+                                   f"{math.degrees(k.MAX_TILT_RAD):g} deg (the reduction's limit), near "
+                                   f"t = {bad:.6g} s; integrator: rk8 or dop853 have no such limit")
         self.x, self.t = xs[:, -1].copy(), float(times[-1])
         self.nsteps += int(steps.sum())
         xs = xs[:, times.size - t.size:]

@@ -109,7 +109,7 @@ class PuiseuxBody(ContactRuns, Instrument):
               doc="initial rate of the axis' compass azimuth (clockwise from above), degrees/s"),
         Param("rtol", default=1e-10, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
-              doc="auto: axis_rk8 for a body of revolution, else rk8; dop853: adaptive DOP853 on the exact "
+              doc="auto: axis_rk8 for a body of revolution released with its axis above the horizontal, else rk8; dop853: adaptive DOP853 on the exact "
                   "equations (the reference); axis_rk8: compiled fixed-step RK8 on the exact reduction of a "
                   "body of revolution by its conserved spin (steps set by the nutation, not the spin); rk8: "
                   "compiled fixed-step RK8 on the exact equations (any body)"),
@@ -204,15 +204,18 @@ class PuiseuxBody(ContactRuns, Instrument):
 
     def integrator_choice(self) -> tuple:
         """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why: the reduction
-        ``axis_rk8`` for a body of revolution, else ``rk8`` (:mod:`.fixed_step`), unless the scene
-        names one."""
+        ``axis_rk8`` for a body of revolution released with its axis above the horizontal, else
+        ``rk8`` (:mod:`.fixed_step`), unless the scene names one."""
         if self.p.integrator != "auto":
             return self.p.integrator, "chosen in the scene"
         why_not = self.not_of_revolution(self.params)
+        why_not = why_not and f"not a body of revolution ({why_not})"
+        if why_not is None and self.p.initial_tilt_rad > 0.5 * math.pi:
+            why_not = "released with the axis below the horizontal, toward the reduction's singular upside-down pose"
         if why_not is None:
             return "axis_rk8", ("auto: a body of revolution, so its spin r is conserved (eq. 6) and the exact "
                                 "reduction to the figure axis leaves the nutation, not the spin, to set the step")
-        return "rk8", f"auto: not a body of revolution ({why_not}), so the exact equations, compiled, fixed step"
+        return "rk8", f"auto: {why_not}, so the exact equations, compiled, fixed step"
 
     def chosen_integrator(self, duration_s=None) -> tuple:
         """:meth:`integrator_choice` (for ``describe``; the choice does not depend on ``duration_s``)."""

@@ -28,7 +28,8 @@ Two right-hand sides, one stepper
   (the swing frame turns about u at −e_z·(u × v)/(1 + c)); the orientation is
   q = q_swing(u) ⊗ (cos φ/2, 0, 0, sin φ/2). The spin r itself appears only through the
   gyroscopic term C r/A u × v: the fastest motion left is the nutation (≈ C r/A), not the spin, and
-  the spin angle is a quadrature. Singular only at u = −e_z (the body upside down; the run stops).
+  the spin angle is a quadrature. Singular at u = −e_z (the body upside down: the swing frame then
+  twists without bound), so the run stops once the tilt passes :data:`MAX_TILT_RAD`.
 
 The stepper :func:`rk8_samples` integrates either with a fixed-step 8th-order Runge–Kutta (the
 12-stage 8th-order formula of DOP853, Hairer, Nørsett & Wanner, Solving ODE I, sec. II.10: the
@@ -49,6 +50,9 @@ from gyro_instrument.instruments.puiseux.dynamics import (_contact_response, _ge
 
 #: Index of the right-hand side in :func:`rk8_samples`.
 BODY, AXIS = 0, 1
+#: Largest tilt of the reduced model's axis (rad, 170°: 1 + cos θ = 0.015 bounds the swing frame's twist rate).
+MAX_TILT_RAD = math.radians(170.0)
+MIN_COS_TILT = math.cos(MAX_TILT_RAD)
 
 vertical = jit.compiled(_vertical)
 general_sn = jit.compiled(_general_sn)
@@ -145,7 +149,7 @@ project_axis = jit.compiled(_project_axis)
 def _rk8_samples(model, y0, t, h_max, p, a, b):
     """States at the sample times ``t`` (s; t[0] the initial time) from ``y0``: in each sample
     interval, the fewest equal steps of the 8th-order formula not longer than ``h_max`` (s). Returns (n, m). Stops (the rest NaN) at a
-    non-finite state or, for the reduced model, when the axis comes within 1e-9 of pointing down."""
+    non-finite state or, for the reduced model, when the tilt passes :data:`MAX_TILT_RAD` (cos θ < :data:`MIN_COS_TILT`)."""
     n, m = y0.size, t.size
     out = np.full((n, m), np.nan)
     y = y0.copy()
@@ -160,7 +164,7 @@ def _rk8_samples(model, y0, t, h_max, p, a, b):
             rk8_step(model, y, h, p, a, b, k, tmp)
             if model == AXIS:
                 project_axis(y)
-        bad = model == AXIS and y[2] < -1.0 + 1e-9
+        bad = model == AXIS and y[2] < MIN_COS_TILT
         for j in range(n):
             bad = bad or not math.isfinite(y[j])
         if bad:
