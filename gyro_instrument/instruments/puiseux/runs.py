@@ -154,7 +154,8 @@ class ContactRuns:
     def integration_run(self, t0, t_end, rtol, atol, integrator=None) -> "Integration | FixedStepRun":
         """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
         ``integrator`` overrides the parameter): DOP853 on :meth:`rhs`, or a fixed-step run of
-        :mod:`.fixed_step` with the same initial state."""
+        :mod:`.fixed_step` with the same initial state, its step set by ``rtol`` and the fastest
+        rate Ω of the motion (:mod:`.fixed_step`; ``atol`` applies to DOP853 only)."""
         name = integrator or self.integrator_choice()[0]
         if name == "dop853":
             return integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853", rtol=rtol, atol=atol)
@@ -165,9 +166,9 @@ class ContactRuns:
         # the fastest swing the gravity couple can drive, at most √(M g max|ρ − γ| / min moment)
         swing = math.sqrt(M * g * max(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma)) / min(A, B, C))
         if name == "axis_rk8":
-            _, r = axis_state(y0)
+            x0, r = axis_state(y0)
             params = (sf.sxx, sf.szz, sf.cz, A, C, r, M, g)
-            omega = abs(C * r) / A + swing + float(np.linalg.norm(axis_state(y0)[0][3:6]))
+            omega = abs(C * r) / A + swing + float(np.linalg.norm(x0[3:6]))
         else:
             S = (sf.sxx, sf.sxy, getattr(sf, "sxz", 0.0), sf.syy, getattr(sf, "syz", 0.0), sf.szz)
             params = (A, B, C, M, g, *S, getattr(sf, "cx", 0.0), getattr(sf, "cy", 0.0), sf.cz)
