@@ -135,7 +135,8 @@ OTHER_INSTRUMENTS = (
     ("free_gyroscope", "free_gyro", ("axis_altitude", "axis_azimuth"),
      (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}), ("exact equations, DOP853", {"model": "numerical"})),
      {"model": "numerical"}),
-    ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"), (("exact equations, DOP853", {}),), {}),
+    ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"),
+     (("exact equations, DOP853", {"integrator": "dop853"}),), {"integrator": "dop853"}),
 )
 
 

@@ -31,6 +31,9 @@ One module per job:
   ellipsoid that stands for any body given by its curvature radii (sec. II, and in any
   orientation for sec. III);
 * :mod:`.dynamics` — the exact rigid body on a frictionless plane (what ``simulate`` integrates);
+* :mod:`.fixed_step`, :mod:`.kernels` — the compiled fixed-step runs (``integrator: axis_rk8``, the exact
+  reduction of a body of revolution by its conserved spin; ``rk8``, the exact equations), picked by
+  ``integrator: auto``; ``dop853`` is the adaptive reference;
 * :mod:`.instrument` — :class:`PuiseuxBody`, the instrument (parameters, predictions, simulate).
 """
 

@@ -171,10 +171,27 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     sxx, sxy, sxz, syy, syz, szz = surf.sxx, surf.sxy, surf.sxz, surf.syy, surf.syz, surf.szz
     cx, cy, cz = surf.cx, surf.cy, surf.cz
     nx, ny, nz, ndx, ndy, ndz = _vertical(qw, qx, qy, qz, wx, wy, wz)
+    sx, sy, sz = _general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz)
+    s = sqrt(nx * sx + ny * sy + nz * sz)
+    gx, gy, gz, h, hx, hy, hz = _general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz,
+                                                       syy, syz, szz, cx, cy, cz)
+    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
+                                            gx, gy, gz, hx, hy, hz, A, B, C, M, g)
+    return qdot, wdot, N, h, zdot, (nx, ny, nz)
+
+
+def _general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz) -> tuple:
+    """S n for the symmetric S of a :class:`~.surface.GeneralEllipsoidSurface` (floats or arrays)."""
     sx = sxx * nx + sxy * ny + sxz * nz
     sy = sxy * nx + syy * ny + syz * nz
     sz = sxz * nx + syz * ny + szz * nz
-    s = sqrt(nx * sx + ny * sy + nz * sz)
+    return sx, sy, sz
+
+
+def _general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz, syy, syz, szz, cx, cy, cz) -> tuple:
+    """From n, ṅ, S n and s = √(nᵀSn): ∇h = S n/s − c, h = s − c·n and H ṅ = S ṅ/s − S n (S n·ṅ)/s³
+    (:func:`contact_dynamics_general`; plain float arithmetic, also compiled by :mod:`.kernels`).
+    Returns (∇h (3), h, H ṅ (3))."""
     gx, gy, gz = sx / s - cx, sy / s - cy, sz / s - cz
     h = s - (cx * nx + cy * ny + cz * nz)
     tx = sxx * ndx + sxy * ndy + sxz * ndz
@@ -182,6 +199,4 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     tz = sxz * ndx + syz * ndy + szz * ndz
     f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
     hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
-    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
-                                            gx, gy, gz, hx, hy, hz, A, B, C, M, g)
-    return qdot, wdot, N, h, zdot, (nx, ny, nz)
+    return gx, gy, gz, h, hx, hy, hz

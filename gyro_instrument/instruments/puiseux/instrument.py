@@ -1,5 +1,5 @@
 """Puiseux's body as an instrument: parameters, predictions (:mod:`.theory`), the exact model
-(:mod:`.dynamics`) integrated and sampled.
+(:mod:`.dynamics`) integrated and sampled (``integrator``: :meth:`PuiseuxBody.integrator_choice`).
 
 Earth rotation is ignored, as in the paper (``MECHANICS`` and so ``SUPPORTED_EFFECTS`` are
 empty): the simulated model is the exact nonlinear rigid body on the frictionless plane, with no
@@ -25,6 +25,8 @@ from gyro_instrument.instruments.puiseux.theory import (classify_coefficients, c
                                                         ellipsoid_coefficients, homogeneous_inertia)
 
 TWO_PI = 2.0 * math.pi
+#: choices of the ``integrator`` parameter (:mod:`.fixed_step`)
+INTEGRATORS = ("auto", "dop853", "axis_rk8", "rk8")
 #: parameters that apply only to some shapes
 GENERAL_ANGLES = ("axes_phi1_deg", "axes_theta1_deg", "axes_psi1_deg")
 SHAPE_KEYS = {"semi_axes_m": ("ellipsoid",), "curvature_radii_m": ("curvature", "general"),
@@ -106,6 +108,11 @@ class PuiseuxBody(ContactRuns, Instrument):
         Param("initial_azimuth_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6,
               doc="initial rate of the axis' compass azimuth (clockwise from above), degrees/s"),
         Param("rtol", default=1e-10, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
+        Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
+              doc="auto: axis_rk8 for a body of revolution released with its axis above the horizontal, else rk8; dop853: adaptive DOP853 on the exact "
+                  "equations (the reference); axis_rk8: compiled fixed-step RK8 on the exact reduction of a "
+                  "body of revolution by its conserved spin (steps set by the nutation, not the spin); rk8: "
+                  "compiled fixed-step RK8 on the exact equations (any body)"),
     )
     MECHANICS = frozenset()
     MEASURED_CHANNELS = ("tilt", "tilt_azimuth")
@@ -171,6 +178,48 @@ class PuiseuxBody(ContactRuns, Instrument):
                 raise SceneError(f"{prefix}.inertia_kg_m2", list(I),
                                  "must be 3 numbers > 0 obeying the triangle inequalities "
                                  "(A + B >= C, B + C >= A, C + A >= B) of a rigid body")
+
+        if p["integrator"] == "axis_rk8" and cls.not_of_revolution(p):
+            raise SceneError(f"{prefix}.integrator", "axis_rk8",
+                             f"needs a body of revolution about Gz ({cls.not_of_revolution(p)}); use rk8 or dop853")
+
+    @staticmethod
+    def not_of_revolution(p) -> "str | None":
+        """Why the body of parameters ``p`` is not one of revolution about Gz (A = B and a surface of
+        revolution: α = β, or ρ = ρ'), or None when it is (``integrator: axis_rk8`` then applies)."""
+        if p["shape"] == "general":
+            return "shape general: GA is not a principal axis"
+        if p["shape"] == "ellipsoid":
+            a, b, _ = p["semi_axes_m"]
+            if a != b:
+                return f"semi-axes alpha = {a:g} m != beta = {b:g} m"
+            if p["homogeneous"]:
+                return None
+        else:
+            rho, rho_p = p["curvature_radii_m"]
+            if rho != rho_p:
+                return f"curvature radii rho = {rho:g} m != rho' = {rho_p:g} m"
+        A, B, _ = p["inertia_kg_m2"]
+        return None if A == B else f"moments A = {A:g} != B = {B:g} kg m^2"
+
+    def integrator_choice(self) -> tuple:
+        """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why: the reduction
+        ``axis_rk8`` for a body of revolution released with its axis above the horizontal, else
+        ``rk8`` (:mod:`.fixed_step`), unless the scene names one."""
+        if self.p.integrator != "auto":
+            return self.p.integrator, "chosen in the scene"
+        why_not = self.not_of_revolution(self.params)
+        why_not = why_not and f"not a body of revolution ({why_not})"
+        if why_not is None and self.p.initial_tilt_rad > 0.5 * math.pi:
+            why_not = "released with the axis below the horizontal, toward the reduction's singular upside-down pose"
+        if why_not is None:
+            return "axis_rk8", ("auto: a body of revolution, so its spin r is conserved (eq. 6) and the exact "
+                                "reduction to the figure axis leaves the nutation, not the spin, to set the step")
+        return "rk8", f"auto: {why_not}, so the exact equations, compiled, fixed step"
+
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """:meth:`integrator_choice` (for ``describe``; the choice does not depend on ``duration_s``)."""
+        return self.integrator_choice()
 
     @classmethod
     def _check_general(cls, prefix, p) -> None:

@@ -3,7 +3,8 @@
 :class:`ContactRuns` is mixed into :class:`~gyro_instrument.instruments.puiseux.instrument.PuiseuxBody`
 (which supplies the parameters, the surface, the inertia and the initial tilt and spin): the state
 is the unit quaternion (body → ENU) and the body-axis angular velocity, integrated with the contact
-dynamics of :mod:`.dynamics` (Puiseux 1852), and turned into columns here.
+dynamics of :mod:`.dynamics` (Puiseux 1852) by the integrator the ``integrator`` parameter names
+(adaptive DOP853, or a compiled fixed-step run of :mod:`.fixed_step`), and turned into columns here.
 """
 
 import math
@@ -12,11 +13,12 @@ from collections.abc import Callable, Iterator
 import numpy as np
 
 from gyro_instrument.core.angles import NumpyUnwrapper
-from gyro_instrument.core.integrate import integration
+from gyro_instrument.core.integrate import Integration, integration
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
+from gyro_instrument.instruments.puiseux.fixed_step import FixedStepRun, axis_state
 
 
 class ContactRuns:
@@ -99,8 +101,9 @@ class ContactRuns:
                 "quaternion_norm": np.sqrt(qn2)}
 
     def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
-        """Integrate the exact model (DOP853) and sample at times ``t`` (s, from t[0]): one block of
-        :meth:`stream`.
+        """Integrate the exact model (the chosen integrator, :meth:`integration_run`) and sample at
+        times ``t`` (s, from t[0]): one block of :meth:`stream`. ``rtol`` overrides the parameter, and
+        ``integrator=`` (a keyword option) the ``integrator`` parameter.
 
         Returns
         -------
@@ -113,15 +116,14 @@ class ContactRuns:
         return super().simulate(t, rtol=rtol, atol=atol, **options)
 
     def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
-        """Block by block (:meth:`Instrument.stream`): one DOP853 step sequence bounded by the run's
-        end, carried across blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn
-        about the vertical is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the
-        block's minimum."""
+        """Block by block (:meth:`Instrument.stream`): one run of the chosen integrator (DOP853's step
+        sequence bounded by the run's end, or the fixed steps of :mod:`.fixed_step`), carried across
+        blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn about the vertical
+        is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the block's minimum."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
-        run = integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853",
-                          rtol=self.p.rtol if rtol is None else rtol, atol=atol)
+        run = self.integration_run(t0, t_end, self.p.rtol if rtol is None else rtol, atol, options.pop("integrator", None))
         carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
         for t in blocks:
             traj = run.advance(t)
@@ -148,6 +150,30 @@ class ContactRuns:
             extra["min_normal_force_N"] = float(np.min(d["normal_force_N"]))
             extra["state"] = traj.y
             yield Simulation(t, columns, traj, extra=extra)
+
+    def integration_run(self, t0, t_end, rtol, atol, integrator=None) -> "Integration | FixedStepRun":
+        """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
+        ``integrator`` overrides the parameter): DOP853 on :meth:`rhs`, or a fixed-step run of
+        :mod:`.fixed_step` with the same initial state, its step set by ``rtol`` and the fastest
+        rate Ω of the motion (:mod:`.fixed_step`; ``atol`` applies to DOP853 only)."""
+        name = integrator or self.integrator_choice()[0]
+        if name == "dop853":
+            return integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853", rtol=rtol, atol=atol)
+        A, B, C = self.inertia
+        M, g, sf = self.p.mass_kg, self.context.gravity_m_s2, self.surface
+        y0 = self.initial_state()
+        w0 = float(np.linalg.norm(y0[4:]))
+        # the fastest swing the gravity couple can drive, at most √(M g max|ρ − γ| / min moment)
+        swing = math.sqrt(M * g * max(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma)) / min(A, B, C))
+        if name == "axis_rk8":
+            x0, r = axis_state(y0)
+            params = (sf.sxx, sf.szz, sf.cz, A, C, r, M, g)
+            omega = abs(C * r) / A + swing + float(np.linalg.norm(x0[3:6]))
+        else:
+            S = (sf.sxx, sf.sxy, getattr(sf, "sxz", 0.0), sf.syy, getattr(sf, "syz", 0.0), sf.szz)
+            params = (A, B, C, M, g, *S, getattr(sf, "cx", 0.0), getattr(sf, "cy", 0.0), sf.cz)
+            omega = w0 * max(A, B, C) / min(A, B, C) + swing
+        return FixedStepRun(name, y0, t0, params, omega, rtol)
 
     def contact_columns(self, y, n, carry=None) -> dict:
         """The contact point and the turn about the vertical along a state history (sec. I and III).

@@ -1,0 +1,132 @@
+"""Fixed-step runs of Puiseux's body (``integrator: axis_rk8`` and ``rk8``; issue 27 item 1).
+
+The adaptive DOP853 run (``integrator: dop853``) resolves every turn of the spin with a Python
+right-hand side. Here the same exact model is stepped by compiled kernels (:mod:`.kernels`):
+
+* ``axis_rk8`` — a body of revolution (A = B and a surface of revolution about Gz: the ellipsoid with
+  α = β, or ρ = ρ'; and A = B) through its exact reduction by the conserved
+  spin r (Puiseux eq. 6): the figure axis u and its velocity in the world, the spin angle a
+  quadrature (:mod:`.kernels`). The step is set by the nutation, not by the spin.
+* ``rk8`` — any body: the exact equations of :mod:`.dynamics` (quaternion and body rate).
+
+Both take equal steps h of the 8th-order Runge–Kutta formula, the fewest per sample interval with
+h Ω ≤ :data:`H_OMEGA` (rtol / 1e-10)^(1/8) (the global error goes as h⁸), Ω (s⁻¹) a bound on the
+fastest rate of the motion: Ω_s + |C r|/A + |u̇(0)| for ``axis_rk8`` (the nutation), Ω_s +
+|w(0)| max(A, B, C)/min(A, B, C) for ``rk8`` (the spin seen in body axes), with
+Ω_s = √(M g max(|ρ − γ|, |ρ' − γ|)/min(A, B, C)) the fastest swing gravity can drive
+(:meth:`~.runs.ContactRuns.integration_run`). :data:`H_OMEGA` was measured with both shipped scenes
+sampled at 5 Hz (so that the step, not the sample spacing, sets h): the output angles stay at the
+error floor of the DOP853 rtol 1e-13 reference (≤ 6e-11 rad over 20-30 s) up to h Ω ≈ 0.3-0.5 and
+grow past it beyond; 0.25 keeps that margin. At the shipped 200 Hz one step per sample is already
+shorter (:mod:`gyro_instrument.bench.spin_puiseux` has the rows). The samples do not depend on how
+the run is cut into blocks.
+"""
+
+import functools
+import math
+import time
+import types
+
+import numpy as np
+
+from gyro_instrument.core import dop853
+from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.quaternion import quat_mul, quat_to_matrix
+from gyro_instrument.core.trajectory import Trajectory
+
+#: h Ω at rtol 1e-10 (dimensionless), for each fixed-step integrator.
+H_OMEGA = {"axis_rk8": 0.25, "rk8": 0.25}
+
+
+@functools.cache
+def fixed_step_kernels() -> "types.ModuleType":
+    """The module :mod:`.kernels`, imported (and so compiled) on first use only."""
+    from gyro_instrument.instruments.puiseux import kernels  # noqa: PLC0415 - lazy: numba
+
+    return kernels
+
+
+def axis_state(y) -> tuple:
+    """(x, r): the reduced state x = (u, u̇, φ) (7,) of a body of revolution and its spin r (rad/s)
+    from y = (q (body → ENU), w (body)) (7,); φ = 2 atan2(z, w) of q_swing(u)⁻¹ ⊗ q."""
+    q, w = np.asarray(y[:4], dtype=float), np.asarray(y[4:], dtype=float)
+    R = quat_to_matrix(q)
+    u = R[:, 2]
+    v = np.cross(R @ w, u)
+    rel = quat_mul(_swing(u[:, None]).T[0] * np.array([1.0, -1.0, -1.0, -1.0]), q / np.linalg.norm(q))
+    phi = 2.0 * math.atan2(rel[3], rel[0])
+    return np.concatenate([u, v, [phi]]), float(w[2])
+
+
+def _swing(u) -> np.ndarray:
+    """Quaternions (4, m) of the minimal rotations taking e_z to the unit vectors u (3, m)."""
+    c = u[2]
+    norm = np.sqrt(2.0 * (1.0 + c))
+    return np.array([(1.0 + c) / norm, -u[1] / norm, u[0] / norm, np.zeros_like(c)])
+
+
+def body_states(x, r) -> np.ndarray:
+    """(q, w) (7, m) from reduced states x (7, m) (:func:`axis_state`): q = q_swing(u) ⊗ q_z(φ),
+    w = Rᵀ (u × u̇ + r u)."""
+    u = x[:3] / np.sqrt(np.sum(x[:3] * x[:3], axis=0))
+    half = 0.5 * x[6]
+    q = quat_mul(_swing(u).T, np.stack([np.cos(half), 0.0 * half, 0.0 * half, np.sin(half)], axis=-1))
+    w_world = np.cross(u.T, x[3:6].T) + r * u.T
+    w = np.einsum("mji,mj->im", quat_to_matrix(q), w_world)
+    return np.vstack([q.T, w])
+
+
+class FixedStepRun:
+    """A resumable fixed-step run (the ``advance`` interface of
+    :class:`gyro_instrument.core.integrate.Integration`).
+
+    Parameters
+    ----------
+    model : str
+        ``axis_rk8`` (reduced body of revolution; ``params`` = (a, b, c_z, A, C, r, M, g)) or ``rk8``
+        (exact equations; ``params`` = (A, B, C, M, g, S_xx, S_xy, S_xz, S_yy, S_yz, S_zz, c_x, c_y, c_z)).
+    y0 : array (7,)
+        (q, w) at ``t0``.
+    t0 : float
+        Start, s.
+    params : sequence of float
+    omega_rad_s : float
+        Fastest rate of the motion, s⁻¹ (sets the step).
+    rtol : float
+        The scene's tolerance (scales :data:`H_OMEGA`).
+    """
+
+    def __init__(self, model, y0, t0, params, omega_rad_s, rtol) -> None:
+        self.model = model
+        self.params = np.asarray(params, dtype=float)
+        self.h_max = H_OMEGA[model] * (rtol / 1e-10) ** 0.125 / max(omega_rad_s, 1e-300)
+        self.r = float(self.params[5]) if model == "axis_rk8" else None
+        self.x = axis_state(y0)[0] if model == "axis_rk8" else np.asarray(y0, dtype=float).copy()
+        self.y0 = np.asarray(y0, dtype=float)
+        self.t = float(t0)
+        self.nsteps = 0
+        self.cpu_time_s = 0.0
+        self.meta = {"rtol": rtol, "h_omega": H_OMEGA[model], "omega_rad_s": omega_rad_s}
+
+    def advance(self, t) -> Trajectory:
+        """States (q, w) at the sample times ``t`` (s, increasing, from the last one returned)."""
+        c0 = time.process_time()
+        k = fixed_step_kernels()
+        t = np.asarray(t, dtype=float)
+        times = t if t.size and t[0] == self.t else np.concatenate([[self.t], t])
+        steps = np.maximum(1, np.ceil(np.diff(times) / self.h_max))
+        sub = int(steps.max()) if steps.size else 0
+        model = k.AXIS if self.model == "axis_rk8" else k.BODY
+        xs = k.rk8_samples(model, self.x, times, self.h_max, self.params, dop853.A, dop853.B)
+        if not np.all(np.isfinite(xs)):
+            bad = times[np.argmax(~np.all(np.isfinite(xs), axis=0))]
+            raise IntegrationError(f"{self.model}: non-finite state, or the axis tilted past "
+                                   f"{math.degrees(k.MAX_TILT_RAD):g} deg (the reduction's limit), near "
+                                   f"t = {bad:.6g} s; integrator: rk8 or dop853 have no such limit")
+        self.x, self.t = xs[:, -1].copy(), float(times[-1])
+        self.nsteps += int(steps.sum())
+        xs = xs[:, times.size - t.size:]
+        y = body_states(xs, self.r) if self.model == "axis_rk8" else xs
+        self.cpu_time_s += time.process_time() - c0
+        meta = dict(self.meta, nsteps=self.nsteps, substeps=sub)
+        return Trajectory(t, y, 12 * self.nsteps, self.cpu_time_s, self.cpu_time_s, self.model, meta)
