@@ -91,8 +91,10 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from gyro_instrument.core.effect import FRAME_RATE, Scales
+from gyro_instrument.core.effect import FRAME_RATE, SPIN, Scales
 from gyro_instrument.core.angles import NumpyUnwrapper
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.rigid_body_flow import COMPOSITIONS, splitting_run, to_body
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
@@ -142,10 +144,23 @@ class FreeGyroscope(Instrument):
               doc="initial spin ρ0 about the axis relative to the Earth, rad/s (right-handed "
                   "about the axis direction; Quet's example 60)"),
         Param("model", kind="str", default="analytic", choices=("analytic", "numerical"),
-              doc="analytic: exact torque-free closed form; numerical: quaternion + DOP853"),
+              doc="analytic: exact torque-free closed form (refused under a torque: spin_decay or "
+                  "center_of_mass_offset_m); numerical: time stepping by the integrator parameter"),
         Param("rtol", default=1e-12, low=1e-14, high=1e-3, doc="numerical path relative tolerance"),
+        Param("integrator", kind="str", default="auto", choices=("auto", "splitting", "dop853"),
+              doc="model numerical: splitting (exact torque-free flow composed with torque kicks, steps "
+                  "set by the slow time scales), dop853 (quaternion + Euler equations, resolves the "
+                  "nutation), auto (splitting)"),
+        Param("splitting_order", kind="int", default=6, low=2, high=6,
+              doc="order of the splitting composition: 2 Strang, 4 Yoshida triple jump, 6 Yoshida"),
+        Param("rotor_mass_kg", default=1.0, low=0.0, open_low=True,
+              doc="mass of the rotor, kg (with center_of_mass_offset_m: the unbalance torque)"),
+        Param("center_of_mass_offset_m", default=0.0, low=-1.0, high=1.0,
+              doc="mass unbalance: centre of mass at this distance from the fixed point along the "
+                  "figure axis (positive toward the spin axis direction), m; gravity torque "
+                  "m g d k × (−up)"),
     )
-    MECHANICS = frozenset({FRAME_RATE})
+    MECHANICS = frozenset({FRAME_RATE, SPIN})
     MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
     OBSERVATION = RotorObservation
@@ -175,6 +190,100 @@ class FreeGyroscope(Instrument):
         self.R0 = body_frame(self.k0)
         self.q0 = quat_from_matrix(self.R0)
         self.theta0 = angle_between(self.k0, self.e_axis)
+
+    @classmethod
+    def check_params(cls, prefix, p) -> None:
+        """Refuse a splitting order other than 2, 4, 6 and an explicit integrator with the closed form
+        (the integrator steps ``model: numerical`` only); raises SceneError."""
+        if p.get("splitting_order", 4) not in COMPOSITIONS:
+            raise SceneError(f"{prefix}.splitting_order", p["splitting_order"],
+                             f"must be one of {', '.join(str(o) for o in COMPOSITIONS)}")
+        if p.get("model", "analytic") == "analytic" and p.get("integrator", "auto") != "auto":
+            raise SceneError(f"{prefix}.integrator", p["integrator"],
+                             "must be auto with model = analytic (the closed form has no integrator; set "
+                             "model: numerical to choose one)")
+
+    @classmethod
+    def check_effects(cls, prefix, p, effect_names) -> None:
+        """Refuse the torque-free closed form (``model: analytic``) under a torque: ``spin_decay`` listed
+        or ``center_of_mass_offset_m`` ≠ 0 (use ``model: numerical``); raises SceneError."""
+        if p.get("model", "analytic") != "analytic":
+            return
+        if p.get("center_of_mass_offset_m", 0.0):
+            raise SceneError(f"{prefix}.center_of_mass_offset_m", p["center_of_mass_offset_m"],
+                             "must be 0 with model = analytic: the mass unbalance's gravity torque has no closed "
+                             "form here (set model: numerical)")
+        if "spin_decay" in effect_names:
+            raise SceneError(f"{prefix}.model", "analytic",
+                             "cannot carry the effect spin_decay (a bearing torque on the spin): the closed form "
+                             "is torque-free; set model: numerical, or remove spin_decay")
+
+    def torqued(self) -> bool:
+        """True when a torque acts: ``spin_decay`` listed or a mass unbalance (``center_of_mass_offset_m``)."""
+        return self.has("spin_decay") or self.p.center_of_mass_offset_m != 0.0
+
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """(integrator, reason): ``analytic`` for the closed form; for ``model: numerical`` the
+        ``integrator`` parameter, ``auto`` meaning splitting (its step from :meth:`splitting_step`)."""
+        if self.p.model == "analytic":
+            return "analytic", "model analytic: the exact torque-free closed form, cost independent of the horizon"
+        if self.p.integrator == "dop853":
+            return "dop853", "chosen in the scene: DOP853 on quaternion + Euler equations (resolves every nutation)"
+        how = "chosen in the scene" if self.p.integrator == "splitting" else \
+            "auto: the exact torque-free flow carries the spin and nutation, so the cost follows the slow motion"
+        if not self.torqued():
+            return "splitting", f"{how}; no torque acts: one exact step per sample"
+        return "splitting", (f"{how}; order {self.p.splitting_order} composition with torque kicks, step "
+                             f"{self.splitting_step():.3g} s from rtol {self.p.rtol:g}, the torque's slow rate "
+                             f"{self.slow_rate():.3g} rad/s and the nutation rate {self.motion_constants()['lam']:.4g} "
+                             f"rad/s (a torque across the axis excites nutation: the step resolves it)")
+
+    #: Error constants K_p of the splitting's measured axis-error law (order p: constant), bounded in
+    #: time: err ≈ K_p (s/λ) (λ h)^p rad, λ = |L|/A the nutation rate, s the torque's slow rate
+    #: (:meth:`slow_rate`), so s/λ is the amplitude of the nutation the torque forces. Fitted on a
+    #: mass unbalance (d = 1e-4 and 1e-6 m, 60 rad/s, 60 and 600 s; tests/test_free_gyroscope_splitting.py
+    #: checks the law): the kicks of a torque across the axis excite nutation, so the step must resolve
+    #: the nutation (λ h ≲ 1), not only the slow motion; torques along the axis (spin_decay) err far less.
+    STEP_ERROR_CONSTANT = {2: 0.2, 4: 0.01, 6: 1e-5}
+
+    def unbalance_torque_per_inertia(self) -> float:
+        """m g d / A, rad/s²: the gravity torque of the mass unbalance over the transverse moment."""
+        return self.p.rotor_mass_kg * self.site.gravity_m_s2 * self.p.center_of_mass_offset_m / \
+            self.p.transverse_inertia_kg_m2
+
+    def slow_rate(self) -> float:
+        """s, rad/s: the fastest of the torques' slow rates — the unbalance's precession rate
+        m g |d| / |L| (|L| at release; √(m g |d| / A) for a body at rest) and the spin decay rate 1/τ."""
+        L = self.p.transverse_inertia_kg_m2 * self.motion_constants()["lam"]
+        torque = abs(self.unbalance_torque_per_inertia()) * self.p.transverse_inertia_kg_m2
+        rates = [torque / L if L > 0.0 else math.sqrt(abs(self.unbalance_torque_per_inertia()))]
+        if self.has("spin_decay"):
+            rates.append(1.0 / self.effect("spin_decay").p.time_constant_s)
+        return max(rates)
+
+    def splitting_step(self) -> float:
+        """Largest splitting step h = (rtol / (K_p s/λ))^(1/p) / λ, s: :meth:`slow_rate`, λ = |L|/A,
+        p: ``splitting_order``, K_p: :data:`STEP_ERROR_CONSTANT` (axis error ≈ rtol rad); inf without a
+        torque (the free flow is exact: one step per sample)."""
+        s, lam = self.slow_rate(), self.motion_constants()["lam"]
+        if not self.torqued() or s <= 0.0:
+            return math.inf
+        lam = max(lam, s)
+        order = self.p.splitting_order
+        return (self.p.rtol / (self.STEP_ERROR_CONSTANT[order] * s / lam)) ** (1.0 / order) / lam
+
+    def torque_array(self) -> np.ndarray:
+        """The torques as :func:`~gyro_instrument.core.rigid_body_flow.kick` reads them: [γ = m g d / A,
+        n, 1/τ (0 without ``spin_decay``), ê, up_par, up_perp, up_cross] with the local up in the inertial
+        frame (ENU frozen at release) up(t) = Rot(ê, n t) ẑ = up_par + cos(nt) up_perp + sin(nt) up_cross;
+        empty without a torque."""
+        if not self.torqued():
+            return np.empty(0)
+        n, e = self.model_rate(), self.e_axis
+        z = np.array([0.0, 0.0, 1.0])
+        par = float(z @ e) * e
+        rate = 1.0 / self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
+        return np.concatenate([[self.unbalance_torque_per_inertia(), n, rate], e, par, z - par, np.cross(e, z)])
 
     # ---------------------------------------------------------------- constants of motion
     def model_rate(self) -> float:
@@ -358,16 +467,36 @@ class FreeGyroscope(Instrument):
         q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|."""
         a = 1.0 - self.p.inertia_ratio
         kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+        torque = self.torque_rates()
 
         def f(t, qw, qx, qy, qz, w1, w2, w3):
             corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
+            d1, d2, d3 = torque(t, (qw, qx, qy, qz), w3) if torque is not None else (0.0, 0.0, 0.0)
             return (0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw,
                     0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx,
                     0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy,
                     0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz,
-                    a * w2 * w3,
-                    -a * w1 * w3,
-                    0.0)
+                    a * w2 * w3 + d1,
+                    -a * w1 * w3 + d2,
+                    d3)
+        return f
+
+    def torque_rates(self) -> Callable | None:
+        """``f(t, q, ω3) -> (ω̇1, ω̇2, ω̇3)``: the torques over the body moments, rad/s² — the mass
+        unbalance m g d (up_b × e3) / A and ``spin_decay``'s −ρ/τ (:meth:`SpinDecay.spin_torque_per_inertia`)
+        on ρ = ω3 − n k·ê; None without a torque (the torque-free equations are then unchanged)."""
+        if not self.torqued():
+            return None
+        tq = self.torque_array()
+        gam, n, par, perp, cross = tq[0], tq[1], tuple(tq[6:9]), tuple(tq[9:12]), tuple(tq[12:15])
+        e = tuple(float(v) for v in self.e_axis)
+        decay = self.effect("spin_decay")
+
+        def f(t, q, w3):
+            c, s = math.cos(n * t), math.sin(n * t)
+            ux, uy, _ = to_body(q, [par[i] + c * perp[i] + s * cross[i] for i in range(3)])
+            d3 = decay.spin_torque_per_inertia(w3 - n * to_body(q, e)[2]) if decay is not None else 0.0
+            return gam * uy, -gam * ux, d3
         return f
 
     def columns_from_state(self, tau, y, unwrappers=None) -> tuple:
@@ -442,22 +571,34 @@ class FreeGyroscope(Instrument):
         if t0 is None:
             return
         model = model or self.p.model
+        integrator = options.pop("integrator", None) or self.chosen_integrator()[0]
         unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
-        run = None
-        if model != "analytic":
-            wb0 = self.R0.T @ self.motion_constants()["omega0"]
+        rtol = self.p.rtol if rtol is None else rtol
+        run = split = None
+        wb0 = self.R0.T @ self.motion_constants()["omega0"]
+        if model != "analytic" and integrator == "dop853":
             run = integration(self.rhs_scalar(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
-                              method="DOP853-scalar", rtol=self.p.rtol if rtol is None else rtol, atol=1e-14)
+                              method="DOP853-scalar", rtol=rtol, atol=1e-14)
+        elif model != "analytic":
+            order = options.pop("splitting_order", None) or self.p.splitting_order
+            h = options.pop("step_s", None) or self.splitting_step()
+            split = [np.concatenate([self.q0, wb0]), 0.0, h, order, self.torque_array()]
         for t in blocks:
             tau = t - t0
-            if run is None:
-                w0, c0 = time.perf_counter(), time.process_time()
-                y = self.analytic_state(tau)
-                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
-            else:
+            w0, c0 = time.perf_counter(), time.process_time()
+            if run is not None:
                 traj = run.advance(tau)
                 traj.t = t
                 y = traj.y
+            elif split is not None:
+                state, start, h, order, torque = split
+                y = splitting_run(state, start, tau, h, order, self.p.inertia_ratio, torque)
+                split[1] = float(tau[-1]) if len(tau) else start
+                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "splitting",
+                                  {"integrator": f"splitting order {order}", "step_s": h})
+            else:
+                y = self.analytic_state(tau)
+                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
             columns, extra = self.columns_from_state(tau, y, unwrappers)
             extra["motion_constants"] = self.motion_constants()
             yield Simulation(t, columns, traj, extra)
