@@ -230,7 +230,7 @@ class FreeGyroscope(Instrument):
         if self.p.integrator == "dop853":
             return "dop853", "chosen in the scene: DOP853 on quaternion + Euler equations (resolves every nutation)"
         how = "chosen in the scene" if self.p.integrator == "splitting" else \
-            "auto: the exact torque-free flow carries the spin and nutation, so the cost follows the slow motion"
+            "auto: the exact torque-free flow carries the spin and the free nutation (faster than DOP853 at equal error: bench spin_free)"
         if not self.torqued():
             return "splitting", f"{how}; no torque acts: one exact step per sample"
         return "splitting", (f"{how}; order {self.p.splitting_order} composition with torque kicks, step "
