@@ -1,7 +1,8 @@
 """Free gyroscope: Quet 1853 sec. 4 §II (the axis moves like a parallactic telescope).
 
 A body of revolution (transverse moment A, axial moment C, μ = C/A) turns freely about its
-fixed centre of mass; no torque acts on it. Its axis is held at rest relative to the Earth in
+fixed centre of mass; no torque acts on it (Quet's problem; a mass unbalance and bearing
+friction may be added, see "Torques" below, with ``model: numerical``). Its axis is held at rest relative to the Earth in
 any direction, the body is given a relative spin ρ0 about the axis, and the axis is released
 at the first sample time ``t[0]`` (Quet's problem statement, §II).
 
@@ -78,11 +79,35 @@ Checks of the printed text (sec. 4 §II)
 
 Numerical path (``model: numerical``)
 -------------------------------------
-The unit quaternion q (body → inertial, scalar first; body z is the figure axis) and the
-body-axis angular velocity are integrated in the inertial frame with DOP853 (Euler's
-equations ω̇1 = (1 − μ) ω3 ω2, ω̇2 = (μ − 1) ω3 ω1, ω̇3 = 0 and q̇ = ½ q ⊗ (0, ω) plus a
-Baumgarte term κ (1 − |q|²) q that holds |q| at 1); q is renormalised before use. For
-cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
+The state is the unit quaternion q (body → inertial, scalar first; body z is the figure axis) and
+the body-axis angular velocity ω, in the inertial frame. Two integrators (``integrator``):
+
+* ``splitting`` (``auto``): the exact flow of the torque-free symmetric top from any state
+  (:mod:`gyro_instrument.core.rigid_body_flow`; the closed form above, restarted) composed with the
+  exact flows of the torques at frozen attitude — angular-momentum kicks — as in Celledoni, Fassò,
+  Säfström & Zanna, SIAM J. Sci. Comput. 30(4), 2008: Strang (order 2), Yoshida's triple jump (4) or
+  his 7-stage solution A (6, the default ``splitting_order``). Without a torque it is one exact step
+  per sample (the closed form to round-off). Under a torque across the axis the kicks excite
+  nutation, so the measured axis error follows err ≈ K_p (s/λ)(λh)^p, s the torque's slow rate, λ
+  the nutation rate (:meth:`FreeGyroscope.splitting_step` picks h for err ≈ rtol rad): the step
+  resolves the nutation, but each step is exact in the spin and cheap (a compiled loop), so
+  it runs thousands of times real time where DOP853 runs tens (``bench`` spin_free).
+* ``dop853``: DOP853 on Euler's equations ω̇1 = (1 − μ) ω3 ω2 + τ1/A, ω̇2 = (μ − 1) ω3 ω1 + τ2/A,
+  ω̇3 = τ3/C and q̇ = ½ q ⊗ (0, ω) plus a Baumgarte term κ (1 − |q|²) q that holds |q| at 1; q is
+  renormalised before use. Its cost grows as the horizon times μ ρ0. The independent cross-check.
+
+Torques (``model: numerical`` only; the closed form refuses them through the scene checks)
+------------------------------------------------------------------------------------------
+* Mass unbalance: the centre of mass at d = ``center_of_mass_offset_m`` from the fixed point along
+  the figure axis, mass m = ``rotor_mass_kg``: the gravity torque m g d k × (−up) (``up`` the local
+  vertical, turning with the Earth in the inertial frame), the classic drift source of a free
+  (two-gimbal) gyro: the axis precesses about the vertical at m g d / (C ω3). Mass-unbalance
+  drift: D. Lawrence, "Modern Inertial Technology", 2nd ed., Springer 1998, ch. 8 (ASSUMED
+  citation: not checked against the text here). A, C are the moments about the fixed point.
+* ``spin_decay``: the bearing torque −C ρ/τ along the axis on the spin relative to the Earth,
+  ρ = ω3 − n k·ê (:meth:`~gyro_instrument.effects.spin_decay.SpinDecay.spin_torque_per_inertia`).
+Without earth_rotation and with an unbalance this is Lagrange's heavy top: the energy
+T + m g d k·up, L·up and ω3 are constants (tests/test_free_gyroscope_splitting.py).
 """
 
 import math
@@ -111,7 +136,8 @@ __all__ = ["FreeGyroscope", "angle_between", "axis_from_alt_az", "axis_relative_
 
 
 class FreeGyroscope(Instrument):
-    """Torque-free body of revolution released with its axis at rest relative to the Earth.
+    """Body of revolution about its fixed point, released with its axis at rest relative to the Earth;
+    torque-free unless a mass unbalance or ``spin_decay`` is given.
 
     Parameters (``PARAMS``)
     -----------------------
@@ -125,13 +151,20 @@ class FreeGyroscope(Instrument):
     spin_rate_rad_s : float
         ρ0, the initial spin about the axis relative to the Earth, rad/s (Quet's ρ0).
     model : {"analytic", "numerical"}
-        Exact closed form (default) or quaternion integration (short horizons).
+        Exact closed form (default; torque-free only) or time stepping by ``integrator``.
     rtol : float
-        Relative tolerance of the numerical path.
+        Relative tolerance of the numerical path (the splitting: the axis error aimed at, rad).
+    integrator : {"auto", "splitting", "dop853"}
+        ``model: numerical`` only: the splitting (``auto``) or DOP853 (module docstring).
+    splitting_order : {2, 4, 6}
+        Order of the splitting's composition (default 6).
+    rotor_mass_kg, center_of_mass_offset_m : float
+        m (kg) and the mass unbalance d (m, along the figure axis): gravity torque m g d k × (−up).
     """
 
     type_name = "free_gyroscope"
-    summary = "torque-free body of revolution: parallactic motion and nutation (Quet sec. 4 §II)"
+    summary = ("free body of revolution: parallactic motion and nutation (Quet sec. 4 §II); mass unbalance "
+               "drift and spin decay with the numerical model")
     PARAMS = (
         Param("initial_axis_altitude_deg", default=0.0, low=-90.0, high=90.0,
               doc="initial axis altitude above the horizon, degrees"),
@@ -146,11 +179,13 @@ class FreeGyroscope(Instrument):
         Param("model", kind="str", default="analytic", choices=("analytic", "numerical"),
               doc="analytic: exact torque-free closed form (refused under a torque: spin_decay or "
                   "center_of_mass_offset_m); numerical: time stepping by the integrator parameter"),
-        Param("rtol", default=1e-12, low=1e-14, high=1e-3, doc="numerical path relative tolerance"),
+        Param("rtol", default=1e-12, low=1e-14, high=1e-3,
+              doc="numerical path tolerance: DOP853's relative tolerance; the splitting's aimed axis error, rad"),
         Param("integrator", kind="str", default="auto", choices=("auto", "splitting", "dop853"),
-              doc="model numerical: splitting (exact torque-free flow composed with torque kicks, steps "
-                  "set by the slow time scales), dop853 (quaternion + Euler equations, resolves the "
-                  "nutation), auto (splitting)"),
+              doc="model numerical: splitting (exact torque-free flow composed with torque kicks: one step "
+                  "per sample without a torque; under one, steps from rtol that resolve the nutation it "
+                  "excites), dop853 (quaternion + Euler equations, resolves spin and nutation), auto "
+                  "(splitting)"),
         Param("splitting_order", kind="int", default=6, low=2, high=6,
               doc="order of the splitting composition: 2 Strang, 4 Yoshida triple jump, 6 Yoshida"),
         Param("rotor_mass_kg", default=1.0, low=0.0, open_low=True,
