@@ -177,3 +177,18 @@ def test_torque_free_invariants_to_round_off_over_a_day():
     E = s.extra["kinetic_energy_j"]
     assert np.ptp(L) / L[0] < 1e-13 and np.ptp(E) / E[0] < 1e-13
     assert np.max(np.abs(s.extra["quaternion_norm"] - 1.0)) < 1e-14
+
+
+def test_work_precision_rows_quick():
+    # bench spin_free: the keys the lead wires into bench, every integrator row within its rtol's
+    # reach (splitting: ≤ 10 rtol, the step law; DOP853: ≤ 1e3 rtol), the heavy top's energy kept
+    # as well as the angles (relative to m g d)
+    from gyro_instrument.bench.spin_free import KEYS, work_precision_rows
+    rows = work_precision_rows(quick=True, progress=lambda s: None)
+    assert rows and all(tuple(r) == KEYS for r in rows)
+    assert {r["integrator"] for r in rows} == {"splitting", "dop853"}
+    for r in rows:
+        rtol = float(r["setting"].split("rtol ")[1].split(",")[0])
+        assert r["max_error_rad"] < (10.0 if r["integrator"] == "splitting" else 1e3) * rtol, r
+        assert r["invariant_drift"] < (10.0 if r["integrator"] == "splitting" else 1e3) * rtol, r
+        assert r["simulated_s"] == 5.0 and r["cpu_s"] > 0.0
