@@ -588,6 +588,9 @@ class FreeGyroscope(Instrument):
             Overrides the ``model`` parameter.
         rtol : float, optional
             Overrides the ``rtol`` parameter (numerical path).
+        **options
+            ``integrator`` ("splitting" or "dop853") and ``splitting_order`` override the parameters;
+            ``step_s`` forces the splitting's largest step, s (the work-precision study).
 
         Returns
         -------
@@ -599,9 +602,10 @@ class FreeGyroscope(Instrument):
 
     def stream(self, blocks, model=None, rtol=None, **options) -> Iterator[Simulation]:
         """Block by block (:meth:`Instrument.stream`), released at the first sample: the closed form
-        at each block's times, or the numerical path's DOP853 step sequence carried across blocks
-        (:class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue across
-        blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
+        at each block's times, or the numerical path's state carried across blocks (the splitting's
+        state and time, :func:`~gyro_instrument.core.rigid_body_flow.splitting_run`, or DOP853's step
+        sequence, :class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue
+        across blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
