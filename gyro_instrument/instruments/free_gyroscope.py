@@ -378,6 +378,10 @@ class FreeGyroscope(Instrument):
             ``zero_spin_departure_1h_rad`` (≥ 0, exact), ``zero_spin_departure_1h_leading_rad``,
             ``initial_cos_theta_acceleration_quet_relative_error`` and ``beyond_the_paper`` (str).
             Rates are signed (the hour angle grows at +n: westward); magnitudes are ≥ 0.
+            With a mass unbalance: ``unbalance_precession_rate_rad_s`` = m g d / (C ω3), the axis'
+            precession about the vertical (counterclockwise seen from above when positive; the
+            steady precession of a fast top, exact for a horizontal axis: m g d = Ω (C ω3 − A Ω cos θ),
+            θ from the vertical; e.g. Goldstein, Classical Mechanics, §5.7).
         """
         n = self.model_rate()
         mu, rho0, th = self.p.inertia_ratio, self.p.spin_rate_rad_s, self.theta0
@@ -411,6 +415,9 @@ class FreeGyroscope(Instrument):
         }
         if n != 0.0:
             out.update(self._zero_spin_departure(n))
+        if self.p.center_of_mass_offset_m != 0.0 and k["omega3"] != 0.0:
+            # gyroscopic (fast-top) precession of the axis about the vertical under the unbalance torque
+            out["unbalance_precession_rate_rad_s"] = self.unbalance_torque_per_inertia() / (mu * k["omega3"])
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
