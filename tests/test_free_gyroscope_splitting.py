@@ -221,3 +221,9 @@ def test_unbalance_drift_is_the_gyroscopic_precession():
     slope = np.polyfit(s.t, az, 1)[0]
     assert slope == pytest.approx(-rate, rel=1e-5)
     assert "unbalance_precession_rate_rad_s" not in _run(["duration_s=1"])[0].predictions()
+
+
+def test_forcing_the_closed_form_under_a_torque_is_refused():
+    g, _ = _run([NUM, "duration_s=1", "instruments.free_gyro.center_of_mass_offset_m=1e-6"])
+    with pytest.raises(SceneError, match="model"):
+        g.simulate(np.linspace(0.0, 1.0, 3), model="analytic")

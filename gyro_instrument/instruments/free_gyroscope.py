@@ -617,6 +617,9 @@ class FreeGyroscope(Instrument):
         if t0 is None:
             return
         model = model or self.p.model
+        if model == "analytic" and self.torqued():
+            raise SceneError(f"instruments.{self.name}.model", model, "is torque-free: a mass unbalance or "
+                             "spin_decay needs model numerical")
         integrator = options.pop("integrator", None) or self.chosen_integrator()[0]
         unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
         rtol = self.p.rtol if rtol is None else rtol
