@@ -42,7 +42,7 @@ CASES = {
     "compound_pendulum": ("foucault_pantheon", ["duration_s=8", "instruments.cp.type=compound_pendulum",
                                                 "instruments.cp.spin_rate_rad_s=3.0", "instruments.pendulum=null"],
                           "cp"),
-    "free_gyroscope": ("free_gyroscope", ["duration_s=600"], "free_gyro"),
+    "free_gyroscope": ("free_gyroscope", ["duration_s=600", "instruments.free_gyro.model=numerical"], "free_gyro"),
     "gimbal_gyroscope": ("gimbal_paris", ["duration_s=30", "instruments.gimbal_outer_fixed=null"], "gimbal_locked"),
     "puiseux_body": ("puiseux_spheroid", ["duration_s=1"], "spheroid"),
 }

@@ -89,7 +89,7 @@ def test_mean_axis_rate_numerical_short(build):
     # integration error in the axis is < 1e-14 rad (see the cross-check below), i.e. ~1e-10 of
     # the 2.9e-4 rad advance; ending on a whole number of nutation periods removes the wobble.
     g = build(FreeGyroscope, Site.from_degrees(PARIS), ROT, initial_axis_altitude_deg=20.0,
-              initial_axis_azimuth_deg=70.0, model="numerical")
+              initial_axis_azimuth_deg=70.0, model="numerical", integrator="dop853")
     t = period_grid(g, 4.0, per_period=8)
     H = g.simulate(t).columns["hour_angle"]
     assert (H[-1] - H[0]) / t[-1] == pytest.approx(N_SID, rel=1e-6)
@@ -111,7 +111,7 @@ def test_nutation_diameter_and_period_from_numerical_samples(build, alt, az, mu,
     # interpolated crossings over ~20 periods err by < 1e-6.
     site = Site.from_degrees(PARIS)
     g = build(FreeGyroscope, site, ROT, initial_axis_altitude_deg=alt, initial_axis_azimuth_deg=az,
-              inertia_ratio=mu, spin_rate_rad_s=spin, model="numerical")
+              inertia_ratio=mu, spin_rate_rad_s=spin, model="numerical", integrator="dop853")
     p = g.predictions()
     t = period_grid(g, 20 * p["nutation_period_s"], per_period=64)
     s = g.simulate(t)
@@ -194,7 +194,7 @@ def test_axis_within_1e6_rad_of_earth_axis(build, part, mu):
     H = s.columns["hour_angle"]
     assert (H[-1] - H[0]) / t[-1] == pytest.approx(N_SID, rel=1e-6)
     tn = np.linspace(0.0, 1.0, 201)
-    sn = g.simulate(tn, model="numerical")
+    sn = g.simulate(tn, model="numerical", integrator="dop853")
     sa = g.simulate(tn, model="analytic")
     assert all(np.all(np.isfinite(c)) for c in sn.columns.values())
     assert np.max(np.linalg.norm(sn.extra["axis_enu"] - sa.extra["axis_enu"], axis=1)) < 1e-13
@@ -209,7 +209,7 @@ def test_axis_exactly_on_earth_axis_is_finite_and_fixed(build):
     t = np.linspace(0.0, 86400.0, 1001)
     for model in ("analytic", "numerical"):
         tt = t if model == "analytic" else t[:11] / 8640.0     # numerical: 1 s
-        s = g.simulate(tt, model=model)
+        s = g.simulate(tt, model=model, integrator="dop853")
         assert all(np.all(np.isfinite(c)) for c in s.columns.values())
         assert np.max(np.abs(s.columns["declination"] - math.pi / 2)) < 1e-14
         assert np.max(np.linalg.norm(s.extra["axis_enu"] - g.k0, axis=1)) < 1e-14
@@ -245,7 +245,7 @@ def test_zero_spin_stays_in_relative_equilibrium_when_omega_is_principal(build, 
     assert g.predictions()["relative_equilibrium_exact"]
     for model, T in (("analytic", 86400.0), ("numerical", 3600.0)):
         t = np.linspace(0.0, T, 241)
-        s = g.simulate(t, model=model)
+        s = g.simulate(t, model=model, integrator="dop853")
         assert np.max(np.linalg.norm(s.extra["axis_enu"] - g.k0, axis=1)) < 1e-12
         assert np.max(np.abs(s.columns["spin_rate"])) < 1e-15
 
@@ -264,7 +264,7 @@ def test_zero_spin_general_axis_leaves_relative_equilibrium(build):
     assert not p["relative_equilibrium_exact"]
     t = np.linspace(0.0, 3600.0, 61)
     sa = g.simulate(t)
-    sn = g.simulate(t, model="numerical")
+    sn = g.simulate(t, model="numerical", integrator="dop853")
     dec = sa.columns["declination"] - sa.columns["declination"][0]
     th = g.theta0
     acc = (mu - 1) * N_SID ** 2 * math.sin(th) * math.cos(th)
@@ -293,7 +293,7 @@ def test_stated_zero_spin_departure_matches_the_simulated_one(build, lat, alt, a
     kw = dict(initial_axis_altitude_deg=alt, initial_axis_azimuth_deg=az, inertia_ratio=mu)
     g = build(FreeGyroscope, site, ROT, spin_rate_rad_s=spin, **kw)
     pred = g.predictions()
-    zero = build(FreeGyroscope, site, ROT, spin_rate_rad_s=0.0, model="numerical", **kw)
+    zero = build(FreeGyroscope, site, ROT, spin_rate_rad_s=0.0, model="numerical", integrator="dop853", **kw)
     s = zero.simulate(np.linspace(0.0, 3600.0, 61))
     a = s.extra["axis_enu"]
     simulated = math.atan2(np.linalg.norm(np.cross(a[0], a[-1])), a[0] @ a[-1])
@@ -317,7 +317,7 @@ def test_relative_vis_viva_eq2_is_exact_only_for_a_sphere(build):
     g = build(FreeGyroscope, Site.from_degrees(PARIS), ROT, initial_axis_altitude_deg=20.0,
               initial_axis_azimuth_deg=0.0, inertia_ratio=2.0, spin_rate_rad_s=0.0)
     t = np.linspace(0.0, 3600.0, 61)
-    s = g.simulate(t, model="numerical")
+    s = g.simulate(t, model="numerical", integrator="dop853")
     R = quat_to_matrix(s.trajectory.y[:4].T)
     wb = s.trajectory.y[4:].T
     om_b = np.einsum("mji,j->mi", R, N_SID * g.e_axis)
@@ -340,7 +340,7 @@ def test_numerical_invariants_and_relative_spin_eq7(build):
     # (Baumgarte term; measured ~1e-15, 0, 1e-13). Relative spin: eq. (7) ρ = ρ0 + n (cos θ_Q −
     # cos θ0_Q) = ρ0 + n (sin δ0 − sin δ) to 1e-13 rad/s (a 1e-10 rad/s effect here).
     g = build(FreeGyroscope, Site.from_degrees(PARIS), ROT, initial_axis_altitude_deg=20.0,
-              initial_axis_azimuth_deg=70.0, model="numerical")
+              initial_axis_azimuth_deg=70.0, model="numerical", integrator="dop853")
     t = np.linspace(0.0, 5.0, 2001)
     s = g.simulate(t)
     L = np.linalg.norm(s.extra["angular_momentum"], axis=1)

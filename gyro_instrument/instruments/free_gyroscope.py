@@ -1,7 +1,8 @@
 """Free gyroscope: Quet 1853 sec. 4 §II (the axis moves like a parallactic telescope).
 
 A body of revolution (transverse moment A, axial moment C, μ = C/A) turns freely about its
-fixed centre of mass; no torque acts on it. Its axis is held at rest relative to the Earth in
+fixed centre of mass; no torque acts on it (Quet's problem; a mass unbalance and bearing
+friction may be added, see "Torques" below, with ``model: numerical``). Its axis is held at rest relative to the Earth in
 any direction, the body is given a relative spin ρ0 about the axis, and the axis is released
 at the first sample time ``t[0]`` (Quet's problem statement, §II).
 
@@ -78,11 +79,35 @@ Checks of the printed text (sec. 4 §II)
 
 Numerical path (``model: numerical``)
 -------------------------------------
-The unit quaternion q (body → inertial, scalar first; body z is the figure axis) and the
-body-axis angular velocity are integrated in the inertial frame with DOP853 (Euler's
-equations ω̇1 = (1 − μ) ω3 ω2, ω̇2 = (μ − 1) ω3 ω1, ω̇3 = 0 and q̇ = ½ q ⊗ (0, ω) plus a
-Baumgarte term κ (1 − |q|²) q that holds |q| at 1); q is renormalised before use. For
-cross-checking over short horizons; its cost grows as the horizon times μ ρ0.
+The state is the unit quaternion q (body → inertial, scalar first; body z is the figure axis) and
+the body-axis angular velocity ω, in the inertial frame. Two integrators (``integrator``):
+
+* ``splitting`` (``auto``): the exact flow of the torque-free symmetric top from any state
+  (:mod:`gyro_instrument.core.rigid_body_flow`; the closed form above, restarted) composed with the
+  exact flows of the torques at frozen attitude — angular-momentum kicks — as in Celledoni, Fassò,
+  Säfström & Zanna, SIAM J. Sci. Comput. 30(4), 2008: Strang (order 2), Yoshida's triple jump (4) or
+  his 7-stage solution A (6, the default ``splitting_order``). Without a torque it is one exact step
+  per sample (the closed form to round-off). Under a torque across the axis the kicks excite
+  nutation, so the measured axis error follows err ≈ K_p (s/λ)(λh)^p, s the torque's slow rate, λ
+  the nutation rate (:meth:`FreeGyroscope.splitting_step` picks h for err ≈ rtol rad): the step
+  resolves the nutation, but each step is exact in the spin and cheap (a compiled loop), so
+  it runs thousands of times real time where DOP853 runs tens (``bench`` spin_free).
+* ``dop853``: DOP853 on Euler's equations ω̇1 = (1 − μ) ω3 ω2 + τ1/A, ω̇2 = (μ − 1) ω3 ω1 + τ2/A,
+  ω̇3 = τ3/C and q̇ = ½ q ⊗ (0, ω) plus a Baumgarte term κ (1 − |q|²) q that holds |q| at 1; q is
+  renormalised before use. Its cost grows as the horizon times μ ρ0. The independent cross-check.
+
+Torques (``model: numerical`` only; the closed form refuses them through the scene checks)
+------------------------------------------------------------------------------------------
+* Mass unbalance: the centre of mass at d = ``center_of_mass_offset_m`` from the fixed point along
+  the figure axis, mass m = ``rotor_mass_kg``: the gravity torque m g d k × (−up) (``up`` the local
+  vertical, turning with the Earth in the inertial frame), the classic drift source of a free
+  (two-gimbal) gyro: the axis precesses about the vertical at m g d / (C ω3). Mass-unbalance
+  drift: D. Lawrence, "Modern Inertial Technology", 2nd ed., Springer 1998, ch. 8 (ASSUMED
+  citation: not checked against the text here). A, C are the moments about the fixed point.
+* ``spin_decay``: the bearing torque −C ρ/τ along the axis on the spin relative to the Earth,
+  ρ = ω3 − n k·ê (:meth:`~gyro_instrument.effects.spin_decay.SpinDecay.spin_torque_per_inertia`).
+Without earth_rotation and with an unbalance this is Lagrange's heavy top: the energy
+T + m g d k·up, L·up and ω3 are constants (tests/test_free_gyroscope_splitting.py).
 """
 
 import math
@@ -91,8 +116,10 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from gyro_instrument.core.effect import FRAME_RATE, Scales
+from gyro_instrument.core.effect import FRAME_RATE, SPIN, Scales
 from gyro_instrument.core.angles import NumpyUnwrapper
+from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.rigid_body_flow import COMPOSITIONS, splitting_run, to_body
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
@@ -109,7 +136,8 @@ __all__ = ["FreeGyroscope", "angle_between", "axis_from_alt_az", "axis_relative_
 
 
 class FreeGyroscope(Instrument):
-    """Torque-free body of revolution released with its axis at rest relative to the Earth.
+    """Body of revolution about its fixed point, released with its axis at rest relative to the Earth;
+    torque-free unless a mass unbalance or ``spin_decay`` is given.
 
     Parameters (``PARAMS``)
     -----------------------
@@ -123,13 +151,20 @@ class FreeGyroscope(Instrument):
     spin_rate_rad_s : float
         ρ0, the initial spin about the axis relative to the Earth, rad/s (Quet's ρ0).
     model : {"analytic", "numerical"}
-        Exact closed form (default) or quaternion integration (short horizons).
+        Exact closed form (default; torque-free only) or time stepping by ``integrator``.
     rtol : float
-        Relative tolerance of the numerical path.
+        Relative tolerance of the numerical path (the splitting: the axis error aimed at, rad).
+    integrator : {"auto", "splitting", "dop853"}
+        ``model: numerical`` only: the splitting (``auto``) or DOP853 (module docstring).
+    splitting_order : {2, 4, 6}
+        Order of the splitting's composition (default 6).
+    rotor_mass_kg, center_of_mass_offset_m : float
+        m (kg) and the mass unbalance d (m, along the figure axis): gravity torque m g d k × (−up).
     """
 
     type_name = "free_gyroscope"
-    summary = "torque-free body of revolution: parallactic motion and nutation (Quet sec. 4 §II)"
+    summary = ("free body of revolution: parallactic motion and nutation (Quet sec. 4 §II); mass unbalance "
+               "drift and spin decay with the numerical model")
     PARAMS = (
         Param("initial_axis_altitude_deg", default=0.0, low=-90.0, high=90.0,
               doc="initial axis altitude above the horizon, degrees"),
@@ -142,10 +177,25 @@ class FreeGyroscope(Instrument):
               doc="initial spin ρ0 about the axis relative to the Earth, rad/s (right-handed "
                   "about the axis direction; Quet's example 60)"),
         Param("model", kind="str", default="analytic", choices=("analytic", "numerical"),
-              doc="analytic: exact torque-free closed form; numerical: quaternion + DOP853"),
-        Param("rtol", default=1e-12, low=1e-14, high=1e-3, doc="numerical path relative tolerance"),
+              doc="analytic: exact torque-free closed form (refused under a torque: spin_decay or "
+                  "center_of_mass_offset_m); numerical: time stepping by the integrator parameter"),
+        Param("rtol", default=1e-12, low=1e-14, high=1e-3,
+              doc="numerical path tolerance: DOP853's relative tolerance; the splitting's aimed axis error, rad"),
+        Param("integrator", kind="str", default="auto", choices=("auto", "splitting", "dop853"),
+              doc="model numerical: splitting (exact torque-free flow composed with torque kicks: one step "
+                  "per sample without a torque; under one, steps from rtol that resolve the nutation it "
+                  "excites), dop853 (quaternion + Euler equations, resolves spin and nutation), auto "
+                  "(splitting)"),
+        Param("splitting_order", kind="int", default=6, low=2, high=6,
+              doc="order of the splitting composition: 2 Strang, 4 Yoshida triple jump, 6 Yoshida"),
+        Param("rotor_mass_kg", default=1.0, low=0.0, open_low=True,
+              doc="mass of the rotor, kg (with center_of_mass_offset_m: the unbalance torque)"),
+        Param("center_of_mass_offset_m", default=0.0, low=-1.0, high=1.0,
+              doc="mass unbalance: centre of mass at this distance from the fixed point along the "
+                  "figure axis (positive toward the spin axis direction), m; gravity torque "
+                  "m g d k × (−up)"),
     )
-    MECHANICS = frozenset({FRAME_RATE})
+    MECHANICS = frozenset({FRAME_RATE, SPIN})
     MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
     OBSERVATION = RotorObservation
@@ -175,6 +225,100 @@ class FreeGyroscope(Instrument):
         self.R0 = body_frame(self.k0)
         self.q0 = quat_from_matrix(self.R0)
         self.theta0 = angle_between(self.k0, self.e_axis)
+
+    @classmethod
+    def check_params(cls, prefix, p) -> None:
+        """Refuse a splitting order other than 2, 4, 6 and an explicit integrator with the closed form
+        (the integrator steps ``model: numerical`` only); raises SceneError."""
+        if p.get("splitting_order", 4) not in COMPOSITIONS:
+            raise SceneError(f"{prefix}.splitting_order", p["splitting_order"],
+                             f"must be one of {', '.join(str(o) for o in COMPOSITIONS)}")
+        if p.get("model", "analytic") == "analytic" and p.get("integrator", "auto") != "auto":
+            raise SceneError(f"{prefix}.integrator", p["integrator"],
+                             "must be auto with model = analytic (the closed form has no integrator; set "
+                             "model: numerical to choose one)")
+
+    @classmethod
+    def check_effects(cls, prefix, p, effect_names) -> None:
+        """Refuse the torque-free closed form (``model: analytic``) under a torque: ``spin_decay`` listed
+        or ``center_of_mass_offset_m`` ≠ 0 (use ``model: numerical``); raises SceneError."""
+        if p.get("model", "analytic") != "analytic":
+            return
+        if p.get("center_of_mass_offset_m", 0.0):
+            raise SceneError(f"{prefix}.center_of_mass_offset_m", p["center_of_mass_offset_m"],
+                             "must be 0 with model = analytic: the mass unbalance's gravity torque has no closed "
+                             "form here (set model: numerical)")
+        if "spin_decay" in effect_names:
+            raise SceneError(f"{prefix}.model", "analytic",
+                             "cannot carry the effect spin_decay (a bearing torque on the spin): the closed form "
+                             "is torque-free; set model: numerical, or remove spin_decay")
+
+    def torqued(self) -> bool:
+        """True when a torque acts: ``spin_decay`` listed or a mass unbalance (``center_of_mass_offset_m``)."""
+        return self.has("spin_decay") or self.p.center_of_mass_offset_m != 0.0
+
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """(integrator, reason): ``analytic`` for the closed form; for ``model: numerical`` the
+        ``integrator`` parameter, ``auto`` meaning splitting (its step from :meth:`splitting_step`)."""
+        if self.p.model == "analytic":
+            return "analytic", "model analytic: the exact torque-free closed form, cost independent of the horizon"
+        if self.p.integrator == "dop853":
+            return "dop853", "chosen in the scene: DOP853 on quaternion + Euler equations (resolves every nutation)"
+        how = "chosen in the scene" if self.p.integrator == "splitting" else \
+            "auto: the exact torque-free flow carries the spin and the free nutation (faster than DOP853 at equal error: bench spin_free)"
+        if not self.torqued():
+            return "splitting", f"{how}; no torque acts: one exact step per sample"
+        return "splitting", (f"{how}; order {self.p.splitting_order} composition with torque kicks, step "
+                             f"{self.splitting_step():.3g} s from rtol {self.p.rtol:g}, the torque's slow rate "
+                             f"{self.slow_rate():.3g} rad/s and the nutation rate {self.motion_constants()['lam']:.4g} "
+                             f"rad/s (a torque across the axis excites nutation: the step resolves it)")
+
+    #: Error constants K_p of the splitting's measured axis-error law (order p: constant), bounded in
+    #: time: err ≈ K_p (s/λ) (λ h)^p rad, λ = |L|/A the nutation rate, s the torque's slow rate
+    #: (:meth:`slow_rate`), so s/λ is the amplitude of the nutation the torque forces. Fitted on a
+    #: mass unbalance (d = 1e-4 and 1e-6 m, 60 rad/s, 60 and 600 s; tests/test_free_gyroscope_splitting.py
+    #: checks the law): the kicks of a torque across the axis excite nutation, so the step must resolve
+    #: the nutation (λ h ≲ 1), not only the slow motion; torques along the axis (spin_decay) err far less.
+    STEP_ERROR_CONSTANT = {2: 0.2, 4: 0.01, 6: 1e-5}
+
+    def unbalance_torque_per_inertia(self) -> float:
+        """m g d / A, rad/s²: the gravity torque of the mass unbalance over the transverse moment."""
+        return self.p.rotor_mass_kg * self.site.gravity_m_s2 * self.p.center_of_mass_offset_m / \
+            self.p.transverse_inertia_kg_m2
+
+    def slow_rate(self) -> float:
+        """s, rad/s: the fastest of the torques' slow rates — the unbalance's precession rate
+        m g |d| / |L| (|L| at release; √(m g |d| / A) for a body at rest) and the spin decay rate 1/τ."""
+        L = self.p.transverse_inertia_kg_m2 * self.motion_constants()["lam"]
+        torque = abs(self.unbalance_torque_per_inertia()) * self.p.transverse_inertia_kg_m2
+        rates = [torque / L if L > 0.0 else math.sqrt(abs(self.unbalance_torque_per_inertia()))]
+        if self.has("spin_decay"):
+            rates.append(1.0 / self.effect("spin_decay").p.time_constant_s)
+        return max(rates)
+
+    def splitting_step(self) -> float:
+        """Largest splitting step h = (rtol / (K_p s/λ))^(1/p) / λ, s: :meth:`slow_rate`, λ = |L|/A,
+        p: ``splitting_order``, K_p: :data:`STEP_ERROR_CONSTANT` (axis error ≈ rtol rad); inf without a
+        torque (the free flow is exact: one step per sample)."""
+        s, lam = self.slow_rate(), self.motion_constants()["lam"]
+        if not self.torqued() or s <= 0.0:
+            return math.inf
+        lam = max(lam, s)
+        order = self.p.splitting_order
+        return (self.p.rtol / (self.STEP_ERROR_CONSTANT[order] * s / lam)) ** (1.0 / order) / lam
+
+    def torque_array(self) -> np.ndarray:
+        """The torques as :func:`~gyro_instrument.core.rigid_body_flow.kick` reads them: [γ = m g d / A,
+        n, 1/τ (0 without ``spin_decay``), ê, up_par, up_perp, up_cross] with the local up in the inertial
+        frame (ENU frozen at release) up(t) = Rot(ê, n t) ẑ = up_par + cos(nt) up_perp + sin(nt) up_cross;
+        empty without a torque."""
+        if not self.torqued():
+            return np.empty(0)
+        n, e = self.model_rate(), self.e_axis
+        z = np.array([0.0, 0.0, 1.0])
+        par = float(z @ e) * e
+        rate = 1.0 / self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
+        return np.concatenate([[self.unbalance_torque_per_inertia(), n, rate], e, par, z - par, np.cross(e, z)])
 
     # ---------------------------------------------------------------- constants of motion
     def model_rate(self) -> float:
@@ -234,6 +378,10 @@ class FreeGyroscope(Instrument):
             ``zero_spin_departure_1h_rad`` (≥ 0, exact), ``zero_spin_departure_1h_leading_rad``,
             ``initial_cos_theta_acceleration_quet_relative_error`` and ``beyond_the_paper`` (str).
             Rates are signed (the hour angle grows at +n: westward); magnitudes are ≥ 0.
+            With a mass unbalance: ``unbalance_precession_rate_rad_s`` = m g d / (C ω3), the axis'
+            precession about the vertical (counterclockwise seen from above when positive; the
+            steady precession of a fast top, exact for a horizontal axis: m g d = Ω (C ω3 − A Ω cos θ),
+            θ from the vertical; e.g. Goldstein, Classical Mechanics, §5.7).
         """
         n = self.model_rate()
         mu, rho0, th = self.p.inertia_ratio, self.p.spin_rate_rad_s, self.theta0
@@ -267,6 +415,9 @@ class FreeGyroscope(Instrument):
         }
         if n != 0.0:
             out.update(self._zero_spin_departure(n))
+        if self.p.center_of_mass_offset_m != 0.0 and k["omega3"] != 0.0:
+            # gyroscopic (fast-top) precession of the axis about the vertical under the unbalance torque
+            out["unbalance_precession_rate_rad_s"] = self.unbalance_torque_per_inertia() / (mu * k["omega3"])
         return with_notes(out, self.missing_effect_note(
             "earth_rotation", f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
@@ -358,16 +509,36 @@ class FreeGyroscope(Instrument):
         q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|."""
         a = 1.0 - self.p.inertia_ratio
         kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+        torque = self.torque_rates()
 
         def f(t, qw, qx, qy, qz, w1, w2, w3):
             corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
+            d1, d2, d3 = torque(t, (qw, qx, qy, qz), w3) if torque is not None else (0.0, 0.0, 0.0)
             return (0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw,
                     0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx,
                     0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy,
                     0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz,
-                    a * w2 * w3,
-                    -a * w1 * w3,
-                    0.0)
+                    a * w2 * w3 + d1,
+                    -a * w1 * w3 + d2,
+                    d3)
+        return f
+
+    def torque_rates(self) -> Callable | None:
+        """``f(t, q, ω3) -> (ω̇1, ω̇2, ω̇3)``: the torques over the body moments, rad/s² — the mass
+        unbalance m g d (up_b × e3) / A and ``spin_decay``'s −ρ/τ (:meth:`SpinDecay.spin_torque_per_inertia`)
+        on ρ = ω3 − n k·ê; None without a torque (the torque-free equations are then unchanged)."""
+        if not self.torqued():
+            return None
+        tq = self.torque_array()
+        gam, n, par, perp, cross = tq[0], tq[1], tuple(tq[6:9]), tuple(tq[9:12]), tuple(tq[12:15])
+        e = tuple(float(v) for v in self.e_axis)
+        decay = self.effect("spin_decay")
+
+        def f(t, q, w3):
+            c, s = math.cos(n * t), math.sin(n * t)
+            ux, uy, _ = to_body(q, [par[i] + c * perp[i] + s * cross[i] for i in range(3)])
+            d3 = decay.spin_torque_per_inertia(w3 - n * to_body(q, e)[2]) if decay is not None else 0.0
+            return gam * uy, -gam * ux, d3
         return f
 
     def columns_from_state(self, tau, y, unwrappers=None) -> tuple:
@@ -424,6 +595,9 @@ class FreeGyroscope(Instrument):
             Overrides the ``model`` parameter.
         rtol : float, optional
             Overrides the ``rtol`` parameter (numerical path).
+        **options
+            ``integrator`` ("splitting" or "dop853") and ``splitting_order`` override the parameters;
+            ``step_s`` forces the splitting's largest step, s (the work-precision study).
 
         Returns
         -------
@@ -435,29 +609,45 @@ class FreeGyroscope(Instrument):
 
     def stream(self, blocks, model=None, rtol=None, **options) -> Iterator[Simulation]:
         """Block by block (:meth:`Instrument.stream`), released at the first sample: the closed form
-        at each block's times, or the numerical path's DOP853 step sequence carried across blocks
-        (:class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue across
-        blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
+        at each block's times, or the numerical path's state carried across blocks (the splitting's
+        state and time, :func:`~gyro_instrument.core.rigid_body_flow.splitting_run`, or DOP853's step
+        sequence, :class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue
+        across blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
         model = model or self.p.model
+        if model == "analytic" and self.torqued():
+            raise SceneError(f"instruments.{self.name}.model", model, "is torque-free: a mass unbalance or "
+                             "spin_decay needs model numerical")
+        integrator = options.pop("integrator", None) or self.chosen_integrator()[0]
         unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
-        run = None
-        if model != "analytic":
-            wb0 = self.R0.T @ self.motion_constants()["omega0"]
+        rtol = self.p.rtol if rtol is None else rtol
+        run = split = None
+        wb0 = self.R0.T @ self.motion_constants()["omega0"]
+        if model != "analytic" and integrator == "dop853":
             run = integration(self.rhs_scalar(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
-                              method="DOP853-scalar", rtol=self.p.rtol if rtol is None else rtol, atol=1e-14)
+                              method="DOP853-scalar", rtol=rtol, atol=1e-14)
+        elif model != "analytic":
+            order = options.pop("splitting_order", None) or self.p.splitting_order
+            h = options.pop("step_s", None) or self.splitting_step()
+            split = [np.concatenate([self.q0, wb0]), 0.0, h, order, self.torque_array()]
         for t in blocks:
             tau = t - t0
-            if run is None:
-                w0, c0 = time.perf_counter(), time.process_time()
-                y = self.analytic_state(tau)
-                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
-            else:
+            w0, c0 = time.perf_counter(), time.process_time()
+            if run is not None:
                 traj = run.advance(tau)
                 traj.t = t
                 y = traj.y
+            elif split is not None:
+                state, start, h, order, torque = split
+                y = splitting_run(state, start, tau, h, order, self.p.inertia_ratio, torque)
+                split[1] = float(tau[-1]) if len(tau) else start
+                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "splitting",
+                                  {"integrator": f"splitting order {order}", "step_s": h})
+            else:
+                y = self.analytic_state(tau)
+                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
             columns, extra = self.columns_from_state(tau, y, unwrappers)
             extra["motion_constants"] = self.motion_constants()
             yield Simulation(t, columns, traj, extra)
