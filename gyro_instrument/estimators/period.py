@@ -198,6 +198,7 @@ class _OscillationModel:
     """
 
     def __init__(self, tau, y, env, harmonics, damping):
+        """``env``: the known amplitude envelope sampled like ``tau``, or None for none (unit)."""
         self.tau, self.y, self.env = tau, y, env
         self.harmonics, self.damping = harmonics, damping
         self.base = 3 if damping else 2          # index of a_1 in the parameters
@@ -211,12 +212,16 @@ class _OscillationModel:
             self._omega = omega
         return self._cs
 
+    def _scaled(self, e, x):
+        """e·x, with e None standing for a unit envelope (1·x is x exactly)."""
+        return x if e is None else e * x
+
     def design(self, omega):
         """Design matrix of the linear parameters (C, a_h, b_h, ...) at ω: columns 1, env·cos hωτ,
         env·sin hωτ."""
         cols = [np.ones_like(self.tau)]
         for c, s_ in self._trig(omega):
-            cols += [self.env * c, self.env * s_]
+            cols += [self._scaled(self.env, c), self._scaled(self.env, s_)]
         return np.column_stack(cols)
 
     def rss(self, omega):
@@ -227,8 +232,11 @@ class _OscillationModel:
         return float(r @ r)
 
     def _envelope(self, params):
-        lm = params[1] if self.damping else 0.0
-        return self.env * np.exp(-lm * self.tau) if self.damping else self.env
+        """env·e^(−λτ) with damping, else env (None: unit envelope)."""
+        if not self.damping:
+            return self.env
+        d = np.exp(-params[1] * self.tau)
+        return d if self.env is None else self.env * d
 
     def values(self, params):
         """The model at every sample."""
@@ -237,27 +245,33 @@ class _OscillationModel:
         base = self.base
         for i, (c, s_) in enumerate(self._trig(params[0])):
             a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            out = out + e * (a * c + b * s_)
+            out += self._scaled(e, a * c + b * s_)
         return out
 
-    def jac_columns(self, params) -> list:
-        """Columns of the analytic Jacobian of the model (ω, [λ], C, a_h, b_h ...)."""
+    def jac_rows(self, params, out=None) -> np.ndarray:
+        """Transpose of the analytic Jacobian (rows: ω, [λ], C, a_h, b_h ...; columns: samples),
+        written into ``out`` if given."""
         tau = self.tau
         e = self._envelope(params)
         base = self.base
-        cols_w = np.zeros_like(tau)
-        osc = np.zeros_like(tau)
-        hcols = []
+        out = np.empty((base + 2 * len(self.harmonics), tau.size)) if out is None else out
+        out[0] = 0.0
+        osc = np.zeros_like(tau) if self.damping else None
         for i, (h, (c, s_)) in enumerate(zip(self.harmonics, self._trig(params[0]))):
             a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            cols_w += e * h * tau * (-a * s_ + b * c)
-            osc += e * (a * c + b * s_)
-            hcols += [e * c, e * s_]
-        return [cols_w] + ([-tau * osc] if self.damping else []) + [np.ones_like(tau)] + hcols
+            out[0] += (h * tau if e is None else e * h * tau) * (-a * s_ + b * c)
+            if self.damping:
+                osc += e * (a * c + b * s_)
+            out[base + 2 * i] = self._scaled(e, c)
+            out[base + 2 * i + 1] = self._scaled(e, s_)
+        if self.damping:
+            np.multiply(-tau, osc, out=out[1])
+        out[base - 1] = 1.0
+        return out
 
     def jac(self, params):
         """Analytic Jacobian of the model (rows: samples; columns: ω, [λ], C, a_h, b_h ...)."""
-        return np.column_stack(self.jac_columns(params))
+        return np.column_stack(list(self.jac_rows(params)))
 
     def polish(self, omega0):
         """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved.
@@ -275,7 +289,7 @@ class _OscillationModel:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)      # info 5–8 is reported in ``status``
             x, _, info, _, ier = leastsq(lambda q: self.values(q) - self.y, q0,
-                                         Dfun=lambda q: np.vstack(self.jac_columns(q)), full_output=True,
+                                         Dfun=self.jac_rows, full_output=True,
                                          col_deriv=True, ftol=1e-15, xtol=1e-15, gtol=1e-8,
                                          maxfev=100 * q0.size, factor=100)
         f = info["fvec"]
@@ -366,13 +380,12 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         raise EstimationError(f"too few valid samples ({t.size}) to fit an oscillation")
     t_ref = float(np.mean(t)) if t_ref is None else t_ref
     tau = (warp - np.mean(warp)) if warp is not None else (t - t_ref)
-    env = envelope if envelope is not None else np.ones_like(t)
     span = float(t[-1] - t[0])
     if omega_guess is None:
         omega_guess = fft_guess(tau + t_ref, y)
     if omega_guess * span / (2 * math.pi) < 2.0:
         raise EstimationError(f"record holds {omega_guess * span / (2 * math.pi):.2f} cycles; need at least 2")
-    model = _OscillationModel(tau, y, env, harmonics, damping)
+    model = _OscillationModel(tau, y, envelope, harmonics, damping)
     sol = _search(model, omega_guess, 2 * math.pi / span)
     return _fit_result(sol, model, t.size, span, warp is not None, notes)
 
