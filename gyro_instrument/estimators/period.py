@@ -20,7 +20,6 @@ historical baseline: its error is one swing in N (≈ 10⁴ times worse than the
 
 import functools
 import math
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -286,12 +285,10 @@ class _OscillationModel:
         X0 = self.design(omega0)
         c0, *_ = np.linalg.lstsq(X0, self.y, rcond=None)
         q0 = np.array([omega0] + ([0.0] if self.damping else []) + list(c0), dtype=float)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)      # info 5–8 is reported in ``status``
-            x, _, info, _, ier = leastsq(lambda q: self.values(q) - self.y, q0,
-                                         Dfun=self.jac_rows, full_output=True,
-                                         col_deriv=True, ftol=1e-15, xtol=1e-15, gtol=1e-8,
-                                         maxfev=100 * q0.size, factor=100)
+        # full_output: MINPACK's info 0 and 5–8 come back in ``ier`` (no warning, no exception)
+        x, _, info, _, ier = leastsq(lambda q: self.values(q) - self.y, q0, Dfun=self.jac_rows, full_output=True,
+                                     col_deriv=True, ftol=1e-15, xtol=1e-15, gtol=1e-8, maxfev=100 * q0.size,
+                                     factor=100)
         f = info["fvec"]
         return OptimizeResult(x=x, fun=f, jac=self.jac(x), cost=0.5 * float(np.dot(f, f)),
                               success=1 <= ier <= 4, status=ier, nfev=info["nfev"])
