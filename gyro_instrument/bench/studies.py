@@ -155,22 +155,27 @@ def seed_sweeps(jobs, executor=None, workers=None) -> list:
             executor.shutdown()
 
 
-def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None) -> list:
-    """Rows :data:`SITE_HEADER`: quet_paris moved to each latitude (10 min per configuration),
-    rms errors over seeds against the reported σ and the Cramér–Rao bound — one
-    ``seed_sweep`` job per site through the executor (any ``concurrent.futures`` executor)."""
-    jobs = [("quet_paris", [f"site.latitude_deg={lat}", f"duration_s={60.0 * minutes}"], range(n_seeds))
-            for lat in latitudes_deg]
-    results = seed_sweeps(jobs, executor)
+def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None, scene="quet_paris", overrides=()) -> list:
+    """Rows :data:`SITE_HEADER`: ``scene`` (name or YAML path, with ``overrides``) moved to each
+    latitude (10 min per configuration), rms errors over seeds against the reported σ and the
+    Cramér–Rao bound — the sweep runner (:func:`gyro_instrument.bench.sweep.run_grid`, as
+    ``gyro-instrument sweep``) over the points ``site.latitude_deg``, through the executor (any
+    ``concurrent.futures`` executor); a point whose estimate was refused gives NaN."""
+    from gyro_instrument.bench.sweep import run_grid
+    results = run_grid(scene, list(overrides) + [f"duration_s={60.0 * minutes}"], ["site.latitude_deg"],
+                       [(lat,) for lat in latitudes_deg], range(n_seeds), executor)
     rows = []
-    for lat, res in zip(latitudes_deg, results):
-        dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r["latitude_deg"] is not None]
-        dn = [r["earth_rate_rad_s"] - r["truth"]["earth_rate_rad_s"] for r in res if r["earth_rate_rad_s"] is not None]
+    for lat, out in zip(latitudes_deg, results):
+        res = out.get("estimates") or []
+        dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r.get("latitude_deg") is not None]
+        dn = [r["earth_rate_rad_s"] - r["truth"]["earth_rate_rad_s"] for r in res
+              if r.get("earth_rate_rad_s") is not None]
         rms = lambda v: float(np.sqrt(np.mean(np.square(v)))) if v else math.nan  # noqa: E731
         mean = lambda v: float(np.mean(v)) if v else math.nan  # noqa: E731
-        rows.append((float(lat), rms(dl), mean([r["latitude_sigma_deg"] for r in res if r["latitude_sigma_deg"]]),
-                     mean([r["crlb"]["latitude_deg"] for r in res if r["crlb"].get("latitude_deg")]), rms(dn),
-                     mean([r["crlb"]["earth_rate_rad_s"] for r in res if r["crlb"].get("earth_rate_rad_s")])))
+        crlb = [r.get("crlb") or {} for r in res]
+        rows.append((float(lat), rms(dl), mean([r["latitude_sigma_deg"] for r in res if r.get("latitude_sigma_deg")]),
+                     mean([c["latitude_deg"] for c in crlb if c.get("latitude_deg")]), rms(dn),
+                     mean([c["earth_rate_rad_s"] for c in crlb if c.get("earth_rate_rad_s")])))
     return rows
 
 

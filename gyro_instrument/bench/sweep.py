@@ -223,6 +223,22 @@ def write_rows(path, rows, metadata) -> int:
     return len(names)
 
 
+def run_grid(scene, overrides, keys, points, seeds, executor=None, progress=None, task=sweep_point) -> list:
+    """The sweep without a file: ``scene`` with ``overrides`` at each grid point (``keys`` set to the
+    point's values, as ``--set`` strings after ``overrides``), ``seeds`` measured on each. Every
+    point's scene is loaded first (a bad value raises its SceneError before anything runs), then
+    :func:`run_points`. Returns one result per point, in order: ``{"estimates": [one estimate dict
+    per seed, JSON-ready]}`` or ``{"error": reason}``. The bench's site sweep and
+    :func:`run_sweep` are both this call; ``points`` need not be a product grid."""
+    points = [tuple(p) for p in points]
+    check_points(scene, overrides, keys, points)
+    seeds = list(seeds)
+    jobs = [(scene, list(overrides) + point_overrides(keys, p), seeds) for p in points]
+    if progress:
+        progress(f"sweep: {len(points)} grid points x {len(seeds)} seeds of {scene}")
+    return run_points(jobs, executor, progress, task)
+
+
 def run_sweep(scene, overrides, specs, n_seeds, out, executor=None, progress=None, task=sweep_point) -> dict:
     """The whole sweep into ``out`` (Parquet); returns a summary (points, rows, columns, errors,
     wall_s, rows_per_s). The grid is parsed and every point's scene loaded before anything runs.
@@ -235,13 +251,9 @@ def run_sweep(scene, overrides, specs, n_seeds, out, executor=None, progress=Non
     if not isinstance(n_seeds, int) or n_seeds < 1:
         raise SceneError("--seeds", n_seeds, "must be an integer >= 1")
     keys, points = grid(specs)
-    check_points(scene, overrides, keys, points)
     seeds = list(range(n_seeds))
-    jobs = [(scene, list(overrides) + point_overrides(keys, p), seeds) for p in points]
-    if progress:
-        progress(f"sweep: {len(points)} grid points x {n_seeds} seeds of {scene}")
     t0 = time.perf_counter()
-    results = run_points(jobs, executor, progress, task)
+    results = run_grid(scene, overrides, keys, points, seeds, executor, progress, task)
     rows = sweep_rows(keys, points, seeds, results)
     wall = time.perf_counter() - t0
     from gyro_instrument import __version__

@@ -18,11 +18,12 @@ var(ω̂) ≥ 24 σ² / (A² Δt² N (N² − 1)) (Rife & Boorstyn 1974, single-
 historical baseline: its error is one swing in N (≈ 10⁴ times worse than the fit).
 """
 
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares, minimize_scalar
+from scipy.optimize import OptimizeResult, leastsq, minimize_scalar
 
 
 
@@ -92,12 +93,23 @@ def crlb_omega(sigma, amplitude, dt, n) -> float:
     return math.sqrt(24.0 * sigma ** 2 / (amplitude ** 2 * dt ** 2 * n * (n * n - 1.0)))
 
 
-def _design(tau, omega, harmonics, env):
-    cols = [np.ones_like(tau)]
-    for h in harmonics:
-        cols.append(env * np.cos(h * omega * tau))
-        cols.append(env * np.sin(h * omega * tau))
-    return np.column_stack(cols)
+@functools.lru_cache(maxsize=8)
+def _hanning(n):
+    """``np.hanning(n)``, kept read-only for the next record of the same length."""
+    w = np.hanning(n)
+    w.setflags(write=False)
+    return w
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_waves(harmonics):
+    """cos hφ and sin hφ on 4097 phases φ over one cycle, for each harmonic (read-only)."""
+    phase = np.linspace(0.0, 2 * math.pi, 4097)
+    out = tuple((np.cos(h * phase), np.sin(h * phase)) for h in harmonics)
+    for c, s_ in out:
+        c.setflags(write=False)
+        s_.setflags(write=False)
+    return out
 
 
 def fft_guess(t, y, min_cycles=1.0) -> float:
@@ -108,10 +120,9 @@ def fft_guess(t, y, min_cycles=1.0) -> float:
     grid = np.arange(t[0], t[-1], dt)
     yi = np.interp(grid, t, y - np.mean(y))
     n = 1 << int(math.ceil(math.log2(max(len(grid), 8)) + 3))
-    spec = np.abs(np.fft.rfft(yi * np.hanning(len(yi)), n))
-    freqs = np.fft.rfftfreq(n, dt)
+    spec = np.abs(np.fft.rfft(yi * _hanning(len(yi)), n))
     fmin = min_cycles / (t[-1] - t[0])
-    spec[freqs < fmin] = 0.0
+    spec[:_bins_below(fmin, 1.0 / (n * dt), len(spec))] = 0.0
     if not np.any(spec > 0):
         raise EstimationError("no oscillation found in the record")
     k = int(np.argmax(spec))
@@ -119,6 +130,21 @@ def fft_guess(t, y, min_cycles=1.0) -> float:
         a, b, c = np.log(spec[k - 1:k + 2] + 1e-300)
         k = k + 0.5 * (a - c) / (a - 2 * b + c) if (a - 2 * b + c) != 0 else k
     return 2.0 * math.pi * k / (n * dt)
+
+
+def _bins_below(fmin, df, size):
+    """Number of FFT bins k (of ``size``) with frequency k·df below ``fmin`` (Hz), the frequencies
+    being ``np.fft.rfftfreq``'s k·df (so the same bins as masking ``rfftfreq(n, dt) < fmin``)."""
+    if not fmin > 0.0:                       # NaN or ≤ 0: no bin lies below
+        return 0
+    if fmin > (size - 1) * df:               # every bin (also fmin = inf)
+        return size
+    k = int(fmin / df)
+    while k < size and k * df < fmin:
+        k += 1
+    while k > 0 and (k - 1) * df >= fmin:
+        k -= 1
+    return k
 
 
 def _clean_record(t, y, warp, envelope):
@@ -163,57 +189,109 @@ def _clean_record(t, y, warp, envelope):
 
 class _OscillationModel:
     """The model fitted by :func:`fit_oscillation` on (warped) times ``tau``: a constant plus, for
-    each harmonic h, env·e^(−λτ)(a_h cos hωτ + b_h sin hωτ); parameters (ω, [λ], C, a_h, b_h, ...)."""
+    each harmonic h, env·e^(−λτ)(a_h cos hωτ + b_h sin hωτ); parameters (ω, [λ], C, a_h, b_h, ...).
+
+    The cosines and sines of hωτ are kept for the last ω asked (:meth:`_trig`): MINPACK evaluates the
+    residuals and the Jacobian at the same point, and the polish starts at the ω of the design matrix,
+    so each ω costs its trigonometric functions once (same numbers, computed once).
+    """
 
     def __init__(self, tau, y, env, harmonics, damping):
+        """``env``: the known amplitude envelope sampled like ``tau``, or None for none (unit)."""
         self.tau, self.y, self.env = tau, y, env
         self.harmonics, self.damping = harmonics, damping
         self.base = 3 if damping else 2          # index of a_1 in the parameters
+        self._omega, self._cs = None, None
+
+    def _trig(self, omega):
+        """[(cos hωτ, sin hωτ) for h in harmonics] at ω (rad/s), computed once per ω."""
+        if omega != self._omega:
+            tau = self.tau
+            self._cs = [(np.cos(h * omega * tau), np.sin(h * omega * tau)) for h in self.harmonics]
+            self._omega = omega
+        return self._cs
+
+    def _scaled(self, e, x):
+        """e·x, with e None standing for a unit envelope (1·x is x exactly)."""
+        return x if e is None else e * x
+
+    def design(self, omega):
+        """Design matrix of the linear parameters (C, a_h, b_h, ...) at ω: columns 1, env·cos hωτ,
+        env·sin hωτ."""
+        cols = [np.ones_like(self.tau)]
+        for c, s_ in self._trig(omega):
+            cols += [self._scaled(self.env, c), self._scaled(self.env, s_)]
+        return np.column_stack(cols)
 
     def rss(self, omega):
         """Residual sum of squares at ω with the linear parameters solved (variable projection)."""
-        X = _design(self.tau, omega, self.harmonics, self.env)
+        X = self.design(omega)
         coef, *_ = np.linalg.lstsq(X, self.y, rcond=None)
         r = self.y - X @ coef
         return float(r @ r)
 
+    def _envelope(self, params):
+        """env·e^(−λτ) with damping, else env (None: unit envelope)."""
+        if not self.damping:
+            return self.env
+        d = np.exp(-params[1] * self.tau)
+        return d if self.env is None else self.env * d
+
     def values(self, params):
         """The model at every sample."""
-        tau, damping = self.tau, self.damping
-        w, lm = params[0], (params[1] if damping else 0.0)
-        e = self.env * np.exp(-lm * tau) if damping else self.env
-        out = np.full_like(tau, params[2 if damping else 1])
+        e = self._envelope(params)
+        out = np.full_like(self.tau, params[2 if self.damping else 1])
         base = self.base
-        for i, h in enumerate(self.harmonics):
+        for i, (c, s_) in enumerate(self._trig(params[0])):
             a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            out = out + e * (a * np.cos(h * w * tau) + b * np.sin(h * w * tau))
+            out += self._scaled(e, a * c + b * s_)
+        return out
+
+    def jac_rows(self, params, out=None) -> np.ndarray:
+        """Transpose of the analytic Jacobian (rows: ω, [λ], C, a_h, b_h ...; columns: samples),
+        written into ``out`` if given."""
+        tau = self.tau
+        e = self._envelope(params)
+        base = self.base
+        out = np.empty((base + 2 * len(self.harmonics), tau.size)) if out is None else out
+        out[0] = 0.0
+        osc = np.zeros_like(tau) if self.damping else None
+        for i, (h, (c, s_)) in enumerate(zip(self.harmonics, self._trig(params[0]))):
+            a, b = params[base + 2 * i], params[base + 2 * i + 1]
+            out[0] += (h * tau if e is None else e * h * tau) * (-a * s_ + b * c)
+            if self.damping:
+                osc += e * (a * c + b * s_)
+            out[base + 2 * i] = self._scaled(e, c)
+            out[base + 2 * i + 1] = self._scaled(e, s_)
+        if self.damping:
+            np.multiply(-tau, osc, out=out[1])
+        out[base - 1] = 1.0
         return out
 
     def jac(self, params):
-        """Analytic Jacobian of the model (columns: ω, [λ], C, a_h, b_h ...)."""
-        tau, damping = self.tau, self.damping
-        w, lm = params[0], (params[1] if damping else 0.0)
-        e = self.env * np.exp(-lm * tau) if damping else self.env
-        base = self.base
-        cols_w = np.zeros_like(tau)
-        osc = np.zeros_like(tau)
-        hcols = []
-        for i, h in enumerate(self.harmonics):
-            a, b = params[base + 2 * i], params[base + 2 * i + 1]
-            c, s_ = np.cos(h * w * tau), np.sin(h * w * tau)
-            cols_w += e * h * tau * (-a * s_ + b * c)
-            osc += e * (a * c + b * s_)
-            hcols += [e * c, e * s_]
-        cols = [cols_w] + ([-tau * osc] if damping else []) + [np.ones_like(tau)] + hcols
-        return np.column_stack(cols)
+        """Analytic Jacobian of the model (rows: samples; columns: ω, [λ], C, a_h, b_h ...)."""
+        return np.column_stack(list(self.jac_rows(params)))
 
     def polish(self, omega0):
-        """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved."""
-        X0 = _design(self.tau, omega0, self.harmonics, self.env)
+        """Levenberg–Marquardt on all parameters (analytic Jacobian) from ω0, amplitudes solved.
+
+        MINPACK's ``lmder`` (Moré 1978) through :func:`scipy.optimize.leastsq` with the settings
+        of ``least_squares(method="lm", x_scale="jac", xtol=ftol=1e-15)``: gtol 1e-8, at most
+        100 evaluations per parameter, step bound factor 100, scaling from the Jacobian's column
+        norms — the same iterates, with the Jacobian handed over column-major (no copies).
+        Returns an ``OptimizeResult`` with ``x``, ``fun`` (residuals), ``jac``, ``cost`` (½ Σ r²),
+        ``success`` and ``status`` (MINPACK's info, 1–4 converged).
+        """
+        X0 = self.design(omega0)
         c0, *_ = np.linalg.lstsq(X0, self.y, rcond=None)
-        q0 = [omega0] + ([0.0] if self.damping else []) + list(c0)
-        return least_squares(lambda q: self.values(q) - self.y, q0, jac=self.jac, method="lm", x_scale="jac",
-                             xtol=1e-15, ftol=1e-15)
+        q0 = np.array([omega0] + ([0.0] if self.damping else []) + list(c0), dtype=float)
+        # full_output: MINPACK's info 0 and 5–8 come back in ``ier`` (no warning, no exception)
+        x, _, info, _, ier = leastsq(lambda q: self.values(q) - self.y, q0, Dfun=self.jac_rows, full_output=True,
+                                     col_deriv=True, ftol=1e-15, xtol=1e-15, gtol=1e-8, maxfev=100 * q0.size,
+                                     factor=100)
+        f = info["fvec"]
+        return OptimizeResult(x=x, fun=f, jac=self.jac(x), cost=0.5 * float(np.dot(f, f)),
+                              success=1 <= ier <= 4, status=ier, nfev=info["nfev"])
 
 
 def _search(model, omega_guess, bin_w):
@@ -257,9 +335,8 @@ def _fit_result(sol, model, n_samples, span, warped, notes):
     amp = float(math.hypot(p[base], p[base + 1]))
     # Peak amplitude from the fitted waveform itself: harmonics may be in antiphase (a pendulum-law
     # swing has A3 < 0 relative to the peak: a = A1 − |A3| + ...), so their sizes do not simply add.
-    phase = np.linspace(0.0, 2 * math.pi, 4097)
-    wave = sum(p[base + 2 * i] * np.cos(h * phase) + p[base + 2 * i + 1] * np.sin(h * phase)
-               for i, h in enumerate(model.harmonics))
+    wave = sum(p[base + 2 * i] * c + p[base + 2 * i + 1] * s_
+               for i, (c, s_) in enumerate(_unit_waves(tuple(model.harmonics))))
     amp_peak = float(0.5 * (np.max(wave) - np.min(wave)))
     dt = span / max(n_samples - 1, 1)
     crlb = crlb_omega(math.sqrt(s2), amp, dt, n_samples)
@@ -300,13 +377,12 @@ def fit_oscillation(t, y, omega_guess=None, harmonics=(1,), damping=False, warp=
         raise EstimationError(f"too few valid samples ({t.size}) to fit an oscillation")
     t_ref = float(np.mean(t)) if t_ref is None else t_ref
     tau = (warp - np.mean(warp)) if warp is not None else (t - t_ref)
-    env = envelope if envelope is not None else np.ones_like(t)
     span = float(t[-1] - t[0])
     if omega_guess is None:
         omega_guess = fft_guess(tau + t_ref, y)
     if omega_guess * span / (2 * math.pi) < 2.0:
         raise EstimationError(f"record holds {omega_guess * span / (2 * math.pi):.2f} cycles; need at least 2")
-    model = _OscillationModel(tau, y, env, harmonics, damping)
+    model = _OscillationModel(tau, y, envelope, harmonics, damping)
     sol = _search(model, omega_guess, 2 * math.pi / span)
     return _fit_result(sol, model, t.size, span, warp is not None, notes)
 

@@ -1,0 +1,54 @@
+"""Sweep throughput rows (issue 27, Bench) and the bench's site sweep through the sweep runner:
+the process pool and a two-worker Dask LocalCluster on loopback give the same rows for the same
+seeds; the site sweep of any scene recovers the latitude within its reported error. No timing is
+asserted (rates live in ``gyro-instrument bench``)."""
+
+import math
+
+import pytest
+
+from gyro_instrument.bench.sweep import run_grid
+from gyro_instrument.bench.sweep_bench import GRIDS, sweep_throughput_rows
+
+KEYS = {"scheduler", "scene", "overrides", "vary", "seeds", "points", "rows", "errors", "wall_s", "rows_per_s",
+        "startup_s", "same_rows_as_process_pool"}
+
+
+def test_quick_throughput_rows_pool_and_cluster_agree():
+    rows = sweep_throughput_rows(quick=True, progress=lambda m: None)
+    scene, overrides, specs, n_seeds = GRIDS[True]
+    assert [r["scheduler"].split()[0] for r in rows] == ["process", "dask.distributed"]
+    for r in rows:
+        assert set(r) == KEYS
+        assert (r["scene"], r["seeds"], r["points"]) == (scene, n_seeds, 2)
+        assert r["rows"] == r["points"] * r["seeds"] and r["errors"] == 0
+        assert r["wall_s"] > 0 and r["rows_per_s"] == pytest.approx(r["rows"] / r["wall_s"])
+        assert r["startup_s"] >= 0
+        # the same seeds give the same estimates on the pool and on the cluster, row for row
+        assert r["same_rows_as_process_pool"] is True
+
+
+def test_run_grid_any_points_latitude_recovered(pool):
+    """run_grid (the sweep runner without a file) on explicit, non-grid points of quet_gyroscopes:
+    each seed's latitude within 5 reported σ of the site's, the truth being the point's value."""
+    res = run_grid("quet_gyroscopes", ["duration_s=120"], ["site.latitude_deg"], [(12.5,), (41.0,)], range(2),
+                   executor=pool)
+    assert [len(r["estimates"]) for r in res] == [2, 2]
+    for lat, r in zip((12.5, 41.0), res):
+        for est in r["estimates"]:
+            assert est["truth"]["latitude_deg"] == pytest.approx(lat, abs=1e-9)
+            assert abs(est["latitude_deg"] - lat) < 5 * est["latitude_sigma_deg"]
+
+
+def test_site_sweep_of_another_scene(pool):
+    """bench.site_sweep is not tied to quet_paris: quet_gyroscopes at two latitudes, 4 seeds of 2 min:
+    the rms latitude error within 3x the mean reported σ, the σ within a factor 2 of the Cramér–Rao
+    bound, and the Earth rate's rms error within 5 of its bound."""
+    from gyro_instrument.bench.studies import site_sweep
+    rows = site_sweep((20.0, 60.0), 4, minutes=2.0, executor=pool, scene="quet_gyroscopes")
+    assert [r[0] for r in rows] == [20.0, 60.0]
+    for lat, rms, sigma, crlb, rms_n, crlb_n in rows:
+        assert all(math.isfinite(x) for x in (rms, sigma, crlb, rms_n, crlb_n))
+        assert rms < 3 * sigma
+        assert 0.5 < sigma / crlb < 2.0
+        assert rms_n < 5 * crlb_n
