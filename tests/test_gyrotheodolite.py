@@ -206,3 +206,12 @@ def test_north_is_calibrated_over_seeds(lat, tmp_path):
         print(f"latitude {lat}: {k} rms error / sigma = {ratio:.3f}")
         assert 0.8 <= ratio <= 1.2, (k, ratio)
     assert 0.95 <= np.mean(sig["fit"]) / (bound * 648000 / math.pi) <= 1.1
+
+
+def test_a_record_of_one_sample_is_refused_not_divided_by(capsys):
+    """A record shorter than one sample interval (0.05 s at 1 Hz: one sample, a span of 0 s) asked
+    for north is refused with the span and the swing time (found by the CLI fuzz test: the latitude
+    limit for a 0 s observation divided by zero)."""
+    assert main(["estimate", "gyrotheodolite", "--duration-s", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert "record spans 0 s" in err and "observe >= 480 s" in err and "Traceback" not in err

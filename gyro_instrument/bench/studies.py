@@ -308,7 +308,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     wp = work_precision(quick, progress)
     _write(os.path.join(out_dir, "work_precision.csv"),
            ("instrument", "method", "setting", "cpu_s", "nfev", "error_rad"), wp)
-    tg, st, rt, gwp = _speed_studies(out_dir, wp, quick, progress)
+    tg, st, rt, gwp, cost_lines = _speed_studies(out_dir, wp, quick, progress)
     own = executor is None
     executor = executor or process_executor()
     try:
@@ -320,7 +320,8 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     from gyro_instrument.bench.north_study import north_lines
-    lines = _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + north_lines(*north)
+    lines = (_bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + cost_lines
+             + north_lines(*north))
     return _write_summary(out_dir, lines, pngs)
 
 
@@ -356,8 +357,9 @@ def _sweep_studies(out_dir, quick, progress, executor) -> tuple:
 
 def _speed_studies(out_dir, wp, quick, progress) -> tuple:
     """The speed targets (targets.csv: work-precision targets, run as it streams, real time of every
-    instrument configuration, plot of a day) and the streaming rows (streaming.csv); returns
-    (targets, streaming rows, real-time rows, gimbal work-precision rows)."""
+    instrument configuration, the pendulum against a compiled reference, plot of a day), the
+    streaming rows (streaming.csv) and issue 27's cost studies (:mod:`.cost_studies`); returns
+    (targets, streaming rows, real-time rows, gimbal work-precision rows, the cost studies' summary lines)."""
     progress("speed targets")
     tg = targets(wp, quick, progress)
     if not quick:       # child processes for minutes: the full bench only (issue 13: bench/live.py)
@@ -369,6 +371,9 @@ def _speed_studies(out_dir, wp, quick, progress) -> tuple:
     rt, gwp = realtime_rows(quick, progress), gimbal_work_precision_rows(quick, progress)
     write_realtime(out_dir, rt, gwp)
     tg.append(realtime_target(rt))
+    from gyro_instrument.bench.cost_studies import cost_studies
+    cost_targets, cost_lines = cost_studies(out_dir, quick, progress)
+    tg += cost_targets
     hours = 3.0 if quick else 24.0
     progress(f"  plot: {hours:g} h of Foucault pendulum data from Parquet")
     secs, n = plot_day_seconds(out_dir, hours=hours)
@@ -381,7 +386,7 @@ def _speed_studies(out_dir, wp, quick, progress) -> tuple:
     from gyro_instrument.bench.streaming import streaming_rows
     st = streaming_rows(wp, REFERENCE[(3600.0 if quick else 86164.0989, 20.0)], quick, progress)
     _write(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
-    return tg, st, rt, gwp
+    return tg, st, rt, gwp, cost_lines
 
 
 def _bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) -> list:

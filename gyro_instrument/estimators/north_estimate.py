@@ -89,6 +89,10 @@ def _check_swing(name, inst, t):
     dur = float(np.ptp(ok)) if ok.size else 0.0
     if period <= dur:
         return
+    if dur <= 0.0:
+        raise InadequateData(check_entry(name, "north", "refused",
+                                         f"the record spans {dur:g} s ({ok.size} finite sample time(s)); one swing "
+                                         f"lasts {period:.6g} s: observe >= {period:.6g} s", dur, period))
     lim = _latitude_limit_deg(inst, dur)
     where = (f"|site.latitude_deg| <= {lim:.4g}" if lim is not None else "no latitude does (spin up the rotor)")
     raise InadequateData(check_entry(name, "north", "refused",
