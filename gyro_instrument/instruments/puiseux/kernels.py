@@ -6,8 +6,8 @@ Imported lazily (by :func:`gyro_instrument.instruments.puiseux.runs.fixed_step_k
 first imported, or left as plain Python under ``GYRO_INSTRUMENT_JIT=0``
 (tests/test_puiseux_fast.py holds the two equal).
 
-Two right-hand sides, one stepper
----------------------------------
+Two right-hand sides, one stepper (and the exact one for DOP853)
+----------------------------------------------------------------
 * :func:`body_rhs` (model 0) — the exact equations of :mod:`.dynamics` (quaternion q, body rate w;
   the general surface S, c, which holds every shape), sharing their float arithmetic
   (``_vertical``, ``_general_sn``, ``_general_surface_terms``, ``_contact_response``).
@@ -100,6 +100,23 @@ def _axis_rhs(x, p, out):
 
 body_rhs = jit.compiled(_body_rhs)
 axis_rhs = jit.compiled(_axis_rhs)
+
+
+def _exact_rhs(t, y, p, dy):
+    """:func:`body_rhs` as a kernel ``f(t, y, p, dy)`` of :mod:`gyro_instrument.core.dop853_jit`
+    (``integrator: dop853``; the equations do not depend on t): compiled by
+    :func:`exact_dop853_kernel` with :func:`~gyro_instrument.core.dop853_jit.rhs_signature`."""
+    body_rhs(y, p, dy)
+
+
+def exact_dop853_kernel():
+    """:func:`_exact_rhs` compiled with :func:`~gyro_instrument.core.dop853_jit.rhs_signature` (numba's
+    cache), or the plain function when :func:`gyro_instrument.core.jit.enabled` is False. Call it
+    through :func:`gyro_instrument.instruments.puiseux.fixed_step.dop853_kernel` (cached)."""
+    from gyro_instrument.core import dop853_jit  # noqa: PLC0415
+    if not jit.enabled():
+        return _exact_rhs
+    return jit.compiled(_exact_rhs, signature_or_function=dop853_jit.rhs_signature())
 
 
 def _rhs(model, y, p, out):
