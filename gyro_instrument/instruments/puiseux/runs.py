@@ -4,7 +4,8 @@
 (which supplies the parameters, the surface, the inertia and the initial tilt and spin): the state
 is the unit quaternion (body → ENU) and the body-axis angular velocity, integrated with the contact
 dynamics of :mod:`.dynamics` (Puiseux 1852) by the integrator the ``integrator`` parameter names
-(adaptive DOP853, or a compiled fixed-step run of :mod:`.fixed_step`), and turned into columns here.
+(adaptive DOP853, compiled when numba is on, or a compiled fixed-step run of :mod:`.fixed_step`), and
+turned into columns here.
 """
 
 import math
@@ -103,8 +104,9 @@ class ContactRuns:
 
     def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
         """Integrate the exact model (the chosen integrator, :meth:`integration_run`) and sample at
-        times ``t`` (s, from t[0]): one block of :meth:`stream`. ``rtol`` overrides the parameter, and
-        ``integrator=`` (a keyword option) the ``integrator`` parameter.
+        times ``t`` (s, from t[0]): one block of :meth:`stream`. ``rtol`` overrides the parameter,
+        ``integrator=`` (a keyword option) the ``integrator`` parameter, and ``compiled=False`` runs
+        ``dop853`` as scipy's DOP853 on :meth:`rhs` even with numba on.
 
         Returns
         -------
@@ -118,7 +120,8 @@ class ContactRuns:
 
     def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
         """Block by block (:meth:`Instrument.stream`): one run of the chosen integrator (DOP853's step
-        sequence bounded by the run's end, or the fixed steps of :mod:`.fixed_step`), carried across
+        sequence, with no end when compiled, bounded by the run's end for scipy's; or the fixed steps
+        of :mod:`.fixed_step`), carried across
         blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn about the vertical
         is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the block's minimum."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
