@@ -173,16 +173,20 @@ def _body_args(inst):
 
 
 def test_whole_runs_equal_without_compilation():
-    # The same short runs with GYRO_INSTRUMENT_JIT=0 (every kernel plain Python) in a subprocess.
+    # The same short runs with GYRO_INSTRUMENT_JIT=0 (every kernel plain Python) in a subprocess;
+    # there integrator dop853 is scipy's DOP853 on the Python right-hand side, bit for bit the
+    # compiled=False run here, and numba is never imported.
     code = ("import numpy as np, sys; from gyro_instrument.scenes import build_instruments, load_scene; "
             "from gyro_instrument.core.scene import sample_times; out = []\n"
-            "for sc, i in (('puiseux_spheroid', 'axis_rk8'), ('puiseux_general', 'rk8')):\n"
+            "for sc, i in (('puiseux_spheroid', 'axis_rk8'), ('puiseux_general', 'rk8'), ('puiseux_general', 'dop853')):\n"
             "    s = load_scene(sc, ['duration_s=0.2']); (b,) = build_instruments(s).values()\n"
             "    out.append(b.simulate(sample_times(s), integrator=i).extra['state'].tolist())\n"
             "import json; print(json.dumps(out)); sys.exit('numba' in sys.modules)")
     env = dict(os.environ, GYRO_INSTRUMENT_JIT="0")
     res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    plain = json.loads(res.stdout)
+    *plain, scipy = json.loads(res.stdout)
+    inst, t = _body("puiseux_general", ["duration_s=0.2"])
+    np.testing.assert_array_equal(inst.simulate(t, integrator="dop853", compiled=False).extra["state"], np.array(scipy))
     for (sc, integ), states in zip((("puiseux_spheroid", "axis_rk8"), ("puiseux_general", "rk8")), plain):
         inst, t = _body(sc, ["duration_s=0.2"])
         np.testing.assert_allclose(inst.simulate(t, integrator=integ).extra["state"], np.array(states),
@@ -281,17 +285,3 @@ def test_compiled_dop853_kernel_and_run_equal_the_plain_ones():
     assert fast.nfev == plain.nfev
     np.testing.assert_allclose(fast.y, plain.y, rtol=1e-13, atol=1e-14)
 
-
-def test_dop853_without_compilation_is_scipys():
-    # GYRO_INSTRUMENT_JIT=0: integrator dop853 is scipy's DOP853 on the Python right-hand side, bit
-    # for bit the compiled=False run here, and numba is never imported.
-    code = ("import numpy as np, sys, json; from gyro_instrument.scenes import build_instruments, load_scene; "
-            "from gyro_instrument.core.scene import sample_times\n"
-            "s = load_scene('puiseux_general', ['duration_s=0.5']); (b,) = build_instruments(s).values()\n"
-            "print(json.dumps(b.simulate(sample_times(s), integrator='dop853').extra['state'].tolist())); "
-            "sys.exit('numba' in sys.modules)")
-    env = dict(os.environ, GYRO_INSTRUMENT_JIT="0")
-    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    inst, t = _body("puiseux_general", ["duration_s=0.5"])
-    np.testing.assert_array_equal(inst.simulate(t, integrator="dop853", compiled=False).extra["state"],
-                                  np.array(json.loads(res.stdout)))

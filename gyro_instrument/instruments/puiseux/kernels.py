@@ -109,7 +109,7 @@ def _exact_rhs(t, y, p, dy):
     body_rhs(y, p, dy)
 
 
-def exact_dop853_kernel():
+def exact_dop853_kernel() -> "object":
     """:func:`_exact_rhs` compiled with :func:`~gyro_instrument.core.dop853_jit.rhs_signature` (numba's
     cache), or the plain function when :func:`gyro_instrument.core.jit.enabled` is False. Call it
     through :func:`gyro_instrument.instruments.puiseux.fixed_step.dop853_kernel` (cached)."""
