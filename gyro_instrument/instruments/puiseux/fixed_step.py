@@ -1,7 +1,8 @@
-"""Fixed-step runs of Puiseux's body (``integrator: axis_rk8`` and ``rk8``; issue 27 item 1).
+"""Compiled runs of Puiseux's body (``integrator: axis_rk8``, ``rk8`` and ``dop853``; issue 27 item 1).
 
-The adaptive DOP853 run (``integrator: dop853``) resolves every turn of the spin with a Python
-right-hand side. Here the same exact model is stepped by compiled kernels (:mod:`.kernels`):
+scipy's adaptive DOP853 (``integrator: dop853`` with ``GYRO_INSTRUMENT_JIT=0``) resolves every turn
+of the spin with a Python right-hand side (16–21× real time for the shipped spheroid). Here the same
+exact model is stepped by compiled kernels (:mod:`.kernels`):
 
 * ``axis_rk8`` — a body of revolution (A = B and a surface of revolution about Gz: the ellipsoid with
   α = β, or ρ = ρ'; and A = B) through its exact reduction by the conserved

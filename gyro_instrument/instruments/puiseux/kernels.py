@@ -1,4 +1,4 @@
-"""Fixed-step kernels for Puiseux's body on the smooth plane (``integrator: axis_rk8`` and ``rk8``).
+"""Compiled kernels for Puiseux's body on the smooth plane (``integrator: axis_rk8``, ``rk8``, ``dop853``).
 
 Imported lazily (by :func:`gyro_instrument.instruments.puiseux.runs.fixed_step_kernels`), never by
 ``import gyro_instrument``: the functions below are compiled with
@@ -30,6 +30,10 @@ Two right-hand sides, one stepper (and the exact one for DOP853)
   gyroscopic term C r/A u × v: the fastest motion left is the nutation (≈ C r/A), not the spin, and
   the spin angle is a quadrature. Singular at u = −e_z (the body upside down: the swing frame then
   twists without bound), so the run stops once the tilt passes :data:`MAX_TILT_RAD`.
+
+:func:`_exact_rhs` is :func:`body_rhs` as the right-hand side ``f(t, y, p, dy)`` of
+:mod:`gyro_instrument.core.dop853_jit` (``integrator: dop853`` with numba on), compiled on first use
+with that module's signature (:func:`exact_dop853_kernel`).
 
 The stepper :func:`rk8_samples` integrates either with a fixed-step 8th-order Runge–Kutta (the
 12-stage 8th-order formula of DOP853, Hairer, Nørsett & Wanner, Solving ODE I, sec. II.10: the
