@@ -1,13 +1,20 @@
-"""Fixed-step runs of Puiseux's body (``integrator: axis_rk8`` and ``rk8``; issue 27 item 1).
+"""Compiled runs of Puiseux's body (``integrator: axis_rk8``, ``rk8`` and ``dop853``; issue 27 item 1).
 
-The adaptive DOP853 run (``integrator: dop853``) resolves every turn of the spin with a Python
-right-hand side. Here the same exact model is stepped by compiled kernels (:mod:`.kernels`):
+scipy's adaptive DOP853 (``integrator: dop853`` with ``GYRO_INSTRUMENT_JIT=0``) resolves every turn
+of the spin with a Python right-hand side (16–21× real time for the shipped spheroid). Here the same
+exact model is stepped by compiled kernels (:mod:`.kernels`):
 
 * ``axis_rk8`` — a body of revolution (A = B and a surface of revolution about Gz: the ellipsoid with
   α = β, or ρ = ρ'; and A = B) through its exact reduction by the conserved
   spin r (Puiseux eq. 6): the figure axis u and its velocity in the world, the spin angle a
   quadrature (:mod:`.kernels`). The step is set by the nutation, not by the spin.
 * ``rk8`` — any body: the exact equations of :mod:`.dynamics` (quaternion and body rate).
+* ``dop853`` with numba on (:func:`gyro_instrument.core.jit.enabled`): :class:`CompiledDOP853Run`, Hairer's
+  adaptive DOP853 of :mod:`gyro_instrument.core.dop853_jit` on the same exact equations as a compiled
+  kernel (:func:`.kernels._exact_rhs`): the method, tolerances and error control of scipy's DOP853
+  (the run of ``GYRO_INSTRUMENT_JIT=0``), its steps run with no end rather than bounded by the run's
+  end, so the two differ by round-off amplified over the run (≈ rtol × the scale of the angles;
+  ``tests/test_puiseux_fast.py``).
 
 Both take equal steps h of the 8th-order Runge–Kutta formula, the fewest per sample interval with
 h Ω ≤ :data:`H_OMEGA` (rtol / 1e-10)^(1/8) (the global error goes as h⁸), Ω (s⁻¹) a bound on the
@@ -30,6 +37,7 @@ import types
 import numpy as np
 
 from gyro_instrument.core import dop853
+from gyro_instrument.core.dop853_jit import CompiledRun
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.quaternion import quat_mul, quat_to_matrix
 from gyro_instrument.core.trajectory import Trajectory
@@ -44,6 +52,13 @@ def fixed_step_kernels() -> "types.ModuleType":
     from gyro_instrument.instruments.puiseux import kernels  # noqa: PLC0415 - lazy: numba
 
     return kernels
+
+
+@functools.cache
+def dop853_kernel() -> "object":
+    """The exact equations as a compiled DOP853 kernel (:func:`.kernels.exact_dop853_kernel`), once
+    per process; the plain function when numba is off."""
+    return fixed_step_kernels().exact_dop853_kernel()
 
 
 def axis_state(y) -> tuple:
@@ -130,3 +145,35 @@ class FixedStepRun:
         self.cpu_time_s += time.process_time() - c0
         meta = dict(self.meta, nsteps=self.nsteps, substeps=sub)
         return Trajectory(t, y, 12 * self.nsteps, self.cpu_time_s, self.cpu_time_s, self.model, meta)
+
+
+class CompiledDOP853Run:
+    """A resumable adaptive DOP853 run of the exact equations compiled (``integrator: dop853`` with
+    numba on; the ``advance`` interface of :class:`gyro_instrument.core.integrate.Integration`):
+    :class:`~gyro_instrument.core.dop853_jit.CompiledRun` on :func:`dop853_kernel`.
+
+    Parameters
+    ----------
+    y0 : array (7,)
+        (q, w) at ``t0`` (quaternion body → ENU, body rate in rad/s).
+    t0 : float
+        Start, s.
+    params : sequence of float
+        (A, B, C, M, g, S_xx, S_xy, S_xz, S_yy, S_yz, S_zz, c_x, c_y, c_z) (SI; :func:`.kernels._body_rhs`).
+    rtol, atol : float
+        DOP853's tolerances (those of the scipy run).
+    compiled : bool
+        The compiled driver and kernel (default), or both as plain Python (the reference the tests
+        hold them to; ~1000× slower).
+    """
+
+    def __init__(self, y0, t0, params, rtol, atol, compiled=True) -> None:
+        kernel = dop853_kernel() if compiled else fixed_step_kernels()._exact_rhs
+        self.run = CompiledRun(kernel, params, np.asarray(y0, dtype=float), t0, rtol, atol, compiled=compiled)
+
+    def advance(self, t) -> Trajectory:
+        """States (q, w) at the sample times ``t`` (s, non-decreasing, from the last one returned)."""
+        y = self.run.advance(np.asarray(t, dtype=float))
+        run = self.run
+        return Trajectory(np.asarray(t, dtype=float), y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
+                          dict(run.meta))

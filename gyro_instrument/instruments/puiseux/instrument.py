@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from gyro_instrument.core import jit
 from gyro_instrument.core.effect import Scales
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import PairParam, Param
@@ -110,7 +111,8 @@ class PuiseuxBody(ContactRuns, Instrument):
         Param("rtol", default=1e-10, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=INTEGRATORS,
               doc="auto: axis_rk8 for a body of revolution released with its axis above the horizontal, else rk8; dop853: adaptive DOP853 on the exact "
-                  "equations (the reference); axis_rk8: compiled fixed-step RK8 on the exact reduction of a "
+                  "equations (the reference), compiled (core.dop853_jit, the equations a numba kernel) when numba is "
+                  "on, else scipy's DOP853 on the Python right-hand side (GYRO_INSTRUMENT_JIT=0); axis_rk8: compiled fixed-step RK8 on the exact reduction of a "
                   "body of revolution by its conserved spin (steps set by the nutation, not the spin); rk8: "
                   "compiled fixed-step RK8 on the exact equations (any body)"),
     )
@@ -205,7 +207,12 @@ class PuiseuxBody(ContactRuns, Instrument):
     def integrator_choice(self) -> tuple:
         """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why: the reduction
         ``axis_rk8`` for a body of revolution released with its axis above the horizontal, else
-        ``rk8`` (:mod:`.fixed_step`), unless the scene names one."""
+        ``rk8`` (:mod:`.fixed_step`), unless the scene names one (``dop853``: the reason says whether it
+        runs compiled, :mod:`gyro_instrument.core.dop853_jit`, or as scipy's, numba off)."""
+        if self.p.integrator == "dop853":
+            how = (f"Hairer's DOP853 compiled, core.dop853_jit: {jit.status()}" if jit.enabled() else
+                   f"scipy's DOP853 on the Python right-hand side, {jit.status()}")
+            return "dop853", f"chosen in the scene ({how})"
         if self.p.integrator != "auto":
             return self.p.integrator, "chosen in the scene"
         why_not = self.not_of_revolution(self.params)

@@ -1,4 +1,4 @@
-"""Fixed-step kernels for Puiseux's body on the smooth plane (``integrator: axis_rk8`` and ``rk8``).
+"""Compiled kernels for Puiseux's body on the smooth plane (``integrator: axis_rk8``, ``rk8``, ``dop853``).
 
 Imported lazily (by :func:`gyro_instrument.instruments.puiseux.runs.fixed_step_kernels`), never by
 ``import gyro_instrument``: the functions below are compiled with
@@ -6,8 +6,8 @@ Imported lazily (by :func:`gyro_instrument.instruments.puiseux.runs.fixed_step_k
 first imported, or left as plain Python under ``GYRO_INSTRUMENT_JIT=0``
 (tests/test_puiseux_fast.py holds the two equal).
 
-Two right-hand sides, one stepper
----------------------------------
+Two right-hand sides, one stepper (and the exact one for DOP853)
+----------------------------------------------------------------
 * :func:`body_rhs` (model 0) — the exact equations of :mod:`.dynamics` (quaternion q, body rate w;
   the general surface S, c, which holds every shape), sharing their float arithmetic
   (``_vertical``, ``_general_sn``, ``_general_surface_terms``, ``_contact_response``).
@@ -30,6 +30,10 @@ Two right-hand sides, one stepper
   gyroscopic term C r/A u × v: the fastest motion left is the nutation (≈ C r/A), not the spin, and
   the spin angle is a quadrature. Singular at u = −e_z (the body upside down: the swing frame then
   twists without bound), so the run stops once the tilt passes :data:`MAX_TILT_RAD`.
+
+:func:`_exact_rhs` is :func:`body_rhs` as the right-hand side ``f(t, y, p, dy)`` of
+:mod:`gyro_instrument.core.dop853_jit` (``integrator: dop853`` with numba on), compiled on first use
+with that module's signature (:func:`exact_dop853_kernel`).
 
 The stepper :func:`rk8_samples` integrates either with a fixed-step 8th-order Runge–Kutta (the
 12-stage 8th-order formula of DOP853, Hairer, Nørsett & Wanner, Solving ODE I, sec. II.10: the
@@ -100,6 +104,23 @@ def _axis_rhs(x, p, out):
 
 body_rhs = jit.compiled(_body_rhs)
 axis_rhs = jit.compiled(_axis_rhs)
+
+
+def _exact_rhs(t, y, p, dy):
+    """:func:`body_rhs` as a kernel ``f(t, y, p, dy)`` of :mod:`gyro_instrument.core.dop853_jit`
+    (``integrator: dop853``; the equations do not depend on t): compiled by
+    :func:`exact_dop853_kernel` with :func:`~gyro_instrument.core.dop853_jit.rhs_signature`."""
+    body_rhs(y, p, dy)
+
+
+def exact_dop853_kernel() -> "object":
+    """:func:`_exact_rhs` compiled with :func:`~gyro_instrument.core.dop853_jit.rhs_signature` (numba's
+    cache), or the plain function when :func:`gyro_instrument.core.jit.enabled` is False. Call it
+    through :func:`gyro_instrument.instruments.puiseux.fixed_step.dop853_kernel` (cached)."""
+    from gyro_instrument.core import dop853_jit  # noqa: PLC0415
+    if not jit.enabled():
+        return _exact_rhs
+    return jit.compiled(_exact_rhs, signature_or_function=dop853_jit.rhs_signature())
 
 
 def _rhs(model, y, p, out):

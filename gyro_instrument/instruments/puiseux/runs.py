@@ -4,7 +4,8 @@
 (which supplies the parameters, the surface, the inertia and the initial tilt and spin): the state
 is the unit quaternion (body → ENU) and the body-axis angular velocity, integrated with the contact
 dynamics of :mod:`.dynamics` (Puiseux 1852) by the integrator the ``integrator`` parameter names
-(adaptive DOP853, or a compiled fixed-step run of :mod:`.fixed_step`), and turned into columns here.
+(adaptive DOP853, compiled when numba is on, or a compiled fixed-step run of :mod:`.fixed_step`), and
+turned into columns here.
 """
 
 import math
@@ -12,13 +13,14 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from gyro_instrument.core import jit
 from gyro_instrument.core.angles import NumpyUnwrapper
 from gyro_instrument.core.integrate import Integration, integration
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
-from gyro_instrument.instruments.puiseux.fixed_step import FixedStepRun, axis_state
+from gyro_instrument.instruments.puiseux.fixed_step import CompiledDOP853Run, FixedStepRun, axis_state
 
 
 class ContactRuns:
@@ -102,8 +104,9 @@ class ContactRuns:
 
     def simulate(self, t, rtol=None, atol=1e-12, **options) -> Simulation:
         """Integrate the exact model (the chosen integrator, :meth:`integration_run`) and sample at
-        times ``t`` (s, from t[0]): one block of :meth:`stream`. ``rtol`` overrides the parameter, and
-        ``integrator=`` (a keyword option) the ``integrator`` parameter.
+        times ``t`` (s, from t[0]): one block of :meth:`stream`. ``rtol`` overrides the parameter,
+        ``integrator=`` (a keyword option) the ``integrator`` parameter, and ``compiled=False`` runs
+        ``dop853`` as scipy's DOP853 on :meth:`rhs` even with numba on.
 
         Returns
         -------
@@ -117,13 +120,15 @@ class ContactRuns:
 
     def stream(self, blocks, rtol=None, atol=1e-12, **options) -> Iterator[Simulation]:
         """Block by block (:meth:`Instrument.stream`): one run of the chosen integrator (DOP853's step
-        sequence bounded by the run's end, or the fixed steps of :mod:`.fixed_step`), carried across
+        sequence, with no end when compiled, bounded by the run's end for scipy's; or the fixed steps
+        of :mod:`.fixed_step`), carried across
         blocks (the blocks concatenate to :meth:`simulate` bit for bit; the turn about the vertical
         is unwrapped across blocks); ``extra["min_normal_force_N"]`` is the block's minimum."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
             return
-        run = self.integration_run(t0, t_end, self.p.rtol if rtol is None else rtol, atol, options.pop("integrator", None))
+        run = self.integration_run(t0, t_end, self.p.rtol if rtol is None else rtol, atol, options.pop("integrator", None),
+                                   options.pop("compiled", None))
         carry = {"unwrap": NumpyUnwrapper(), "turn0": None}
         for t in blocks:
             traj = run.advance(t)
@@ -151,17 +156,22 @@ class ContactRuns:
             extra["state"] = traj.y
             yield Simulation(t, columns, traj, extra=extra)
 
-    def integration_run(self, t0, t_end, rtol, atol, integrator=None) -> "Integration | FixedStepRun":
+    def integration_run(self, t0, t_end, rtol, atol, integrator=None, compiled=None
+                        ) -> "Integration | FixedStepRun | CompiledDOP853Run":
         """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
-        ``integrator`` overrides the parameter): DOP853 on :meth:`rhs`, or a fixed-step run of
-        :mod:`.fixed_step` with the same initial state, its step set by ``rtol`` and the fastest
-        rate Ω of the motion (:mod:`.fixed_step`; ``atol`` applies to DOP853 only)."""
+        ``integrator`` overrides the parameter): DOP853 — compiled (:class:`.fixed_step.CompiledDOP853Run`,
+        when ``compiled`` is None or True and numba is on) or scipy's on :meth:`rhs` (``compiled=False``,
+        or numba off) — or a fixed-step run of :mod:`.fixed_step` with the same initial state, its step
+        set by ``rtol`` and the fastest rate Ω of the motion (:mod:`.fixed_step`; ``atol`` applies to
+        DOP853 only)."""
         name = integrator or self.integrator_choice()[0]
+        y0 = self.initial_state()
         if name == "dop853":
-            return integration(self.rhs(), self.initial_state(), t0, t_end, method="DOP853", rtol=rtol, atol=atol)
+            if compiled is False or not jit.enabled():
+                return integration(self.rhs(), y0, t0, t_end, method="DOP853", rtol=rtol, atol=atol)
+            return CompiledDOP853Run(y0, t0, self.exact_params(), rtol, atol)
         A, B, C = self.inertia
         M, g, sf = self.p.mass_kg, self.context.gravity_m_s2, self.surface
-        y0 = self.initial_state()
         w0 = float(np.linalg.norm(y0[4:]))
         # the fastest swing the gravity couple can drive, at most √(M g max|ρ − γ| / min moment)
         swing = math.sqrt(M * g * max(abs(self.rho - self.gamma), abs(self.rho_prime - self.gamma)) / min(A, B, C))
@@ -170,10 +180,18 @@ class ContactRuns:
             params = (sf.sxx, sf.szz, sf.cz, A, C, r, M, g)
             omega = abs(C * r) / A + swing + float(np.linalg.norm(x0[3:6]))
         else:
-            S = (sf.sxx, sf.sxy, getattr(sf, "sxz", 0.0), sf.syy, getattr(sf, "syz", 0.0), sf.szz)
-            params = (A, B, C, M, g, *S, getattr(sf, "cx", 0.0), getattr(sf, "cy", 0.0), sf.cz)
+            params = self.exact_params()
             omega = w0 * max(A, B, C) / min(A, B, C) + swing
         return FixedStepRun(name, y0, t0, params, omega, rtol)
+
+    def exact_params(self) -> tuple:
+        """The exact equations' kernel parameters (:func:`.kernels._body_rhs`): (A, B, C (kg m²), M (kg),
+        g (m/s²), S_xx, S_xy, S_xz, S_yy, S_yz, S_zz (m), c_x, c_y, c_z (m))."""
+        A, B, C = self.inertia
+        sf = self.surface
+        S = (sf.sxx, sf.sxy, getattr(sf, "sxz", 0.0), sf.syy, getattr(sf, "syz", 0.0), sf.szz)
+        return (A, B, C, self.p.mass_kg, self.context.gravity_m_s2, *S, getattr(sf, "cx", 0.0),
+                getattr(sf, "cy", 0.0), sf.cz)
 
     def contact_columns(self, y, n, carry=None) -> dict:
         """The contact point and the turn about the vertical along a state history (sec. I and III).
