@@ -57,7 +57,13 @@ EXTRA_VARIANTS = tuple(
         ("pivot_damping and spin_decay", ["effects={earth_rotation: {}, centrifugal: {}, ring_inertia: {}, "
                                           "pivot_damping: {time_constant_s: 600}, "
                                           "spin_decay: {time_constant_s: 3600}}"]))) + (
-    ("gimbal_paris", "gimbal_locked", "as shipped, 1 kHz", ["sample_rate_hz=1000"]),)
+    ("gimbal_paris", "gimbal_locked", "as shipped, 1 kHz", ["sample_rate_hz=1000"]),
+    # the free gyroscope's numerical model: DOP853 (compiled, core.dop853_jit) resolving every nutation,
+    # and a 0.1 mm mass unbalance (auto: the splitting)
+    ("free_gyroscope", "free_gyro", "model=numerical, integrator=dop853",
+     ["instruments.free_gyro.model=numerical", "instruments.free_gyro.integrator=dop853"]),
+    ("free_gyroscope", "free_gyro", "model=numerical, center_of_mass_offset_m=1e-4",
+     ["instruments.free_gyro.model=numerical", "instruments.free_gyro.center_of_mass_offset_m=1e-4"]),)
 
 REALTIME_HEADER = ("scene", "instrument", "type", "variant", "integrator", "simulated_s", "sample_rate_hz",
                    "cpu_s", "wall_s", "real_time_factor", "nfev", "met", "note")

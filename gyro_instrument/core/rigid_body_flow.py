@@ -34,6 +34,7 @@ times, is the free gyroscope's closed form
 
 import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -67,17 +68,6 @@ def qmul(a, b) -> tuple:
     bw, bx, by, bz = b
     return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
             aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-
-
-def to_body(q, v) -> tuple:
-    """R(q)ᵀ v: the inertial vector ``v`` (3 floats) in body axes, for the unit quaternion ``q``."""
-    w, x, y, z = q
-    vx, vy, vz = v
-    # v' = v + 2 r × (r × v + w' v), r = −(x, y, z) for the conjugate, w' = w
-    tx = 2.0 * (-y * vz + z * vy)
-    ty = 2.0 * (-z * vx + x * vz)
-    tz = 2.0 * (-x * vy + y * vx)
-    return (vx + w * tx + (-y * tz + z * ty), vy + w * ty + (-z * tx + x * tz), vz + w * tz + (-x * ty + y * tx))
 
 
 def to_body(q, v) -> tuple:
@@ -135,6 +125,59 @@ def kick(y, t, dt, torque) -> None:
         kz = ez + w * 2.0 * (yy * ex - x * ey) + (yy * tx - x * ty)
         rest = n * kz
         y[6] = rest + (y[6] - rest) * math.exp(-dt * rate)
+
+
+def rhs_kernel(t, y, p, dy) -> None:
+    """The heavy symmetric top's right-hand side for DOP853 (:mod:`gyro_instrument.core.dop853_jit`'s
+    kernel ``f(t, y, p, dy)``), y = [q (4), ω (3, body, rad/s)] as in :func:`free_flow`, dy/dt into ``dy``:
+    Euler's equations ω̇1 = (1 − μ) ω3 ω2 + τ1/A, ω̇2 = −(1 − μ) ω3 ω1 + τ2/A, ω̇3 = τ3/C and
+    q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q (a Baumgarte term, κ in 1/s, holding |q| at 1). The torques are
+    :func:`kick`'s at the time ``t`` and the attitude q (not renormalised): (τ1, τ2)/A = γ (u_y, −u_x),
+    u = R(q)ᵀ up(t), and τ3/C = −(ω3 − n (R(q)ᵀ ê)_z)/τ. ``p`` (:func:`rhs_params`) = [1 − μ, κ, τ (s; 0:
+    no spin relaxation), then :func:`kick`'s torque array (empty: torque-free)]. The arithmetic, term for
+    term, of :meth:`~gyro_instrument.instruments.free_gyroscope.FreeGyroscope.rhs_scalar`."""
+    a, kappa = p[0], p[1]
+    qw, qx, qy, qz, w1, w2, w3 = y[0], y[1], y[2], y[3], y[4], y[5], y[6]
+    corr = kappa * (1.0 - (qw * qw + qx * qx + qy * qy + qz * qz))
+    d1, d2, d3 = 0.0, 0.0, 0.0
+    if p.size > 3:
+        gam, n = p[3], p[4]
+        c, s = math.cos(n * t), math.sin(n * t)
+        vx = p[9] + c * p[12] + s * p[15]
+        vy = p[10] + c * p[13] + s * p[16]
+        vz = p[11] + c * p[14] + s * p[17]
+        tx, ty, tz = 2.0 * (qz * vy - qy * vz), 2.0 * (qx * vz - qz * vx), 2.0 * (qy * vx - qx * vy)
+        ux = vx + qw * tx + (qz * ty - qy * tz)       # R(q)ᵀ v, as in to_body
+        uy = vy + qw * ty + (qx * tz - qz * tx)
+        d1, d2 = gam * uy, -gam * ux
+        if p[2] != 0.0:
+            ex, ey, ez = p[6], p[7], p[8]
+            tx, ty, tz = 2.0 * (qz * ey - qy * ez), 2.0 * (qx * ez - qz * ex), 2.0 * (qy * ex - qx * ey)
+            kz = ez + qw * tz + (qy * tx - qx * ty)
+            d3 = -(w3 - n * kz) / p[2]
+    dy[0] = 0.5 * (-qx * w1 - qy * w2 - qz * w3) + corr * qw
+    dy[1] = 0.5 * (qw * w1 + qy * w3 - qz * w2) + corr * qx
+    dy[2] = 0.5 * (qw * w2 - qx * w3 + qz * w1) + corr * qy
+    dy[3] = 0.5 * (qw * w3 + qx * w2 - qy * w1) + corr * qz
+    dy[4] = a * w2 * w3 + d1
+    dy[5] = -a * w1 * w3 + d2
+    dy[6] = d3
+
+
+def rhs_params(mu, kappa, decay_time_s, torque) -> np.ndarray:
+    """:func:`rhs_kernel`'s parameter array: μ = C/A, κ (1/s), the spin relaxation time τ (s; 0 for
+    none) and :func:`kick`'s ``torque`` array (empty for the torque-free body)."""
+    return np.concatenate([[1.0 - float(mu), float(kappa), float(decay_time_s)], np.asarray(torque, dtype=float)])
+
+
+@functools.cache
+def compiled_rhs_kernel() -> "Callable":
+    """:func:`rhs_kernel` compiled with :func:`~gyro_instrument.core.dop853_jit.rhs_signature` (numba's
+    cache), or the plain function when :func:`gyro_instrument.core.jit.enabled` is False."""
+    from gyro_instrument.core import dop853_jit  # noqa: PLC0415 - its compile step only when asked for
+    if not jit.enabled():
+        return rhs_kernel
+    return jit.compiled(rhs_kernel, signature_or_function=dop853_jit.rhs_signature())
 
 
 def _splitting_loop(free, kick_fn):

@@ -95,6 +95,11 @@ the body-axis angular velocity ω, in the inertial frame. Two integrators (``int
 * ``dop853``: DOP853 on Euler's equations ω̇1 = (1 − μ) ω3 ω2 + τ1/A, ω̇2 = (μ − 1) ω3 ω1 + τ2/A,
   ω̇3 = τ3/C and q̇ = ½ q ⊗ (0, ω) plus a Baumgarte term κ (1 − |q|²) q that holds |q| at 1; q is
   renormalised before use. Its cost grows as the horizon times μ ρ0. The independent cross-check.
+  With numba (:mod:`gyro_instrument.core.jit`) Hairer's DOP853 runs compiled, dense output and all
+  (:mod:`gyro_instrument.core.dop853_jit`), on the compiled right-hand side
+  :func:`~gyro_instrument.core.rigid_body_flow.rhs_kernel` (the arithmetic of :meth:`FreeGyroscope.rhs_scalar`,
+  term for term): the same steps as the Python-float driver (``GYRO_INSTRUMENT_JIT=0``), ~100–300×
+  faster (``bench`` spin_free, realtime).
 
 Torques (``model: numerical`` only; the closed form refuses them through the scene checks)
 ------------------------------------------------------------------------------------------
@@ -119,7 +124,11 @@ import numpy as np
 from gyro_instrument.core.effect import FRAME_RATE, SPIN, Scales
 from gyro_instrument.core.angles import NumpyUnwrapper
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.rigid_body_flow import COMPOSITIONS, splitting_run, to_body
+from gyro_instrument.core import jit
+from gyro_instrument.core.dop853 import ScalarDOP853
+from gyro_instrument.core.dop853_jit import CompiledRun
+from gyro_instrument.core.rigid_body_flow import (COMPOSITIONS, compiled_rhs_kernel, rhs_params, splitting_run,
+                                                  to_body)
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
@@ -263,7 +272,10 @@ class FreeGyroscope(Instrument):
         if self.p.model == "analytic":
             return "analytic", "model analytic: the exact torque-free closed form, cost independent of the horizon"
         if self.p.integrator == "dop853":
-            return "dop853", "chosen in the scene: DOP853 on quaternion + Euler equations (resolves every nutation)"
+            driver = f"compiled, core.dop853_jit, {jit.status()}" if jit.enabled() else \
+                f"Python floats: {jit.status()}"
+            return "dop853", (f"chosen in the scene: DOP853 on quaternion + Euler equations (resolves every "
+                              f"nutation; {driver})")
         how = "chosen in the scene" if self.p.integrator == "splitting" else \
             "auto: the exact torque-free flow carries the spin and the free nutation (faster than DOP853 at equal error: bench spin_free)"
         if not self.torqued():
@@ -502,13 +514,37 @@ class FreeGyroscope(Instrument):
             return np.array(g(t, *y))
         return f
 
+    #: DOP853's absolute tolerance on the state [q, ω (rad/s)] of the numerical path.
+    DOP853_ATOL = 1e-14
+
+    def dop853_run(self, span_s, rtol, compiled=True) -> "CompiledRun | ScalarDOP853":
+        """DOP853 from the release state (τ = 0) over ``span_s`` seconds at ``rtol`` (atol
+        :data:`DOP853_ATOL`): Hairer's DOP853 compiled with its dense output
+        (:class:`~gyro_instrument.core.dop853_jit.CompiledRun`, run with no end) on the compiled
+        :func:`~gyro_instrument.core.rigid_body_flow.rhs_kernel` when ``compiled`` and
+        :func:`gyro_instrument.core.jit.enabled`; else the same method on Python floats over
+        :meth:`rhs_scalar` (``integrate(method="DOP853-scalar")``, which ends its last step on
+        ``span_s``). The two take the same steps up to round-off (and the scalar one's last)."""
+        y0 = np.concatenate([self.q0, self.R0.T @ self.motion_constants()["omega0"]])
+        if compiled and jit.enabled():
+            decay = self.effect("spin_decay")
+            params = rhs_params(self.p.inertia_ratio, self.baumgarte_rate(),
+                                decay.p.time_constant_s if decay is not None else 0.0, self.torque_array())
+            return CompiledRun(compiled_rhs_kernel(), params, y0, 0.0, rtol, self.DOP853_ATOL)
+        return integration(self.rhs_scalar(), y0, 0.0, span_s, method="DOP853-scalar", rtol=rtol,
+                           atol=self.DOP853_ATOL)
+
+    def baumgarte_rate(self) -> float:
+        """κ = |ω0|, 1/s: the rate of the Baumgarte term κ (1 − |q|²) q of the DOP853 path's q̇."""
+        return float(np.linalg.norm(self.motion_constants()["omega0"]))
+
     def rhs_scalar(self) -> Callable:
         """The right-hand side on Python floats, ``f(t, qw, qx, qy, qz, w1, w2, w3) -> tuple``, for the
         scalar DOP853 driver (``integrate(method="DOP853-scalar")``): a 7-element state is evaluated
         ~5x faster without numpy's per-call overhead. Euler's equations for A = A, C = μA, and
         q̇ = ½ q ⊗ (0, ω) + κ (1 − |q|²) q with κ = |ω0|."""
         a = 1.0 - self.p.inertia_ratio
-        kappa = float(np.linalg.norm(self.motion_constants()["omega0"]))
+        kappa = self.baumgarte_rate()
         torque = self.torque_rates()
 
         def f(t, qw, qx, qy, qz, w1, w2, w3):
@@ -597,7 +633,8 @@ class FreeGyroscope(Instrument):
             Overrides the ``rtol`` parameter (numerical path).
         **options
             ``integrator`` ("splitting" or "dop853") and ``splitting_order`` override the parameters;
-            ``step_s`` forces the splitting's largest step, s (the work-precision study).
+            ``step_s`` forces the splitting's largest step, s (the work-precision study);
+            ``compiled=False`` runs ``dop853`` on Python floats even with numba (:meth:`dop853_run`).
 
         Returns
         -------
@@ -611,7 +648,7 @@ class FreeGyroscope(Instrument):
         """Block by block (:meth:`Instrument.stream`), released at the first sample: the closed form
         at each block's times, or the numerical path's state carried across blocks (the splitting's
         state and time, :func:`~gyro_instrument.core.rigid_body_flow.splitting_run`, or DOP853's step
-        sequence, :class:`~gyro_instrument.core.integrate.Integration`); the unwrapped angles continue
+        sequence, :meth:`dop853_run`); the unwrapped angles continue
         across blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
         if t0 is None:
@@ -626,8 +663,7 @@ class FreeGyroscope(Instrument):
         run = split = None
         wb0 = self.R0.T @ self.motion_constants()["omega0"]
         if model != "analytic" and integrator == "dop853":
-            run = integration(self.rhs_scalar(), np.concatenate([self.q0, wb0]), 0.0, t_end - t0,
-                              method="DOP853-scalar", rtol=rtol, atol=1e-14)
+            run = self.dop853_run(t_end - t0, rtol, options.pop("compiled", True))
         elif model != "analytic":
             order = options.pop("splitting_order", None) or self.p.splitting_order
             h = options.pop("step_s", None) or self.splitting_step()
@@ -635,7 +671,11 @@ class FreeGyroscope(Instrument):
         for t in blocks:
             tau = t - t0
             w0, c0 = time.perf_counter(), time.process_time()
-            if run is not None:
+            if isinstance(run, CompiledRun):
+                y = run.advance(tau)
+                traj = Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853 (compiled)",
+                                  dict(run.meta))
+            elif run is not None:
                 traj = run.advance(tau)
                 traj.t = t
                 y = traj.y
