@@ -36,14 +36,26 @@ def pendulum_columns(pos, vel, omega0_sq, unwrappers=None) -> dict:
     x, y, z = pos
     vx, vy = vel[0], vel[1]
     rh = np.hypot(x, y)
-    deflection = np.arctan2(rh, -z)
+    deflection = np.arctan2(rh, -z, out=rh)
     azimuth = unwrap_az(np.arctan2(x, y))
-    # Fradkin tensor in (north, east) axes: its major axis is the swing plane.
+    # Fradkin tensor in (north, east) axes: its major axis is the swing plane. T_nn = ω0² n n + v_n v_n,
+    # T_ee = ω0² e e + v_e v_e, T_ne = ω0² n e + v_n v_e; swing = atan2(2 T_ne, T_nn − T_ee) / 2, the
+    # operations in place (the same doubles, fewer arrays of the block's length: 1.7 million samples a day)
     n, e, vn, ve = y, x, vy, vx
-    tnn = omega0_sq * n * n + vn * vn
-    tee = omega0_sq * e * e + ve * ve
-    tne = omega0_sq * n * e + vn * ve
-    swing = 0.5 * unwrap_swing(np.arctan2(2.0 * tne, tnn - tee))
+    tnn = omega0_sq * n
+    tnn *= n
+    w = vn * vn
+    tnn += w
+    tee = omega0_sq * e
+    tee *= e
+    tee += np.multiply(ve, ve, out=w)
+    tne = omega0_sq * n
+    tne *= e
+    tne += np.multiply(vn, ve, out=w)
+    tne *= 2.0
+    tnn -= tee
+    swing = unwrap_swing(np.arctan2(tne, tnn, out=tne))
+    swing *= 0.5
     return {"deflection": deflection, "azimuth": azimuth, "swing_azimuth": swing,
             "x_east": x, "y_north": y, "z_up": z}
 
