@@ -1,12 +1,13 @@
-"""The gimbal gyroscope's runs: its hinge chain, the closed form's drivers and the streamed simulation.
+"""The gimbal gyroscope's runs: its hinge chain, the choice of integrator, the closed form's drivers and the
+streamed simulation.
 
 :class:`GimbalRuns` is mixed into :class:`~gyro_instrument.instruments.gimbal.instrument.GimbalGyroscope`
 (which supplies the parameters, the inertias as simulated, the configuration's initial angles and
-the choice of integrator): it builds the generic :class:`~gyro_instrument.instruments.chain.HingeChain`
-(outer ring about PP', inner ring about NN', rotor about oQ; Quet 1853 sec. 4 §III), runs the closed
-form (:mod:`.dynamics`: compiled kernels through :mod:`gyro_instrument.core.dop853_jit`, or Python
-floats through scipy's DOP853 drivers) or the chain, and turns states into columns and invariants
-(:mod:`.theory`).
+the effects' rigid-body coefficients): it builds the generic
+:class:`~gyro_instrument.instruments.chain.HingeChain` (outer ring about PP', inner ring about NN',
+rotor about oQ; Quet 1853 sec. 4 §III), chooses the integrator, runs the closed form (:mod:`.kernels`
+compiled through :mod:`gyro_instrument.core.dop853_jit`, or :mod:`.dynamics` on Python floats through
+scipy's DOP853 drivers) or the chain, and turns states into columns and invariants (:mod:`.theory`).
 """
 
 import math
@@ -18,8 +19,8 @@ from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.instruments.base import Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link
 from gyro_instrument.core.dop853_jit import CompiledRun
-from gyro_instrument.instruments.gimbal.dynamics import (ClosedFormRun, DenseRun, closed_form_rhs, compiled_kernel,
-                                                         kernel_params)
+from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, DenseRun, closed_form_rhs
+from gyro_instrument.instruments.gimbal.kernels import compiled_kernel, kernel_params
 from gyro_instrument.instruments.gimbal.theory import axial_momentum, quet_energy, spin_invariant, swing_inertias_kg_m2
 
 #: Absolute tolerance of both integrators (rad, rad/s), as before the closed form existed.
@@ -62,6 +63,51 @@ class GimbalRuns:
                        self.p.spin_rate_rad_s - self.p.initial_outer_rate_rad_s * math.cos(self.theta0)])
         return np.concatenate([q[chain.free], qd[chain.free]])
 
+    # ---------------------------------------------------------------- integrator
+    def kernels_fit(self) -> bool:
+        """True when the compiled kernels (:func:`~.kernels.free_kernel`, :func:`~.kernels.held_kernel`)
+        hold every active term: rigid-body terms c_l L + c_q Ω × IΩ and hinge torques linear in the rates."""
+        if self.rigid_body_coefficients is None:
+            return False
+        return self.kernel_params(self.build_chain()) is not None
+
+    def integrator_choice(self) -> tuple:
+        """(integrator, reason): what ``integrator`` (``auto`` by default) runs and why.
+
+        ``compiled`` (numba kernels through :mod:`gyro_instrument.core.dop853_jit`) for the free
+        rings (whose nutation needs ~1700 steps per simulated second) when numba is enabled and
+        :meth:`kernels_fit`; else ``closed_form`` (:mod:`.dynamics`) whenever the
+        active effects' rigid-body terms are c_l L + c_q Ω × IΩ
+        (:func:`~.dynamics.rigid_body_coefficients`: true of every registered effect);
+        ``hinge_chain`` otherwise, or when the scene asks for it."""
+        from gyro_instrument.core import jit
+        if self.p.integrator == "hinge_chain":
+            return "hinge_chain", "chosen in the scene"
+        if self.rigid_body_coefficients is None:
+            return "hinge_chain", ("auto: an active effect's rigid-body terms are not the Earth rate's first- and "
+                                   "second-order terms, which only the generic chain sums")
+        if self.p.integrator != "auto":
+            return self.p.integrator, f"chosen in the scene ({jit.status()})" if self.p.integrator == "compiled" \
+                else "chosen in the scene"
+        if self.p.configuration != "free":
+            return "closed_form", ("auto: the locked or outer-fixed swing is slow (a DOP853 step covers many samples): "
+                                   "scipy's DOP853 with dense output runs it thousands of times faster than real "
+                                   "time without loading numba (~0.6 s)")
+        if not self.kernels_fit():
+            return "closed_form", ("auto: an active hinge torque is not linear in its rate, which only the Python "
+                                   "closed form calls (16-75x less CPU than the chain at the same rtol)")
+        if not jit.enabled():
+            return "closed_form", f"auto: the compiled kernels would run uncompiled ({jit.status()})"
+        return "compiled", (f"auto: the free rings' nutation needs ~1700 DOP853 steps per simulated second and the "
+                            f"effects' terms fit the compiled kernels ({jit.status()}; the first run on a machine "
+                            f"compiles for ~15 s, later processes load numba and the cache in ~0.6 s): 15-30x less "
+                            f"CPU than the closed form on Python floats at the same rtol")
+
+    def chosen_integrator(self, duration_s=None) -> tuple:
+        """:meth:`integrator_choice` (``describe`` shows it)."""
+        return self.integrator_choice()
+
+    # ---------------------------------------------------------------- drivers
     def closed_form(self, chain) -> tuple:
         """(rhs, y0) of :func:`~.dynamics.closed_form_rhs` for this gimbal, in ``chain``'s state layout."""
         held = {"locked": chain.links[1].locked_angle, "outer_fixed": chain.links[0].locked_angle}
@@ -72,7 +118,7 @@ class GimbalRuns:
         return rhs, [float(v) for v in self.initial_state(chain)]
 
     def kernel_params(self, chain) -> "tuple | None":
-        """(kernel name, parameter array) of :func:`~.dynamics.kernel_params` for this gimbal, or None
+        """(kernel name, parameter array) of :func:`~.kernels.kernel_params` for this gimbal, or None
         when an effect's hinge torque is not linear in its rate (the compiled kernels do not fit)."""
         held = {"locked": chain.links[1].locked_angle, "outer_fixed": chain.links[0].locked_angle}
         inertias = (self.p.transverse_inertia_kg_m2, self.C, self.A1, self.C1, self.A2, self.C2)
@@ -81,8 +127,8 @@ class GimbalRuns:
                              self.context)
 
     def compiled_run(self, chain, t0) -> CompiledRun:
-        """The compiled closed form's resumable run from ``t0`` (s): :func:`~.dynamics.free_kernel` or
-        :func:`~.dynamics.held_kernel` through :class:`~gyro_instrument.core.dop853_jit.CompiledRun`
+        """The compiled closed form's resumable run from ``t0`` (s): :func:`~.kernels.free_kernel` or
+        :func:`~.kernels.held_kernel` through :class:`~gyro_instrument.core.dop853_jit.CompiledRun`
         (DOP853 with dense output, steps never steered by the samples)."""
         name, params = self.kernel_params(chain)
         y0 = [float(v) for v in self.initial_state(chain)]
