@@ -80,12 +80,13 @@ def angle_arguments(pos, vel, omega0_sq, args) -> None:
     """Kernel: the arguments of :func:`_angle_columns`' three arctangents, sample by sample, into ``args``
     (4, samples): the bob's horizontal distance hypot(x, y) (m) and −z (m) for the deflection, then
     2 T_ne and T_nn − T_ee of the Fradkin tensor (m²/s²) for the swing azimuth; the same operations in
-    the same order as there (``math.hypot`` is the C library's ``hypot``, as ``numpy.hypot``), so the
-    same doubles. ``pos``, ``vel`` (3, samples): ENU, m and m/s; ``omega0_sq`` = g / l (1/s²). Plain
-    Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
+    the same order as there, so the same doubles (``numpy.hypot``: compiled, the C library's ``hypot``
+    as in numpy's loop; not ``math.hypot``, whose CPython algorithm differs in the last bit).
+    ``pos``, ``vel`` (3, samples): ENU, m and m/s; ``omega0_sq`` = g / l (1/s²). Plain Python on
+    floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
     for i in range(pos.shape[1]):
         e, n, vn, ve = pos[0, i], pos[1, i], vel[1, i], vel[0, i]
-        args[0, i] = math.hypot(e, n)
+        args[0, i] = np.hypot(e, n)
         args[1, i] = -pos[2, i]
         wn = omega0_sq * n
         args[2, i] = (wn * e + vn * ve) * 2.0
