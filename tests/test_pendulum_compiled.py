@@ -69,6 +69,11 @@ def test_hermite_samples_equal_dense_output_bit_for_bit():
         kernel(ys, fs, 3, T, t, 100.0, 0.0, out)
         np.testing.assert_array_equal(out, want)
     assert compiled_hermite_samples() is not hermite_samples
+    # more samples than the kernel's block of 4096 (steps cut by a block boundary): still dense_output's doubles
+    t = np.sort(rng.uniform(0.0, n * T, 9000)) + 100.0
+    out = np.empty((6, t.size))
+    compiled_hermite_samples()(ys, fs, 3, T, t, 100.0, 0.0, out)
+    np.testing.assert_array_equal(out, dense_output(grid, T, (t - 100.0) - 0.0, 3))
 
 
 def test_point_mass_map_is_coriolis_and_centrifugal():
