@@ -6,7 +6,8 @@ integrates: the Cartesian constrained right-hand side summing the active effects
 streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
 swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
 pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
-gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
+gives the equations; :func:`pendulum_columns` turns bob states into the published columns
+(:func:`compiled_pendulum_columns`: the same doubles, its arithmetic and unwrapping compiled).
 """
 
 import bisect
@@ -494,7 +495,8 @@ class SwingDynamics:
         result is the full model to ``shooting_tol``, not the comparison solution. A run of at least
         :attr:`COMPILED_MIN_SWINGS` swings with numba (:meth:`compiled_swings`) integrates the same grid
         compiled, swing after swing (:meth:`_serial_window`: the sequential fine solution that Newton
-        converges to, without its shooting error), and samples it with the compiled Hermite kernel. The run's
+        converges to, without its shooting error), samples it with the compiled Hermite kernel and forms
+        the columns with :func:`compiled_pendulum_columns` (the same doubles as :func:`pendulum_columns`). The run's
         ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
         from the fine end state of window w's last swing, so the state carried is the integrated one
         and the windows do not depend on how the samples are cut into blocks."""
