@@ -69,6 +69,11 @@ def test_hermite_samples_equal_dense_output_bit_for_bit():
         kernel(ys, fs, 3, T, t, 100.0, 0.0, out)
         np.testing.assert_array_equal(out, want)
     assert compiled_hermite_samples() is not hermite_samples
+    # more samples than the kernel's block of 4096 (steps cut by a block boundary): still dense_output's doubles
+    t = np.sort(rng.uniform(0.0, n * T, 9000)) + 100.0
+    out = np.empty((6, t.size))
+    compiled_hermite_samples()(ys, fs, 3, T, t, 100.0, 0.0, out)
+    np.testing.assert_array_equal(out, dense_output(grid, T, (t - 100.0) - 0.0, 3))
 
 
 def test_point_mass_map_is_coriolis_and_centrifugal():
@@ -166,3 +171,50 @@ def test_compiled_reference_rows():
     assert "compiled, serial" in fast["method"] and ref["numba"] == jit.status()
     assert ref["end_error_rad"] < 1e-11 and fast["end_error_rad"] < 1e-11
     assert ref["cpu_s"] > 0 and fast["cpu_ratio"] == pytest.approx(fast["cpu_s"] / ref["cpu_s"])
+
+
+def _columns_input(rng, size):
+    # positions and velocities of a 67 m bob swinging through the vertical and round it (azimuth wraps
+    # at ±π both ways), a Fradkin tensor whose angle crosses ±π too, and a bob exactly below the pivot
+    ang = np.cumsum(rng.uniform(-2.5, 2.5, size))
+    rad = 2.3 * rng.uniform(0.0, 1.0, size)
+    pos = np.vstack([rad * np.sin(ang), rad * np.cos(ang), -np.sqrt(67.0 ** 2 - rad ** 2)])
+    vel = rng.standard_normal((3, size)) * 0.9
+    pos[:2, 5] = 0.0
+    return pos, vel
+
+
+def test_column_kernels_compiled_equal_plain_python_and_numpy():
+    # angle_arguments and unwrap_in_place: the same operations in the same order as
+    # pendulum_columns' numpy (hypot is the C library's in both), so the compiled kernels, their plain
+    # Python functions and numpy give the same doubles, blocks and chunks cut anywhere
+    from gyro_instrument.core.angles import Unwrapper
+    from gyro_instrument.instruments import pendulum_dynamics as pd
+    rng = np.random.default_rng(27)
+    pos, vel = _columns_input(rng, 5000)
+    w0sq = PARIS.gravity_m_s2 / 67.0
+    compiled = pd.compiled_column_kernels()
+    assert compiled[0] is not pd.angle_arguments and compiled[1] is not pd.unwrap_in_place
+    args = [np.empty((4, 300)) for _ in range(2)]
+    for kernel, out in zip((compiled[0], pd.angle_arguments), args):
+        kernel(pos[:, :300], vel[:, :300], w0sq, out)
+    np.testing.assert_array_equal(args[0], args[1])
+    angles = [np.arctan2(args[0][2], args[0][3]) for _ in range(2)]
+    states = [np.array([1.0, 3.0, -2.0]) for _ in range(2)]
+    for kernel, angle, state in zip((compiled[1], pd.unwrap_in_place), angles, states):
+        kernel(angle, state, 0.5)
+    np.testing.assert_array_equal(angles[0], angles[1])
+    np.testing.assert_array_equal(states[0], states[1])
+    want = pd.pendulum_columns(pos, vel, w0sq)
+    assert np.ptp(want["azimuth"]) > 20.0 and np.ptp(want["swing_azimuth"]) > 5.0     # many wraps unwrapped
+    got = pd.compiled_pendulum_columns(pos, vel, w0sq, chunk=777)
+    for key in want:
+        np.testing.assert_array_equal(got[key], want[key])
+    ua, ub = (Unwrapper(), Unwrapper()), (Unwrapper(), Unwrapper())
+    for a, b in ((0, 1), (1, 1200), (1200, 1201), (1201, 5000)):
+        one = pd.pendulum_columns(pos[:, a:b], vel[:, a:b], w0sq, ua)
+        two = pd.compiled_pendulum_columns(pos[:, a:b], vel[:, a:b], w0sq, ub, chunk=500)
+        for key in one:
+            np.testing.assert_array_equal(two[key], one[key])
+            np.testing.assert_array_equal(two[key], want[key][a:b])
+        assert [(u.prev, u.turns) for u in ua] == [(u.prev, u.turns) for u in ub]

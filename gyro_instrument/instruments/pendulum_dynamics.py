@@ -6,7 +6,8 @@ integrates: the Cartesian constrained right-hand side summing the active effects
 streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
 swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
 pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
-gives the equations; :func:`pendulum_columns` turns bob states into the published columns.
+gives the equations; :func:`pendulum_columns` turns bob states into the published columns
+(:func:`compiled_pendulum_columns`: the same doubles, its arithmetic and unwrapping compiled).
 """
 
 import bisect
@@ -74,6 +75,72 @@ def _angle_columns(pos, vel, omega0_sq, unwrappers) -> tuple:
     swing = unwrap_swing(np.arctan2(tne, tnn, out=tne))
     swing *= 0.5
     return deflection, azimuth, swing
+
+
+def angle_arguments(pos, vel, omega0_sq, args) -> None:
+    """Kernel: the arguments of :func:`_angle_columns`' three arctangents, sample by sample, into ``args``
+    (4, samples): the bob's horizontal distance hypot(x, y) (m) and −z (m) for the deflection, then
+    2 T_ne and T_nn − T_ee of the Fradkin tensor (m²/s²) for the swing azimuth; the same operations in
+    the same order as there, so the same doubles (``numpy.hypot``: compiled, the C library's ``hypot``
+    as in numpy's loop; not ``math.hypot``, whose CPython algorithm differs in the last bit).
+    ``pos``, ``vel`` (3, samples): ENU, m and m/s; ``omega0_sq`` = g / l (1/s²). Plain Python on
+    floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
+    for i in range(pos.shape[1]):
+        e, n, vn, ve = pos[0, i], pos[1, i], vel[1, i], vel[0, i]
+        args[0, i] = np.hypot(e, n)
+        args[1, i] = -pos[2, i]
+        wn = omega0_sq * n
+        args[2, i] = (wn * e + vn * ve) * 2.0
+        args[3, i] = (wn * n + vn * vn) - (omega0_sq * e * e + ve * ve)
+
+
+def unwrap_in_place(angle, state, factor) -> None:
+    """Kernel: :class:`~gyro_instrument.core.angles.Unwrapper` on ``angle`` (rad, wrapped to (−π, π]) in
+    place, then times ``factor``: each sample less 2π × the whole turns rint(Δ / 2π) summed over the
+    differences Δ from the previous sample, the same doubles (the turns are integers, exact in their
+    sum). ``state`` = [1 if a previous block's last sample is held else 0, that sample (rad), the turns
+    so far], carried from call to call and updated. Plain Python, compiled by
+    :func:`~gyro_instrument.core.jit.compiled`."""
+    two_pi = 2.0 * np.pi
+    held, prev, turns = state[0] != 0.0, state[1], state[2]
+    for i in range(angle.size):
+        a = angle[i]
+        if held:
+            turns += np.rint((a - prev) / two_pi)
+        held, prev = True, a
+        angle[i] = (a - two_pi * turns) * factor
+    state[0], state[1], state[2] = 1.0 if held else 0.0, prev, turns
+
+
+@functools.cache
+def compiled_column_kernels() -> tuple:
+    """(:func:`angle_arguments`, :func:`unwrap_in_place`) compiled (:func:`~gyro_instrument.core.jit.compiled`),
+    or the plain functions when compilation is off."""
+    return jit.compiled(angle_arguments), jit.compiled(unwrap_in_place)
+
+
+def compiled_pendulum_columns(pos, vel, omega0_sq, unwrappers=None, chunk=16384) -> dict:
+    """:func:`pendulum_columns` with its arithmetic and unwrapping in the kernels of
+    :func:`compiled_column_kernels` and only the arctangents on numpy (its vectorised ``arctan2``): the
+    same doubles, ``chunk`` samples at a time through a scratch of 4 × ``chunk`` (in cache); the
+    ``unwrappers`` are carried and left as :func:`pendulum_columns` leaves them."""
+    unwrappers = unwrappers if unwrappers is not None else (Unwrapper(), Unwrapper())
+    arguments, unwrap = compiled_column_kernels()
+    size = pos.shape[1]
+    out = {"deflection": np.empty(size), "azimuth": np.empty(size), "swing_azimuth": np.empty(size)}
+    states = [np.array([float(u.prev is not None), u.prev or 0.0, u.turns]) for u in unwrappers]
+    scratch = np.empty((4, min(chunk, size)))
+    for a in range(0, size, chunk):
+        b = min(a + chunk, size)
+        args = scratch[:, :b - a]
+        arguments(pos[:, a:b], vel[:, a:b], omega0_sq, args)
+        np.arctan2(args[0], args[1], out=out["deflection"][a:b])
+        unwrap(np.arctan2(pos[0, a:b], pos[1, a:b], out=out["azimuth"][a:b]), states[0], 1.0)
+        unwrap(np.arctan2(args[2], args[3], out=out["swing_azimuth"][a:b]), states[1], 0.5)
+    for u, st in zip(unwrappers, states):
+        if st[0]:
+            u.prev, u.turns = float(st[1]), float(st[2])
+    return {**out, "x_east": pos[0], "y_north": pos[1], "z_up": pos[2]}
 
 
 def _swing_frames(U, w0sq):
@@ -428,7 +495,8 @@ class SwingDynamics:
         result is the full model to ``shooting_tol``, not the comparison solution. A run of at least
         :attr:`COMPILED_MIN_SWINGS` swings with numba (:meth:`compiled_swings`) integrates the same grid
         compiled, swing after swing (:meth:`_serial_window`: the sequential fine solution that Newton
-        converges to, without its shooting error), and samples it with the compiled Hermite kernel. The run's
+        converges to, without its shooting error), samples it with the compiled Hermite kernel and forms
+        the columns with :func:`compiled_pendulum_columns` (the same doubles as :func:`pendulum_columns`). The run's
         ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
         from the fine end state of window w's last swing, so the state carried is the integrated one
         and the windows do not depend on how the samples are cut into blocks."""
@@ -470,7 +538,7 @@ class SwingDynamics:
                 if b > a:
                     _fill_samples(grid, rows, period, t[a:b], t0, (w * per) * period, y[:, a:b])
             pos, vel = y[:3], y[3:]
-            cols = pendulum_columns(pos, vel, w0sq, unwrappers)
+            cols = (pendulum_columns if compiled is None else compiled_pendulum_columns)(pos, vel, w0sq, unwrappers)
             cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
             c0 = None
             how = "compiled, serial" if compiled is not None else f"{passes} parareal pass{'es' if passes != 1 else ''}"
