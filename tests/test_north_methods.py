@@ -314,3 +314,29 @@ def test_bench_study_rows():
     assert set(by) == {"schuler_mean", "lavrov", "transit", "fit"}
     assert by["fit"]["mean_sigma_rad"] == pytest.approx(by["fit"]["crlb_rad"], rel=0.01)
     assert abs(by["fit"]["floor_rad"]) < 0.01 * by["fit"]["crlb_rad"]
+
+
+def test_scatter_sigma_is_the_matrix_form_without_the_matrices():
+    """σ̂_a² = |P B a|² / tr(BᵀPB) (means._scatter_sigma's definition) evaluated without forming B (k × ν)
+    or BᵀPB (ν × ν): equal to the dense form to round-off (the dense form's own cancellation with
+    readings of 0.3 rad and a scatter of 1e-4 rad is ~eps·0.3/1e-4 ≈ 7e-13 relative; measured ≤ 1e-12),
+    and a day of a fast swing (2e5 reversal points, whose dense BᵀPB would be 320 GB) costs O(ν)."""
+    import math
+
+    from gyro_instrument.estimators.north.means import _scatter_sigma
+    rng = np.random.default_rng(5)
+    for nu in (4, 5, 9, 64, 257):
+        a = 0.3 + 1e-4 * rng.normal(size=nu)
+        k = nu - 2
+        B = np.zeros((k, nu))
+        for j in range(k):
+            B[j, j:j + 3] = [0.25, 0.5, 0.25]
+        P = np.eye(k) - 1.0 / k
+        r = P @ B @ a
+        dense = math.sqrt(float(r @ r) / float(np.trace(B.T @ P @ B)))
+        got, dof = _scatter_sigma(a)
+        assert dof == nu - 3 and abs(got / dense - 1) < 1e-11, nu
+    big = 0.3 + 1e-4 * rng.normal(size=200_000)
+    got, dof = _scatter_sigma(big)
+    # independent readings of σ 1e-4: each triple mean has σ √(3/8) 1e-4 and σ̂ recovers 1e-4 within 1 %
+    assert dof == 199_997 and abs(got / 1e-4 - 1) < 0.01
