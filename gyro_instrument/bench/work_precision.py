@@ -133,8 +133,9 @@ OTHER_INSTRUMENTS = (
     ("gimbal_paris", "gimbal_locked", ("outer_angle", "inner_angle"), (("exact equations (hinge chain), DOP853", {}),),
      {}),
     ("free_gyroscope", "free_gyro", ("axis_altitude", "axis_azimuth"),
-     (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}), ("exact equations, DOP853", {"model": "numerical"})),
-     {"model": "numerical"}),
+     (("Quet's closed form (sec. 4 §II)", {"model": "analytic"}),
+      ("exact equations, DOP853", {"model": "numerical", "integrator": "dop853"})),
+     {"model": "numerical", "integrator": "dop853"}),
     ("puiseux_spheroid", "spheroid", ("tilt", "tilt_azimuth"),
      (("exact equations, DOP853", {"integrator": "dop853"}),), {"integrator": "dop853"}),
 )
