@@ -15,6 +15,7 @@ from gyro_instrument.core.files import replaced_atomically
 
 
 def _write_dicts(path, rows):
+    """Write dict rows (all with the first row's keys, in its order) as CSV, atomically."""
     with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
@@ -25,11 +26,11 @@ def cost_studies(out_dir, quick=False, progress=print) -> tuple:
     """Run the three studies, write their CSVs into ``out_dir`` and return (``targets.csv`` rows as
     (target, measured, unit, goal, met), summary.md lines)."""
     from gyro_instrument.bench.compiled_reference import GOAL_RATIO, compiled_reference_rows
-    from gyro_instrument.bench.spin import spin_summary_lines, spin_work_precision_rows, write_spin_csv
+    from gyro_instrument.bench.spin import spin_summary_lines, spin_work_precision_rows
     from gyro_instrument.bench.sweep_bench import sweep_throughput_rows
     progress("spinning bodies: work-precision of the spin integrators")
     spin = spin_work_precision_rows(quick, progress)
-    write_spin_csv(out_dir, spin)
+    _write_dicts(os.path.join(out_dir, "spin_work_precision.csv"), spin)
     progress("the pendulum's fast path against a compiled fixed-step RK8 (same run)")
     cr = compiled_reference_rows(quick, progress)
     _write_dicts(os.path.join(out_dir, "compiled_reference.csv"), cr)

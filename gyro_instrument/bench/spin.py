@@ -6,14 +6,10 @@ Each instrument whose rotor spins far faster than the motion its scene measures 
 torques, reductions by the cyclic coordinates, compiled drivers, averaged models) against DOP853 at
 several tolerances, the error of the output angles against a tight DOP853 reference over the same span,
 the CPU per simulated second and the drift of a conserved quantity over the run. This module runs them
-and writes ``spin_work_precision.csv`` and the summary's table.
+and builds the summary's table (:mod:`.cost_studies` writes ``spin_work_precision.csv``).
 """
 
-import csv
 import importlib
-import os
-
-from gyro_instrument.core.files import replaced_atomically
 
 #: The studies' modules (``gyro_instrument.bench.<name>``), one per spinning instrument type.
 SPIN_STUDIES = ("spin_free", "spin_puiseux", "spin_gimbal")
@@ -32,16 +28,6 @@ def spin_work_precision_rows(quick=False, progress=print) -> list:
         for r in mod.work_precision_rows(quick, progress):
             rows.append({k: r.get(k) for k in SPIN_WP_HEADER})
     return rows
-
-
-def write_spin_csv(out_dir, rows) -> str:
-    """Write ``spin_work_precision.csv`` into ``out_dir``; return its path."""
-    path = os.path.join(out_dir, "spin_work_precision.csv")
-    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=SPIN_WP_HEADER)
-        w.writeheader()
-        w.writerows(rows)
-    return path
 
 
 def _g(x, spec):
