@@ -78,24 +78,27 @@ def transit_method(t, u, mark_rad, noise_sigma_rad=None) -> NorthEstimate:
         raise SceneError("mark_rad", mark_rad, f"must lie inside the swing (between the reversal points "
                          f"{rp.readings_rad.min():.6g} and {rp.readings_rad.max():.6g} rad) and be crossed "
                          f"≥ 3 times; {tt.size} transits found")
-    cs, grad = [], []
+    # g: the gradient of the mean centre with respect to the transit times, accumulated run by run
+    # (one vector of the transits' size, not one per run: a 48 h record has thousands of runs)
+    cs, g = [], np.zeros(tt.size)
+    lo = np.searchsorted(rp.times_s, tt, side="right")      # first reversal point after each transit
+    hi = np.searchsorted(rp.times_s, tt, side="left")       # first reversal point at or after it
     for k in range(tt.size - 2):
         t1, t2, t3 = tt[k:k + 3]
-        inside = (rp.times_s > t1) & (rp.times_s < t3)
-        if inside.sum() != 2:          # a reversal point cut off by the record's ends: no amplitude
+        i, j = lo[k], hi[k + 2]                                # the reversal points inside (t1, t3)
+        if j - i != 2:                 # a reversal point cut off by the record's ends: no amplitude
             continue
-        A = 0.5 * float(np.ptp(rp.readings_rad[inside]))
+        A = 0.5 * float(np.ptp(rp.readings_rad[i:j]))
         s, T = side[k], t3 - t1
         dt = s * ((t2 - t1) - (t3 - t2))
         cs.append(mark_rad + transit_offset(dt, T, A))
         k_dt = A * math.cos(math.pi * dt / (2 * T)) * math.pi / (2 * T)      # ∂x0/∂Δt
         k_T = -k_dt * dt / T                                                  # ∂x0/∂T
-        grad.append(np.zeros(tt.size))
-        grad[-1][k:k + 3] = [-s * k_dt - k_T, 2 * s * k_dt, -s * k_dt + k_T]
+        g[k:k + 3] += [-s * k_dt - k_T, 2 * s * k_dt, -s * k_dt + k_T]
     if not cs:
         raise SceneError("record", f"{t[-1] - t[0]:.6g} s", "must hold a full period between transits "
                          "with both its reversal points; observe longer")
-    g = np.mean(grad, axis=0)
+    g /= len(cs)
     sig = float(math.sqrt(np.sum(g ** 2 * ts ** 2)))
     return NorthEstimate("transit", float(np.mean(cs)), sig, f"propagated from the transit times' σ (noise "
                          f"σ {rp.noise_source})", int(tt.size), "≥ 3 transits of a mark inside the swing and "
