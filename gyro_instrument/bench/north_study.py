@@ -78,17 +78,17 @@ def _method_errors(result, truth_deg) -> dict:
 def scene_north_rows(durations_s, seeds, scene="gyrotheodolite", overrides=(), executor=None) -> list:
     """Rows ``{duration_s, method, rms_error_arcsec, mean_sigma_arcsec, floor_arcsec, n_ok}`` of a shipped
     scene's north estimate (tape, drift, damping as the scene has them): the rms over ``seeds`` sensor
-    draws (:func:`~gyro_instrument.estimators.pipeline.seed_sweep`), the mean reported σ, and the
+    draws (the sweep runner, :func:`~gyro_instrument.bench.sweep.run_grid`), the mean reported σ, and the
     systematic floor (the noise-free run's error: :func:`~gyro_instrument.estimators.planner.noise_free_estimate`)."""
-    from gyro_instrument.bench.studies import seed_sweeps
+    from gyro_instrument.bench.sweep import point_estimates, run_grid
     from gyro_instrument.estimators.planner import noise_free_estimate
     from gyro_instrument.scenes import build_instruments, load_scene
     sc = load_scene(scene, list(overrides))
     gyro = next(n for n, i in build_instruments(sc).items() if i.p.spin_rate_rad_s and getattr(i.p, "plane", "") ==
                 "horizontal")
     truth = build_instruments(sc)[gyro].p.mount_azimuth_deg
-    jobs = [(scene, list(overrides) + [f"duration_s={d!r}"], list(range(seeds))) for d in durations_s]
-    sweeps = seed_sweeps(jobs, executor, min(len(jobs), 2))
+    sweeps = [point_estimates(out) for out in run_grid(scene, list(overrides), ["duration_s"],
+                                                  [(float(d),) for d in durations_s], range(seeds), executor)]
     rows = []
     for d, results in zip(durations_s, sweeps):
         floor = _method_errors(noise_free_estimate(scene, list(overrides), d)[1], truth)

@@ -15,7 +15,6 @@ from gyro_instrument.bench.work_precision import REFERENCE, targets, work_precis
 from gyro_instrument.core.files import replaced_atomically
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import sample_times
-from gyro_instrument.estimators.pipeline import seed_sweep
 from gyro_instrument.instruments.pendulum import binet_ellipse
 from gyro_instrument.scenes import build_instruments, load_scene
 
@@ -75,7 +74,9 @@ def systematic_floor_rows(minutes) -> list:
     :data:`~gyro_instrument.estimators.pipeline.CORRECTIONS` left out (the floor a user would hit
     without it). One picklable argument, so it runs through any executor: ``minutes`` alone (the
     floor scene, quet_paris with a 1 h spin decay) or ``(scene, overrides, minutes)`` for any scene
-    with its own effects."""
+    with its own effects. The seeded and noise-free runs go through the sweep runner
+    (:func:`gyro_instrument.bench.sweep.run_grid`, as ``gyro-instrument sweep --vary duration_s=…``);
+    a refused observation time gives a row of NaN."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
     from gyro_instrument.estimators.pipeline import CORRECTIONS, estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import load_scene
@@ -112,26 +113,32 @@ def observation_time(minutes_list, n_seeds, executor=None, scene="quet_paris", o
     finite amplitude, spin decay and the Foucault ellipse precession. ``scene`` (name or YAML path)
     with ``overrides``: the study on any scene (its floors then with the scene's own effects)."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
+    from gyro_instrument.bench.sweep import point_estimates, run_grid
     over = list(overrides)
-    jobs = [(scene, over + [f"duration_s={60.0 * m}"], range(n_seeds)) for m in minutes_list]
-    free = [(scene, over + [f"duration_s={60.0 * m}"] + list(NOISE_FREE), [0]) for m in minutes_list]
+    points = [(60.0 * m,) for m in minutes_list]
     floor_jobs = list(minutes_list) if scene == "quet_paris" and not over else \
         [(scene, over, m) for m in minutes_list]
     own = executor is None
     executor = executor or process_executor()
     try:
-        results = [_obs_rows(m, res) for m, res in zip(minutes_list, executor.map(seed_sweep, jobs))]
-        noise_free = list(executor.map(seed_sweep, free))
+        # the sweep runner over the observation times: the seeded draws, then the noise-free run
+        results = [_obs_rows(m, point_estimates(out)) for m, out in
+                   zip(minutes_list, run_grid(scene, over, ["duration_s"], points, range(n_seeds), executor))]
+        noise_free = [point_estimates(out) for out in
+                      run_grid(scene, over + list(NOISE_FREE), ["duration_s"], points, [0], executor)]
         floor_rows = list(executor.map(systematic_floor_rows, floor_jobs))
     finally:
         if own:
             executor.shutdown()
     rows = []
-    for res, nf in zip(results, noise_free):
+    for m, res, nf in zip(minutes_list, results, noise_free):
+        if not res:                                   # the point was refused: a row of NaN
+            rows.append((float(m),) + (None,) * (len(OBS_HEADER) - 1))
+            continue
         a = np.array([[x if x is not None else np.nan for x in r] for r in res], dtype=float)
         rms = lambda j: float(np.sqrt(np.nanmean(a[:, j] ** 2))) if np.isfinite(a[:, j]).any() else None  # noqa: E731
         mean = lambda j: float(np.nanmean(a[:, j])) if np.isfinite(a[:, j]).any() else None  # noqa: E731
-        e = _obs_rows(a[0, 0], nf)[0]
+        e = _obs_rows(a[0, 0], nf)[0] if nf else (None,) * 9
         rows.append((a[0, 0], rms(1), mean(2), mean(3), rms(4), rms(5), mean(6), mean(7), rms(8), e[1], e[5]))
     # a scope the scene has no instrument for (no pendulum, no gyroscope pair) gives only empty rows
     scopes = {r[2] for rws in floor_rows for r in rws if r[3] is not None or r[4] is not None}
@@ -143,30 +150,18 @@ SITE_HEADER = ("latitude_deg", "rms_error_deg", "mean_sigma_deg", "crlb_deg", "r
                "crlb_earth_rate_rad_s")
 
 
-def seed_sweeps(jobs, executor=None, workers=None) -> list:
-    """``seed_sweep`` over ``jobs`` through ``executor`` (by default a process pool of ``workers``,
-    shut down after): one list of estimates per job."""
-    own = executor is None
-    executor = executor or process_executor(workers)
-    try:
-        return list(executor.map(seed_sweep, jobs))
-    finally:
-        if own:
-            executor.shutdown()
-
-
 def site_sweep(latitudes_deg, n_seeds, minutes=10.0, executor=None, scene="quet_paris", overrides=()) -> list:
     """Rows :data:`SITE_HEADER`: ``scene`` (name or YAML path, with ``overrides``) moved to each
     latitude (10 min per configuration), rms errors over seeds against the reported σ and the
     Cramér–Rao bound — the sweep runner (:func:`gyro_instrument.bench.sweep.run_grid`, as
     ``gyro-instrument sweep``) over the points ``site.latitude_deg``, through the executor (any
     ``concurrent.futures`` executor); a point whose estimate was refused gives NaN."""
-    from gyro_instrument.bench.sweep import run_grid
+    from gyro_instrument.bench.sweep import point_estimates, run_grid
     results = run_grid(scene, list(overrides) + [f"duration_s={60.0 * minutes}"], ["site.latitude_deg"],
                        [(lat,) for lat in latitudes_deg], range(n_seeds), executor)
     rows = []
     for lat, out in zip(latitudes_deg, results):
-        res = out.get("estimates") or []
+        res = point_estimates(out)
         dl = [r["latitude_deg"] - r["truth"]["latitude_deg"] for r in res if r.get("latitude_deg") is not None]
         dn = [r["earth_rate_rad_s"] - r["truth"]["earth_rate_rad_s"] for r in res
               if r.get("earth_rate_rad_s") is not None]

@@ -239,6 +239,12 @@ def run_grid(scene, overrides, keys, points, seeds, executor=None, progress=None
     return run_points(jobs, executor, progress, task)
 
 
+def point_estimates(result) -> list:
+    """The estimates of one :func:`run_grid` result, one dict per seed; [] for a point refused or
+    failed (the bench's studies then give that point a row of NaN, as the sweep gives it null)."""
+    return result.get("estimates") or []
+
+
 def run_sweep(scene, overrides, specs, n_seeds, out, executor=None, progress=None, task=sweep_point) -> dict:
     """The whole sweep into ``out`` (Parquet); returns a summary (points, rows, columns, errors,
     wall_s, rows_per_s). The grid is parsed and every point's scene loaded before anything runs.
