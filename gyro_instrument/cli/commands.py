@@ -1,6 +1,7 @@
 """The subcommands (``args`` in, exit status out) and :func:`main` with its exit statuses (see
 :func:`guarded`)."""
 
+import contextlib
 import json
 import math
 import os
@@ -10,6 +11,7 @@ import threading
 
 from gyro_instrument import api
 from gyro_instrument.api import damage_line, replay_bag
+from gyro_instrument.cli.interrupt import LINE, SigintWatch, exit_now
 from gyro_instrument.cli.parser import (EXIT_BAD_INPUT, EXIT_CLOSED_PIPE, EXIT_INTEGRATION_FAILED, EXIT_INTERRUPTED,
                                         build_parser, scene_arg, scene_from_args)
 from gyro_instrument.cli.simulate import simulate_to_file, terminal_progress
@@ -36,12 +38,21 @@ def guarded(body, process=False) -> int:
     KeyboardInterrupt (wherever it lands: imports,
     integration, progress drawing, writing) -> ``gyro-instrument: interrupted`` and 130. Any other
     exception is a bug and keeps its traceback. ``process``: this is the process's entry point
-    (``argv`` not given); SIGINT is then ignored once the status is decided, so a Ctrl-C while
-    Python exits cannot print a traceback after the one line.
+    (``argv`` not given): the body runs under a :class:`~gyro_instrument.cli.interrupt.SigintWatch`
+    (an exception after a Ctrl-C is the interrupt, whatever an extension turned it into; one a
+    finalizer swallowed is raised again), SIGINT is ignored once the status is decided, and an
+    interrupted process ends at once with 130 (:func:`~gyro_instrument.cli.interrupt.exit_now`).
     """
+    watch = SigintWatch() if process else None
     try:
         try:
-            return body()
+            with watch or contextlib.nullcontext():
+                try:
+                    return body()
+                except Exception:
+                    if watch is not None and watch.hit:
+                        raise KeyboardInterrupt from None
+                    raise
         except SceneError as exc:
             print(f"gyro-instrument: error: {one_line(exc)}", file=sys.stderr)
             return EXIT_BAD_INPUT
@@ -51,7 +62,10 @@ def guarded(body, process=False) -> int:
         except BrokenPipeError:
             return closed_pipe()
     except KeyboardInterrupt:
-        return interrupted(process)
+        status = interrupted(process)
+        if process:
+            exit_now(status)
+        return status
     finally:
         if process:
             _ignore_sigint()
@@ -82,7 +96,7 @@ def interrupted(process=False) -> int:
     for _ in range(3):   # a second SIGINT before the handler is swapped lands here: try again
         try:
             previous = _ignore_sigint()
-            print("gyro-instrument: interrupted", file=sys.stderr)
+            print(LINE, file=sys.stderr)
             if not process and previous is not None:
                 signal.signal(signal.SIGINT, previous)
             return EXIT_INTERRUPTED

@@ -5,11 +5,11 @@ import argparse
 from typing import NoReturn
 
 from gyro_instrument import api
+from gyro_instrument.cli.interrupt import EXIT_INTERRUPTED
 from gyro_instrument.core.errors import SceneError
 
 EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
-EXIT_INTERRUPTED = 130
 EXIT_CLOSED_PIPE = 141
 
 

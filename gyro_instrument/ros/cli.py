@@ -28,10 +28,17 @@ def split_ros_args(argv) -> tuple:
 
 def main(argv=None) -> int:
     """Run one command line; exit status as :func:`gyro_instrument.cli.main` (0, 2, 3, 130)."""
-    try:
-        from gyro_instrument.cli import commands as core_cli
+    from gyro_instrument.cli.interrupt import guarded_import, interrupted_while_importing
+
+    def load():
+        from gyro_instrument.cli import commands
         from gyro_instrument.cli import text  # noqa: F401  (imported here, inside the guard)
+        return commands
+    try:
+        core_cli = guarded_import(load)
     except KeyboardInterrupt:
+        if argv is None:                      # the process's entry point: the line, then exit 130
+            interrupted_while_importing()
         print("gyro-instrument: interrupted", file=sys.stderr)
         return 130
     return core_cli.guarded(lambda: _command(core_cli, argv), process=argv is None)
