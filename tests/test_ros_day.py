@@ -458,3 +458,43 @@ def test_no_line_strip_with_fewer_than_two_points(recorded):
                 strips += 1
                 assert len(mk.points) >= 2
     assert n == 61 and strips == 60           # the first one (one trail point) has no trail marker
+
+
+def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
+    """A recorder that stops taking messages for 3 s (SIGSTOP: a process starved of CPU or paused in
+    a debugger) while a simulator publishes as fast as it can: the RELIABLE / KEEP_ALL writer's
+    history fills and Fast DDS refuses the write ("cannot publish data"), which ended the simulator
+    with an RCLError traceback (seen trying separate nodes beside a busy bench). Now the simulator
+    waits, says so, resumes, and every sample is recorded (600 s at 20 Hz: 12 001 per topic)."""
+    bag = str(tmp_path / "paused.mcap")
+    rec = subprocess.Popen([str(BIN / "recorder"), "--ros-args", "-p", "scene:=foucault_pantheon",
+                            "-p", "duration_s:=600.0", "-p", f"output:={bag}", "-p", "stop_when_complete:=true",
+                            "-p", "topics:=['clock', 'pendulum/joint_states']"],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    sim = subprocess.Popen([str(BIN / "pendulum_sim"), "--ros-args", "-p", "scene:=foucault_pantheon",
+                            "-p", "duration_s:=600.0", "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
+                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=3"],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        t0 = time.monotonic()
+        while not (os.path.exists(bag) and os.path.getsize(bag) > 100_000):
+            assert time.monotonic() - t0 < 60 and sim.poll() is None, "the run never started"
+            time.sleep(0.02)
+        rec.send_signal(signal.SIGSTOP)
+        time.sleep(3.0)
+        rec.send_signal(signal.SIGCONT)
+        rec_out, _ = rec.communicate(timeout=120)       # stop_when_complete: it exits when all is in
+        sim.send_signal(signal.SIGINT)                    # a simulator stays up once done, as a node does
+        sim_out, _ = sim.communicate(timeout=60)
+    finally:
+        for p in (sim, rec):
+            if p.poll() is None:
+                p.send_signal(signal.SIGCONT)
+                p.kill()
+                p.wait()
+    assert sim.returncode == 0 and "Traceback" not in sim_out, sim_out
+    assert "waits: a RELIABLE / KEEP_ALL subscriber is not taking messages" in sim_out, sim_out
+    assert "resumed after" in sim_out, sim_out
+    state, counts, _ = status(bag)
+    assert state == "complete", (counts, rec_out)
+    assert counts["/clock"][0] == counts["/pendulum/joint_states"][0] == 12001, counts

@@ -128,6 +128,7 @@ def _run(name, make, args=None, on_exit=None):
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     _STOP.install()
     node = make()
+    node.stop_asked = lambda: _STOP.asked
     node.start()
     _spin(node, on_exit=(lambda: on_exit(node)) if on_exit else None)
     return 0

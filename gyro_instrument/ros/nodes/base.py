@@ -57,6 +57,9 @@ class SceneNode(Node):
         self.insts = {}
         self.clock_owner = False
         self.standalone = False
+        #: True once the process was asked to stop (SIGINT / SIGTERM; set by the entry point): a
+        #: node waiting inside a callback gives up the wait
+        self.stop_asked = lambda: False
         self._ack_warned = set()
         self._restart = False
         self.add_pre_set_parameters_callback(P.pre_set_checker(self, self.specs))

@@ -11,6 +11,7 @@ time reaches it.
 
 import time
 
+from rclpy._rclpy_pybind11 import RCLError
 from rclpy.serialization import serialize_message
 
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
@@ -136,8 +137,41 @@ class SimulatorNode(SceneNode):
             with pub.handle:
                 publish = pub.handle.publish_raw
                 for data in datas:
-                    publish(data)
+                    if self.standalone:
+                        self._publish_waiting(publish, data, pub.topic_name)
+                    else:
+                        publish(data)
         return batch.count
+
+    def _publish_waiting(self, publish, data, topic) -> None:
+        """Publish ``data``; while a RELIABLE / KEEP_ALL subscriber is not taking messages (a recorder
+        paused or starved of CPU: the writer's history fills, and Fast DDS refuses the write after
+        its blocking time, "cannot publish data") wait and try again, nothing dropped and nothing
+        reordered, with a WARN when the wait starts, every 10 s while it lasts and an INFO when it
+        ends. A stop asked meanwhile (SIGINT / SIGTERM: :attr:`stop_asked`) ends the wait by
+        raising KeyboardInterrupt; a context shut down re-raises the error. Only for a node run
+        alone: in ``run``'s lock-step suite the subscribers are served by the same thread."""
+        t0 = last = None
+        while True:
+            try:
+                publish(data)
+                break
+            except RCLError:
+                if not self.context.ok():
+                    raise
+                now = time.monotonic()
+                if t0 is None:
+                    t0 = last = now
+                    self.get_logger().warn(f"publishing {topic} waits: a RELIABLE / KEEP_ALL subscriber is not "
+                                           f"taking messages (its queue is full); nothing is dropped")
+                elif now - last >= 10.0:
+                    last = now
+                    self.get_logger().warn(f"publishing {topic} has waited {now - t0:.0f} s for a subscriber")
+                if self.stop_asked():
+                    raise KeyboardInterrupt from None
+                time.sleep(0.01)
+        if t0 is not None:
+            self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
 
     def _marker_array(self, name, t_ns, geom):
         msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name))
