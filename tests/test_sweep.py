@@ -128,3 +128,34 @@ def test_a_failing_task_is_retried_once_then_reported():
         res = run_points(["once", "always"], executor=ex, task=flaky)
     assert res[0] == {"estimates": ["once"]} and calls == {"once": 2, "always": 2}
     assert res[1]["error"] == "failed twice: RuntimeError: worker died on always"
+
+
+def test_plan_verify_runs_on_the_sweeps_runner(monkeypatch):
+    """``plan --verify`` (the bench's planner study) runs its seed chunks on the sweep's runner
+    (core.parallel.run_tasks): a chunk whose worker dies once is run again and every seed counts; a
+    chunk that fails twice ends the verification with one IntegrationError naming the reason (a dead
+    worker was a BrokenProcessPool traceback before)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from gyro_instrument.core.errors import IntegrationError
+    from gyro_instrument.estimators import pipeline, planner
+    real, calls = pipeline.seed_sweep, []
+
+    def dies_once(job):
+        calls.append(job[2][0])
+        if job[2][0] == 0 and calls.count(0) == 1:
+            raise RuntimeError("worker died")
+        return real(job)
+
+    monkeypatch.setattr(pipeline, "seed_sweep", dies_once)
+    with ThreadPoolExecutor(2) as ex:
+        out = planner.verify("quet_paris", [], 60.0, n_seeds=4, executor=ex, chunk=2)
+    assert calls.count(0) == 2 and calls.count(2) == 1
+    assert out["latitude"][1] + out["latitude"][2] == 4
+
+    def gone(job):
+        raise RuntimeError("worker gone")
+
+    monkeypatch.setattr(pipeline, "seed_sweep", gone)
+    with ThreadPoolExecutor(2) as ex, pytest.raises(IntegrationError, match="2 of 2 chunks of seeds failed twice"):
+        planner.verify("quet_paris", [], 60.0, n_seeds=4, executor=ex, chunk=2)

@@ -18,13 +18,11 @@ import json
 import math
 import os
 import time
-from concurrent.futures import as_completed
-from concurrent.futures.process import BrokenProcessPool
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
 from gyro_instrument.core.files import replaced_atomically
 from gyro_instrument.core.jsonable import to_jsonable
-from gyro_instrument.core.parallel import process_executor
+from gyro_instrument.core.parallel import run_tasks
 from gyro_instrument.estimators.pipeline import seed_sweep
 
 #: Most grid points a sweep accepts.
@@ -140,51 +138,20 @@ def flatten(d, prefix="") -> dict:
     return out
 
 
-def _fresh(executor, own):
-    if own and getattr(executor, "_broken", False):
-        executor.shutdown(wait=False)
-        return process_executor()
-    return executor
-
-
 def run_points(jobs, executor=None, progress=None, task=sweep_point) -> list:
-    """``task`` of every job through ``executor`` (default: a process pool), in job order. A task
-    that raises (a worker that died: BrokenProcessPool, Dask's KilledWorker) is retried once, then
-    becomes ``{"error": ...}``."""
-    own = executor is None
-    executor = executor or process_executor()
-    results, tries, pending = [None] * len(jobs), [0] * len(jobs), list(range(len(jobs)))
-    t0, done = time.perf_counter(), 0
-    try:
-        while pending:
-            executor = _fresh(executor, own)
-            futures, retry = {}, []
-            for i in pending:
-                try:
-                    futures[executor.submit(task, jobs[i])] = i
-                except (BrokenProcessPool, RuntimeError) as exc:
-                    results[i] = {"error": f"not run: {type(exc).__name__}: {exc}"}
-            for fut in as_completed(futures):
-                i = futures[fut]
-                try:
-                    results[i] = fut.result()
-                except Exception as exc:      # noqa: BLE001 - a dead worker: retried once, then in the row
-                    tries[i] += 1
-                    why = f"{type(exc).__name__}: {exc}".strip()
-                    if tries[i] < 2:
-                        retry.append(i)
-                        if progress:
-                            progress(f"sweep: point {i + 1} failed ({why}); retrying it once")
-                        continue
-                    results[i] = {"error": f"failed twice: {why}"}
-                done += 1
-                if progress:
-                    progress(f"sweep: {done}/{len(jobs)} points ({time.perf_counter() - t0:.1f} s)")
-            pending = sorted(retry)
-    finally:
-        if own:
-            executor.shutdown()
-    return results
+    """``task`` of every job through ``executor`` (default: a process pool), in job order, by
+    :func:`gyro_instrument.core.parallel.run_tasks`: a task that raises (a worker that died:
+    BrokenProcessPool, Dask's KilledWorker) is retried once, then becomes ``{"error": ...}``;
+    ``progress`` gets a line per finished point and per retry."""
+    t0 = time.perf_counter()
+    on_done = on_retry = None
+    if progress:
+        def on_done(done, total):
+            progress(f"sweep: {done}/{total} points ({time.perf_counter() - t0:.1f} s)")
+
+        def on_retry(i, why):
+            progress(f"sweep: point {i + 1} failed ({why}); retrying it once")
+    return run_tasks(task, jobs, executor, on_done, on_retry)
 
 
 def sweep_rows(keys, points, seeds, results) -> list:

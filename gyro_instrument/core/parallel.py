@@ -51,6 +51,60 @@ def process_executor(max_workers=None) -> ProcessPoolExecutor:
     return _InterruptiblePool(max_workers=max_workers or os.cpu_count() or 1,
                               mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
 
+def _fresh(executor, own):
+    """A new pool for the retries when our own pool broke (a worker died: the pool is unusable)."""
+    if own and getattr(executor, "_broken", False):
+        executor.shutdown(wait=False)
+        return process_executor()
+    return executor
+
+
+def run_tasks(task, jobs, executor=None, on_done=None, on_retry=None) -> list:
+    """``task(job)`` for every job through ``executor`` (any ``concurrent.futures`` executor with
+    ``submit``; default :func:`process_executor`, shut down after): the results in job order. A task
+    that raises — a worker that died (BrokenProcessPool, Dask's KilledWorker) or anything else — is
+    retried once (on a new pool when our own broke), then its result is ``{"error": "failed twice:
+    …"}``; a task the executor refuses to take is ``{"error": "not run: …"}``. ``on_done(done,
+    total)`` after each finished task, ``on_retry(index, reason)`` before a retry. The runner of
+    ``gyro-instrument sweep`` (:mod:`gyro_instrument.bench.sweep`), of the bench's seeded studies and
+    of ``plan --verify``."""
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+    own = executor is None
+    executor = executor or process_executor()
+    results, tries, pending = [None] * len(jobs), [0] * len(jobs), list(range(len(jobs)))
+    done = 0
+    try:
+        while pending:
+            executor = _fresh(executor, own)
+            futures, retry = {}, []
+            for i in pending:
+                try:
+                    futures[executor.submit(task, jobs[i])] = i
+                except (BrokenProcessPool, RuntimeError) as exc:
+                    results[i] = {"error": f"not run: {type(exc).__name__}: {exc}"}
+            for fut in as_completed(futures):
+                i = futures[fut]
+                try:
+                    results[i] = fut.result()
+                except Exception as exc:      # noqa: BLE001 - a dead worker: retried once, then in the result
+                    tries[i] += 1
+                    why = f"{type(exc).__name__}: {exc}".strip()
+                    if tries[i] < 2:
+                        retry.append(i)
+                        if on_retry:
+                            on_retry(i, why)
+                        continue
+                    results[i] = {"error": f"failed twice: {why}"}
+                done += 1
+                if on_done:
+                    on_done(done, len(jobs))
+            pending = sorted(retry)
+    finally:
+        if own:
+            executor.shutdown()
+    return results
+
 
 @contextmanager
 def dask_executor(address, timeout_s=10.0, need_workers=False, progress=None) -> Iterator:

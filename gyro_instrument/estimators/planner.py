@@ -389,26 +389,36 @@ def _errors(results, quantity, ref=None):
 def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, chunk=None, ref=None) -> dict:
     """Seeded Monte Carlo at observation time T: ``n_seeds`` sensor draws of one simulation per
     chunk (:func:`~gyro_instrument.estimators.pipeline.seed_sweep` through ``executor``, by default
-    :func:`~gyro_instrument.core.parallel.process_executor`); ``progress(done, total)`` after each
-    chunk. Returns {quantity: (rms error in SI, number of seeds used, number null)}; with ``ref`` =
+    :func:`~gyro_instrument.core.parallel.process_executor`, by the sweep's runner
+    :func:`~gyro_instrument.core.parallel.run_tasks`: a chunk whose worker died is retried once);
+    ``progress(done, total)`` after each chunk. Raises IntegrationError when a chunk fails twice
+    (its reason in the message). Returns {quantity: (rms error in SI, number of seeds used, number null)}; with ``ref`` =
     (instrument, true mount azimuth rad) also ``azimuth`` (the fit's) and ``azimuth_methods``
     {method: (rms rad, used, null)} for every north method."""
-    from gyro_instrument.core.parallel import process_executor
+    from gyro_instrument.core.parallel import process_executor, run_tasks
     from gyro_instrument.estimators.pipeline import seed_sweep
     over = list(overrides) + [f"duration_s={T!r}"]
     chunk = chunk or max(1, math.ceil(n_seeds / 8))
     jobs = [(scene_arg, over, list(range(i, min(i + chunk, n_seeds)))) for i in range(0, n_seeds, chunk)]
     own = executor is None
     executor = executor or process_executor(min(len(jobs), 2))
-    results = []
+    sizes = [len(j[2]) for j in jobs]
+
+    def on_done(done, total):
+        if progress:
+            progress(min(sum(sizes[:done]), n_seeds), n_seeds)
     try:
-        for res in executor.map(seed_sweep, jobs):
-            results.extend(res)
-            if progress:
-                progress(len(results), n_seeds)
+        # the sweep's runner: a chunk whose worker died is retried once, then the verification fails
+        chunks = run_tasks(seed_sweep, jobs, executor, on_done)
     finally:
         if own:
             executor.shutdown()
+    failed = [res["error"] for res in chunks if isinstance(res, dict)]
+    if failed:
+        from gyro_instrument.core.errors import IntegrationError
+        raise IntegrationError(f"--verify: {len(failed)} of {len(jobs)} chunks of seeds failed twice "
+                               f"(first: {failed[0]})")
+    results = [r for res in chunks for r in res]
     def rms_of(errs, null):
         return (float(np.sqrt(np.mean(np.square(errs)))) if errs else None, len(errs), null)
     out = {q: rms_of(*_errors(results, q)) for q in ("latitude", "earth_rate")}
