@@ -74,9 +74,7 @@ def systematic_floor_rows(minutes) -> list:
     :data:`~gyro_instrument.estimators.pipeline.CORRECTIONS` left out (the floor a user would hit
     without it). One picklable argument, so it runs through any executor: ``minutes`` alone (the
     floor scene, quet_paris with a 1 h spin decay) or ``(scene, overrides, minutes)`` for any scene
-    with its own effects. The seeded and noise-free runs go through the sweep runner
-    (:func:`gyro_instrument.bench.sweep.run_grid`, as ``gyro-instrument sweep --vary duration_s=…``);
-    a refused observation time gives a row of NaN."""
+    with its own effects."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
     from gyro_instrument.estimators.pipeline import CORRECTIONS, estimate_records, measure, simulate_truth
     from gyro_instrument.scenes import load_scene
@@ -111,7 +109,9 @@ def observation_time(minutes_list, n_seeds, executor=None, scene="quet_paris", o
     estimator's own systematic floor) and :data:`FLOOR_HEADER` rows from
     :func:`systematic_floor_rows`: the bias left with every correction and without each of
     finite amplitude, spin decay and the Foucault ellipse precession. ``scene`` (name or YAML path)
-    with ``overrides``: the study on any scene (its floors then with the scene's own effects)."""
+    with ``overrides``: the study on any scene (its floors then with the scene's own effects). The
+    seeded and noise-free runs go through the sweep runner (:func:`gyro_instrument.bench.sweep.run_grid`,
+    as ``gyro-instrument sweep --vary duration_s=…``); a refused observation time gives a row of NaN."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
     from gyro_instrument.bench.sweep import point_estimates, run_grid
     over = list(overrides)

@@ -51,17 +51,19 @@ def process_executor(max_workers=None) -> ProcessPoolExecutor:
     return _InterruptiblePool(max_workers=max_workers or os.cpu_count() or 1,
                               mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
 
-def _fresh(executor, own):
+
+def _fresh(executor, own, workers):
     """A new pool for the retries when our own pool broke (a worker died: the pool is unusable)."""
     if own and getattr(executor, "_broken", False):
         executor.shutdown(wait=False)
-        return process_executor()
+        return process_executor(workers)
     return executor
 
 
-def run_tasks(task, jobs, executor=None, on_done=None, on_retry=None) -> list:
+def run_tasks(task, jobs, executor=None, on_done=None, on_retry=None, workers=None) -> list:
     """``task(job)`` for every job through ``executor`` (any ``concurrent.futures`` executor with
-    ``submit``; default :func:`process_executor`, shut down after): the results in job order. A task
+    ``submit``; default :func:`process_executor` of ``workers``, shut down after): the results in job
+    order. A task
     that raises — a worker that died (BrokenProcessPool, Dask's KilledWorker) or anything else — is
     retried once (on a new pool when our own broke), then its result is ``{"error": "failed twice:
     …"}``; a task the executor refuses to take is ``{"error": "not run: …"}``. ``on_done(done,
@@ -71,12 +73,12 @@ def run_tasks(task, jobs, executor=None, on_done=None, on_retry=None) -> list:
     from concurrent.futures import as_completed
     from concurrent.futures.process import BrokenProcessPool
     own = executor is None
-    executor = executor or process_executor()
+    executor = executor or process_executor(workers)
     results, tries, pending = [None] * len(jobs), [0] * len(jobs), list(range(len(jobs)))
     done = 0
     try:
         while pending:
-            executor = _fresh(executor, own)
+            executor = _fresh(executor, own, workers)
             futures, retry = {}, []
             for i in pending:
                 try:

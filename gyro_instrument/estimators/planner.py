@@ -395,24 +395,19 @@ def verify(scene_arg, overrides, T, n_seeds=100, executor=None, progress=None, c
     (its reason in the message). Returns {quantity: (rms error in SI, number of seeds used, number null)}; with ``ref`` =
     (instrument, true mount azimuth rad) also ``azimuth`` (the fit's) and ``azimuth_methods``
     {method: (rms rad, used, null)} for every north method."""
-    from gyro_instrument.core.parallel import process_executor, run_tasks
+    from gyro_instrument.core.parallel import run_tasks
     from gyro_instrument.estimators.pipeline import seed_sweep
     over = list(overrides) + [f"duration_s={T!r}"]
     chunk = chunk or max(1, math.ceil(n_seeds / 8))
     jobs = [(scene_arg, over, list(range(i, min(i + chunk, n_seeds)))) for i in range(0, n_seeds, chunk)]
-    own = executor is None
-    executor = executor or process_executor(min(len(jobs), 2))
     sizes = [len(j[2]) for j in jobs]
 
     def on_done(done, total):
         if progress:
             progress(min(sum(sizes[:done]), n_seeds), n_seeds)
-    try:
-        # the sweep's runner: a chunk whose worker died is retried once, then the verification fails
-        chunks = run_tasks(seed_sweep, jobs, executor, on_done)
-    finally:
-        if own:
-            executor.shutdown()
+    # the sweep's runner (its own pool of up to 2 workers unless given one): a chunk whose worker died
+    # is retried once, then the verification fails
+    chunks = run_tasks(seed_sweep, jobs, executor, on_done, workers=min(len(jobs), 2))
     failed = [res["error"] for res in chunks if isinstance(res, dict)]
     if failed:
         from gyro_instrument.core.errors import IntegrationError

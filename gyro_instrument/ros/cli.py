@@ -28,7 +28,7 @@ def split_ros_args(argv) -> tuple:
 
 def main(argv=None) -> int:
     """Run one command line; exit status as :func:`gyro_instrument.cli.main` (0, 2, 3, 130)."""
-    from gyro_instrument.cli.interrupt import guarded_import, interrupted_while_importing
+    from gyro_instrument.cli.interrupt import EXIT_INTERRUPTED, LINE, guarded_import, interrupted_while_importing
 
     def load():
         from gyro_instrument.cli import commands
@@ -39,8 +39,8 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         if argv is None:                      # the process's entry point: the line, then exit 130
             interrupted_while_importing()
-        print("gyro-instrument: interrupted", file=sys.stderr)
-        return 130
+        print(LINE, file=sys.stderr)
+        return EXIT_INTERRUPTED
     return core_cli.guarded(lambda: _command(core_cli, argv), process=argv is None)
 
 

@@ -137,22 +137,29 @@ class SimulatorNode(SceneNode):
             with pub.handle:
                 publish = pub.handle.publish_raw
                 for data in datas:
-                    if self.standalone:
-                        self._publish_waiting(publish, data, pub.topic_name)
-                    else:
+                    try:
                         publish(data)
+                    except RCLError:
+                        if not self.standalone or not self.context.ok():
+                            raise
+                        self._publish_waiting(publish, data, pub.topic_name)
         return batch.count
 
     def _publish_waiting(self, publish, data, topic) -> None:
-        """Publish ``data``; while a RELIABLE / KEEP_ALL subscriber is not taking messages (a recorder
-        paused or starved of CPU: the writer's history fills, and Fast DDS refuses the write after
-        its blocking time, "cannot publish data") wait and try again, nothing dropped and nothing
-        reordered, with a WARN when the wait starts, every 10 s while it lasts and an INFO when it
-        ends. A stop asked meanwhile (SIGINT / SIGTERM: :attr:`stop_asked`) ends the wait by
-        raising KeyboardInterrupt; a context shut down re-raises the error. Only for a node run
-        alone: in ``run``'s lock-step suite the subscribers are served by the same thread."""
-        t0 = last = None
+        """Publish ``data``, whose write was just refused: while a RELIABLE / KEEP_ALL subscriber is not
+        taking messages (a recorder paused or starved of CPU: the writer's history fills, and Fast DDS
+        refuses the write after its blocking time, "cannot publish data") wait and try again, nothing
+        dropped and nothing reordered, with a WARN when the wait starts, every 10 s while it lasts and
+        an INFO when it ends. A stop asked meanwhile (SIGINT / SIGTERM: :attr:`stop_asked`) ends the
+        wait by raising KeyboardInterrupt; a context shut down re-raises the error. Only for a node
+        run alone: in ``run``'s lock-step suite the subscribers are served by the same thread."""
+        t0 = last = time.monotonic()
+        self.get_logger().warn(f"publishing {topic} waits: a RELIABLE / KEEP_ALL subscriber is not "
+                               f"taking messages (its queue is full); nothing is dropped")
         while True:
+            if self.stop_asked():
+                raise KeyboardInterrupt
+            time.sleep(0.01)
             try:
                 publish(data)
                 break
@@ -160,18 +167,10 @@ class SimulatorNode(SceneNode):
                 if not self.context.ok():
                     raise
                 now = time.monotonic()
-                if t0 is None:
-                    t0 = last = now
-                    self.get_logger().warn(f"publishing {topic} waits: a RELIABLE / KEEP_ALL subscriber is not "
-                                           f"taking messages (its queue is full); nothing is dropped")
-                elif now - last >= 10.0:
+                if now - last >= 10.0:
                     last = now
                     self.get_logger().warn(f"publishing {topic} has waited {now - t0:.0f} s for a subscriber")
-                if self.stop_asked():
-                    raise KeyboardInterrupt from None
-                time.sleep(0.01)
-        if t0 is not None:
-            self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
+        self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
 
     def _marker_array(self, name, t_ns, geom):
         msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name))
