@@ -11,7 +11,7 @@ import threading
 
 from gyro_instrument import api
 from gyro_instrument.api import damage_line, replay_bag
-from gyro_instrument.cli.interrupt import LINE, SigintWatch, exit_now
+from gyro_instrument.cli.interrupt import LINE, SigintWatch, exit_interrupted
 from gyro_instrument.cli.parser import (EXIT_BAD_INPUT, EXIT_CLOSED_PIPE, EXIT_INTEGRATION_FAILED, EXIT_INTERRUPTED,
                                         build_parser, scene_arg, scene_from_args)
 from gyro_instrument.cli.simulate import simulate_to_file, terminal_progress
@@ -41,7 +41,7 @@ def guarded(body, process=False) -> int:
     (``argv`` not given): the body runs under a :class:`~gyro_instrument.cli.interrupt.SigintWatch`
     (an exception after a Ctrl-C is the interrupt, whatever an extension turned it into; one a
     finalizer swallowed is raised again), SIGINT is ignored once the status is decided, and an
-    interrupted process ends at once with 130 (:func:`~gyro_instrument.cli.interrupt.exit_now`).
+    interrupted process ends with 130 (:func:`~gyro_instrument.cli.interrupt.exit_interrupted`).
     """
     watch = SigintWatch() if process else None
     try:
@@ -63,9 +63,7 @@ def guarded(body, process=False) -> int:
             return closed_pipe()
     except KeyboardInterrupt:
         status = interrupted(process)
-        if process:
-            exit_now(status)
-        return status
+        return exit_interrupted(status) if process else status
     finally:
         if process:
             _ignore_sigint()

@@ -16,8 +16,11 @@ Three ways Python alone gets it wrong, each seen in a fuzz of 60 Ctrl-Cs 0.05–
   wake a main thread blocked in a system call);
 * an interrupt that landed inside an extension's own Python run (CPython's ``run_eval_code_obj``)
   leaves the interpreter's "unhandled KeyboardInterrupt" flag set, and Python then ends by killing
-  itself with SIGINT: status −2, not 130, in 6 of 60 runs. :func:`exit_now` ends the process with
-  130 itself once the one line is printed (stdout and stderr flushed, ``atexit`` run first).
+  itself with SIGINT: status −2, not 130, in 6 of 60 runs. :func:`exit_interrupted` clears that
+  flag (CPython 3.11's exported ``_Py_UnhandledKeyboardInterrupt``) so that the process ends
+  normally with 130; where the flag cannot be reached it ends the process itself
+  (:func:`exit_now`), which skips the finalizers (a process pool's semaphores are then reported
+  leaked by multiprocessing's resource tracker).
 """
 
 import atexit
@@ -80,6 +83,25 @@ def guarded_import(load) -> object:
             raise
 
 
+def _clear_unhandled_interrupt() -> bool:
+    """Clear CPython's "unhandled KeyboardInterrupt" flag; False where it is not reachable."""
+    import ctypes
+    try:
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
+    except (ValueError, AttributeError, OSError):
+        return False
+    return True
+
+
+def exit_interrupted(status) -> int:
+    """Make ``status`` the process's exit status: the interpreter's "unhandled KeyboardInterrupt"
+    flag cleared and ``status`` returned for ``sys.exit`` (a normal shutdown, finalizers run), or,
+    where the flag is out of reach, :func:`exit_now`."""
+    if not _clear_unhandled_interrupt():
+        exit_now(status)
+    return status
+
+
 def exit_now(status) -> None:
     """End the process with ``status`` at once, SIGINT ignored: stdout and stderr flushed and the
     ``atexit`` functions run (multiprocessing's clean-up of its children among them), then
@@ -97,7 +119,8 @@ def exit_now(status) -> None:
 
 
 def interrupted_while_importing() -> None:
-    """The one line, then :func:`exit_now` (130): a Ctrl-C before the CLI's modules are imported."""
+    """The one line, then exit 130 (:func:`exit_interrupted`): a Ctrl-C before the CLI's modules are
+    imported."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     print(LINE, file=sys.stderr)
-    exit_now(EXIT_INTERRUPTED)
+    sys.exit(exit_interrupted(EXIT_INTERRUPTED))
