@@ -65,7 +65,7 @@ from gyro_instrument.estimators.north.timing import (  # noqa: F401
     transit_offset, transit_times, transit_method)
 from gyro_instrument.estimators.north.fit import (  # noqa: F401
     _fit_jacobian, _fit_model, _fit_start, fit_record, crlb_centre, crlb_centre_long, tape_ratio,
-    tape_corrected)
+    tape_corrected, tape_north, undamped_omega)
 
 
 # ----------------------------------------------------------------------------- all together

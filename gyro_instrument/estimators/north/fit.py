@@ -134,22 +134,53 @@ def tape_ratio(period_on_s, period_off_s, period_on_sigma_s=0.0, period_off_sigm
     return float(r), float(math.hypot(dr_on * period_on_sigma_s, dr_off * period_off_sigma_s))
 
 
-def tape_corrected(estimate, tape_zero_rad, ratio, ratio_sigma=0.0, tape_zero_sigma_rad=0.0) -> NorthEstimate:
-    """The north reading from a swing centre under tape torsion: N = c + (D_B/D_K)(c − Z).
+def undamped_omega(omega_rad_s, damping_per_s=0.0, omega_sigma=0.0, damping_sigma=0.0) -> tuple:
+    """The undamped angular frequency of a damped swing, (ω_u, σ): ω_u² = ω_d² + δ² (rad/s).
 
-    The centre of the rotor-on swing is the torque balance c = (D_K N + D_B Z)/(D_K + D_B)
-    (physics_notes "North finding"), solved for N. σ² = (1+r)² σ_c² + r² σ_Z² + (c − Z)² σ_r², the
-    three independent (Z from the rotor-off swing, r from the two periods, c from the rotor-on
-    swing). ``estimate``: a :class:`NorthEstimate` of the rotor-on centre.
+    A damped oscillator ü + 2δu̇ + ω_u² u = 0 swings at ω_d = √(ω_u² − δ²) with amplitude ∝ e^(−δt).
+    The tape relation needs the stiffnesses ω_u² (physics_notes "North finding": T_on²/(T_off² − T_on²)
+    from *damped* periods carries −δ²/(D_K/A)).
+    """
+    w, d = float(omega_rad_s), float(damping_per_s)
+    wu = math.sqrt(w * w + d * d)
+    return wu, float(math.hypot(w * omega_sigma, d * damping_sigma) / wu)
+
+
+def tape_north(centre_rad, tape_zero_rad, ratio) -> float:
+    """The north reading N from the swing's equilibrium c under tape torsion, exact (rad).
+
+    The horizontal gyroscope's restoring torque is D_K sin(u − N) + D_B (u − Z) (Quet 1853 sec. 4 §1
+    eq. 2 with the sine law, times A, plus the tape; physics_notes "North finding"). At the
+    equilibrium c: D_K sin(c − N) = D_B (Z − c). Linearised about c the rotor-on swing has
+    ω_on² = (D_K cos(c − N) + D_B)/A and the rotor-off swing ω_off² = D_B/A, so the measured ratio
+    x = ω_off²/(ω_on² − ω_off²) = T_on²/(T_off² − T_on²) (:func:`tape_ratio`, undamped small-swing
+    periods) is D_B/(D_K cos(c − N)), and dividing the two: tan(c − N) = x (Z − c), hence
+    N = c − atan(x (Z − c)). Near north this is the linear law N = c + x (c − Z); a scale some
+    degrees from north needs the arctangent (the linear law errs by x³(Z − c)³/3).
+    """
+    return float(centre_rad - math.atan(float(ratio) * (tape_zero_rad - centre_rad)))
+
+
+def tape_corrected(estimate, tape_zero_rad, ratio, ratio_sigma=0.0, tape_zero_sigma_rad=0.0) -> NorthEstimate:
+    """The north reading from a swing centre under tape torsion (:func:`tape_north`, exact):
+    N = c − atan(x (Z − c)), x = D_B/(D_K cos(c − N)) from the undamped periods.
+
+    σ² = (∂N/∂c)² σ_c² + (∂N/∂Z)² σ_Z² + (∂N/∂x)² σ_x², the three independent (Z from the rotor-off
+    swing, x from the two periods, c from the rotor-on swing), with g = 1/(1 + x²(Z − c)²):
+    ∂N/∂c = 1 + x g, ∂N/∂Z = −x g, ∂N/∂x = −(Z − c) g. ``estimate``: a :class:`NorthEstimate` of
+    the rotor-on centre.
     """
     c, r = estimate.centre_rad, float(ratio)
     if not (r >= 0 and math.isfinite(r)):
         raise SceneError("tape_ratio", ratio, "D_B/D_K must be finite and ≥ 0")
-    north = c + r * (c - tape_zero_rad)
+    north = tape_north(c, tape_zero_rad, r)
+    g = 1.0 / (1.0 + (r * (tape_zero_rad - c)) ** 2)
     sig = None if estimate.sigma_rad is None else float(math.sqrt(
-        ((1 + r) * estimate.sigma_rad) ** 2 + (r * tape_zero_sigma_rad) ** 2 + ((c - tape_zero_rad) * ratio_sigma) ** 2))
+        ((1 + r * g) * estimate.sigma_rad) ** 2 + (r * g * tape_zero_sigma_rad) ** 2
+        + ((c - tape_zero_rad) * g * ratio_sigma) ** 2))
     return NorthEstimate(estimate.method + "+tape", float(north), sig,
                          estimate.sigma_source + "; with the tape zero's and the ratio's σ", estimate.n_used,
                          estimate.needs + "; a rotor-off swing (tape zero and period)",
-                         estimate.notes + (f"tape: D_B/D_K = {r:.6g}, zero {tape_zero_rad:.9g} rad",),
+                         estimate.notes + (f"tape: D_B/D_K = {r:.6g}, zero {tape_zero_rad:.9g} rad "
+                                           "(exact relation N = c - atan(x (Z - c)))",),
                          estimate.period_s, estimate.period_sigma_s, None)
