@@ -24,7 +24,9 @@ import math
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.angles import unwrap
 from gyro_instrument.estimators import north
+from gyro_instrument.estimators.north import exact, joint
 from gyro_instrument.estimators.adequacy import InadequateData, check_entry
 from gyro_instrument.instruments.observation_azimuth import ROTOR_OFF
 
@@ -41,8 +43,8 @@ BIASES = {
                "x0 = A sin(pi dt/(2T)) exact undamped; finite amplitude: the swing's third harmonic shifts the "
                "transit times off the sine law (first order in the mark's offset); drift: averaged over the runs "
                "of three transits",
-    "fit": "tape: as every centre (removed); damping and a linear drift of the centre are fitted (the drift when "
-           "the scene lists tape_drift): none; sigma at the Cramer-Rao bound",
+    "fit": "none: the swing equation itself is fitted (sine law about north, the tape toward its drifting zero, "
+           "damping), jointly to the rotor-on and rotor-off records; sigma at the Cramer-Rao bound of the whole problem",
 }
 
 
@@ -54,10 +56,15 @@ def _arcsec(x) -> float | None:
     return None if x is None else float(x) * ARCSEC_PER_RAD
 
 
-def _method_entry(est, crlb_rad=None) -> dict:
+def _method_entry(est, bias_rad=None, crlb_rad=None) -> dict:
+    """One method's entry; ``bias_rad``: its bias in this set-up (the method on the fitted model's own
+    noise-free records), flagged when it exceeds a quarter of the method's σ."""
     out = {"mount_azimuth_deg": _deg(est.centre_rad), "sigma_arcsec": _arcsec(est.sigma_rad),
            "sigma_source": est.sigma_source, "n_used": est.n_used, "needs": est.needs,
            "bias": BIASES[est.method.split("+")[0]], "notes": list(est.notes)}
+    if bias_rad is not None:
+        out["bias_arcsec"] = _arcsec(bias_rad)
+        out["bias_flagged"] = bool(est.sigma_rad is not None and abs(bias_rad) > 0.25 * est.sigma_rad)
     if est.period_s is not None:
         out["period_s"] = est.period_s
     if crlb_rad is not None:
@@ -102,19 +109,67 @@ def _check_swing(name, inst, t):
                                      f"{where}", inst.site.latitude_deg, lim))
 
 
-def _tape(name, inst, off, fit_on, sigma):
-    """(zero_rad, zero_sigma, ratio, ratio_sigma, entry) from the rotor-off companion record."""
-    if off is None:
+def _rotor_off(name, inst, off) -> np.ndarray:
+    """The rotor-off record's clockwise readings, or SceneError naming what to add."""
+    if off is None or "angle" not in off:
         raise SceneError(f"instruments.{name}.rotor_off_instrument", inst.p.rotor_off_instrument or None,
                          "the tape torsion is on: add the rotor-off swing (the same gyroscope with spin_rate_rad_s: 0 "
                          "and the same tape) to the scene and name it here")
-    z = north.fit_record(off["t"], -np.asarray(off["angle"], dtype=float), sigma)
-    ratio, rs = north.tape_ratio(fit_on.period_s, z.period_s, fit_on.period_sigma_s or 0.0, z.period_sigma_s or 0.0)
-    entry = {"instrument": inst.p.rotor_off_instrument, "ratio_db_dk": ratio, "ratio_sigma": rs,
-             "zero_reading_deg": -math.degrees(z.centre_rad), "zero_sigma_arcsec": _arcsec(z.sigma_rad),
-             "rotor_on_period_s": fit_on.period_s, "rotor_off_period_s": z.period_s,
-             "source": "rotor-off swing (torsion pendulum): zero = its fitted centre; D_B/D_K = T_on^2/(T_off^2 - T_on^2)"}
-    return z.centre_rad, z.sigma_rad or 0.0, ratio, rs, entry
+    t, a = np.asarray(off["t"], dtype=float), np.asarray(off["angle"], dtype=float)
+    ok = np.isfinite(t) & np.isfinite(a)
+    return exact.Record(t[ok], unwrap(-a[ok]), "off")
+
+
+def swing_equation(inst, t_ref_s) -> exact.SwingEquation:
+    """What the exact fit knows of ``inst``'s swing (its reduced model's constants, the tape and its
+    drift as the scene declares them; damping always fitted)."""
+    c = inst.reduced_coefficients()
+    return exact.SwingEquation(sine_law=c["sine_law"], second_order_per_s2=c["b"], spin_decay_per_s=c["decay"],
+                               tape=bool(c["kb"]), drift=bool(c["kb"] and c["zero_rate"]), damping=True,
+                               t_ref_s=float(t_ref_s))
+
+
+def _surveyor_tape(eq, records, sigma) -> dict:
+    """The tape calibration of the reversal-point methods (:func:`.north.joint.tape_from_records`)."""
+    on = joint.summarise(records[0].t, records[0].w, sigma, eq.drift)
+    off = joint.summarise(records[1].t, records[1].w, sigma, eq.drift)
+    return joint.tape_from_records(on, off, eq.t_ref_s)
+
+
+def _methods(eq, records, sigma, drift) -> tuple:
+    """The reversal-point methods on the rotor-on record, tape-corrected (exact relation, undamped
+    periods, the drifting zero fitted): ({name: NorthEstimate}, refused, tape dict or None)."""
+    on = records[0]
+    ests, refused = north.north_methods(on.t, on.w, sigma, drift=drift)
+    ests.pop("fit", None)
+    refused.pop("fit", None)
+    tape = None
+    if eq.tape:
+        tape = _surveyor_tape(eq, records, sigma)
+        ests = {k: north.tape_corrected(v, tape["zero_rad"], tape["ratio"], tape["ratio_sigma"], tape["zero_sigma_rad"])
+                for k, v in ests.items()}
+    return ests, refused, tape
+
+
+def _biases(eq, fitted, records, sigma, drift) -> dict:
+    """Each method's bias in this set-up, in mount azimuth (rad): the method run on the fitted model's
+    noise-free records, its mount azimuth less the model's (the readings are clockwise: the mount is
+    −N, so the bias is −(N_method − N_model)). A method the model's records refuse is left out."""
+    model = joint.model_records(eq, fitted, records)
+    ests, _, _ = _methods(eq, model, sigma or 1e-9, drift)
+    return {k: -north.wrap_pi(v.centre_rad - fitted.north_rad) for k, v in ests.items()}
+
+
+def _fit_entry(fitted, eq, records) -> "north.NorthEstimate":
+    par = fitted.par()
+    notes = [f"t_ref = {eq.t_ref_s:.9g} s", f"residual rms {fitted.residual_rms_rad:.6g} rad",
+             f"K = D_K/A {par.get('directing', 0.0):.9g} 1/s^2", f"damping {par.get('damping', 0.0):.6g} 1/s"]
+    if eq.tape:
+        notes.append(f"tape: k_B = D_B/A {par['tape']:.9g} 1/s^2, zero {par['zero']:.9g} rad at t_ref"
+                     + (f", drifting {par['zero_rate']:.6g} rad/s" if eq.drift else ""))
+    needs = "about one swing (≥ 2 reversal points) to start" + ("; the rotor-off swing (the tape)" if eq.tape else "")
+    return north.NorthEstimate("fit", fitted.north_rad, fitted.sigma_rad, fitted.sigma_source, fitted.n_samples,
+                               needs, tuple(notes), crlb_rad=fitted.sigma_rad)
 
 
 def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
@@ -148,23 +203,69 @@ def _north_block(obs, rec, sensor) -> dict:
     _check_swing(name, inst, t)
     sigma = sensor.effective_sigma_rad() if sensor is not None else 0.0
     sigma = sigma if sigma > 0 else None
-    ests, refused = north.north_methods(t, -np.asarray(rec["angle"], dtype=float), sigma,
-                                        drift=obs.centre_drifts())
-    if "fit" not in ests:
-        return null_block(name, f"the fit was refused: {refused.get('fit')}") | {"refused": refused}
-    fit = ests["fit"]
-    ratio, tape = 0.0, None
-    if obs.has_tape():
-        zero, zs, ratio, rs, tape = _tape(name, inst, rec.get(ROTOR_OFF), fit, sigma)
-        ests = {k: north.tape_corrected(v, zero, ratio, rs, zs) for k, v in ests.items()}
-    crlb = None if fit.crlb_rad is None else fit.crlb_rad * (1.0 + ratio)
+    a = np.asarray(rec["angle"], dtype=float)
+    ok = np.isfinite(t) & np.isfinite(a)
+    records = [exact.Record(t[ok], unwrap(-a[ok]), "on")]
+    eq = swing_equation(inst, float(np.mean(t[ok])))
+    if eq.tape:
+        records.append(_rotor_off(name, inst, rec.get(ROTOR_OFF)))
+    drift = obs.centre_drifts()
+    ests, refused, tape = _methods(eq, records, sigma, drift)
+    try:
+        fitted = joint.joint_fit(eq, records, sigma)
+    except (SceneError, np.linalg.LinAlgError, ValueError) as exc:
+        return null_block(name, f"the fit was refused: {exc}") | {"refused": refused}
+    ests["fit"] = _fit_entry(fitted, eq, records)
+    biases = _biases(eq, fitted, records, sigma, drift)
+    biases["fit"] = 0.0
     best = ests["fit"]
-    return {"instrument": name, "mount_azimuth_deg": _deg(best.centre_rad), "sigma_arcsec": _arcsec(best.sigma_rad),
-            "crlb_arcsec": _arcsec(crlb), "method": "fit", "tape": tape,
-            "methods": {k: _method_entry(v, crlb if k == "fit" else None) for k, v in ests.items()},
-            "refused": refused,
-            "notes": ["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
-                      "(Quet's u), true north reads +mount_azimuth"]}
+    methods = {k: _method_entry(v, biases.get(k), best.sigma_rad if k == "fit" else None) for k, v in ests.items()}
+    block = {"instrument": name, "mount_azimuth_deg": _deg(best.centre_rad), "sigma_arcsec": _arcsec(best.sigma_rad),
+             "crlb_arcsec": _arcsec(best.sigma_rad), "method": "fit", "tape": _tape_entry(inst, fitted, tape, eq),
+             "methods": methods, "refused": refused,
+             "pre_orientation": _pre_orientation(fitted, eq, biases, tape),
+             "notes": ["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
+                       "(Quet's u), true north reads +mount_azimuth",
+                       "fit: the swing equation itself (sine law, tape toward its drifting zero, damping) fitted "
+                       "jointly to the rotor-on and rotor-off records; sigma at the Cramer-Rao bound of the whole "
+                       "problem, tape calibration included"]}
+    return block
+
+
+def _tape_entry(inst, fitted, tape, eq) -> dict | None:
+    """The ``tape`` entry: the joint fit's k_B, zero and drift, and the surveyors' calibration."""
+    if not eq.tape:
+        return None
+    par, K = fitted.par(), fitted.par()["directing"]
+    i, j = fitted.names.index("tape"), fitted.names.index("directing")
+    g = np.zeros(len(fitted.names))
+    g[i], g[j] = 1.0 / K, -par["tape"] / K ** 2            # ∂(k_B/K)
+    return {"instrument": inst.p.rotor_off_instrument, "ratio_db_dk": par["tape"] / K,
+            "ratio_sigma": float(math.sqrt(g @ fitted.cov @ g)), "zero_reading_deg": -math.degrees(par["zero"]),
+            "zero_sigma_arcsec": _arcsec(fitted.sigma("zero")),
+            "zero_rate_arcsec_h": -_arcsec(par.get("zero_rate", 0.0)) * 3600.0,
+            "surveyor_ratio": tape["ratio"], "surveyor_ratio_sigma": tape["ratio_sigma"],
+            "source": "the joint fit of both swings (k_B/K, the zero at t_ref and its drift); the reversal-point "
+                      "methods use the surveyors' calibration: x = T_on^2/(T_off^2 - T_on^2) from undamped periods, "
+                      "the rotor-off centre with its drift, and the exact relation N = c - atan(x (Z - c))"}
+
+
+def _pre_orientation(fitted, eq, biases, tape) -> dict:
+    """How far the swing's centre sits from north and what that costs each method (arcsec)."""
+    par = fitted.par()
+    N = fitted.north_rad
+    K, kb = par["directing"], par.get("tape", 0.0)
+    c = N
+    if kb:                                  # the equilibrium: K sin(c − N) = k_B (Z − c), by Newton
+        for _ in range(50):
+            f = K * math.sin(c - N) - kb * (par["zero"] - c)
+            c -= f / (K * math.cos(c - N) + kb)
+    out = {"centre_from_north_deg": math.degrees(c - N),
+           "cost_arcsec": {k: _arcsec(v) for k, v in biases.items()}}
+    if tape is not None:
+        out["tape_zero_from_north_deg"] = math.degrees(north.wrap_pi(par["zero"] - N))
+        out["linear_tape_law_error_arcsec"] = _arcsec(joint.linear_law_error_rad(c, par["zero"], tape["ratio"]))
+    return out
 
 
 def best_block(blocks) -> dict | None:

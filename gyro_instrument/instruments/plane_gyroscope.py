@@ -277,22 +277,13 @@ class PlaneGyroscope(Instrument):
 
         with p = n sin ω, s = sin u (``finite_amplitude``; u for Quet's small-swing form) and d the
         ``pivot_damping`` rate. Absent effects enter as zero coefficients."""
-        p = self.site.earth_rate_rad_s * self.sin_omega
-        mu = self.p.inertia_ratio
-        rot = self.has("earth_rotation")
-        a = mu * p if rot else 0.0                                       # eq. (2)
-        pr = p if rot else 0.0                                           # eq. (3)
-        b = (mu - 1.0) * p * p if self.has("centrifugal") else 0.0       # the dropped O(n²) term
-        damp = self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0
-        kb = self.tape[0] / self.p.transverse_inertia_kg_m2                 # tape: −(D_B/A)(u + M − Z0 − Ż t)
-        zb = self.tape[1] - self.mount_reading_rad
-        zr = self.tape[2]
-        tau_s = self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
-        decay = 1.0 / tau_s if tau_s else 0.0
+        c = self.reduced_coefficients()
+        a, pr, b, damp, kb, zr, decay = (c[k] for k in ("a", "pr", "b", "damping", "kb", "zero_rate", "decay"))
+        zb = c["zero"] - self.mount_reading_rad
         sin, cos = math.sin, math.cos
 
         if kb:
-            law = sin if self.restoring_law() is not None else (lambda x: x)
+            law = sin if c["sine_law"] else (lambda x: x)
 
             def rhs(t, u, ud, rho):
                 su = law(u)
@@ -306,6 +297,23 @@ class PlaneGyroscope(Instrument):
             def rhs(t, u, ud, rho):
                 return ud, -(a * rho + b * cos(u)) * u - damp * ud, pr * sin(u) * ud - decay * rho
         return rhs
+
+    def reduced_coefficients(self) -> dict:
+        """The constants of the reduced model (:meth:`reduced_rhs_scalar`), absent effects as zeros:
+        ``a`` = μ n sin ω (eq. 2; times ρ the directing constant per inertia, 1/s²), ``pr`` = n sin ω
+        (eq. 3), ``b`` = (μ − 1) n² sin² ω (the O(n²) term, 1/s²), ``damping`` (1/s), ``kb`` = D_B/A
+        (1/s²), ``zero`` Z0 and ``zero_rate`` Ż (the tape zero on the scale, rad, rad/s), ``decay``
+        (1/s, the spin's) and ``sine_law`` (``finite_amplitude``: sin u, else u). The north estimate's
+        exact fit (:mod:`gyro_instrument.estimators.north.exact`) fits the same equation."""
+        p = self.site.earth_rate_rad_s * self.sin_omega
+        mu = self.p.inertia_ratio
+        rot = self.has("earth_rotation")
+        tau_s = self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
+        return {"a": mu * p if rot else 0.0, "pr": p if rot else 0.0,
+                "b": (mu - 1.0) * p * p if self.has("centrifugal") else 0.0,
+                "damping": self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0,
+                "kb": self.tape[0] / self.p.transverse_inertia_kg_m2, "zero": self.tape[1], "zero_rate": self.tape[2],
+                "decay": 1.0 / tau_s if tau_s else 0.0, "sine_law": self.restoring_law() is not None}
 
     def reduced_rhs(self) -> Callable:
         """Right-hand side of the reduced model for y = [u, u̇, ρ] (array form of

@@ -55,7 +55,7 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.north.base import (  # noqa: F401
-    TWO_PI, NorthEstimate, ReversalPoints, mount_azimuth_rad, damped_swing, _sides, _runs,
+    TWO_PI, NorthEstimate, ReversalPoints, mount_azimuth_rad, wrap_pi, damped_swing, _sides, _runs,
     _coarse_level, _local_poly, _poly_root, _basis, _coarse_extrema, _refined_extrema,
     reversal_points, half_period, _finite, _noise)
 from gyro_instrument.estimators.north.means import (  # noqa: F401

@@ -94,6 +94,11 @@ class ReversalPoints:
     half_period_sigma_s: float = field(default=math.nan)
 
 
+def wrap_pi(angle_rad) -> float:
+    """An angle wrapped to [−π, π) (rad)."""
+    return float((float(angle_rad) + math.pi) % TWO_PI - math.pi)
+
+
 def mount_azimuth_rad(north_reading_rad) -> float:
     """Mount azimuth from the scale reading of true north: (−u_N) mod 2π (module docstring)."""
     return float((-float(north_reading_rad)) % TWO_PI)

@@ -47,6 +47,18 @@ def _fit_start(tau, u, rp, damping, drift):
     return np.array(list(lin[:3]) + [w] + ([dl] if damping else []) + ([lin[3]] if drift else []))
 
 
+def sine_fit(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=None) -> tuple:
+    """(scipy OptimizeResult, t_ref) of the damped-sine least squares of :func:`fit_record`; the
+    parameters ``x`` are (c, a, b, ω[, δ][, d]) of u = c + d τ + e^(−δτ)(a cos ωτ + b sin ωτ)."""
+    rp = reversal_points(t, u, noise_sigma_rad)
+    t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
+    tau = t - t_ref
+    p0 = _fit_start(tau, u, rp, damping, drift)
+    sol = least_squares(lambda p: _fit_model(tau, p, damping, drift) - u, p0,
+                        jac=lambda p: _fit_jacobian(tau, p, damping, drift), method="lm", xtol=1e-14)
+    return sol, t_ref
+
+
 def fit_record(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=None) -> NorthEstimate:
     """Swing centre by nonlinear least squares of the whole record (at the Cramér–Rao bound).
 
@@ -58,13 +70,8 @@ def fit_record(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=No
     residual rms with N − p degrees of freedom.
     """
     t, u = _finite(t, u)
-    rp = reversal_points(t, u, noise_sigma_rad)
-    t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
-    tau = t - t_ref
-    p0 = _fit_start(tau, u, rp, damping, drift)
-    sol = least_squares(lambda p: _fit_model(tau, p, damping, drift) - u, p0,
-                        jac=lambda p: _fit_jacobian(tau, p, damping, drift), method="lm", xtol=1e-14)
-    J = _fit_jacobian(tau, sol.x, damping, drift)
+    sol, t_ref = sine_fit(t, u, noise_sigma_rad, damping, drift, t_ref_s)
+    J = _fit_jacobian(t - t_ref, sol.x, damping, drift)
     inv = np.linalg.inv(J.T @ J)
     if noise_sigma_rad is not None:
         sigma, src = float(noise_sigma_rad), "inverse Fisher information at the estimate (sensor σ given)"
