@@ -255,11 +255,7 @@ def _pre_orientation(fitted, eq, biases, tape) -> dict:
     par = fitted.par()
     N = fitted.north_rad
     K, kb = par["directing"], par.get("tape", 0.0)
-    c = N
-    if kb:                                  # the equilibrium: K sin(c − N) = k_B (Z − c), by Newton
-        for _ in range(50):
-            f = K * math.sin(c - N) - kb * (par["zero"] - c)
-            c -= f / (K * math.cos(c - N) + kb)
+    c = joint.equilibrium(N, K, kb, par.get("zero", 0.0))
     out = {"centre_from_north_deg": math.degrees(c - N),
            "cost_arcsec": {k: _arcsec(v) for k, v in biases.items()}}
     if tape is not None:

@@ -123,3 +123,21 @@ def model_records(eq, result, records) -> list:
 def linear_law_error_rad(centre_rad, zero_rad, ratio) -> float:
     """What the linear tape law N = c + x(c − Z) errs by against the exact :func:`.fit.tape_north` (rad)."""
     return float(centre_rad + ratio * (centre_rad - zero_rad) - tape_north(centre_rad, zero_rad, ratio))
+
+
+def equilibrium(north_rad, directing_per_s2, tape_per_s2=0.0, zero_rad=0.0) -> float:
+    """The swing's equilibrium c on the scale (rad): K sin(c − N) = k_B (Z − c), by Newton from N
+    (the restoring torque K sin(u − N) + k_B (u − Z) is monotonic while K cos(c − N) + k_B > 0, which
+    a tape weaker than the directing torque guarantees near the root; physics_notes "North finding").
+    """
+    N, K, kb, Z = float(north_rad), float(directing_per_s2), float(tape_per_s2), float(zero_rad)
+    c = N
+    if not kb:
+        return c
+    for _ in range(100):
+        f = K * math.sin(c - N) - kb * (Z - c)
+        step = f / (K * math.cos(c - N) + kb)
+        c -= step
+        if abs(step) < 1e-15:
+            break
+    return float(c)
