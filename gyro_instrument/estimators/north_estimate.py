@@ -3,16 +3,21 @@
 The engine for the :data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH` measurement a
 horizontal plane gyroscope's observation declares beside its swing rate
 (:class:`~gyro_instrument.instruments.observation_azimuth.HorizontalSwing`). The record's ``angle``
-reads counter-clockwise, so the clockwise reading of :mod:`.north` is −angle (u = azimuth − M);
-every method of :func:`.north.north_methods` runs on it with the sensor model's σ; with a torsion
-tape the rotor-off companion record gives the tape zero Z (the fit's centre of the torsion
-pendulum) and D_B/D_K from the two periods (:func:`.north.tape_ratio`), and each centre is
-corrected, N = c + (D_B/D_K)(c − Z) (:func:`.north.tape_corrected`). The mount azimuth is
-(−N) mod 360°. The block (msg_docs/estimate.md)::
+reads counter-clockwise, so the clockwise reading of :mod:`.north` is w = −angle (azimuth − M),
+unwrapped. The headline is the exact fit (:mod:`.north.exact`, issue 33): the swing equation itself
+(sine law about north, the tape toward its drifting zero, damping) fitted jointly to the rotor-on
+record and, with a torsion tape, the rotor-off companion's (:data:`ROTOR_OFF`), with σ the
+Cramér–Rao bound of the whole problem. The surveyors' reductions (Schuler mean, Lavrov, transit)
+run beside it on the reversal points, tape-corrected with the undamped periods, the rotor-off
+centre with its drift and the exact relation N = c − atan(x (Z − c)) (:func:`.north.tape_corrected`);
+each states its bias in this set-up (the method run on the fitted model's own noise-free records)
+and is flagged where that exceeds a quarter of its σ. The mount azimuth is (−N) mod 360°.
+The block (msg_docs/estimate.md)::
 
     north: {instrument, mount_azimuth_deg, sigma_arcsec, crlb_arcsec, method, tape,
-            methods: {schuler_mean, lavrov, transit, fit: {mount_azimuth_deg, sigma_arcsec, ...}},
-            refused, notes}
+            methods: {schuler_mean, lavrov, transit, fit: {mount_azimuth_deg, sigma_arcsec, bias_arcsec,
+                                                          bias_flagged, ...}},
+            refused, pre_orientation, notes}
 
 Near a pole the directing torque n cos γ vanishes: without any (T infinite) the block is null
 with the whole circle as its interval; when one swing outlasts the observation the estimate is

@@ -44,7 +44,10 @@ method                     needs                                 bias (first ord
 =========================  ====================================  ===========================================
 
 Tape torque biases every centre alike (the swing centre is not north); :func:`tape_corrected`
-removes it with the ratio from the rotor-on and rotor-off periods (:func:`tape_ratio`). Sources:
+removes it with the ratio from the rotor-on and rotor-off periods (:func:`tape_ratio`) by the exact
+relation N = c − atan(x (Z − c)) (:func:`tape_north`). The estimate's headline is none of these but
+:mod:`.exact`: the swing equation itself fitted to both records (no linearisation, no bias for any
+mount azimuth); :mod:`.joint` starts it and states each reduction's bias in the set-up at hand. Sources:
 Quet 1853 sec. 4 §1; physics_notes.md "North finding" (the Schuler mean is Freiberger
 Forschungshefte A 303 eq. 31b; the transit form N = N' + c·a·Δt with c ≈ π/(2T)); the GAK1
 procedures are described in K. P. Logan, *Determining an azimuth with a gyrotheodolite*, U.S. Army
