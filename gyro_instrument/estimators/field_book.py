@@ -221,7 +221,8 @@ def outliers(sw, centre_rad, alpha=OUTLIER_ALPHA) -> list:
     (Bonferroni over the n residuals, α = :data:`OUTLIER_ALPHA`); the median scale is noisier than an
     rms, so a book of Gaussian noise names one in about 1–2 % of books of 9 to 40 points (measured over
     3000 books each; ``tests/test_field_books.py`` checks it), while a reading 15 σ off is named.
-    Needs ≥ 2 other residuals (ν ≥ 9).
+    Needs ≥ 2 other residuals (ν ≥ 9). A reading two places from a named one (on its side) holds half
+    the named one's error in its residual and is not named beside it.
 
     Returns
     -------
@@ -230,7 +231,7 @@ def outliers(sw, centre_rad, alpha=OUTLIER_ALPHA) -> list:
         the residual in units of s_k.
     """
     rows = _neighbour_residuals(sw, centre_rad)
-    n, out = len(rows), []
+    n, found = len(rows), []
     for j, k, r in rows:
         keep = np.array([x for _, kk, x in rows if abs(kk - k) not in (0, 2)])
         if keep.size < 2:
@@ -238,18 +239,22 @@ def outliers(sw, centre_rad, alpha=OUTLIER_ALPHA) -> list:
         z = r / (1.4826 * float(np.median(np.abs(keep))))
         thr = float(stats.t.ppf(1.0 - alpha / (2.0 * n), keep.size))
         if abs(z) > thr:
-            out.append({"column": sw.column, "turning_point": int(k) + sw.first_number, "line": int(sw.lines[j]),
-                        "reading": sw.texts[j], "sigmas": float(z), "threshold_sigmas": thr,
-                        "residual_arcsec": r * 648000.0 / math.pi})
-    return out
+            found.append({"column": sw.column, "turning_point": int(k) + sw.first_number, "line": int(sw.lines[j]),
+                          "reading": sw.texts[j], "sigmas": float(z), "threshold_sigmas": thr,
+                          "residual_arcsec": r * 648000.0 / math.pi})
+    out, blamed = [], set()
+    for o in sorted(found, key=lambda o: -abs(o["sigmas"])):    # a named reading's same-side neighbours carry
+        if o["turning_point"] not in blamed:                   # half its error in their residuals: not named
+            out.append(o)
+            blamed |= {o["turning_point"] - 2, o["turning_point"] + 2}
+    return sorted(out, key=lambda o: o["turning_point"])
 
 
 # ----------------------------------------------------------------------------- the tape
 def _period_ratio(book, lav_q) -> tuple:
     """(ratio, σ, entry) from the undamped half periods of both swings (module docstring)."""
     hp = {s: half_period(sw) for s, sw in (("on", book.on), ("off", book.off))}
-    zero = _schuler(book.off)
-    _, q_off, sq_off = _lavrov(book.off, zero.centre_rad)
+    _, q_off, sq_off = _lavrov(book.off, _schuler(book.off).centre_rad)
     q = {"on": lav_q, "off": (q_off, sq_off)}
     und = {s: undamped_half_period(*hp[s], *q[s]) for s in hp}
     try:
@@ -279,6 +284,13 @@ def _scene_x(est, tape) -> float:
     return r / math.sqrt(1.0 - s * s)
 
 
+def _tape_zeros(off) -> dict:
+    """Each method's tape zero from the rotor-off turning points: the Schuler mean's and Lavrov's (the
+    latter exact under exponential damping), so that each method reduces both swings alike."""
+    z = _schuler(off)
+    return {"schuler_mean": z, "lavrov": _lavrov(off, z.centre_rad)[0]}
+
+
 def _book_times_mean(book) -> float | None:
     t = book.on.time_values_s
     return float(t.mean()) if t.size else None
@@ -305,28 +317,31 @@ def reduce_field_book(book, scene_tape=None) -> tuple:
     lav, q_on, sq_on = _lavrov(book.on, schuler.centre_rad)
     ests = {"schuler_mean": schuler, "lavrov": lav}
     off_ok = book.off is not None and book.off.index.size >= 3
+    zeros = _tape_zeros(book.off) if off_ok else None
     if off_ok and half_period(book.on) and half_period(book.off):
-        zero = _schuler(book.off)
         ratio, rs, entry = _period_ratio(book, (q_on, sq_on))
-        zs = zero.sigma_rad or 0.0
-        ests = {k: north.tape_corrected(v, zero.centre_rad, ratio, rs, zs) for k, v in ests.items()}
-        return ests, entry | {"ratio_db_dk": ratio, "ratio_sigma": rs, "zero_rad": zero.centre_rad,
-                              "zero_sigma_rad": zs}, notes
+        ests = {k: north.tape_corrected(v, zeros[k].centre_rad, ratio, rs, zeros[k].sigma_rad or 0.0)
+                for k, v in ests.items()}
+        return ests, entry | {"ratio_db_dk": ratio, "ratio_sigma": rs, "zero_rad": zeros["schuler_mean"].centre_rad,
+                              "zero_sigma_rad": zeros["schuler_mean"].sigma_rad or 0.0,
+                              "zero_by_method": {k: z.centre_rad for k, z in zeros.items()}}, notes
     if book.off is not None:
         notes.append("tape readings " + ("without the times of both swings" if off_ok else "fewer than 3")
                      + (": the tape zero from the book, D_B/D_K from the scene" if scene_tape and off_ok else
                         ": the tape ratio D_B/D_K is unknown and the tape torque is not removed"))
     if scene_tape is None or (book.off is not None and not off_ok):
         return ests, None, notes
-    zero, zs, source = scene_tape["zero_rad"], 0.0, f"the scene's tape ({scene_tape['instrument']})"
+    zero, source = scene_tape["zero_rad"], f"the scene's tape ({scene_tape['instrument']})"
+    zeros = zeros or {k: north.NorthEstimate(k, zero, 0.0, "the scene", 0, "") for k in ests}
     if off_ok:
-        z = _schuler(book.off)
-        zero, zs, source = z.centre_rad, z.sigma_rad or 0.0, "the book's tape zero, the scene's D_B/D_K"
+        zero, source = zeros["schuler_mean"].centre_rad, "the book's tape zero, the scene's D_B/D_K"
     elif scene_tape["drift_rad_s"] and _book_times_mean(book) is not None:
         zero += scene_tape["drift_rad_s"] * _book_times_mean(book)
+        zeros = {k: north.NorthEstimate(k, zero, 0.0, "the scene", 0, "") for k in ests}
         notes.append("the scene's tape zero drifts: taken at the book's mean time, its clock read as the scene's")
-    ests = {k: north.tape_corrected(v, zero, _scene_x(v, scene_tape | {"zero_rad": zero}), 0.0, zs)
-            for k, v in ests.items()}
+    ests = {k: north.tape_corrected(v, zeros[k].centre_rad, _scene_x(v, scene_tape | {"zero_rad": zeros[k].centre_rad}),
+                                    0.0, zeros[k].sigma_rad or 0.0) for k, v in ests.items()}
+    zs = zeros["schuler_mean"].sigma_rad or 0.0
     return ests, {"source": source, "instrument": scene_tape["instrument"], "ratio_db_dk": scene_tape["ratio"],
                   "ratio_sigma": 0.0, "zero_rad": zero, "zero_sigma_rad": zs}, notes
 

@@ -188,7 +188,8 @@ def _times(cells, unit, name, path, field, comma):
     out = []
     for _, line, cell in cells:
         try:
-            v = parse_clock(cell) if unit == "hms" else float(cell.replace(",", ".") if comma else cell)
+            text = cell.replace(",", ".") if comma else cell
+            v = parse_clock(text) if unit == "hms" else float(text)
         except ValueError as exc:
             msg = str(exc) if unit == "hms" else f"{cell!r} is not a number"
             raise SceneError(field, path, f"line {line}, column {name}: {msg}") from None
