@@ -241,3 +241,16 @@ def test_north_lines_render_bias_flags_and_pre_orientation_when_present():
     assert "bias 0.6\" [FLAGGED" in text and "pre-orientation: centre_from_north_deg 5" in text
     assert "FLAGGED" not in "\n".join(north_lines(block | {"methods": {"s": m | {"bias_flagged": False}}}))
     assert "50.55556 gon" in "\n".join(north_lines(block, "gon"))
+
+
+def test_plot_draws_a_field_book(tmp_path):
+    """plot of a book (a reading column): one view, field_book.png, with a missed point and a tape."""
+    pytest.importorskip("matplotlib")
+    a = _turning(9)
+    rows = [f"{150 * k},{'' if k == 4 else repr(float(x) / 3600)},{400 * k if k < 4 else ''},"
+            f"{repr(180.5 + 0.1 * (-0.9) ** k) if k < 4 else ''}" for k, x in enumerate(a)]
+    path = _book(tmp_path, "time_s,reading_deg,tape_time_s,tape_reading_deg\n" + "\n".join(rows) + "\n")
+    out = tmp_path / "views"
+    assert main(["plot", path, "--out", str(out)]) == 0
+    assert [p.name for p in out.iterdir()] == ["field_book.png"] and (out / "field_book.png").stat().st_size > 10000
+    assert main(["plot", path, "--out", str(out)]) == 2                     # already there: --overwrite

@@ -189,7 +189,9 @@ def _add_bag_commands(sub):
                                     "deg/h, full turn in hours), the rosette (the bob seen from above, coloured by "
                                     "time), the fit residuals; --animate adds animation.gif (needs matplotlib: pip "
                                     "install 'gyro_instrument[plot]')")
-    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
+    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory, or "
+                                "a field book (a CSV with a reading_<unit> column, as for estimate --reversal-points: "
+                                "one view, field_book: readings, turning points, centre, north)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="directory for angles, swing_azimuth, bob_path (the rosette) and residuals .png/.svg/.pdf "
                         "(default: <file name>_plots in the current directory); files already there are refused "

@@ -97,19 +97,23 @@ class FieldBook:
     path: str = ""
 
     @property
-    def readings_rad(self):
+    def readings_rad(self) -> np.ndarray:
+        """The rotor-on readings present (rad)."""
         return self.on.readings_rad
 
     @property
-    def times_s(self):
+    def times_s(self) -> np.ndarray | None:
+        """Their times (s; nan where none), or None."""
         return self.on.reading_times_s
 
     @property
-    def tape_readings_rad(self):
+    def tape_readings_rad(self) -> np.ndarray | None:
+        """The tape's readings present (rad), or None."""
         return None if self.off is None else self.off.readings_rad
 
     @property
-    def tape_times_s(self):
+    def tape_times_s(self) -> np.ndarray | None:
+        """Their times (s), or None."""
         return None if self.off is None else self.off.reading_times_s
 
 
