@@ -254,3 +254,11 @@ def test_plot_draws_a_field_book(tmp_path):
     assert main(["plot", path, "--out", str(out)]) == 0
     assert [p.name for p in out.iterdir()] == ["field_book.png"] and (out / "field_book.png").stat().st_size > 10000
     assert main(["plot", path, "--out", str(out)]) == 2                     # already there: --overwrite
+
+
+def test_angle_format_applies_to_a_simulated_estimates_north(capsys, monkeypatch):
+    """--angle-format reaches the north lines of 'estimate SCENE' too (print_estimate), not only field books."""
+    from gyro_instrument.cli import text
+    block = {"instrument": "g", "mount_azimuth_deg": 359.75, "sigma_arcsec": 0.4, "crlb_arcsec": 0.38, "methods": {}}
+    assert text.estimate_headline({"north": block, "latitude_deg": None}, "dms")[0].startswith(
+        "north: scale zero of g at azimuth 359°45′00.0″ +/- 0.4\"")

@@ -177,7 +177,7 @@ def estimate_command(args) -> int:
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print_estimate(result)
+        print_estimate(result, angle_format=args.angle_format)
     return 0
 
 

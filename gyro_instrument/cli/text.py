@@ -126,12 +126,12 @@ def _fmt(v, spec):
     return "null" if v is None else format(v, spec)
 
 
-def print_estimate(r, stream=None) -> None:
-    """Human-readable estimate: the answer first (:func:`estimate_headline`), then the recovered
-    latitude and Earth rate next to the truth, the checks, each instrument and method; lines
-    wrapped at :data:`TEXT_WIDTH`."""
+def print_estimate(r, stream=None, angle_format="deg") -> None:
+    """Human-readable estimate: the answer first (:func:`estimate_headline`, north's angles in
+    ``angle_format``), then the recovered latitude and Earth rate next to the truth, the checks, each
+    instrument and method; lines wrapped at :data:`TEXT_WIDTH`."""
     w, flush = wrapped_writer(stream or sys.stdout)
-    for line in estimate_headline(r):
+    for line in estimate_headline(r, angle_format):
         w(f"{line}\n")
     _print_estimate_body(r, w)
     flush()
@@ -203,12 +203,12 @@ def north_lines(n, angle_format="deg") -> list:
     return lines
 
 
-def estimate_headline(r) -> list:
+def estimate_headline(r, angle_format="deg") -> list:
     """The estimate's answer as lines: north first when a horizontal gyroscope gives it
     (:func:`north_lines`), the latitude (or why there is none) and each pendulum's measured
     swing-plane rate in °/h with its full turn in hours."""
     lat = r.get("latitude_deg")
-    lines = north_lines(r["north"]) if r.get("north") else []
+    lines = north_lines(r["north"], angle_format) if r.get("north") else []
     if lat is None:
         lines += [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
     else:
