@@ -262,3 +262,10 @@ def test_angle_format_applies_to_a_simulated_estimates_north(capsys, monkeypatch
     block = {"instrument": "g", "mount_azimuth_deg": 359.75, "sigma_arcsec": 0.4, "crlb_arcsec": 0.38, "methods": {}}
     assert text.estimate_headline({"north": block, "latitude_deg": None}, "dms")[0].startswith(
         "north: scale zero of g at azimuth 359°45′00.0″ +/- 0.4\"")
+
+
+def test_tape_readings_without_times_are_said_not_removed(tmp_path, capsys):
+    path = _book(tmp_path, "time_s,reading_deg,tape_reading_deg\n0,1,0.2\n60,-1,-0.2\n120,0.9,0.19\n180,-0.9,\n")
+    assert main(["estimate", "--reversal-points", path]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "the tape's pull is NOT removed" in out and "note: tape readings without the times of both swings" in out

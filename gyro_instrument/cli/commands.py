@@ -165,6 +165,8 @@ def estimate_command(args) -> int:
                    "--separator": (args.separator, None), "--scale-division": (args.scale_division, None)}
     if args.data:
         from gyro_instrument.estimators.data_io import TableOptions, estimate_data
+        if args.scale_division is not None:
+            raise SceneError("--scale-division", args.scale_division, "reads a field book: give --reversal-points")
         options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad", args.columns,
                                           args.separator)
         result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)

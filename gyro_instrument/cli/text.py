@@ -168,6 +168,7 @@ def _book_lines(n, fmt) -> list:
     if n.get("missed"):
         lines.append("  missed: " + ", ".join(f"turning point {m['turning_point']}" + (f" (line {m['line']})" if m["line"]
                                                                                       else "") for m in n["missed"]))
+    lines += [f"  note: {note}" for note in n.get("notes", [])[:-1]]      # the last: the clockwise convention
     for o in n.get("outliers", []):
         lines.append(f"  outlier: turning point {o['turning_point']}, line {o['line']}, {o['column']} = {o['reading']}: "
                      f"{o['sigmas']:+.1f} sigma from its neighbours' mean (threshold {o['threshold_sigmas']:.2g}; kept)")

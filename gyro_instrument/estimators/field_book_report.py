@@ -112,7 +112,10 @@ def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separato
     ests, tape, more = reduce_field_book(book, scene_tape)
     head = ests["schuler_mean"]
     found = outliers(book.on, _schuler(book.on).centre_rad)         # about the swing's own centre
-    if tape is None:
+    if tape is None and book.off is not None:
+        reduction = "raw: the tape's pull is NOT removed (its readings lack the times of both swings, or are fewer " \
+                    "than 3, and the scene has no tape)"
+    elif tape is None:
         reduction = "raw: no tape in the book" + (" or the scene" if scene is not None else " and no scene") \
                     + " (the swing centre is north's reading)"
     else:
