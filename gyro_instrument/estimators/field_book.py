@@ -324,7 +324,9 @@ def reduce_field_book(book, scene_tape=None) -> tuple:
                 for k, v in ests.items()}
         return ests, entry | {"ratio_db_dk": ratio, "ratio_sigma": rs, "zero_rad": zeros["schuler_mean"].centre_rad,
                               "zero_sigma_rad": zeros["schuler_mean"].sigma_rad or 0.0,
-                              "zero_by_method": {k: z.centre_rad for k, z in zeros.items()}}, notes
+                              "zero_reading_by_method_deg": {k: math.degrees(z.centre_rad) for k, z in zeros.items()}}, \
+            notes + ([f"the book's own tape used; the scene's ({scene_tape['instrument']}, D_B/D_K = "
+                      f"{scene_tape['ratio']:.6g}) is not"] if scene_tape else [])
     if book.off is not None:
         notes.append("tape readings " + ("without the times of both swings" if off_ok else "fewer than 3")
                      + (": the tape zero from the book, D_B/D_K from the scene" if scene_tape and off_ok else
