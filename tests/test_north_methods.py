@@ -276,22 +276,32 @@ def test_field_book_units_wrap_and_tape(tmp_path):
     book = fb.read_field_book(path)
     assert book.tape_readings_rad == pytest.approx(np.radians(np.array([3, -2, 2.5]) / 60))
     est = fb.field_book_north(book)["schuler_mean"]
-    r = 5.0 ** 2 / (8.0 ** 2 - 5.0 ** 2)                            # T_on²/(T_off² − T_on²)
+    # issue 33: the ratio from the *undamped* half periods (T_on 5 s, T_off 8 s; δ = −ln(q)/T with Lavrov's
+    # damping ratio per swing q) and the exact relation N = c − atan(x (Z − c)); q of the 3 tape points in
+    # closed form (a_i = c + d(−q)^i), q of the 4 rotor-on points from Lavrov's fit (its note)
     c, z = north.schuler_mean(book.readings_rad).centre_rad, north.schuler_mean(book.tape_readings_rad).centre_rad
-    assert est.centre_rad == pytest.approx(c + r * (c - z), rel=1e-12)
+    a = book.tape_readings_rad
+    z_lav = float(north.lavrov_triples(a)[0])
+    q_off = -(a[1] - z_lav) / (a[0] - z_lav)
+    q_on = float(north.lavrov(book.readings_rad).notes[0].split("=")[1])
+    w_on2, w_off2 = ((math.pi / T) ** 2 + (math.log(q) / T) ** 2 for T, q in ((5.0, q_on), (8.0, q_off)))
+    x = w_off2 / (w_on2 - w_off2)
+    assert est.centre_rad == pytest.approx(c - math.atan(x * (z - c)), rel=1e-9)   # q_on printed to 6 digits
+    assert abs(est.centre_rad - (c + 5.0 ** 2 / (8.0 ** 2 - 5.0 ** 2) * (c - z))) > 1e-8  # not the damped, linear law
 
 
 @pytest.mark.parametrize("text, option, match", [
     ("reading_deg\n1\n-1\nx\n", None, r"line 4, column reading_deg: 'x' is not a number"),
-    ("reading_deg\n1\n-1\n400\n", None, r"line 4, column reading_deg: 400.0 is outside the scale, \(−360, 360\) deg"),
-    ("reading_deg\n1\n-1\n-2\n", None, r"line 4, column reading_deg: turning points must alternate"),
-    ("reading_deg,time_s\n1,0\n-1,5\n1,5\n", None, r"line 4, column time_s: 5.0 must be later"),
+    ("reading_deg\n1\n-1\n400\n", None, r"line 4, column reading_deg: '400' is outside the circle \(one turn\)"),
+    ("reading_deg\n1\n-1\n-2\n", None, r"line 4, column reading_deg: '-2': turning points must alternate"),
+    ("reading_deg,time_s\n1,0\n-1,5\n1,5\n", None, r"line 4, column time_s: '5' must be later"),
     ("reading\n1\n-1\n1\n", None, r"column 'reading' states no unit"),
     ("reading_deg\n1\n-1\n1\n", "gon", r"--angle-unit = 'gon' is invalid: contradicts the header"),
     ("reading_deg,speed\n1,0\n-1,0\n1,0\n", None, r"column 'speed' is not a field-book column"),
     ("reading_deg\n1\n\n-1\n1\n", None, None),                                   # blank lines are skipped
-    ("reading_deg,time_s\n1,0\n,5\n1,6\n", None, r"line 3, column reading_deg: empty cell inside"),
-    ("reading_deg\n1\n-1\n", None, r"holds 2 turning points"),
+    ("reading_deg,time_s\n1,0\n,5\n1,6\n", None, r"holds 2 turning point readings"),   # a hole kept out by its time
+    ("reading_deg,time_s\n1,0\n,5\n1,10\n-1,15\n", None, None),                        # ... and the rest kept
+    ("reading_deg\n1\n-1\n", None, r"holds 2 turning point readings"),
 ])
 def test_field_book_bad_input_names_line_column_value_and_range(tmp_path, text, option, match):
     path = tmp_path / "b.csv"

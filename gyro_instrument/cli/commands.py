@@ -152,19 +152,21 @@ def simulate_command(args) -> int:
 def estimate_command(args) -> int:
     """``gyro-instrument estimate``: simulate through the sensors (or read ``--data``) and estimate."""
     from gyro_instrument.estimators.pipeline import simulate_truth
+    if args.reversal_points:
+        return _field_book_estimate(args)
     scene = data_scene(args) if scene_arg(args) is None and args.data else None
     if scene is None and scene_arg(args) is None:
         raise SceneError("scene", None, "give the scene: 'estimate SCENE' or 'estimate --data FILE --scene SCENE'"
                                         + (f" ({args.data} carries none: no Parquet metadata 'gyro_instrument."
                                            f"scene_yaml', no .scene.yaml beside it)" if args.data else ""))
     scene = scene or scene_from_args(args)
-    if args.reversal_points:
-        return _field_book_estimate(args, scene)
     table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
                    "--angle-unit": (args.angle_unit, None), "--column": (args.columns, []),
-                   "--separator": (args.separator, None)}
+                   "--separator": (args.separator, None), "--scale-division": (args.scale_division, None)}
     if args.data:
         from gyro_instrument.estimators.data_io import TableOptions, estimate_data
+        if args.scale_division is not None:
+            raise SceneError("--scale-division", args.scale_division, "reads a field book: give --reversal-points")
         options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad", args.columns,
                                           args.separator)
         result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)
@@ -177,23 +179,38 @@ def estimate_command(args) -> int:
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print_estimate(result)
+        print_estimate(result, angle_format=args.angle_format)
     return 0
 
 
-def _field_book_estimate(args, scene) -> int:
-    """``estimate --reversal-points FILE --scene SCENE``: north from a field book (no simulation)."""
+def _field_book_estimate(args) -> int:
+    """``estimate --reversal-points FILE [--scene SCENE]``: north from a field book (no simulation); the
+    scene, when given, lends its latitude and tape (:func:`.field_book_report.field_book_block`)."""
+    from gyro_instrument.core.angle_formats import parse_scale_division
     from gyro_instrument.estimators.north_estimate import field_book_block
     if args.data:
         raise SceneError("--reversal-points", args.reversal_points, "reads a field book: leave --data out")
-    result = {"scene": scene.name, "field_book": args.reversal_points,
-              "north": field_book_block(args.reversal_points, args.angle_unit, args.time_unit)}
+    if args.columns or args.time_column != "time_s":
+        raise SceneError(*(("--column", args.columns[0]) if args.columns else ("--time-column", args.time_column)),
+                         "reads a table (--data); a field book's columns are named by its header")
+    division = None
+    if args.scale_division is not None:
+        try:
+            division = parse_scale_division(args.scale_division)
+        except ValueError as exc:
+            raise SceneError("--scale-division", args.scale_division, str(exc)) from None
+    scene = scene_from_args(args) if scene_arg(args) is not None else None
+    if scene is None and args.overrides:
+        raise SceneError("--set", args.overrides[0], "overrides a scene's value: give --scene SCENE (a field book "
+                                                     "needs none)")
+    block = field_book_block(args.reversal_points, args.angle_unit, args.time_unit, scene, args.separator, division)
+    result = {"scene": None if scene is None else scene.name, "field_book": args.reversal_points, "north": block}
     if args.json:
         print(json.dumps(to_jsonable(result), indent=2))
     else:
         from gyro_instrument.cli.text import north_lines, wrapped_writer
         w, flush = wrapped_writer(sys.stdout)
-        for line in north_lines(result["north"]):
+        for line in north_lines(result["north"], args.angle_format):
             w(f"{line}\n")
         flush()
     return 0

@@ -6,11 +6,16 @@ from typing import NoReturn
 
 from gyro_instrument import api
 from gyro_instrument.cli.interrupt import EXIT_INTERRUPTED
+from gyro_instrument.core.angle_formats import ANGLE_UNITS
+from gyro_instrument.core.angle_formats import FORMATS as ANGLE_FORMATS
 from gyro_instrument.core.errors import SceneError
 
 EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
 EXIT_CLOSED_PIPE = 141
+#: ``--time-unit``: the units of ``--data`` (s, ms, us, ns, min) and, for ``--reversal-points``, clock
+#: times (hms); equal to ``estimators.field_book_read.TIME_UNITS`` (tests/test_field_books.py)
+BOOK_TIME_UNITS = ("s", "ms", "us", "ns", "min", "hms")
 
 
 def add_scene_arguments(parser, positional=True) -> None:
@@ -131,24 +136,37 @@ def _add_scene_commands(sub):
                         "or a duration")
     p.add_argument("--time-column", default="time_s", metavar="NAME",
                    help="with --data: the table's time column (default time_s)")
-    p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
-                   help="with --data: unit of a numeric time column, converted to s (default s; not for a "
-                        "Parquet timestamp or duration, which carries its unit)")
-    p.add_argument("--angle-unit", default=None, choices=["rad", "deg"],
+    p.add_argument("--time-unit", default=None, choices=list(BOOK_TIME_UNITS),
+                   help="with --data: unit of a numeric time column, converted to s (s, ms, us, ns, min; default s; "
+                        "not for a Parquet timestamp or duration, which carries its unit); with --reversal-points: "
+                        "the unit of a bare time column (also hms: clock times mm:ss or hh:mm:ss)")
+    p.add_argument("--angle-unit", default=None, choices=list(ANGLE_UNITS),
                    help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
-                        "deflection_east, deflection_north (default rad; x_east/y_north stay m, spin_rate rad/s); "
-                        "with --reversal-points: the unit of a bare reading column")
+                        "deflection_east, deflection_north (rad or deg; default rad; x_east/y_north stay m, "
+                        "spin_rate rad/s); with --reversal-points: the unit of a bare reading column, any unit a "
+                        "header takes (dms: 179°01'56\", 179.01.56, 179 01 56, 179-01-56; ddmmss: 179.0156; div: "
+                        "scale divisions of --scale-division)")
     p.add_argument("--reversal-points", metavar="FILE.csv",
                    help="estimate north from a field book instead of simulating: a CSV of turning-point readings "
                         "of the circle (clockwise), one a row, header reading_<unit> (rad, mrad, deg, gon, mgon, "
-                        "arcmin, arcsec), optional time_s, tape_reading_<unit>, tape_time_s; gives the Schuler "
-                        "mean and Lavrov's estimate with their sigma from the scatter (msg_docs/estimate.md)")
+                        "arcmin, arcsec, dms, ddmmss, div), optional time_<tunit> (s, min, hms, ...), "
+                        "tape_reading_<unit>, tape_time_<tunit>, turning_point, side, remark; a row with an empty "
+                        "reading is a missed turning point. Gives the Schuler mean and Lavrov's estimate with "
+                        "their sigma from the scatter, the mount azimuth and the circle reading of north; --scene "
+                        "is optional (its latitude and tape; a book without tape readings on a scene with a tape "
+                        "takes the scene's tape, said in the output) (msg_docs/estimate.md)")
+    p.add_argument("--angle-format", default="deg", choices=list(ANGLE_FORMATS),
+                   help="the text output's north angles: deg (179.832222°), dms (179°49'56.0\") or gon "
+                        "(199.81358 gon); the JSON always carries degrees, the d°m′s″ string and gon")
+    p.add_argument("--scale-division", metavar="VALUE", default=None,
+                   help="with --reversal-points: the value of one scale division for div columns, a number and "
+                        "its unit, e.g. 10arcmin or 0.1852gon")
     p.add_argument("--column", dest="columns", action="append", default=[], metavar="NAME=SOURCE",
                    help="with --data: read the table's column SOURCE as the channel column NAME, e.g. "
                         "--column gyro_horizontal.angle=Theta (repeatable)")
     p.add_argument("--separator", default=None, choices=[",", ";", "tab"],
-                   help="with --data, CSV: the field separator (default: sniffed from the header line; ';' "
-                        "reads decimal commas)")
+                   help="with --data or --reversal-points, CSV: the field separator (default: sniffed from the "
+                        "header line; ';' reads decimal commas)")
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
 
 
@@ -171,7 +189,9 @@ def _add_bag_commands(sub):
                                     "deg/h, full turn in hours), the rosette (the bob seen from above, coloured by "
                                     "time), the fit residuals; --animate adds animation.gif (needs matplotlib: pip "
                                     "install 'gyro_instrument[plot]')")
-    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory")
+    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory, or "
+                                "a field book (a CSV with a reading_<unit> column, as for estimate --reversal-points: "
+                                "one view, field_book: readings, turning points, centre, north)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="directory for angles, swing_azimuth, bob_path (the rosette) and residuals .png/.svg/.pdf "
                         "(default: <file name>_plots in the current directory); files already there are refused "

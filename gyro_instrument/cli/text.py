@@ -126,44 +126,90 @@ def _fmt(v, spec):
     return "null" if v is None else format(v, spec)
 
 
-def print_estimate(r, stream=None) -> None:
-    """Human-readable estimate: the answer first (:func:`estimate_headline`), then the recovered
-    latitude and Earth rate next to the truth, the checks, each instrument and method; lines
-    wrapped at :data:`TEXT_WIDTH`."""
+def print_estimate(r, stream=None, angle_format="deg") -> None:
+    """Human-readable estimate: the answer first (:func:`estimate_headline`, north's angles in
+    ``angle_format``), then the recovered latitude and Earth rate next to the truth, the checks, each
+    instrument and method; lines wrapped at :data:`TEXT_WIDTH`."""
     w, flush = wrapped_writer(stream or sys.stdout)
-    for line in estimate_headline(r):
+    for line in estimate_headline(r, angle_format):
         w(f"{line}\n")
     _print_estimate_body(r, w)
     flush()
 
 
-def north_lines(n) -> list:
-    """The ``north`` block as lines: the mount azimuth with its σ and bound, then each method."""
-    if n.get("mount_azimuth_deg") is None:
-        return [f"north: not determined ({n.get('reason') or 'see the methods'}); azimuth in "
-                f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
-    what = n["instrument"] or f"the field book {n.get('field_book')}"
-    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
-    lines = [f"north: scale zero of {what} at azimuth {n['mount_azimuth_deg']:.6f}° +/- "
-             f"{_fmt(n['sigma_arcsec'], '.3g')}\" ({how}" + (f" {n['crlb_arcsec']:.3g}\")" if n.get("crlb_arcsec") is not None else ")")]
-    for name, m in n.get("methods", {}).items():
-        lines.append(f"  {name:<13} {m['mount_azimuth_deg']:.6f}° +/- {_fmt(m['sigma_arcsec'], '.3g')}\"  "
-                     f"({m['n_used']} used; needs {m['needs']})")
-    for name, why in n.get("refused", {}).items():
-        lines.append(f"  {name:<13} refused: {why}")
-    if n.get("tape"):
-        t = n["tape"]
-        lines.append(f"  tape: D_B/D_K = {t['ratio_db_dk']:.4g} +/- {t['ratio_sigma']:.2g}, zero reads "
-                     f"{t['zero_reading_deg']:.6f}° (rotor-off swing {t['instrument']}); every centre corrected")
+def _angle(deg, fmt) -> str:
+    from gyro_instrument.core.angle_formats import format_angle
+    return format_angle(deg, fmt)
+
+
+def _sigma(arcsec, fmt) -> str:
+    from gyro_instrument.core.angle_formats import format_arcsec
+    return format_arcsec(arcsec, fmt)
+
+
+def _flat(d) -> str:
+    """``key value; ...`` of a dict, nested dicts one level down, numbers to 4 significant digits."""
+    def v(x):
+        return f"{x:.4g}" if isinstance(x, float) else str(x)
+    return "; ".join(f"{k} {'(' + _flat(x) + ')' if isinstance(x, dict) else v(x)}" for k, x in d.items())
+
+
+def _method_line(name, m, fmt) -> str:
+    bias = ""
+    if m.get("bias_arcsec") is not None:
+        bias = f"  bias {_sigma(m['bias_arcsec'], fmt)}" + (" [FLAGGED: > sigma/4]" if m.get("bias_flagged") else "")
+    return (f"  {name:<13} {_angle(m['mount_azimuth_deg'], fmt)} +/- {_sigma(m['sigma_arcsec'], fmt)}{bias}  "
+            f"({m['n_used']} used; needs {m['needs']})")
+
+
+def _book_lines(n, fmt) -> list:
+    """A field book's extra lines: the circle reading of north, the reduction, missed points, outliers."""
+    lines = [f"  north reads {_angle(n['north_reading_deg'], fmt)} on the circle; {n['reduction']}"]
+    if n.get("missed"):
+        lines.append("  missed: " + ", ".join(f"turning point {m['turning_point']}" + (f" (line {m['line']})" if m["line"]
+                                                                                      else "") for m in n["missed"]))
+    lines += [f"  note: {note}" for note in n.get("notes", [])[:-1]]      # the last: the clockwise convention
+    for o in n.get("outliers", []):
+        lines.append(f"  outlier: turning point {o['turning_point']}, line {o['line']}, {o['column']} = {o['reading']}: "
+                     f"{o['sigmas']:+.1f} sigma from its neighbours' mean (threshold {o['threshold_sigmas']:.2g}; kept)")
     return lines
 
 
-def estimate_headline(r) -> list:
+def north_lines(n, angle_format="deg") -> list:
+    """The ``north`` block as lines: the mount azimuth with its σ and bound, then each method (with its
+    ``bias_arcsec``, flagged, when the block has one), the pre-orientation check and the tape; a field
+    book's also the circle reading of north, the reduction, missed and outlying turning points. Angles
+    in ``angle_format`` (``--angle-format``: deg, dms, gon)."""
+    if n.get("mount_azimuth_deg") is None:
+        return [f"north: not determined ({n.get('reason') or 'see the methods'}); azimuth in "
+                f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
+    fmt = angle_format
+    what = n["instrument"] or f"the field book {n.get('field_book')}"
+    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    lines = [f"north: scale zero of {what} at azimuth {_angle(n['mount_azimuth_deg'], fmt)} +/- "
+             f"{_sigma(n['sigma_arcsec'], fmt)} ({how}" + (f" {_sigma(n['crlb_arcsec'], fmt)})"
+                                                            if n.get("crlb_arcsec") is not None else ")")]
+    if "north_reading_deg" in n:
+        lines += _book_lines(n, fmt)
+    lines += [_method_line(name, m, fmt) for name, m in n.get("methods", {}).items()]
+    for name, why in n.get("refused", {}).items():
+        lines.append(f"  {name:<13} refused: {why}")
+    if isinstance(n.get("pre_orientation"), dict):
+        lines.append(f"  pre-orientation: {_flat(n['pre_orientation'])}")
+    if n.get("tape"):
+        t = n["tape"]
+        src = t.get("source") or f"rotor-off swing {t['instrument']}"
+        lines.append(f"  tape: D_B/D_K = {t['ratio_db_dk']:.4g} +/- {t['ratio_sigma']:.2g}, zero reads "
+                     f"{_angle(t['zero_reading_deg'], fmt)} ({src}); every centre corrected")
+    return lines
+
+
+def estimate_headline(r, angle_format="deg") -> list:
     """The estimate's answer as lines: north first when a horizontal gyroscope gives it
     (:func:`north_lines`), the latitude (or why there is none) and each pendulum's measured
     swing-plane rate in °/h with its full turn in hours."""
     lat = r.get("latitude_deg")
-    lines = north_lines(r["north"]) if r.get("north") else []
+    lines = north_lines(r["north"], angle_format) if r.get("north") else []
     if lat is None:
         lines += [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
     else:

@@ -1,254 +1,80 @@
-"""Field books: turning points written down by hand, read into SI (issue 24, item 6).
+"""Field books: turning points written down by hand, read into SI and reduced (issues 24 and 33).
 
-A surveyor with a gyrotheodolite reads the scale (or the horizontal circle, following the swing
-with the tangent screw) at each reversal point, and perhaps times it; with a torsion tape she also
-swings the gyroscope with the rotor off and reads the tape's turning points. A field book is a CSV
-table of those readings, one turning point a row, in the order observed::
+A surveyor with a gyrotheodolite reads the horizontal circle (following the swing with the tangent
+screw) or a scale at each turning point, and perhaps times it; with a torsion tape she also swings
+the gyroscope with the rotor off and reads the tape's turning points. A field book is a CSV table
+of those readings, one turning point a row, in the order observed::
 
     # station A, 2024-05-02, GAK1 no. 123          (lines starting with # are comments)
-    time_s,reading_gon,tape_time_s,tape_reading_gon
-    0.0,399.8731,0.0,0.0213
-    241.2,0.1478,300.5,-0.0188
+    turning_point,side,time_hms,reading_dms,tape_time_s,tape_reading_div
+    1,left,10:02:11,179°01'56",0,0.8
+    2,right,10:06:12,181°17'26",160.2,-0.6
     ...
 
-Columns (any order; only ``reading`` is required; a column may end early — empty cells after its
-last value — but may not have holes):
+Columns (any order; only ``reading`` is required):
 
 ==========================  =====================================================================
-``reading_<unit>``          rotor-on turning points (scale or circle readings)
-``time_<tunit>``            their times (optional)
+``reading_<unit>``          rotor-on turning points: clockwise circle (or scale) readings
+``time_<tunit>``            their times (optional; a missed reading's time may stand alone)
 ``tape_reading_<unit>``     rotor-off turning points of the tape alone (optional)
 ``tape_time_<tunit>``       their times (optional; with ``time`` they give the tape ratio D_B/D_K)
+``turning_point``           the book's numbers of the rotor-on turning points (optional; a skipped
+                            number is a missed point)
+``side``                    ``left`` / ``right`` (optional; checked against the readings: a left
+                            turning point reads less than the right ones beside it)
+``remark``                  free text, not read
 ==========================  =====================================================================
 
-Angle units ``<unit>``: rad, mrad, deg, gon, mgon, arcmin, arcsec (:data:`ANGLE_UNITS`); time units
-``<tunit>``: s, min (:data:`TIME_UNITS`). A bare ``reading`` / ``time`` header takes its unit from the
-``angle_unit`` / ``time_unit`` option; a header unit that contradicts the option is refused. Circle
-readings that straddle the zero (399.98 gon, 0.02 gon) are unwrapped about the first reading, and a
-note says so. Readings must alternate about the centre (a swing). Errors are
-:class:`~gyro_instrument.core.errors.SceneError` naming the file, the line, the column, the value
-and the valid range.
+Angle units ``<unit>`` (:data:`~gyro_instrument.core.angle_formats.ANGLE_UNITS`): rad, mrad, deg,
+gon, mgon, arcmin, arcsec as numbers; ``dms`` as printed (``179°01'56"``, ``179.01.56``,
+``179 01 56``, ``179-01-56``); ``ddmmss``, the DD.MMSS notation (``179.0156``; never guessed from
+a decimal column); ``div``, scale divisions of a value stated with ``--scale-division``. Time units
+``<tunit>``: s, ms, us, ns, min, ``hms`` (clock times ``mm:ss`` or ``hh:mm:ss``; a bare ``time``
+column with colons is read so). A bare ``reading`` / ``time`` header takes its unit from
+``--angle-unit`` / ``--time-unit``; a header unit the option contradicts is refused. The separator
+is sniffed from the header as for ``--data`` (``,``; ``;`` with decimal commas; tab) unless
+``--separator`` names it.
 
-:func:`field_book_north` gives the Schuler mean and Lavrov's estimate with their σ from the scatter
-(the same :mod:`gyro_instrument.estimators.north` code as on simulated records), tape-corrected
-when the book holds the rotor-off swing and the times of both.
+Rules: a row with its reading empty is a missed turning point, left out in its place (the others
+keep theirs; its time, if written, still times the swing); empty cells after a column's last value
+end that column. Readings must alternate about the centre; times must increase; readings that
+straddle the circle's zero (359°59′, 0°01′) are unwrapped about the first, noted. Errors are
+:class:`~gyro_instrument.core.errors.SceneError` naming the file, the line, the column and the value.
+
+The reduction (:func:`reduce_field_book`): the Schuler mean and Lavrov's estimate with σ from the
+scatter (:mod:`gyro_instrument.estimators.north`; with missed points, the same methods over the
+turning points present: the Schuler mean as the mean of the complete triple means, Lavrov's
+geometric sequence fitted at the points' numbers). With the tape's readings and the times of both
+swings: the tape ratio from the *undamped* half periods (Lavrov's damping ratio per swing q =
+e^(−δ T_half), ω_u² = ω_d² + δ², :func:`.north.undamped_omega`) and the exact relation
+N = c − atan(x (Z − c)) (:func:`.north.tape_corrected`). Outliers are named, not dropped
+(:func:`outliers`).
 """
 
 import csv
 import math
-from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import stats
+from scipy.optimize import least_squares
 
+from gyro_instrument.core.angle_formats import ANGLE_UNITS, NUMBER_UNITS  # noqa: F401
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
+from gyro_instrument.estimators.field_book_read import (  # noqa: F401
+    COLUMNS, TIME_UNITS, FieldBook, Swing, read_field_book)
 
-#: angle units: radians per unit (gon: 400 to the turn; mgon 1e-3 gon)
-ANGLE_UNITS = {"rad": 1.0, "mrad": 1e-3, "deg": math.pi / 180.0, "gon": math.pi / 200.0,
-               "mgon": math.pi / 200000.0, "arcmin": math.pi / 10800.0, "arcsec": math.pi / 648000.0}
-#: time units: seconds per unit
-TIME_UNITS = {"s": 1.0, "min": 60.0}
-#: column stems: (kind, required)
-COLUMNS = {"reading": ("angle", True), "time": ("time", False), "tape_reading": ("angle", False),
-           "tape_time": ("time", False)}
-
-
-@dataclass(frozen=True)
-class FieldBook:
-    """A field book in SI (rad, s).
-
-    Attributes
-    ----------
-    readings_rad : ndarray
-        Rotor-on turning points, unwrapped about the first.
-    times_s : ndarray or None
-    tape_readings_rad, tape_times_s : ndarray or None
-        Rotor-off turning points (tape alone) and their times.
-    angle_unit, time_unit : str
-        The units the book was written in.
-    notes : tuple of str
-    """
-
-    readings_rad: np.ndarray
-    times_s: np.ndarray | None = None
-    tape_readings_rad: np.ndarray | None = None
-    tape_times_s: np.ndarray | None = None
-    angle_unit: str = "rad"
-    time_unit: str = "s"
-    notes: tuple = ()
-
-
-def _split_header(name, path, field):
-    """(stem, unit or None) of a header cell; SceneError for an unknown column or unit."""
-    for stem in sorted(COLUMNS, key=len, reverse=True):
-        kind = COLUMNS[stem][0]
-        units = ANGLE_UNITS if kind == "angle" else TIME_UNITS
-        if name == stem:
-            return stem, None
-        if name.startswith(stem + "_") and name[len(stem) + 1:] in units:
-            return stem, name[len(stem) + 1:]
-    valid = ", ".join(f"{s}_<{'unit' if k == 'angle' else 'tunit'}>" for s, (k, _) in COLUMNS.items())
-    raise SceneError(field, path, f"column {name!r} is not a field-book column; expected {valid} with <unit> "
-                                  f"one of {', '.join(ANGLE_UNITS)} and <tunit> one of {', '.join(TIME_UNITS)}")
-
-
-def _unit(stem, header_unit, option, path, field):
-    kind = COLUMNS[stem][0]
-    units = ANGLE_UNITS if kind == "angle" else TIME_UNITS
-    name = "--angle-unit" if kind == "angle" else "--time-unit"
-    if option is not None and option not in units:
-        raise SceneError(name, option, f"must be one of {', '.join(units)}")
-    if header_unit and option and header_unit != option:
-        raise SceneError(name, option, f"contradicts the header of {path} (column {stem}_{header_unit}); "
-                                       f"drop the option or the unit in the header")
-    unit = header_unit or option
-    if unit is None:
-        if kind == "time":
-            return "s"
-        raise SceneError(field, path, f"column {stem!r} states no unit: write {stem}_deg, {stem}_gon, ... or "
-                                      f"pass --angle-unit ({', '.join(ANGLE_UNITS)})")
-    return unit
-
-
-def _rows(path, field):
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            lines = [(i, line) for i, line in enumerate(fh, start=1) if line.strip() and not line.lstrip().startswith("#")]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(field, path, f"cannot be read ({exc.__class__.__name__}); a UTF-8 CSV file expected") from None
-    if len(lines) < 2:
-        raise SceneError(field, path, "holds no turning points; expected a header such as time_s,reading_deg "
-                                      "and one row per turning point")
-    rows = list(csv.reader([line for _, line in lines]))
-    return [n for n, _ in lines], [[c.strip() for c in r] for r in rows]
-
-
-def _column(values, lines, name, path, field):
-    """Floats of one column: empty cells only after its last value; SceneError naming the line."""
-    out = []
-    for line, cell in zip(lines, values):
-        if not cell:
-            out.append(None)
-            continue
-        try:
-            v = float(cell)
-        except ValueError:
-            raise SceneError(field, path, f"line {line}, column {name}: {cell!r} is not a number") from None
-        if not math.isfinite(v):
-            raise SceneError(field, path, f"line {line}, column {name}: {cell!r} must be a finite number")
-        out.append(v)
-    while out and out[-1] is None:
-        out.pop()
-    if None in out:
-        line = lines[out.index(None)]
-        raise SceneError(field, path, f"line {line}, column {name}: empty cell inside the column; turning points "
-                                      f"must be consecutive (end the column early instead)")
-    return np.array(out, dtype=float)
-
-
-def _check_angles(x, unit, lines, name, path, field):
-    """In SI, |reading| < one turn; circle readings unwrapped about the first. Returns (rad, note)."""
-    turn = 2.0 * math.pi / ANGLE_UNITS[unit]
-    bad = np.nonzero(np.abs(x) >= turn)[0]
-    if bad.size:
-        k = int(bad[0])
-        raise SceneError(field, path, f"line {lines[k]}, column {name}: {float(x[k])!r} is outside the scale, "
-                                      f"(−{turn:g}, {turn:g}) {unit}")
-    rad = x * ANGLE_UNITS[unit]
-    un = rad[0] + (rad - rad[0] + math.pi) % (2 * math.pi) - math.pi
-    note = f"{name}: readings across the scale's zero unwrapped about the first" if np.any(np.abs(un - rad) > 1) else None
-    return un, note
-
-
-def _check_alternating(rad, lines, name, path, field):
-    d = np.diff(rad)
-    bad = np.nonzero(d[1:] * d[:-1] >= 0)[0]
-    if bad.size:
-        k = int(bad[0]) + 2
-        raise SceneError(field, path, f"line {lines[k]}, column {name}: turning points must alternate about the "
-                                      f"centre (each between its neighbours' sides); this one continues the previous "
-                                      f"swing's direction")
-
-
-def _check_times(ts, lines, name, path, field):
-    bad = np.nonzero(np.diff(ts) <= 0)[0]
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise SceneError(field, path, f"line {lines[k]}, column {name}: {float(ts[k])!r} must be later than the previous "
-                                      f"time {float(ts[k - 1])!r} (times strictly increasing)")
-
-
-def _read_pair(cols, lines, stem, units, path, field, notes):
-    """(angles_rad, times_s or None) of ``stem``'s readings and its times column, checked."""
-    name, values = cols[stem]
-    a = _column(values, lines, name, path, field)
-    if a.size == 0:
-        return None, None
-    a, note = _check_angles(a, units[stem], lines, name, path, field)
-    if note:
-        notes.append(note)
-    _check_alternating(a, lines, name, path, field)
-    tstem = "time" if stem == "reading" else "tape_time"
-    if tstem not in cols:
-        return a, None
-    tname, tvalues = cols[tstem]
-    ts = _column(tvalues, lines, tname, path, field)
-    if ts.size != a.size:
-        raise SceneError(field, path, f"column {tname} holds {ts.size} times for {a.size} readings in {name}; "
-                                      f"give one time per turning point (or none)")
-    _check_times(ts, lines, tname, path, field)
-    return a, ts * TIME_UNITS[units[tstem]]
-
-
-def read_field_book(path, angle_unit=None, time_unit=None, field="--reversal-points") -> FieldBook:
-    """Read a field book (module docstring) into SI.
-
-    Parameters
-    ----------
-    path : str
-        The CSV file.
-    angle_unit, time_unit : str, optional
-        Units for bare ``reading`` / ``time`` headers (a header's own unit must agree).
-    field : str
-        The option named in errors.
-
-    Returns
-    -------
-    FieldBook
-
-    Raises
-    ------
-    SceneError
-        Naming the file, the line, the column, the value and the valid range or what to write.
-    """
-    path = str(path)
-    lines, rows = _rows(path, field)
-    header, body, lines = rows[0], rows[1:], lines[1:]
-    cols, units = {}, {}
-    for j, name in enumerate(header):
-        stem, hunit = _split_header(name, path, field)
-        if stem in cols:
-            raise SceneError(field, path, f"columns {cols[stem][0]!r} and {name!r} are the same field; keep one")
-        cols[stem] = (name, [r[j] if j < len(r) else "" for r in body])
-        units[stem] = _unit(stem, hunit, angle_unit if COLUMNS[stem][0] == "angle" else time_unit, path, field)
-    if "reading" not in cols:
-        raise SceneError(field, path, f"has no reading column (header {','.join(header)}); add reading_<unit>")
-    notes = []
-    a, ts = _read_pair(cols, lines, "reading", units, path, field, notes)
-    if a is None or a.size < 3:
-        raise SceneError(field, path, f"holds {0 if a is None else a.size} turning points; the Schuler mean and "
-                                      f"Lavrov's method need ≥ 3 (≥ 4 for a σ from the scatter)")
-    za, zt = _read_pair(cols, lines, "tape_reading", units, path, field, notes) if "tape_reading" in cols else (None, None)
-    return FieldBook(a, ts, za, zt, units["reading"], units.get("time", "s"), tuple(notes))
+#: Book-wide false-alarm probability of the outlier test (:func:`outliers`).
+OUTLIER_ALPHA = 0.002
 
 
 def write_field_book(path, readings_rad, times_s=None, tape_readings_rad=None, tape_times_s=None,
                      angle_unit="deg", decimals=None) -> None:
-    """Write a field book (module docstring): readings in ``angle_unit`` (``decimals`` places, else
-    full precision, 17 significant digits), times in s; columns of unequal length end early."""
-    if angle_unit not in ANGLE_UNITS:
-        raise SceneError("angle_unit", angle_unit, f"must be one of {', '.join(ANGLE_UNITS)}")
-    k = ANGLE_UNITS[angle_unit]
+    """Write a field book (module docstring): readings in ``angle_unit`` (a number unit; ``decimals``
+    places, else full precision, 17 significant digits), times in s; columns of unequal length end early."""
+    if angle_unit not in NUMBER_UNITS:
+        raise SceneError("angle_unit", angle_unit, f"must be one of {', '.join(NUMBER_UNITS)}")
+    k = NUMBER_UNITS[angle_unit]
     cols = [(f"reading_{angle_unit}", np.asarray(readings_rad, dtype=float) / k)]
     if times_s is not None:
         cols.append(("time_s", np.asarray(times_s, dtype=float)))
@@ -268,24 +94,260 @@ def write_field_book(path, readings_rad, times_s=None, tape_readings_rad=None, t
             w.writerow([fmt(c[i], "reading" in name) if i < c.size else "" for name, c in cols])
 
 
-def field_book_north(book) -> dict:
-    """The Schuler mean and Lavrov's estimate of a field book, σ from the scatter.
+# ----------------------------------------------------------------------------- the methods, gaps allowed
+def triple_means(sw) -> tuple:
+    """(first turning-point numbers, means (a_k + 2 a_(k+1) + a_(k+2))/4 in rad) of every complete triple:
+    the means a surveyor prints beside the readings (each one estimate of the centre)."""
+    pos = dict(zip(sw.index.tolist(), sw.readings_rad.tolist()))
+    ks = [k for k in pos if k + 1 in pos and k + 2 in pos]
+    return np.array(ks, dtype=int), np.array([(pos[k] + 2 * pos[k + 1] + pos[k + 2]) / 4 for k in ks])
 
-    Returns ``{name: NorthEstimate}`` for ``schuler_mean`` and ``lavrov``; when the book holds the
-    rotor-off swing with the times of both swings, each is tape-corrected: the tape zero Z is the
-    Schuler mean of the tape readings, D_B/D_K comes from the two half periods (the mean spacing of
-    the turning times, :func:`gyro_instrument.estimators.north.tape_ratio`). Without the times the
-    centres stay uncorrected and a note says the tape was not removed.
+
+def _schuler(sw) -> north.NorthEstimate:
+    """The Schuler mean of the turning points present: :func:`.north.schuler_mean` when none is missed;
+    else the mean of the complete triple means with σ from their scatter, σ̂_a² = |P m|² / tr(BᵀPB)
+    (B the triples' rows over the readings present, P the centring: :func:`.north.means._scatter_sigma`'s
+    formula with B written out)."""
+    if sw.consecutive:
+        return north.schuler_mean(sw.readings_rad)
+    ks, m = triple_means(sw)
+    if ks.size == 0:
+        raise SceneError("--reversal-points", sw.column, "no three consecutive turning points are present: the "
+                         "Schuler mean needs at least one complete triple")
+    col = {k: j for j, k in enumerate(sw.index.tolist())}
+    B = np.zeros((ks.size, sw.index.size))
+    for r, k in enumerate(ks):
+        B[r, [col[k], col[k + 1], col[k + 2]]] = (0.25, 0.5, 0.25)
+    w = B.mean(axis=0)
+    sig, src = None, "none: a single complete triple leaves no scatter"
+    if ks.size >= 2:
+        P = np.eye(ks.size) - 1.0 / ks.size
+        res = P @ m
+        sa = math.sqrt(float(res @ res) / float(np.trace(B.T @ P @ B)))
+        sig, src = sa * math.sqrt(float(w @ w)), f"from the scatter of the {ks.size} complete triple means " \
+                                                  f"({ks.size - 1} dof)"
+    return north.NorthEstimate("schuler_mean", float(m.mean()), sig, src, int(sw.index.size),
+                               "≥ 3 consecutive reversal points (≥ 4 for a σ from the scatter)",
+                               (f"{len(sw.missed)} missed turning point(s) left out: the mean of the complete "
+                                f"triple means",))
+
+
+def geometric_fit(sw, c0) -> tuple:
+    """Lavrov's geometric sequence a_i = c + d(−q)^i fitted at the points' numbers i (least squares,
+    from the centre ``c0``): (params (c, d, q), covariance or None (3 points), residuals)."""
+    i = (sw.index - sw.index[0]).astype(float)
+    a = sw.readings_rad
+    adj = np.nonzero(np.diff(sw.index) == 1)[0]
+    ratios = [-(a[j + 1] - c0) / (a[j] - c0) for j in adj if a[j] != c0]
+    q0 = float(np.median(ratios)) if ratios else 1.0
+    d0 = (a[0] - c0) if a[0] != c0 else float(np.ptp(a)) / 2
+    sol = least_squares(lambda p: north._geometric(p, i) - a, [c0, d0, q0], jac=lambda p: north._geometric_jac(p, i),
+                        method="lm", xtol=1e-15, ftol=1e-15)
+    J = north._geometric_jac(sol.x, i)
+    dof = a.size - 3
+    cov = np.linalg.pinv(J.T @ J) * float(sol.fun @ sol.fun) / dof if dof > 0 else None
+    return sol.x, cov, sol.fun
+
+
+def _lavrov(sw, c0) -> tuple:
+    """(Lavrov's NorthEstimate, q, σq or nan) over the points present (:func:`.north.lavrov` when none is
+    missed; else :func:`geometric_fit`)."""
+    p, cov, _ = geometric_fit(sw, c0)
+    sq = math.sqrt(cov[2, 2]) if cov is not None else math.nan
+    if sw.consecutive:
+        return north.lavrov(sw.readings_rad), float(p[2]), sq
+    sig = math.sqrt(cov[0, 0]) if cov is not None else None
+    src = (f"from the scatter about the geometric fit ({sw.index.size - 3} dof)" if cov is not None
+           else "none: 3 readings leave no scatter")
+    est = north.NorthEstimate("lavrov", float(p[0]), sig, src, int(sw.index.size), "≥ 3 reversal points at "
+                              "known places in the swing (≥ 4 for a σ from the scatter)",
+                              (f"damping ratio per swing q = {p[2]:.6g}",
+                               f"{len(sw.missed)} missed turning point(s) left out: fitted at the points' numbers"))
+    return est, float(p[2]), sq
+
+
+def half_period(sw) -> tuple:
+    """(T_half, σ) s: the slope of time against turning-point number over every timed row (a missed
+    reading's time included), by least squares; σ nan from 2 times. None without 2 times."""
+    k, t = sw.time_index.astype(float), sw.time_values_s
+    if t.size < 2:
+        return None
+    A = np.vstack([k, np.ones_like(k)]).T
+    coef, *_ = np.linalg.lstsq(A, t, rcond=None)
+    if t.size < 3:
+        return float(coef[0]), math.nan
+    r = t - A @ coef
+    return float(coef[0]), float(math.sqrt(r @ r / (t.size - 2) / np.sum((k - k.mean()) ** 2)))
+
+
+def undamped_half_period(T, sT, q, sq) -> tuple:
+    """(T_u, σ) s, the half period of the undamped swing: δ = −ln(q)/T (q = e^(−δ T) per swing, Lavrov),
+    ω_d = π/T, ω_u² = ω_d² + δ² (:func:`.north.undamped_omega`), T_u = π/ω_u; σ's of T and q propagated
+    (nan read as 0)."""
+    sT, sq = (0.0 if not math.isfinite(s) else s for s in (sT, sq))
+    delta = -math.log(q) / T if q > 0 else 0.0
+    wd = math.pi / T
+    s_wd = math.pi * sT / T ** 2
+    s_delta = math.hypot(sq / (q * T), math.log(q) * sT / T ** 2) if q > 0 else 0.0
+    wu, s_wu = north.undamped_omega(wd, delta, s_wd, s_delta)
+    return math.pi / wu, math.pi * s_wu / wu ** 2
+
+
+# ----------------------------------------------------------------------------- outliers
+def _neighbour_residuals(sw, centre_rad) -> list:
+    """[(position, number, residual rad)] of each reading with both same-side neighbours (k ± 2) present:
+    the reading less its neighbours' mean, the mean taken of their deviations from the centre
+    geometrically, c ± √(e₋ e₊) (exact for an exponentially damped swing, whose deviations on one side
+    are geometric; the arithmetic mean is off by d (1 − q²)²/(2q²), second order in the damping),
+    arithmetically when the two lie on opposite sides of ``centre_rad``."""
+    pos = dict(zip(sw.index.tolist(), sw.readings_rad.tolist()))
+    out = []
+    for j, k in enumerate(sw.index.tolist()):
+        if k - 2 in pos and k + 2 in pos:
+            e1, e2 = pos[k - 2] - centre_rad, pos[k + 2] - centre_rad
+            pred = (centre_rad + math.copysign(math.sqrt(e1 * e2), e1) if e1 * e2 > 0
+                    else (pos[k - 2] + pos[k + 2]) / 2)
+            out.append((j, k, float(sw.readings_rad[j] - pred)))
+    return out
+
+
+def outliers(sw, centre_rad, alpha=OUTLIER_ALPHA) -> list:
+    """The readings far from their neighbours' mean, named (not dropped).
+
+    Each reading with both same-side neighbours present gives a residual r_k (:func:`_neighbour_residuals`);
+    its scale s_k is 1.4826 × the median |r| of the *other* residuals, leaving out r_(k±2), which share
+    a reading with r_k: an outlier neither hides itself nor, by the median, a second one beside it. The
+    threshold is Student's t quantile at 1 − α/(2n), as many degrees of freedom as residuals kept
+    (Bonferroni over the n residuals, α = :data:`OUTLIER_ALPHA`); the median scale is noisier than an
+    rms, so a book of Gaussian noise names one in about 1–2 % of books of 9 to 40 points (measured over
+    3000 books each; ``tests/test_field_books.py`` checks it), while a reading 15 σ off is named.
+    Needs ≥ 2 other residuals (ν ≥ 9). A reading two places from a named one (on its side) holds half
+    the named one's error in its residual and is not named beside it.
+
+    Returns
+    -------
+    list of dict
+        ``{column, turning_point, line, reading, sigmas, threshold_sigmas, residual_arcsec}``, ``sigmas``
+        the residual in units of s_k.
     """
-    out = {"schuler_mean": north.schuler_mean(book.readings_rad), "lavrov": north.lavrov(book.readings_rad)}
-    if book.tape_readings_rad is None:
-        return out
-    if book.times_s is None or book.tape_times_s is None or book.tape_readings_rad.size < 3:
-        note = ("tape readings given without the times of both swings (or < 3 of them): the tape ratio "
-                "D_B/D_K is unknown and the tape torque is not removed",)
-        return {k: replace(v, notes=v.notes + note) for k, v in out.items()}
-    zero = north.schuler_mean(book.tape_readings_rad)
-    on, off = (north.half_period(ts) for ts in (book.times_s, book.tape_times_s))
-    ratio, ratio_sigma = north.tape_ratio(on[0], off[0], on[1], off[1])
-    zs = zero.sigma_rad or 0.0
-    return {k: north.tape_corrected(v, zero.centre_rad, ratio, ratio_sigma, zs) for k, v in out.items()}
+    rows = _neighbour_residuals(sw, centre_rad)
+    n, found = len(rows), []
+    for j, k, r in rows:
+        keep = np.array([x for _, kk, x in rows if abs(kk - k) not in (0, 2)])
+        if keep.size < 2:
+            continue
+        z = r / (1.4826 * float(np.median(np.abs(keep))))
+        thr = float(stats.t.ppf(1.0 - alpha / (2.0 * n), keep.size))
+        if abs(z) > thr:
+            found.append({"column": sw.column, "turning_point": int(k) + sw.first_number, "line": int(sw.lines[j]),
+                          "reading": sw.texts[j], "sigmas": float(z), "threshold_sigmas": thr,
+                          "residual_arcsec": r * 648000.0 / math.pi})
+    out, blamed = [], set()
+    for o in sorted(found, key=lambda o: -abs(o["sigmas"])):    # a named reading's same-side neighbours carry
+        if o["turning_point"] not in blamed:                   # half its error in their residuals: not named
+            out.append(o)
+            blamed |= {o["turning_point"] - 2, o["turning_point"] + 2}
+    return sorted(out, key=lambda o: o["turning_point"])
+
+
+# ----------------------------------------------------------------------------- the tape
+def _period_ratio(book, lav_q) -> tuple:
+    """(ratio, σ, entry) from the undamped half periods of both swings (module docstring)."""
+    hp = {s: half_period(sw) for s, sw in (("on", book.on), ("off", book.off))}
+    _, q_off, sq_off = _lavrov(book.off, _schuler(book.off).centre_rad)
+    q = {"on": lav_q, "off": (q_off, sq_off)}
+    und = {s: undamped_half_period(*hp[s], *q[s]) for s in hp}
+    try:
+        ratio, rs = north.tape_ratio(und["on"][0], und["off"][0], und["on"][1], und["off"][1])
+    except SceneError as exc:
+        raise SceneError("--reversal-points", book.path, f"{book.off.column}: the tape's half period "
+                                                         f"{und['off'][0]:.6g} s must exceed the rotor-on one "
+                                                         f"{und['on'][0]:.6g} s ({exc.valid})") from None
+    entry = {"source": "the book: the rotor-off turning points and the times of both swings",
+             "rotor_on_half_period_s": hp["on"][0], "rotor_off_half_period_s": hp["off"][0],
+             "rotor_on_undamped_half_period_s": und["on"][0], "rotor_off_undamped_half_period_s": und["off"][0],
+             "damping_ratio_per_swing": {"rotor_on": q["on"][0], "rotor_off": q["off"][0]}}
+    return ratio, rs, entry
+
+
+def _scene_x(est, tape) -> float:
+    """The measured-ratio form x of the scene's D_B/D_K = r for :func:`.north.tape_corrected`: with the sine
+    law the equilibrium is D_K sin(c − N) = D_B (Z − c), so x = r / cos(c − N) = r / √(1 − r²(Z − c)²);
+    with the small-angle law D_K (c − N) = D_B (Z − c), x = tan(r (Z − c)) / (Z − c)."""
+    r, dz = tape["ratio"], tape["zero_rad"] - est.centre_rad
+    if not tape["sine_law"]:
+        return r if dz == 0 else math.tan(r * dz) / dz
+    s = r * dz
+    if abs(s) >= 1:
+        raise SceneError("--reversal-points", f"{math.degrees(est.centre_rad):.6g} deg", "the swing centre is too far "
+                         "from the scene's tape zero for the scene's tape: no equilibrium (|D_B/D_K (Z - c)| >= 1)")
+    return r / math.sqrt(1.0 - s * s)
+
+
+def _tape_zeros(off) -> dict:
+    """Each method's tape zero from the rotor-off turning points: the Schuler mean's and Lavrov's (the
+    latter exact under exponential damping), so that each method reduces both swings alike."""
+    z = _schuler(off)
+    return {"schuler_mean": z, "lavrov": _lavrov(off, z.centre_rad)[0]}
+
+
+def _book_times_mean(book) -> float | None:
+    t = book.on.time_values_s
+    return float(t.mean()) if t.size else None
+
+
+def reduce_field_book(book, scene_tape=None) -> tuple:
+    """The Schuler mean and Lavrov's estimate of a field book, tape-corrected when a tape is known.
+
+    Parameters
+    ----------
+    book : FieldBook
+    scene_tape : dict, optional
+        The scene's tape, used when the book holds no tape readings or no times for both swings:
+        ``{instrument, ratio (D_B/D_K), zero_rad (clockwise circle reading at t = 0), drift_rad_s,
+        sine_law}``.
+
+    Returns
+    -------
+    (ests, tape, notes) : ({name: NorthEstimate}, dict or None, list of str)
+        ``tape`` says where the tape came from, its ratio and zero; None for the raw reduction.
+    """
+    notes = []
+    schuler = _schuler(book.on)
+    lav, q_on, sq_on = _lavrov(book.on, schuler.centre_rad)
+    ests = {"schuler_mean": schuler, "lavrov": lav}
+    off_ok = book.off is not None and book.off.index.size >= 3
+    zeros = _tape_zeros(book.off) if off_ok else None
+    if off_ok and half_period(book.on) and half_period(book.off):
+        ratio, rs, entry = _period_ratio(book, (q_on, sq_on))
+        ests = {k: north.tape_corrected(v, zeros[k].centre_rad, ratio, rs, zeros[k].sigma_rad or 0.0)
+                for k, v in ests.items()}
+        return ests, entry | {"ratio_db_dk": ratio, "ratio_sigma": rs, "zero_rad": zeros["schuler_mean"].centre_rad,
+                              "zero_sigma_rad": zeros["schuler_mean"].sigma_rad or 0.0,
+                              "zero_reading_by_method_deg": {k: math.degrees(z.centre_rad) for k, z in zeros.items()}}, \
+            notes + ([f"the book's own tape used; the scene's ({scene_tape['instrument']}, D_B/D_K = "
+                      f"{scene_tape['ratio']:.6g}) is not"] if scene_tape else [])
+    if book.off is not None:
+        notes.append("tape readings " + ("without the times of both swings" if off_ok else "fewer than 3")
+                     + (": the tape zero from the book, D_B/D_K from the scene" if scene_tape and off_ok else
+                        ": the tape ratio D_B/D_K is unknown and the tape torque is not removed"))
+    if scene_tape is None or (book.off is not None and not off_ok):
+        return ests, None, notes
+    zero, source = scene_tape["zero_rad"], f"the scene's tape ({scene_tape['instrument']})"
+    zeros = zeros or {k: north.NorthEstimate(k, zero, 0.0, "the scene", 0, "") for k in ests}
+    if off_ok:
+        zero, source = zeros["schuler_mean"].centre_rad, "the book's tape zero, the scene's D_B/D_K"
+    elif scene_tape["drift_rad_s"] and _book_times_mean(book) is not None:
+        zero += scene_tape["drift_rad_s"] * _book_times_mean(book)
+        zeros = {k: north.NorthEstimate(k, zero, 0.0, "the scene", 0, "") for k in ests}
+        notes.append("the scene's tape zero drifts: taken at the book's mean time, its clock read as the scene's")
+    ests = {k: north.tape_corrected(v, zeros[k].centre_rad, _scene_x(v, scene_tape | {"zero_rad": zeros[k].centre_rad}),
+                                    0.0, zeros[k].sigma_rad or 0.0) for k, v in ests.items()}
+    zs = zeros["schuler_mean"].sigma_rad or 0.0
+    return ests, {"source": source, "instrument": scene_tape["instrument"], "ratio_db_dk": scene_tape["ratio"],
+                  "ratio_sigma": 0.0, "zero_rad": zero, "zero_sigma_rad": zs}, notes
+
+
+def field_book_north(book, scene_tape=None) -> dict:
+    """``{name: NorthEstimate}`` of :func:`reduce_field_book` (the Schuler mean and Lavrov's estimate)."""
+    return reduce_field_book(book, scene_tape)[0]

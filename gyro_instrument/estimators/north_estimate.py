@@ -276,18 +276,8 @@ def best_block(blocks) -> dict | None:
     return min(blocks, key=lambda b: b["sigma_arcsec"] if b.get("sigma_arcsec") is not None else math.inf)
 
 
-def field_book_block(path, angle_unit=None, time_unit=None) -> dict:
-    """The ``north`` block of a field book (``estimate --reversal-points FILE``,
-    :mod:`.field_book`): the Schuler mean (the headline, the surveyors' reduction) and Lavrov's
-    estimate with their σ from the scatter, tape-corrected when the book holds the rotor-off swing
-    with the times of both. The readings are the circle's, clockwise (azimuth less the circle's
-    zero), so the mount azimuth is (−N) mod 360°. No record: no Cramér–Rao bound (null)."""
-    from gyro_instrument.estimators.field_book import field_book_north, read_field_book
-    book = read_field_book(path, angle_unit, time_unit)
-    ests = field_book_north(book)
-    head = ests["schuler_mean"]
-    return {"instrument": None, "field_book": str(path), "mount_azimuth_deg": _deg(head.centre_rad),
-            "sigma_arcsec": _arcsec(head.sigma_rad), "crlb_arcsec": None, "method": "schuler_mean",
-            "tape": None, "methods": {k: _method_entry(v) for k, v in ests.items()}, "refused": {},
-            "notes": list(book.notes) + [f"{book.readings_rad.size} turning points read in {book.angle_unit}; the "
-                                         "readings are the circle's, clockwise: true north reads -mount_azimuth"]}
+def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
+    """The ``north`` block of a field book (``estimate --reversal-points FILE``): moved to
+    :func:`.field_book_report.field_book_block` (issue 33 item 5), re-exported here."""
+    from gyro_instrument.estimators.field_book_report import field_book_block as block
+    return block(path, angle_unit, time_unit, scene, separator, division_rad)

@@ -22,6 +22,9 @@ Views, one file each in the output directory:
     a gyroscope's angle less its fitted oscillation; a swing azimuth less its line (a slope there
     is a rate difference, written beside it).
 
+A CSV with a ``reading`` column is a surveyor's field book instead (``estimate --reversal-points``):
+one view, ``field_book`` (:mod:`.field_book_view`): readings, turning points, the centre, north.
+
 ``--animate`` adds ``animation.gif`` (:mod:`.animate`). matplotlib is an optional extra (``pip
 install 'gyro_instrument[plot]'``); without it the command exits 2 saying so.
 """
@@ -131,6 +134,11 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
         raise SceneError("--dpi", dpi, "must be a number in [20, 1200]")
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise SceneError("--out", out_dir, "is a file; give a directory for the views")
+    from gyro_instrument.views.field_book_view import is_field_book, plot_field_book
+    if is_field_book(path):                          # a surveyor's field book (views/field_book_view.py)
+        from gyro_instrument.scenes import load_scene
+        scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
+        return plot_field_book(path, out_dir, scene, fmt, dpi, overwrite), []
     names = [f"{v}.{fmt}" for v in VIEWS] + (["animation.gif"] if animate else [])
     if not overwrite:
         existing = [v for v in names if os.path.exists(os.path.join(out_dir, v))]
