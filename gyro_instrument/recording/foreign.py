@@ -238,7 +238,7 @@ def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()) -> dict:
     if report["unused"]:
         notes.append(f"topics not used: {', '.join(report['unused'])}")
     from gyro_instrument.recording.replay import check_companions
-    check_companions(insts, samples, path)
+    check_companions(insts, samples, path, remaps)
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     spans = [float(v[0][-1] - v[0][0]) / 1e9 for v in samples.values()]
     result["observation_s"] = max(spans)

@@ -85,9 +85,11 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     return result
 
 
-def check_companions(insts, samples, path) -> None:
+def check_companions(insts, samples, path, remaps=None) -> None:
     """Refuse a bag that lacks the joint states of a record the estimator reads beside an instrument's
     own (:func:`~gyro_instrument.estimators.pipeline.missing_companions`: a rotor-off swing).
+
+    ``remaps``: instrument -> topic (``--topic``) where a foreign bag was read.
 
     Raises
     ------
@@ -97,7 +99,8 @@ def check_companions(insts, samples, path) -> None:
     from gyro_instrument.estimators.pipeline import missing_companions
     from gyro_instrument.recording.topics import joint_topic
     for name, key, other in missing_companions(insts, samples):
-        raise SceneError("bag", path, f"holds no joint states of {other} (/{joint_topic(other)}, at least 3 "
+        topic = (remaps or {}).get(other, "/" + joint_topic(other))
+        raise SceneError("bag", path, f"holds no joint states of {other} ({topic}, at least 3 "
                                       f"messages): {name} reads its {key.replace('_', '-')} swing from it")
 
 
