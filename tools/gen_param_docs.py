@@ -46,8 +46,8 @@ with `publish_clock:=true` (or the player). Every other simulator follows it: it
 sample when the owner's clock reaches the sample's time, so separate simulators share one time
 line. Before sim time starts a simulator waits (at most `wait_timeout_s`, logged) until the
 nodes in `wait_for` subscribe to its topics (the recorder: every topic; the estimator: the
-joint states of the instruments it estimates from; any other name: one of its topics) and every
-subscription the graph knows of is matched; the clock owner also waits for the scene's other
+joint states of the instruments it reads, the estimable ones and a gyroscope's rotor-off swing;
+any other name: one of its topics) and every subscription the graph knows of is matched; the clock owner also waits for the scene's other
 simulators, which subscribe to the clock once their own subscribers are matched. Publishers
 are RELIABLE / KEEP_ALL when run alone, so at real-time factor 0 a slow subscriber delays the
 data but loses none.

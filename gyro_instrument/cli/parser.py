@@ -112,8 +112,10 @@ def _add_scene_commands(sub):
                         "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
                         "leaves no partial file); refused before the run when it would not fit on the disk; "
                         "an existing file is refused unless --overwrite; never the scene file. The scene (YAML, seed, "
-                        "units, package version) goes into Parquet's key-value metadata (gyro_instrument.scene_yaml, "
-                        "...) or, for a CSV, into <name>.scene.yaml beside it (same overwrite rule)")
+                        "units, package version, the mount of each scale reading) goes into Parquet's key-value "
+                        "metadata (gyro_instrument.scene_yaml, ...) or, for a CSV, into <name>.scene.yaml beside it "
+                        "(same overwrite rule). A horizontal gyroscope's angle is its scale reading u + M, as the "
+                        "sensor reads it")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--output-rate-hz", type=float, default=None, metavar="HZ",
                    help="write every k-th sample, k = sample_rate_hz / HZ (a whole number; HZ <= sample_rate_hz): "

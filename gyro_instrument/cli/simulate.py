@@ -32,9 +32,25 @@ def simulate_scene(scene, progress=None) -> tuple:
         with terminal_progress(f"  {name}", enabled=progress is not None):
             sim = inst.simulate(t)
         sims[name] = sim
-        for c in inst.COLUMNS:
-            columns[f"{name}.{c.name}"] = sim.columns[c.name]
+        columns.update(table_columns(name, inst, sim.columns))
     return t, columns, sims
+
+
+def table_columns(name, inst, sim_columns) -> dict:
+    """``<name>.<column>`` -> array of one instrument's simulated columns as a table holds them: each
+    channel the sensor reads with an offset as it reads it, noise-free (a horizontal gyroscope's
+    ``angle`` on its scale, u + M: :func:`~gyro_instrument.instruments.observation_azimuth.read_on_scale`,
+    the doubles ``estimate`` measures), the others as simulated."""
+    from gyro_instrument.instruments.observation_azimuth import read_on_scale
+    read = read_on_scale(inst.observation(), {c.name: sim_columns[c.name] for c in inst.COLUMNS})
+    return {f"{name}.{c}": v for c, v in read.items()}
+
+
+def scale_readings(insts) -> dict:
+    """``{<name>.<channel>: offset (deg)}`` of the columns a table holds as scale readings (u + M, M the
+    mount azimuth wrapped to (-180, 180]): the table's ``gyro_instrument.scale_readings``."""
+    return {f"{n}.{c}": math.degrees(off) for n, inst in insts.items()
+            for c, off in inst.observation().reading_offsets().items()}
 
 
 #: Samples per block of a streamed ``simulate`` (each instrument's :meth:`stream`): large enough
@@ -118,8 +134,7 @@ def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None) -> 
         for name, inst in insts.items():
             sim = next(streams[name])
             sims[name] = sim
-            for c in inst.COLUMNS:
-                columns[f"{name}.{c.name}"] = sim.columns[c.name]
+            columns.update(table_columns(name, inst, sim.columns))
         report(t[-1] / span)
         yield t, columns, sims
 
@@ -132,13 +147,15 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     from gyro_instrument.estimators.data_io import TableWriter, scene_yaml_text, table_kind, table_metadata
     from gyro_instrument.scenes import build_instruments
     k = output_step(scene, output_rate_hz)
-    names = [f"{n}.{c.name}" for n, i in build_instruments(scene).items() for c in i.COLUMNS]
+    insts = build_instruments(scene)
+    names = [f"{n}.{c.name}" for n, i in insts.items() for c in i.COLUMNS]
     n = sample_count(scene)
     check_disk(out, (n - 1) // k + 1, len(names) + 1)
     first = 0                                  # index of the block's first sample in the run
     nfev = wall = 0.0
     text = scene_yaml_text(scene)
-    meta = table_metadata(text, scene.name, scene.seed) if table_kind(out) == "parquet" else None
+    readings = scale_readings(insts)
+    meta = table_metadata(text, scene.name, scene.seed, readings) if table_kind(out) == "parquet" else None
     with TableWriter(out, names, metadata=meta) as writer:
         with terminal_progress("  simulating", enabled=progress is not None):
             for t, columns, sims in stream_scene(scene, progress=progress):
@@ -148,18 +165,22 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
                 nfev = sum(s.trajectory.nfev for s in sims.values())
                 wall = sum(s.trajectory.wall_time_s for s in sims.values())
     if meta is None:
-        write_scene_sidecar(out, text)
+        write_scene_sidecar(out, text, readings)
     return writer.rows, len(names) + 1, int(nfev), wall
 
 
-def write_scene_sidecar(table, scene_yaml) -> str:
+def write_scene_sidecar(table, scene_yaml, readings=None) -> str:
     """Write ``<name>.scene.yaml`` beside the CSV ``table`` (atomically: an interrupted write leaves
-    no partial file); return its path."""
-    from gyro_instrument.estimators.data_io import scene_sidecar_path
+    no partial file); return its path. ``readings`` ({column: M deg}, :func:`scale_readings`)
+    goes into a comment line ``# gyro_instrument.scale_readings: {JSON}`` (the scene stays as it is)."""
+    from gyro_instrument.estimators.data_io import SCALE_KEY, scale_readings_text, scene_sidecar_path
     path = scene_sidecar_path(table)
     with replaced_atomically(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         fh.write(f"# the scene gyro-instrument simulate ran for {os.path.basename(table)} (seed and overrides "
                  f"applied)\n")
+        if readings:
+            fh.write("# the columns read on a scale, u + M, with M (deg: mount_azimuth_deg wrapped to (-180, 180])\n"
+                     f"# {SCALE_KEY}: {scale_readings_text(readings)}\n")
         fh.write(scene_yaml)
     return path
 

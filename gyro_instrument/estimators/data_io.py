@@ -37,9 +37,9 @@ from gyro_instrument.estimators.table_read import (ANGLE_CHANNELS, ANGLE_UNITS, 
                                                    TIME_COLUMN, TIME_UNITS, TableOptions, _pyarrow, load_table,
                                                    read_table, table_kind)
 from gyro_instrument.estimators.table_write import (BYTES_PER_VALUE, QUEUED_WRITES, ROWS_PER_WRITE,  # noqa: F401
-                                                    SCENE_KEY, TableWriter, output_bytes, scene_of_table,
-                                                    scene_sidecar_path, scene_yaml_text, table_metadata, table_scene,
-                                                    write_csv, write_table)
+                                                    SCALE_KEY, SCENE_KEY, TableWriter, output_bytes, scale_readings_text,
+                                                    scene_of_table, scene_sidecar_path, scene_yaml_text, table_metadata,
+                                                    table_scene, write_csv, write_table)
 
 
 def _needs(inst):
@@ -125,8 +125,10 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
     ------
     SceneError
         An instrument has some of its columns but not a complete set (the scene does not match the
-        data: wrong type, or columns missing), or no instrument the estimator uses has its columns.
+        data: wrong type, or columns missing), an instrument's companion record has no column (a
+        rotor-off swing), or no instrument the estimator uses has its columns.
     """
+    from gyro_instrument.estimators.pipeline import estimable
     notes = []
     t, keep, order, distinct = _table_times(cols, path, field, notes)
 
@@ -159,7 +161,8 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         if n_nan:
             notes.append(f"{name}: {n_nan} missing or NaN values left out")
         records[name] = rec
-    if not any(_needs(insts[n]) for n in records):
+    _check_companions(insts, records, path, field)
+    if not any(_needs(insts[n]) and estimable(insts[n]) for n in records):
         raise SceneError(field, path, "does not match the scene: no instrument's columns found; expected "
                                       + "; ".join(wanted) if wanted else
                                       "the scene has no instrument the estimator uses")
@@ -176,6 +179,16 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         notes.append(f"columns matching no channel of the scene's instruments, not used: {shown}")
     t_ok = t[np.isfinite(t)]
     return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
+
+
+def _check_companions(insts, records, path, field) -> None:
+    """Refuse a table without the columns of a record the estimator reads beside an instrument's own
+    (:func:`~gyro_instrument.estimators.pipeline.missing_companions`: a rotor-off swing)."""
+    from gyro_instrument.estimators.pipeline import missing_companions
+    for name, key, other in missing_companions(insts, records):
+        need = " or ".join("+".join(f"{other}.{c}" for c in opt) for opt in _needs(insts[other]))
+        raise SceneError(field, path, f"has no column {need}: {name} reads its {key.replace('_', '-')} swing "
+                                      f"from {other}")
 
 
 #: Length units a logger may have written under ``x_east``/``y_north`` (metres): factor, name.

@@ -31,7 +31,8 @@ from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
 __all__ = ["CORRECTIONS", "ENGINES", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStream", "estimable", "estimate_records",
-           "known_earth_rate", "measure", "seed_sweep", "simulate_truth"]
+           "estimator_instruments", "known_earth_rate", "measure", "missing_companions", "seed_sweep",
+           "simulate_truth"]
 
 
 def estimable(inst) -> bool:
@@ -39,6 +40,25 @@ def estimable(inst) -> bool:
     None): pendulums (k = n sin γ) and gyroscopes with a directing line (y = n s(γ)). Free
     gyroscopes and Puiseux's body do not."""
     return inst.observation().MEASUREMENT is not None
+
+
+def estimator_instruments(insts) -> list:
+    """The names of the instruments whose records the estimator reads, in the scene's order: the
+    estimable ones and the records they read beside their own (``companions()``: a horizontal
+    gyroscope's rotor-off swing with a tape). What a live ``run`` keeps, ``replay`` decodes from a bag
+    and ``estimate --data`` asks columns for, so that each builds the record ``estimate`` measures."""
+    names = {n for n, inst in insts.items() if estimable(inst)}
+    for n in list(names):
+        names.update(v for v in insts[n].observation().companions().values() if v in insts)
+    return [n for n in insts if n in names]
+
+
+def missing_companions(insts, records) -> list:
+    """``(name, record key, companion)`` for each instrument with a record whose companion (in ``insts``)
+    has none: what a table or a bag lacks for an estimate the scene asks for."""
+    return [(n, key, other) for n in records if n in insts
+            for key, other in insts[n].observation().companions().items()
+            if other in insts and other not in records]
 
 
 def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:

@@ -189,14 +189,30 @@ def scene_sidecar_path(path) -> str:
     return os.path.splitext(str(path))[0] + ".scene.yaml"
 
 
-def table_metadata(scene_yaml, scene_name, seed) -> dict:
+#: The key (Parquet metadata; a comment line of the CSV's sidecar) of the columns a table holds as scale
+#: readings: JSON ``{"<instrument>.<channel>": M}``, the column reading u + M, M (deg) the instrument's
+#: ``mount_azimuth_deg`` wrapped to (-180, 180] (msg_docs/csv.md).
+SCALE_KEY = "gyro_instrument.scale_readings"
+
+
+def scale_readings_text(readings) -> str:
+    """The value of :data:`SCALE_KEY`: ``readings`` ({column: M deg}) as JSON."""
+    import json
+    return json.dumps(readings)
+
+
+def table_metadata(scene_yaml, scene_name, seed, scale_readings=None) -> dict:
     """The key-value metadata ``simulate`` writes into a Parquet table (keys ``gyro_instrument.*``):
     ``scene_yaml`` (the scene, overrides applied, as YAML text), ``scene_name``, ``scene_seed``,
-    ``units`` and ``version``."""
+    ``units``, ``version`` and, when some column is a scale reading, ``scale_readings``
+    (:data:`SCALE_KEY`)."""
     from gyro_instrument import __version__
-    return {SCENE_KEY: scene_yaml, "gyro_instrument.scene_name": scene_name, "gyro_instrument.scene_seed": seed,
+    meta = {SCENE_KEY: scene_yaml, "gyro_instrument.scene_name": scene_name, "gyro_instrument.scene_seed": seed,
             "gyro_instrument.units": "time_s in s; angles in rad, rates in rad/s, lengths in m (msg_docs/csv.md)",
             "gyro_instrument.version": __version__}
+    if scale_readings:
+        meta[SCALE_KEY] = scale_readings_text(scale_readings)
+    return meta
 
 
 def table_scene(path) -> tuple | None:

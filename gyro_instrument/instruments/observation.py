@@ -196,6 +196,14 @@ class Observation:
         """``rec`` with what the estimator reads beside the measured channels (the default adds nothing)."""
         return rec
 
+    def companions(self) -> dict:
+        """{record key: instrument name} of the other records this one's engines read; {} by default."""
+        return {}
+
+    def reading_offsets(self) -> dict:
+        """{channel: rad} the sensor reads on top of the simulated channel (a scale's zero); {} by default."""
+        return {}
+
     def has_record(self, rec) -> bool:
         """True when ``rec`` holds what the estimator reads (the first measured channel)."""
         return bool(self.layout.measured) and self.layout.measured[0] in rec

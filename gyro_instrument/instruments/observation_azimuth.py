@@ -14,7 +14,9 @@ estimate for the tape zero and the tape's stiffness (``companions``).
 import math
 from typing import ClassVar
 
-from gyro_instrument.instruments.observation import RateEstimate, RotorObservation, SwingRate
+import numpy as np
+
+from gyro_instrument.instruments.observation import SPIN_RATE, RateEstimate, RotorObservation, SwingRate
 
 #: Measurement kind: the azimuth of a scale's zero from a swing centre on the meridian.
 AZIMUTH = "azimuth"
@@ -22,27 +24,79 @@ AZIMUTH = "azimuth"
 ROTOR_OFF = "rotor_off"
 
 
-def _on_scale(obs, out) -> dict:
-    """``out`` with the swing angle read on the scale: u + M (``mount_reading_rad``)."""
-    m = obs.instrument.mount_reading_rad
-    if m:
-        out["angle"] = out["angle"] + m
+def read_on_scale(obs, columns) -> dict:
+    """``columns`` (channel -> array) as the sensor reads them: each channel of ``obs.reading_offsets()``
+    plus its offset (a horizontal gyroscope's angle on its scale, u + M), the others as they are. What the
+    sensor draws from (``true_values``) and what ``simulate`` writes into a table, the same doubles."""
+    off = obs.reading_offsets()
+    return {c: (v + off[c] if off.get(c) else v) for c, v in columns.items()}
+
+
+def unwrapped_reading(angle, what, notes) -> np.ndarray:
+    """A scale reading logged wrapped to (−π, π] (msg_docs/csv.md) unwrapped along the record (rad).
+
+    The finite samples, in time order, are unwrapped where consecutive ones jump by more than π (a
+    whole turn taken off: ``numpy.unwrap``). Only a record entirely inside [−π, π] with such a jump
+    is touched: a column in degrees read as radians is left for the amplitude check to name. A line
+    goes to ``notes`` when anything changed."""
+    a = np.asarray(angle, dtype=float)
+    ok = np.isfinite(a)
+    v = a[ok]
+    jumps = int(np.count_nonzero(np.abs(np.diff(v)) > math.pi)) if v.size > 1 else 0
+    if not jumps or float(np.max(np.abs(v))) > math.pi:
+        return a
+    out = a.copy()
+    out[ok] = np.unwrap(v)
+    notes.append(f"{what}: read wrapped to (-180, 180] deg: unwrapped ({jumps} jump{'s' * (jumps > 1)} of a "
+                 f"whole turn taken off)")
     return out
 
 
-class TapeSwing(RotorObservation):
-    """A suspended gyroscope with its rotor stopped: a torsion pendulum on its tape (no Earth rate),
-    read on the same scale (u + M)."""
+class _ScaleReading:
+    """What the rotor-on and rotor-off swings share: the angle read on the scale, u + M
+    (``mount_reading_rad``, the mount azimuth wrapped to (−π, π]), also from a table."""
+
+    def reading_offsets(self) -> dict:
+        """{``angle``: M} (rad): the scale's reading of true north."""
+        return {"angle": self.instrument.mount_reading_rad}
 
     def true_values(self, columns) -> dict:
-        """The scale reading u + M (rad)."""
-        return _on_scale(self, super().true_values(columns))
+        """The scale reading u + M (rad): Quet's u offset by the mount (``mount_azimuth_deg``)."""
+        return read_on_scale(self, super().true_values(columns))
+
+    def record_from_table(self, full, col, size, notes) -> dict:
+        """The record as the base reads it, the angle unwrapped when logged wrapped (:func:`unwrapped_reading`)."""
+        rec = super().record_from_table(full, col, size, notes)
+        rec["angle"] = unwrapped_reading(rec["angle"], f"{self.name}.angle", notes)
+        return rec
+
+
+class TapeSwing(_ScaleReading, RotorObservation):
+    """A suspended gyroscope with its rotor stopped: a torsion pendulum on its tape (no Earth rate),
+    read on the same scale (u + M). Not estimated itself: the rotor-on gyroscope's north reads its
+    record (``companions``), so a table or a bag gives its angle like the gyroscope's."""
 
     def unmeasured_reason(self) -> str:
         return f"{self.name} swings with its rotor off: a torsion pendulum on its tape, read for the tape zero"
 
+    def table_columns(self) -> tuple:
+        """The angle (``spin_rate`` read too when the table has it)."""
+        return (("angle",),)
 
-class HorizontalSwing(SwingRate):
+    def record_from_table(self, full, col, size, notes) -> dict:
+        """``angle`` (unwrapped when logged wrapped), and ``spin_rate`` when present (as live)."""
+        rec = super().record_from_table(full, col, size, notes)
+        spin = col(SPIN_RATE)
+        if spin is not None:
+            rec[SPIN_RATE] = spin
+        return rec
+
+    def required_joints(self) -> tuple:
+        """The axis joint (the rotor's is read when present)."""
+        return (self.layout.names[0],)
+
+
+class HorizontalSwing(_ScaleReading, SwingRate):
     """A horizontal plane gyroscope: its swing rate, and its swing centre as an azimuth.
 
     The rate law is :class:`SwingRate`'s, less the tape's own restoring constant D_B/A when a torsion
@@ -72,15 +126,11 @@ class HorizontalSwing(SwingRate):
         #: tape): an inadequate record is then refused (exit 2); otherwise ``north`` is null with its reason.
         self.north_asked = inst.p.mount_azimuth_deg is not None or self.has_tape()
 
-    def true_values(self, columns) -> dict:
-        """The scale reading u + M (rad): Quet's u offset by the mount (``mount_azimuth_deg``)."""
-        return _on_scale(self, super().true_values(columns))
-
     def companions(self) -> dict:
-        """{record key: instrument name} of the other records the azimuth engine reads: the rotor-off
-        swing (``rotor_off_instrument``), when one is named."""
+        """{record key: instrument name} of the other records the azimuth engine reads: with a tape, the
+        rotor-off swing (``rotor_off_instrument``), when one is named."""
         name = self.instrument.p.rotor_off_instrument
-        return {ROTOR_OFF: name} if name else {}
+        return {ROTOR_OFF: name} if name and self.has_tape() else {}
 
     def has_tape(self) -> bool:
         """True when a torsion tape hangs the gyroscope."""

@@ -117,7 +117,8 @@ class PlaneGyroscope(Instrument):
     OBSERVATION = HorizontalSwing
     SHOWS_AXIS = True
     SIMULATOR_NODE = "gyrocompass_sim"
-    COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the normal"),
+    COLUMNS = (Column("angle", "rad", "u: axis angle from the north projection, counter-clockwise about the "
+                      "normal; a horizontal plane's table, bag and sensor read it on the scale, u + mount_azimuth_deg"),
                Column("angle_rate", "rad/s", "du/dt"),
                Column("spin_rate", "rad/s", "ρ: relative spin of the rotor about its axis"))
 

@@ -56,7 +56,7 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     if scene is not None or topics or overrides:
         from gyro_instrument.recording.foreign import replay_foreign
         return replay_foreign(path, scene, list(overrides), list(topics))
-    from gyro_instrument.estimators.pipeline import estimable, estimate_records
+    from gyro_instrument.estimators.pipeline import estimate_records, estimator_instruments
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
@@ -69,8 +69,10 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
                                       f"--scene SCENE{lost}")
     scene = scene_from_data(json.loads(meta["scene_yaml"]), source=path)
     insts = build_instruments(scene)
-    # in the scene's instrument order, whatever order the bag's topics first appear in
-    samples = {n: samples[n] for n in insts if n in samples and estimable(insts[n]) and len(samples[n][0]) >= 3}
+    # the records a live run's estimator keeps (estimable instruments and their companions: a rotor-off
+    # swing), in the scene's instrument order, whatever order the bag's topics first appear in
+    samples = {n: samples[n] for n in estimator_instruments(insts) if n in samples and len(samples[n][0]) >= 3}
+    check_companions(insts, samples, path)
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     result = to_jsonable(result)
     if damaged:
@@ -81,6 +83,25 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     if notes:
         result["replay_notes"] = notes
     return result
+
+
+def check_companions(insts, samples, path, remaps=None) -> None:
+    """Refuse a bag that lacks the joint states of a record the estimator reads beside an instrument's
+    own (:func:`~gyro_instrument.estimators.pipeline.missing_companions`: a rotor-off swing).
+
+    ``remaps``: instrument -> topic (``--topic``) where a foreign bag was read.
+
+    Raises
+    ------
+    SceneError
+        On ``bag``: naming the instrument, its companion and the topic looked for.
+    """
+    from gyro_instrument.estimators.pipeline import missing_companions
+    from gyro_instrument.recording.topics import joint_topic
+    for name, key, other in missing_companions(insts, samples):
+        topic = (remaps or {}).get(other, "/" + joint_topic(other))
+        raise SceneError("bag", path, f"holds no joint states of {other} ({topic}, at least 3 "
+                                      f"messages): {name} reads its {key.replace('_', '-')} swing from it")
 
 
 def read_span_s(samples) -> float:

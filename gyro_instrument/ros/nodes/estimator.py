@@ -21,7 +21,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.estimators.heading import imu_fields
 from gyro_instrument.estimators.north_live import NorthTracker, live_north
-from gyro_instrument.estimators.pipeline import estimable, estimate_records
+from gyro_instrument.estimators.pipeline import estimate_records, estimator_instruments
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
 from gyro_instrument.recording.nmea import NmeaUdpSender
@@ -65,10 +65,7 @@ class EstimatorNode(SceneNode):
     def _buffered(self) -> set:
         """The instruments whose joint states the estimator keeps: the estimable ones and the records
         they read beside their own (``companions()``: a gyroscope's rotor-off swing)."""
-        names = {n for n, inst in self.insts.items() if estimable(inst)}
-        for n in list(names):
-            names.update(v for v in getattr(self.insts[n].observation(), "companions", dict)().values() if v in self.insts)
-        return names
+        return set(estimator_instruments(self.insts))
 
     def prepare(self) -> None:
         self.expected = sample_count(self.scene)

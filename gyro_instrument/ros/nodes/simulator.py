@@ -15,7 +15,7 @@ from rclpy._rclpy_pybind11 import RCLError
 from rclpy.serialization import serialize_message
 
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
-from gyro_instrument.estimators.pipeline import estimable
+from gyro_instrument.estimators.pipeline import estimator_instruments
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK
@@ -185,7 +185,7 @@ class SimulatorNode(SceneNode):
 
     def expected_subscribers(self) -> dict:
         """{node name: [topics it must subscribe to]} from ``wait_for`` and the scene: the recorder
-        every topic, the estimator the joint states of estimable instruments, another name any of
+        every topic, the estimator the joint states it reads (``estimator_instruments``), another name any of
         this node's topics; the clock owner also waits for the scene's other simulators (they
         subscribe to clock once their own subscribers are matched)."""
         mine = self.topics()
@@ -194,8 +194,8 @@ class SimulatorNode(SceneNode):
             if name == "recorder":
                 out[name] = mine
             elif name == "estimator":
-                topics = [self.pubs[(n, "joints")].topic_name for n, inst in self.insts.items()
-                          if (n, "joints") in self.pubs and estimable(inst)]
+                topics = [self.pubs[(n, "joints")].topic_name for n in estimator_instruments(self.insts)
+                          if (n, "joints") in self.pubs]
                 if topics:
                     out[name] = topics
             elif mine:
