@@ -134,6 +134,13 @@ def swing_equation(inst, t_ref_s) -> exact.SwingEquation:
                                t_ref_s=float(t_ref_s))
 
 
+def _declared(inst) -> dict:
+    """The scene's declared tape and damping in the clockwise reading: the fit's fallback start where a
+    record is too short for its own (never an answer: the fit converges to the data's optimum)."""
+    c = inst.reduced_coefficients()
+    return {"tape": c["kb"], "zero": -c["zero"], "zero_rate": -c["zero_rate"], "damping": c["damping"]}
+
+
 def _surveyor_tape(eq, records, sigma) -> dict:
     """The tape calibration of the reversal-point methods (:func:`.north.joint.tape_from_records`)."""
     on = joint.summarise(records[0].t, records[0].w, sigma, eq.drift)
@@ -150,7 +157,11 @@ def _methods(eq, records, sigma, drift) -> tuple:
     refused.pop("fit", None)
     tape = None
     if eq.tape:
-        tape = _surveyor_tape(eq, records, sigma)
+        try:
+            tape = _surveyor_tape(eq, records, sigma)
+        except (SceneError, np.linalg.LinAlgError, ValueError) as exc:
+            why = f"no tape calibration from the rotor-off swing ({exc})"
+            return {}, refused | {k: why for k in ests}, None
         ests = {k: north.tape_corrected(v, tape["zero_rad"], tape["ratio"], tape["ratio_sigma"], tape["zero_sigma_rad"])
                 for k, v in ests.items()}
     return ests, refused, tape
@@ -217,7 +228,7 @@ def _north_block(obs, rec, sensor) -> dict:
     drift = obs.centre_drifts()
     ests, refused, tape = _methods(eq, records, sigma, drift)
     try:
-        fitted = joint.joint_fit(eq, records, sigma)
+        fitted = joint.joint_fit(eq, records, sigma, _declared(inst))
     except (SceneError, np.linalg.LinAlgError, ValueError) as exc:
         return null_block(name, f"the fit was refused: {exc}") | {"refused": refused}
     ests["fit"] = _fit_entry(fitted, eq, records)
@@ -249,7 +260,7 @@ def _tape_entry(inst, fitted, tape, eq) -> dict | None:
             "ratio_sigma": float(math.sqrt(g @ fitted.cov @ g)), "zero_reading_deg": -math.degrees(par["zero"]),
             "zero_sigma_arcsec": _arcsec(fitted.sigma("zero")),
             "zero_rate_arcsec_h": -_arcsec(par.get("zero_rate", 0.0)) * 3600.0,
-            "surveyor_ratio": tape["ratio"], "surveyor_ratio_sigma": tape["ratio_sigma"],
+            "surveyor_ratio": tape["ratio"] if tape else None, "surveyor_ratio_sigma": tape["ratio_sigma"] if tape else None,
             "source": "the joint fit of both swings (k_B/K, the zero at t_ref and its drift); the reversal-point "
                       "methods use the surveyors' calibration: x = T_on^2/(T_off^2 - T_on^2) from undamped periods, "
                       "the rotor-off centre with its drift, and the exact relation N = c - atan(x (Z - c))"}
@@ -263,9 +274,10 @@ def _pre_orientation(fitted, eq, biases, tape) -> dict:
     c = joint.equilibrium(N, K, kb, par.get("zero", 0.0))
     out = {"centre_from_north_deg": math.degrees(c - N),
            "cost_arcsec": {k: _arcsec(v) for k, v in biases.items()}}
-    if tape is not None:
+    if eq.tape:                             # x = k_B/(K cos(c − N)): the ratio the periods measure
         out["tape_zero_from_north_deg"] = math.degrees(north.wrap_pi(par["zero"] - N))
-        out["linear_tape_law_error_arcsec"] = _arcsec(joint.linear_law_error_rad(c, par["zero"], tape["ratio"]))
+        x = kb / (K * math.cos(c - N))
+        out["linear_tape_law_error_arcsec"] = _arcsec(joint.linear_law_error_rad(c, par["zero"], x))
     return out
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.north import exact
 from gyro_instrument.estimators.north.fit import _fit_model, sine_fit, tape_north, undamped_omega
 
@@ -81,33 +82,62 @@ def tape_from_records(on, off, t_at) -> dict:
             "zero_sigma_rad": off.centre_sigma_at(t_at), "kb": wf ** 2}
 
 
-def start_values(eq, records, sigma=None) -> dict:
-    """Starting parameters of :func:`.exact.fit` for ``records`` (rotor-on first, then rotor-off)."""
-    sums = [summarise(r.t, r.w, sigma, eq.drift and r.kind == "off") for r in records]
+def _summaries(eq, records, sigma) -> list:
+    """:func:`summarise` of each record, None where the record is too short for its sine fit (a
+    rotor-off swing of 26 min observed for 30 min holds two reversal points)."""
+    out = []
+    for r in records:
+        try:
+            out.append(summarise(r.t, r.w, sigma, eq.drift and r.kind == "off"))
+        except (SceneError, np.linalg.LinAlgError, ValueError):
+            out.append(None)
+    return out
+
+
+def start_values(eq, records, sigma=None, fallback=None) -> dict:
+    """Starting parameters of :func:`.exact.fit` for ``records`` (rotor-on first, then rotor-off).
+
+    From damped-sine fits of each record (module docstring); where a record is too short for one,
+    from ``fallback`` ({name: value} of :data:`.exact.GLOBAL`, e.g. the scene's declared constants —
+    a start only: the answer is the least-squares optimum of the data) and the record's first
+    readings. Raises SceneError when neither is there.
+    """
+    sums = _summaries(eq, records, sigma)
+    fb = dict(fallback or {})
+    if sums[0] is None:
+        raise SceneError("record", f"{records[0].t.size} samples", "the rotor-on swing must hold at least three "
+                         "reversal points (a swing and a half) to start the fit; observe longer")
     on = sums[0]
     out = {}
+    (wo, _) = on.undamped()
     if eq.tape:
         off = sums[1]
-        (wo, _), (wf, _) = on.undamped(), off.undamped()
-        kb = wf ** 2
-        Z = off.centre_at(eq.t_ref_s)
+        if off is None and "tape" not in fb:
+            raise SceneError("rotor_off_instrument", f"{records[1].t.size} samples", "the rotor-off swing must "
+                             "hold at least three reversal points (a swing and a half) to start the fit; observe longer")
+        kb = off.undamped()[0] ** 2 if off is not None else fb["tape"]
+        Z = off.centre_at(eq.t_ref_s) if off is not None else fb.get("zero", 0.0)
         c = on.centre_at(eq.t_ref_s)
         N = tape_north(c, Z, kb / (wo ** 2 - kb))
-        out.update(tape=kb, zero=Z, zero_rate=off.drift_rad_s, damping=2 * off.damping_per_s)
+        out.update(tape=kb, zero=Z, zero_rate=off.drift_rad_s if off is not None else fb.get("zero_rate", 0.0),
+                   damping=2 * (off.damping_per_s if off is not None else on.damping_per_s))
         out["directing"] = (wo ** 2 - kb) / math.cos(c - N)
     else:
-        wo, _ = on.undamped()
         N = on.centre_rad
         out.update(directing=wo ** 2, damping=2 * on.damping_per_s)
     out["north"] = N
     for i, (r, s) in enumerate(zip(records, sums)):
-        out[f"{r.kind}{i}_w0"], out[f"{r.kind}{i}_v0"] = s.reading0, s.rate0
+        if s is not None:
+            out[f"{r.kind}{i}_w0"], out[f"{r.kind}{i}_v0"] = s.reading0, s.rate0
+        else:
+            out[f"{r.kind}{i}_w0"] = float(r.w[0])
+            out[f"{r.kind}{i}_v0"] = float((r.w[1] - r.w[0]) / (r.t[1] - r.t[0])) if r.t.size > 1 else 0.0
     return out
 
 
-def joint_fit(eq, records, sigma=None) -> exact.ExactFit:
+def joint_fit(eq, records, sigma=None, fallback=None) -> exact.ExactFit:
     """The exact fit of ``records`` started by :func:`start_values`."""
-    return exact.fit(eq, records, start_values(eq, records, sigma), sigma)
+    return exact.fit(eq, records, start_values(eq, records, sigma, fallback), sigma)
 
 
 def model_records(eq, result, records) -> list:
