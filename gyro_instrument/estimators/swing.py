@@ -127,6 +127,10 @@ def swing_estimate(obs, rec, corrections=CORRECTIONS, checks=None, sensor=None) 
         fit, warp = _fit_swing(obs, t, y, warp, env, ratio, corrections)
     except EstimationError as exc:
         return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {obs.null_reason}"}, None
+    obs.rate_terms(rec)
+    why = obs.rate_withheld(fit.amplitude)
+    if why:
+        return out | {"swing_duration_s": None, "reason": why}, None
     snr = detection_snr(fit.amplitude, fit.n_samples, fit.residual_rms)
     checks.append(signal_entry(obs.name, snr, DETECTION_SNR))
     if snr < DETECTION_SNR:
@@ -151,7 +155,10 @@ def _swing_result(obs, out, fit, rec, notes, rho_mean, corrections):
         a = a * math.sqrt(float(np.mean(np.exp(-2 * fit.damping_per_s * tau))))
     F = obs.amplitude_factor(a) if AMPLITUDE_CORRECTION in corrections else 1.0
     T = fit.swing_duration_s
-    T0 = T / F
+    # viscous damping (ü + 2δu̇ + ω_u² u = 0) swings at ω_d = √(ω_u² − δ²): the restoring constant is
+    # ω_u² = ω_d² + δ² (δ²/ω² = 5e-5 on the gyrotheodolite: 0.0026° of latitude, 1.8σ, uncorrected)
+    undamped = math.sqrt(1.0 + (fit.damping_per_s / fit.omega_rad_s) ** 2) if fit.damping_per_s else 1.0
+    T0 = T / F / undamped
     sig_T0 = fit.swing_duration_sigma_s / F
     crlb_T0 = math.pi * fit.crlb_omega_rad_s / fit.omega_rad_s ** 2 / F
     out.update({"swing_duration_s": T, "swing_duration_sigma_s": fit.swing_duration_sigma_s,

@@ -386,6 +386,12 @@ class SwingRate(RotorObservation):
         """The adiabatic amplitude ratio a(ρ)/a(ρ̄): (ρ/ρ̄)^(−1/4) (action E/ω kept, K ∝ ρ)."""
         return ratio ** -0.25
 
+    def rate_withheld(self, amplitude_rad) -> str | None:
+        """Why a swing of this amplitude gives no rate (None: it does; after :meth:`rate_terms`)."""
+
+    def rate_terms(self, rec) -> None:
+        """Note what the rate law needs from the record beyond its period (a tape's centre offset)."""
+
     def rate_from_swing(self, T0, rho_mean) -> tuple:
         """(y, second-order correction or None): y = K/(gain ρ̄) = n s(γ), K = (π/T0)², with the O(n²)
         centrifugal term of the exact equation removed when the model has one (y = y0 (1 + c2 y0/ρ))."""

@@ -141,11 +141,75 @@ class HorizontalSwing(_ScaleReading, SwingRate):
         ``tape_drift``): the full-record fit then fits a linear drift of the centre."""
         return self.instrument.has("tape_drift")
 
+    #: the swing centre's offset from the tape zero on the scale, Z − c (rad), from :meth:`rate_terms`
+    centre_from_zero_rad = 0.0
+
+    def rate_terms(self, rec) -> None:
+        """With a tape, note Z − c: the tape zero at mid-record (the scene's Z0 + Ż t) less the swing's
+        centre, (max + min)/2 of the scale reading over its 0.5–99.5 % range (an error δc there moves K
+        by (k_B/K)² (Z − c) δc relative: 1e-6 for δc = 1e-4 rad on the shipped tape)."""
+        if not self.has_tape():
+            return
+        t, a = np.asarray(rec["t"], dtype=float), np.asarray(rec["angle"], dtype=float)
+        ok = np.isfinite(t) & np.isfinite(a)
+        if ok.sum() < 2:
+            return
+        lo, hi = np.percentile(a[ok], [0.5, 99.5])
+        c = self.instrument.reduced_coefficients()
+        self.centre_from_zero_rad = float(c["zero"] + c["zero_rate"] * np.mean(t[ok]) - 0.5 * (lo + hi))
+
+    #: the largest second-order period factor F − 1 (:meth:`amplitude_factor`) the rate law trusts: its
+    #: neglected O(a⁴) term is ~(F − 1)², 1e-6 of the period here (a few 1e-5° of latitude)
+    MAX_ANHARMONIC = 1e-3
+
+    def rate_withheld(self, amplitude_rad) -> str | None:
+        """Why the swing's period gives no rate (None when it does): with a tape, a swing so large about an
+        equilibrium off north that the period's amplitude law (second order, :meth:`amplitude_factor`)
+        no longer holds, nor the sine-and-third-harmonic fit (the swing is asymmetric)."""
+        if not self.has_tape():
+            return None
+        F = float(self.amplitude_factor(amplitude_rad))
+        if F - 1.0 <= self.MAX_ANHARMONIC:
+            return None
+        return (f"the swing ({math.degrees(amplitude_rad):.3g} deg) about a centre held "
+                f"{math.degrees(self._offset_from_north()):.3g} deg from north by the tape is too anharmonic for the "
+                f"period's amplitude law (factor {F:.6f} beyond 1 + {self.MAX_ANHARMONIC:g}): no Earth-rate measurement "
+                "from it; north (the exact fit of the swing equation) is unaffected")
+
+    def _offset_from_north(self) -> float:
+        c = self.instrument.reduced_coefficients()
+        K = c["a"] * self.instrument.p.spin_rate_rad_s
+        return math.asin(max(-1.0, min(1.0, self.tape_constant_per_inertia * self.centre_from_zero_rad / K))) if K > 0 else 0.0
+
+    def amplitude_factor(self, amplitude_rad) -> "float | np.ndarray":
+        """T(a)/T0. Without a tape :meth:`SwingRate.amplitude_factor` (the sine law's elliptic factor). With
+        one the restoring torque about the equilibrium c is K sin(ε + c − N) − K sin(c − N) + k_B ε, whose
+        Taylor terms ω² ε + α ε² + β ε³ (α = −K sin(c − N)/2, β = −K cos(c − N)/6) shift the frequency by
+        (3β/(8ω) − 5α²/(12ω³)) a² (Landau & Lifshitz, Mechanics §28): F = 1 + a² (K cos(c − N)/(16 ω²)
+        + 5 K² sin²(c − N)/(48 ω⁴)), the sine law's 1 + a²/16 when k_B = 0 and c = N. K, k_B from the
+        scene (a correction's coefficients), sin(c − N) = k_B (Z − c)/K with Z − c from :meth:`rate_terms`;
+        the next term is O(a⁴) (4e-8 at a = 0.06 rad)."""
+        if not self.has_tape():
+            return super().amplitude_factor(amplitude_rad)
+        c = self.instrument.reduced_coefficients()
+        K, kb = c["a"] * self.instrument.p.spin_rate_rad_s, self.tape_constant_per_inertia
+        if not K > 0:
+            return super().amplitude_factor(amplitude_rad)
+        sn = max(-1.0, min(1.0, kb * self.centre_from_zero_rad / K))
+        cs = math.sqrt(1.0 - sn * sn)
+        w2 = K * cs + kb
+        return 1.0 + np.square(amplitude_rad) * (K * cs / (16.0 * w2) + 5.0 * (K * sn) ** 2 / (48.0 * w2 * w2))
+
     def rate_from_swing(self, T0, rho_mean) -> tuple:
-        """:meth:`SwingRate.rate_from_swing` with the tape's D_B/A taken out of K = (π/T0)²."""
+        """:meth:`SwingRate.rate_from_swing` with the tape taken out of K: linearised about the equilibrium
+        c, ω² = (π/T0)² = K cos(c − N) + k_B, and there K sin(c − N) = k_B (Z − c) (physics_notes "North
+        finding"), so K = √((ω² − k_B)² + k_B² (Z − c)²) (Z − c from :meth:`rate_terms`; the scale's
+        zero far from north holds the centre degrees off the meridian, where ω² − k_B alone is
+        K cos(c − N): 0.3 % low at a mount of 45°, 0.13° of latitude)."""
         if not self.has_tape():
             return super().rate_from_swing(T0, rho_mean)
-        k = (math.pi / T0) ** 2 - self.tape_constant_per_inertia
+        kb = self.tape_constant_per_inertia
+        k = math.hypot((math.pi / T0) ** 2 - kb, kb * self.centre_from_zero_rad) if (math.pi / T0) ** 2 > kb else 0.0
         return super().rate_from_swing(math.pi / math.sqrt(k) if k > 0 else math.inf, rho_mean)
 
     def measured_rate(self, T0, sig_T0, crlb_T0, rho_mean) -> "RateEstimate":
