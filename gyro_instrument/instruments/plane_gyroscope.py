@@ -30,7 +30,8 @@ reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −a
 M = 0 (or M unstated, read as 0: the estimate still reports north, null with its reason when the
 record cannot give it) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
 mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
-c = (D_K N + D_B Z)/(D_K + D_B) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
+to the equilibrium D_K sin(c − N) = D_B (Z − c) (:meth:`PlaneGyroscope.equilibrium_reading_rad`; near
+north the linear c = (D_K N + D_B Z)/(D_K + D_B)) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
 with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
 "North finding").
 """
