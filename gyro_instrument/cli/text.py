@@ -68,9 +68,14 @@ def _hemisphere(lat) -> str:
 
 
 def description_headline(d) -> list:
-    """What a person asks first, as lines: the latitude and, per pendulum, the swing plane's turn in
-    °/h (the exact finite-amplitude rate when it has one) and a full turn in hours."""
-    lines = [f"latitude {_hemisphere(d['site']['latitude_deg'])}"]
+    """What a person asks first, as lines: per horizontal gyroscope asked for north, the predicted
+    swing centre on the scale and true north's reading (:func:`north_prediction_lines`); then the
+    latitude and, per pendulum, the swing plane's turn in °/h (the exact finite-amplitude rate when it
+    has one) and a full turn in hours."""
+    lines = []
+    for name, inst in d["instruments"].items():
+        lines += north_prediction_lines(name, inst["predictions"])
+    lines.append(f"latitude {_hemisphere(d['site']['latitude_deg'])}")
     for name, inst in d["instruments"].items():
         p = inst["predictions"]
         rate = p.get("apsidal_rate_from_rest_rad_s", p.get("foucault_rate_rad_s"))
@@ -79,6 +84,27 @@ def description_headline(d) -> list:
         lines.append(turn_line(name, rate) + (" (exact rate at this amplitude)" if "apsidal_rate_from_rest_rad_s" in p
                                               else ""))
     return lines
+
+
+def north_prediction_lines(name, p) -> list:
+    """A horizontal gyroscope's north as ``describe`` predicts it (scale readings counter-clockwise,
+    as the measured ``angle``): the swing centre and true north's reading, the centre's offset (the
+    tape's pull, the exact equilibrium); a rotor-off swing as the torsion pendulum it is."""
+    if "torsion_period_s" in p:
+        return [f"{name}: a torsion pendulum on its tape (rotor off): period {p['torsion_period_s']:.6g} s "
+                f"(2 pi sqrt(A/D_B), {p['torsion_period_damped_s']:.6g} s damped), swinging about the tape zero at "
+                f"{p['tape_zero_reading_deg']:.6f}° on the scale, drifting {p['tape_zero_rate_arcsec_h']:.4g}\"/h"]
+    if "north_reading_deg" not in p:
+        return []
+    north = f"true north reads {p['north_reading_deg']:.6f}° on the scale (mount azimuth {p['mount_azimuth_deg']:.6f}°)"
+    if p.get("centre_reading_deg") is None:
+        return [f"{name}: {north}; no directing torque, no swing centre"]
+    pull = (f"; the tape pulls it toward its zero at {p['tape_zero_reading_deg']:.6f}° (exact equilibrium "
+            f"K sin(c - N) = k_B (Z - c))" if "tape_zero_reading_deg" in p else "")
+    off = p["centre_from_north_arcsec"]
+    off = f"{off:+.4g}\"" if abs(off) < 3600.0 else f"{off / 3600.0:+.6f}°"
+    return [f"{name}: swing centre predicted at {p['centre_reading_deg']:.6f}° on the scale, {off} from north{pull}",
+            f"{name}: {north}"]
 
 
 def turn_line(name, rate_rad_s) -> str:
@@ -385,21 +411,43 @@ def print_plan(d, stream=None) -> None:
               + (f"; {v['null']} null" if v["null"] else "") + "\n")
 
 
+def time_up(s) -> str:
+    """A planned time in s, never printed shorter than it is: 6 significant digits rounded up, with
+    the largest sensible unit beside it (:func:`human_duration`)."""
+    if s is None or not math.isfinite(s) or s <= 0:
+        return human_duration(s)
+    places = max(0, 5 - math.floor(math.log10(s)))
+    up = math.ceil(s * 10 ** places - 1e-6) / 10 ** places
+    text = f"{up:.{places}f}".rstrip("0").rstrip(".") if places else f"{up:.0f}"
+    return text + " s" + human_duration(s)[len(f"{s:.4g} s"):]
+
+
 def _print_azimuth_target(e, w) -> None:
-    """An azimuth target of the plan: the fit's time, each north method's, the floor, the check."""
+    """An azimuth target of the plan: the fit's time (its σ the whole joint problem's bound), each
+    north method's, the rotor-off swing's part, the floor, the check."""
     unit = e["target"][len("azimuth_"):]
     w(f"\ntarget {e['target']} = {e['value']:g} (1 sigma):\n")
     if e.get("observation_s") is None:
         w(f"  not reachable: {e.get('reason')}\n")
         return
-    w(f"  observe {human_duration(e['observation_s'])} with {e['instrument']} ({e['samples_per_instrument']} samples): "
-      f"the full-record fit at the Cramer-Rao bound of the centre, {e['planned_sigma']:.4g} {unit}; limited by "
+    w(f"  observe {time_up(e['observation_s'])} with {e['instrument']} ({e['samples_per_instrument']} samples): "
+      f"the exact joint fit at the Cramer-Rao bound of the whole problem, {e['planned_sigma']:.4g} {unit}; limited by "
       f"{e['limited_by']}\n")
     w("      method          T for the target          sigma at the fit's T\n")
     for name, m in e["methods"].items():
-        t = human_duration(m["observation_s"]) if m["observation_s"] is not None else f"null ({m['note']})"
+        t = time_up(m["observation_s"]) if m["observation_s"] is not None else f"null ({m['note']})"
         ratio = f" ({m['over_fit']:.3g}x the fit's)" if m.get("over_fit") and name != "fit" else ""
         w(f"    {name:<14} {t + ratio:<28} {_fmt(m['sigma_at_plan'], '.4g')} {unit}\n")
+    off = e.get("rotor_off")
+    if off:
+        sets = " -- it sets the planned time" if off["sets_the_time"] else ""
+        w(f"  rotor-off swing {off['instrument']} (period {off['period_s']:.6g} s {FULL_PERIOD}): {off['assumed']}; "
+          f"shortest record {time_up(off['min_record_s'])}{sets}\n")
+        rows = "; ".join(f"{time_up(r['rotor_off_s'])} -> {_fmt(r['sigma'], '.4g')} {unit}" for r in off["curve"])
+        w(f"    the fit's sigma at the planned T with a rotor-off record of: {rows}\n")
+        ba = off["before_after"]
+        w(f"    in the field, half before and half after the rotor-on swing ({time_up(ba['field_time_s'])} in all): "
+          f"{_fmt(ba['sigma'], '.4g')} {unit}\n")
     fl = e.get("floor")
     if fl:
         if fl.get("bias") is None:
@@ -411,8 +459,8 @@ def _print_azimuth_target(e, w) -> None:
     v = e.get("verify")
     if v:
         w(f"  verify: {v['used']} seeds at the planned T: the fit's rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
-          f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
-          + (f"; {v['null']} null" if v["null"] else "") + "\n")
+          f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')}, achieved/planned "
+          f"{_fmt(v['achieved_over_planned'], '.3f')})" + (f"; {v['null']} null" if v["null"] else "") + "\n")
         for name, m in v.get("methods", {}).items():
             w(f"    {name:<14} rms {_fmt(m['achieved_rms'], '.4g')} {unit}, planned {_fmt(m['planned_sigma'], '.4g')} "
               f"(achieved/planned {_fmt(m['achieved_over_planned'], '.3f')})\n")

@@ -1,16 +1,23 @@
-"""The Cramér–Rao bound of a horizontal gyroscope's oscillation centre (north) as a function of the
-observation time T, per north method, for ``plan --target azimuth_arcsec=...`` (issue 24 item 4).
+"""The Cramér–Rao bound of a horizontal gyroscope's north reading as a function of the observation
+time T, per north method, for ``plan --target azimuth_arcsec=...`` (issue 24 item 4, issue 33 item 3).
 
 The rate bounds and the probes of the other measurement kinds are :mod:`.bounds`'s; this module
 adds the probe of :data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH` to
-:data:`.bounds.PROBES` when imported (:mod:`.planner` imports it). Sources: the centre's bound
-:func:`.north.crlb_centre` (:func:`.north.crlb_centre_long` for long undamped records), the
-reversal-point and transit methods of :mod:`.north` run on the noise-free model record, and the
-torsion tape's correction N = c + (D_B/D_K)(c − Z) (physics_notes, 'North finding').
+:data:`.bounds.PROBES` when imported (:mod:`.planner` imports it). Sources: the fit's σ is the
+Cramér–Rao bound of the WHOLE joint problem the estimate solves (:func:`.north.exact.crlb`: the
+swing equation in scale readings, rotor-on and rotor-off records, tape calibration included) at the
+scene's true constants (:func:`exact_truth`); the reversal-point and transit methods of :mod:`.north`
+run on the noise-free model record, tape-corrected by the estimate's own step
+(:func:`.north.tape_corrected`, the exact relation N = c − atan(x (Z − c))).
+
+The rotor-off swing: the scene simulates it simultaneously with the rotor-on swing over the same
+span (its ``duration_s``), and so does the plan (``layout="simultaneous"``); in the field it is
+swung before and after (``layout="before_after"``: half its record before the rotor-on swing, half
+after, each a release of its own; the same joint fit's bound).
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -28,11 +35,13 @@ METHOD_SAMPLES = 400_000
 #: What each method's σ law is (the plan's ``law``).
 NORTH_LAWS = {
     "schuler_mean": "sigma_a sqrt(sum w^2), w = (1, 3, 4, ..., 4, 3, 1)/(4(nu - 2)) over the nu reversal points "
-                    "of T; sigma_a = sigma sqrt(g'(X'X)^-1 g) of each point's local quartic (~ T^-1/2)",
+                    "of T; sigma_a = sigma sqrt(g'(X'X)^-1 g) of each point's local quartic (~ T^-1/2); with a tape "
+                    "through the exact relation N = c - atan(x (Z - c))",
     "lavrov": "propagated from the reversal points' sigma_a through the damped-oscillation fit (~ T^-1/2)",
     "transit": "propagated from the transit times' sigma through x0 = A sin(pi dt/(2T)) (~ T^-1/2)",
-    "fit": "Cramer-Rao bound of the centre, sqrt([I^-1]_cc), I = J'J/sigma^2 on the sample grid "
-           "(-> sigma/sqrt(N), ~ T^-1/2, for many cycles)",
+    "fit": "Cramer-Rao bound of the whole joint problem, sqrt([I^-1]_NN), I = J'J/sigma^2 of the swing equation in "
+           "scale readings (rotor-on and rotor-off records, tape calibration included) on the sample grid at the "
+           "scene's truth (~ T^-1/2 for many swings)",
 }
 
 
@@ -59,13 +68,49 @@ class AzimuthModel:
     centre_minus_zero_rad: float = 0.0
     mount_azimuth_rad: float = 0.0
     kind: str = "azimuth"
+    #: the exact model (:func:`exact_truth`): the swing equation (t_ref = 0), its true parameters
+    #: (:data:`.north.exact.GLOBAL`, clockwise reading) and each record's (reading, rate) at t = 0;
+    #: None for a synthetic model (the centre's bound :func:`_centre_bound` then stands for the fit's)
+    eq: object = None
+    par: dict = field(default_factory=dict)
+    initial: tuple = ()
+    #: the estimator's check (``north_estimate._check_swing``): one full small-swing period, s
+    check_period_s: float = 0.0
+    rate_hz: float = 0.0
+    rotor_off_name: str = ""
+
+    def on_grid(self, T) -> float:
+        """T rounded UP to the scene's sample grid (t_i = i/f): the record then spans ≥ T."""
+        return math.ceil(T * self.rate_hz - 1e-9) / self.rate_hz if self.rate_hz else T
+
+    @property
+    def min_on_s(self) -> float:
+        """Two full swings of the rotor-on record (the fit's start and the reversal-point methods need
+        ≥ 3 complete reversal points whatever the phase at which the record starts; at least the
+        estimator's check, one full small-swing period)."""
+        return max(4.0 * math.pi / self.omega, self.check_period_s)
+
+    @property
+    def min_off_s(self) -> float:
+        """Two full swings of the rotor-off swing (its fit, which starts the tape zero and period, needs
+        ≥ 3 complete reversal points likewise); 0 without a tape."""
+        return 4.0 * math.pi / self.off[0] if self.off else 0.0
 
     @property
     def min_record_s(self) -> float:
-        """One full swing; with a tape two full swings of the rotor-off swing (its fit, which gives the
-        tape zero and period, starts from ≥ 3 complete reversal points, whatever the phase at which
-        the record starts): the shortest record the estimator's north block accepts."""
-        return max(2.0 * math.pi / self.omega, 4.0 * math.pi / self.off[0] if self.off else 0.0)
+        """The shortest record the estimator's north block accepts (:attr:`min_on_s`, and with a tape
+        :attr:`min_off_s`, the rotor-off swing simultaneous), rounded up to the sample grid so that
+        the record's span passes the estimator's own check."""
+        return self.on_grid(max(self.min_on_s, self.min_off_s))
+
+    def record_limit(self) -> str:
+        """What sets :attr:`min_record_s`, in words."""
+        if self.min_off_s > self.min_on_s:
+            return (f"the rotor-off swing {self.rotor_off_name}: two full swings of the torsion pendulum "
+                    f"({self.min_off_s:.6g} s, period {2 * math.pi / self.off[0]:.6g} s) for the tape zero and period, "
+                    f"observed over the same span as the rotor-on swing")
+        return (f"two full swings of the rotor-on record ({self.min_on_s:.6g} s, period {2 * math.pi / self.omega:.6g} s: "
+                f"the estimator's shortest record)")
 
     def record(self, T, rate_hz, off=False) -> tuple:
         """(t, u): the noise-free model record on the scene's sample grid over T s (rotor-off with ``off``)."""
@@ -103,6 +148,25 @@ def _probe_swing(inst, rate_hz):
         return f"no swing in a noise-free probe: {exc}"
 
 
+def exact_truth(inst, off_inst=None) -> tuple:
+    """The exact fit's model of ``inst`` at the scene's truth, t_ref = 0: (SwingEquation, par, initial).
+
+    In the clockwise reading w = −angle (:mod:`.north.exact`): north N = −mount_reading_rad, the
+    directing constant K = a ρ0 (:meth:`~gyro_instrument.instruments.plane_gyroscope.PlaneGyroscope.
+    reduced_coefficients`: a = μ n sin ω), the tape k_B = D_B/A, its zero −Z0 drifting at −Ż, the
+    damping rate; ``initial``: each record's (w0, v0) at t = 0, the rotor-off instrument's read on
+    its own scale (its release u0 plus its mount reading).
+    """
+    from gyro_instrument.estimators.north_estimate import swing_equation
+    c = inst.reduced_coefficients()
+    par = {"north": -inst.mount_reading_rad, "directing": c["a"] * inst.p.spin_rate_rad_s, "tape": c["kb"],
+           "zero": -c["zero"], "zero_rate": -c["zero_rate"], "damping": c["damping"]}
+    initial = [(-(inst.p.initial_angle_rad + inst.mount_reading_rad), -inst.p.initial_rate_rad_s)]
+    if off_inst is not None:
+        initial.append((-(off_inst.p.initial_angle_rad + off_inst.mount_reading_rad), -off_inst.p.initial_rate_rad_s))
+    return swing_equation(inst, 0.0), par, tuple(initial)
+
+
 def _azimuth_model(scene, obs):
     """The azimuth model of a horizontal gyroscope (and its rotor-off companion with a tape)."""
     from gyro_instrument.scenes import build_instruments
@@ -112,16 +176,22 @@ def _azimuth_model(scene, obs):
         return None, f"{shape}: {obs.null_reason}"
     w, A, d, ph, c = shape
     model = AzimuthModel(obs.name, w, A, d, ph, c, drift=obs.centre_drifts(),
-                         mount_azimuth_rad=float(inst.p.mount_azimuth_rad))
+                         mount_azimuth_rad=float(inst.p.mount_azimuth_rad),
+                         check_period_s=2.0 * inst.predictions()["swing_duration_small_s"],
+                         rate_hz=float(scene.sample_rate_hz))
+    off_inst = None
     if obs.has_tape():
         other = obs.companions().get("rotor_off")
         insts = build_instruments(scene)
         if other not in insts:
             return None, "the tape torsion is on and no rotor-off swing is named (rotor_off_instrument)"
-        off = _probe_swing(insts[other], scene.sample_rate_hz)
+        off_inst = insts[other]
+        off = _probe_swing(off_inst, scene.sample_rate_hz)
         if isinstance(off, str):
             return None, f"rotor-off swing {other}: {off}"
         model.tape_ratio, model.off, model.centre_minus_zero_rad = inst.tape_ratio(), off[:4], c - off[4]
+        model.rotor_off_name = other
+    model.eq, model.par, model.initial = exact_truth(inst, off_inst)
     return model, None
 
 
@@ -168,13 +238,69 @@ def _ratio_sigma(model, T, sensor) -> float:
 
 
 def tape_combined(model, sigma_c, T, sensor) -> float:
-    """σ of the north reading from a centre's σ with the tape's terms (:class:`AzimuthModel`)."""
+    """σ of the north reading from a centre's σ through the estimate's own tape step
+    (:func:`.north.tape_corrected`: the exact relation N = c − atan(x (Z − c)), x = D_B/(D_K cos(c − N))),
+    the tape zero's σ the rotor-off centre's bound and the ratio's from the two periods' bounds."""
+    from gyro_instrument.estimators import north
     if not model.tape_ratio or not math.isfinite(sigma_c):
         return sigma_c
-    r = model.tape_ratio
+    x = model.tape_ratio
+    if model.par:
+        K, kb, N = model.par["directing"], model.par["tape"], model.par["north"]
+        x = kb / (K * math.cos(model.centre - N))
     s_z = _centre_bound(model, T, sensor, off=True)
     s_r = _ratio_sigma(model, T, sensor)
-    return math.sqrt(((1 + r) * sigma_c) ** 2 + (r * s_z) ** 2 + (model.centre_minus_zero_rad * s_r) ** 2)
+    est = north.NorthEstimate("fit", model.centre, sigma_c, "", 0, "", ())
+    return north.tape_corrected(est, model.centre - model.centre_minus_zero_rad, x, s_r, s_z).sigma_rad
+
+
+def _grid(T, rate_hz, start=0.0) -> np.ndarray:
+    """The scene's sample times over T s from ``start`` (:func:`.bounds.samples`)."""
+    return start + np.arange(samples(T, rate_hz)) / rate_hz
+
+
+def _off_records(model, T, off_s, layout, rate_hz) -> list:
+    """The rotor-off records' times: ``simultaneous`` from t = 0 over ``off_s`` (default T, as the
+    scene simulates it), or ``before_after``: half of ``off_s`` ending where the rotor-on record
+    starts and half from where it ends (each a release of its own)."""
+    off_s = T if off_s is None else off_s
+    if layout == "simultaneous":
+        return [_grid(off_s, rate_hz)]
+    half = 0.5 * off_s
+    before = _grid(half, rate_hz)
+    return [before - before[-1] - 1.0 / rate_hz, _grid(half, rate_hz, T + 1.0 / rate_hz)]
+
+
+def fit_bound(model, T, sensor, off_s=None, layout="simultaneous") -> float:
+    """Cramér–Rao bound on the north reading of the exact joint fit (rad) over a rotor-on record of T
+    s and the rotor-off record(s) (:func:`_off_records`): :func:`.north.exact.crlb` at the scene's
+    truth (:func:`exact_truth`) on the sample grid (thinned to :data:`EXACT_SAMPLES` samples in all,
+    the information scaled by the stride), the dropouts' information (1 − p) taken out. A synthetic
+    model without the swing equation: the centre's bound (:func:`_centre_bound`). inf when the
+    records cannot determine the parameters."""
+    from gyro_instrument.core.errors import SceneError
+    from gyro_instrument.estimators.north import exact
+    if model.eq is None:
+        return _centre_bound(model, T, sensor)
+    sigma, rate = sensor.sigma_rad, sensor.rate_hz
+    if sigma <= 0:
+        return 0.0
+    records, kinds = [_grid(T, rate)], ["on"]
+    initial = [model.initial[0]]
+    if model.eq.tape:
+        offs = _off_records(model, T, off_s, layout, rate)
+        records += offs
+        kinds += ["off"] * len(offs)
+        initial += [model.initial[1]] * len(offs)
+    stride = max(1, math.ceil(sum(r.size for r in records) / EXACT_SAMPLES))
+    records = [r[::stride] for r in records]
+    if min(r.size for r in records) < 8:
+        return math.inf
+    try:
+        b = exact.crlb(model.eq, model.par, records, kinds, initial, sigma)
+    except (np.linalg.LinAlgError, SceneError, ValueError):
+        return math.inf
+    return b / math.sqrt(stride * (1.0 - sensor.dropout_fraction)) if math.isfinite(b) else math.inf
 
 
 def _method_sigmas(model, T, sensor) -> dict:
@@ -203,9 +329,9 @@ def _method_sigmas(model, T, sensor) -> dict:
 
 def azimuth_sigmas(model, T, sensor) -> dict:
     """{method: σ of the north reading (rad) over T s} for :data:`NORTH_METHODS`: the fit at the
-    Cramér–Rao bound (:func:`_centre_bound`), the others by their σ laws (:func:`_method_sigmas`;
-    beyond :data:`METHOD_SAMPLES` extrapolated ∝ T^-1/2), each with the tape's terms
-    (:func:`tape_combined`); inf below one full swing."""
+    Cramér–Rao bound of the whole joint problem (:func:`fit_bound`), the others by their σ laws
+    (:func:`_method_sigmas`; beyond :data:`METHOD_SAMPLES` extrapolated ∝ T^-1/2) with the tape's step
+    (:func:`tape_combined`); inf below the shortest record (:attr:`AzimuthModel.min_record_s`)."""
     if T < model.min_record_s * (1 - 1e-9):
         return dict.fromkeys(NORTH_METHODS, math.inf)
     cap = (METHOD_SAMPLES - 1) / sensor.rate_hz
@@ -213,20 +339,43 @@ def azimuth_sigmas(model, T, sensor) -> dict:
         out = {k: v * math.sqrt(cap / T) for k, v in _method_sigmas(model, cap, sensor).items()}
     else:
         out = _method_sigmas(model, T, sensor)
-    out["fit"] = _centre_bound(model, T, sensor)
-    return {k: tape_combined(model, v, T, sensor) for k, v in out.items()}
+    out = {k: tape_combined(model, v, T, sensor) for k, v in out.items()}
+    out["fit"] = fit_bound(model, T, sensor)
+    return out
 
 
 def solve_azimuth(model, sensor, target_rad, method="fit") -> tuple:
-    """Shortest T (s) whose σ (:func:`azimuth_sigmas`) of ``method`` is ≤ ``target_rad``, from one full
-    swing up: (T or None, note). Exponential search, then bisection in log T to 1e-3 relative (the
-    reversal-point methods' σ falls in steps, one per reversal point: the first T of the step)."""
+    """Shortest T (s) whose σ (:func:`azimuth_sigmas`) of ``method`` is ≤ ``target_rad``, from the
+    shortest record up: (T or None, note). Exponential search, then bisection in log T to 1e-3
+    relative (the reversal-point methods' σ falls in steps, one per reversal point: the first T of the
+    step); T rounded up to the sample grid, so that the record's span passes the estimator's check."""
     def sig(T):
-        return azimuth_sigmas(model, T, sensor)[method] if method != "fit" else tape_combined(
-            model, _centre_bound(model, T, sensor), T, sensor)
-    if sig(model.min_record_s) <= target_rad:
-        return model.min_record_s, "one full swing (the shortest record) already meets the target"
-    return shortest_time(sig, model.min_record_s, target_rad, 2.0, 1e-3)
+        return fit_bound(model, T, sensor) if method == "fit" else azimuth_sigmas(model, T, sensor)[method]
+    t_min = model.min_record_s
+    if sig(t_min) <= target_rad:
+        return t_min, f"the shortest record already meets the target: {model.record_limit()}"
+    T, note = shortest_time(sig, t_min, target_rad, 2.0, 1e-3)
+    return (None, note) if T is None else (model.on_grid(T), note)
+
+
+def rotor_off_plan(m, sensor, T, unit) -> dict:
+    """The rotor-off swing's part in an azimuth plan at rotor-on time T (σ in the target's unit, ``unit``
+    rad): what is assumed (simultaneous over the same span, as the scene simulates it), its shortest
+    record and whether that sets T, the fit's σ for other rotor-off record lengths, and the field's
+    before-and-after layout (:func:`fit_bound`)."""
+    def fin(x):
+        return x / unit if math.isfinite(x) else None
+    spans = sorted({m.on_grid(x) for x in (m.min_off_s, 0.5 * T, T, 2.0 * T, 4.0 * T) if x >= m.min_off_s * (1 - 1e-9)})
+    return {"instrument": m.rotor_off_name, "period_s": 2 * math.pi / m.off[0], "min_record_s": m.on_grid(m.min_off_s),
+            "sets_the_time": bool(m.min_off_s > m.min_on_s and T <= m.min_record_s * (1 + 1e-9)),
+            "assumed": "observed simultaneously over the same span as the rotor-on swing, as the scene simulates it "
+                       "(duration_s for both); the estimator reads that one record",
+            "curve": [{"rotor_off_s": x, "sigma": fin(fit_bound(m, T, sensor, off_s=x))} for x in spans],
+            "before_after": {"rotor_off_s": T, "field_time_s": 2.0 * T,
+                             "sigma": fin(fit_bound(m, T, sensor, off_s=T, layout="before_after")),
+                             "layout": "the field's: half the rotor-off record before the rotor-on swing and half "
+                                       "after, each a release of its own; the same joint fit's bound (the estimate "
+                                       "here reads one simultaneous record)"}}
 
 
 PROBES[AZIMUTH] = _azimuth_model

@@ -23,7 +23,8 @@ from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES
                                                MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
                                                Planner, SensorSpec, combined, counting_sigma, instrument_models,
                                                instrument_sigma, samples, sine_fit_covariance)
-from gyro_instrument.estimators.bounds_azimuth import NORTH_LAWS, NORTH_METHODS, azimuth_sigmas, solve_azimuth
+from gyro_instrument.estimators.bounds_azimuth import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
+                                                       rotor_off_plan, solve_azimuth)
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
@@ -186,7 +187,8 @@ def _azimuth_dict(m):
          "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
          "drift_fitted": m.drift}
     if m.tape_ratio:
-        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0]})
+        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0],
+                  "rotor_off_instrument": m.rotor_off_name, "rotor_off_min_record_s": m.min_off_s})
     return d
 
 
@@ -196,10 +198,13 @@ def _finite(x):
 
 def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
     """The plan of an azimuth target: per horizontal gyroscope the fit's T at the Cramér–Rao bound of
-    the centre (:func:`.bounds_azimuth.solve_azimuth`); for the instrument that needs the least (the one the
-    estimate's top-level ``north`` would carry), T per north method by its σ law, each method's σ at
-    the fit's T, σ(T) on a log grid, and the systematic floor (the noise-free estimate's azimuth error
-    at the fit's T). ``observation_s`` is the fit's."""
+    the whole joint problem (:func:`.bounds_azimuth.solve_azimuth`, :func:`.bounds_azimuth.fit_bound`:
+    the exact swing equation in scale readings, the rotor-off swing simultaneous over the same span,
+    as the scene simulates it); for the instrument that needs the least (the one the estimate's
+    top-level ``north`` would carry), T per north method by its σ law, each method's σ at the fit's T,
+    σ(T) on a log grid, the rotor-off swing's part (:func:`.bounds_azimuth.rotor_off_plan`) and the systematic floor
+    (the noise-free estimate's azimuth error at the fit's T). ``observation_s`` is the fit's, on the
+    sample grid (rounded up: the record passes the estimator's own check)."""
     entry = {"target": name, "value": value, "quantity": "azimuth"}
     if not models:
         entry.update({"observation_s": None, "reason": "no horizontal gyroscope measures an azimuth"
@@ -216,7 +221,8 @@ def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si,
     entry.update({"instrument": m.name, "mount_azimuth_deg_truth": math.degrees(m.mount_azimuth_rad),
                   "observation_s": T, "samples_per_instrument": samples(T, sensor.rate_hz),
                   "planned_sigma": at_plan["fit"] / TARGETS[name][1], "note": note or None,
-                  "limited_by": "one full swing (the shortest record)" if note else "noise (Cramer-Rao bound of the centre)",
+                  "limited_by": (f"the shortest record: {m.record_limit()}" if note else
+                                 "noise (Cramer-Rao bound of the whole joint fit, tape calibration included)"),
                   "per_instrument_observation_s": {k: v[0] for k, v in solved.items()}, "methods": {}})
     for method in NORTH_METHODS:
         Tm, why = (T, note) if method == "fit" else solve_azimuth(m, sensor, si, method)
@@ -226,6 +232,8 @@ def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si,
             "sigma_at_plan": _finite(at_plan[method] / TARGETS[name][1]),
             "over_fit": None if Tm is None else Tm / T, "law": NORTH_LAWS[method], "note": why or None}
     entry["dependence"] = _azimuth_dependence(m, sensor, name, T)
+    if m.off:
+        entry["rotor_off"] = rotor_off_plan(m, sensor, T, TARGETS[name][1])
     if floor:
         entry["floor"] = systematic_floor(scene_arg, overrides, T, "azimuth", si, name, ref=(m.name, m.mount_azimuth_rad))
     return entry

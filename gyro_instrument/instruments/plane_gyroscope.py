@@ -30,7 +30,8 @@ reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −a
 M = 0 (or M unstated, read as 0: the estimate still reports north, null with its reason when the
 record cannot give it) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
 mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
-c = (D_K N + D_B Z)/(D_K + D_B) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
+to the equilibrium D_K sin(c − N) = D_B (Z − c) (:meth:`PlaneGyroscope.equilibrium_reading_rad`; near
+north the linear c = (D_K N + D_B Z)/(D_K + D_B)) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
 with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
 "North finding").
 """
@@ -192,29 +193,87 @@ class PlaneGyroscope(Instrument):
         return swing_duration_small_s(self.p.inertia_ratio, n, self.p.spin_rate_rad_s, self.sin_omega,
                                       math.sin(self.p.cone_half_angle_rad) if self.is_cone else 1.0)
 
+    def equilibrium_reading_rad(self, t_s=0.0) -> float:
+        """The swing's equilibrium c on the scale at time ``t_s`` (rad, the counter-clockwise reading
+        u + M of the measured ``angle``), exact for the reduced model (:meth:`reduced_rhs_scalar`):
+        (a ρ + b cos u) s(u) + k_B (u + M − Z0 − Ż t) = 0, u = c − M, by Newton from north (u = 0).
+        Without a tape c = M, true north's reading. With the rotor off: the tape zero (a torsion
+        pendulum). The north estimate's :func:`~gyro_instrument.estimators.north.joint.equilibrium`
+        solves the same equation, in the clockwise reading (physics_notes "North finding")."""
+        c = self.reduced_coefficients()
+        K, b, kb = c["a"] * self.p.spin_rate_rad_s * math.exp(-c["decay"] * t_s), c["b"], c["kb"]
+        M = self.mount_reading_rad
+        if not kb:
+            return M
+        zero = c["zero"] + c["zero_rate"] * t_s - M          # the tape zero's u
+        sine = c["sine_law"]
+        u = 0.0 if K > 0 else zero
+        for _ in range(100):
+            s, ds = (math.sin(u), math.cos(u)) if sine else (u, 1.0)
+            f = (K + b * math.cos(u)) * s + kb * (u - zero)
+            step = f / ((K + b * math.cos(u)) * ds - b * math.sin(u) * s + kb)
+            u -= step
+            if abs(step) < 1e-15:
+                break
+        return M + u
+
     def tape_predictions(self) -> dict:
         """With a torsion tape: D_B/D_K, the rotor-off swing duration π√(A/D_B) (s) and the swing centre's
-        offset from north c − N = (D_B/(D_K + D_B))(Z − N) on the scale (rad, at the start)."""
-        D_B, Z, _ = self.tape
+        offset from north c − N on the scale at the start (rad, counter-clockwise reading), the exact
+        equilibrium (:meth:`equilibrium_reading_rad`; the linear law (D_B/(D_K + D_B))(Z − N) errs by
+        tens of arcseconds once the scale's zero is degrees from north)."""
+        D_B = self.tape[0]
         D_K = self.directing_constant_n_m()
-        N = self.mount_reading_rad
         return {"tape_ratio": D_B / D_K if D_K else None,
                 "rotor_off_swing_duration_s": math.pi * math.sqrt(self.p.transverse_inertia_kg_m2 / D_B),
-                "centre_offset_rad": D_B / (D_K + D_B) * (Z - N)}
+                "centre_offset_rad": self.equilibrium_reading_rad() - self.mount_reading_rad}
+
+    def _north_predictions(self) -> dict:
+        """A horizontal gyroscope asked for north (a stated mount or a tape): the scale readings (ccw,
+        the measured ``angle``'s, degrees) of true north and of the swing's centre at the start; with
+        the rotor off, the torsion pendulum on its tape (no directing torque)."""
+        if self.p.plane != "horizontal" or self.is_cone or (self.p.mount_azimuth_deg is None and not self.tape[0]):
+            return {}
+        c = self.reduced_coefficients()
+        arcsec_h = 3600.0 * 648000.0 / math.pi
+        if not self.p.spin_rate_rad_s:
+            if not self.tape[0]:
+                return {}
+            kb, d = c["kb"], c["damping"]
+            damped = kb - 0.25 * d * d
+            return {"torsion_period_s": 2.0 * math.pi / math.sqrt(kb),
+                    "torsion_period_damped_s": 2.0 * math.pi / math.sqrt(damped) if damped > 0 else math.inf,
+                    "tape_zero_reading_deg": math.degrees(c["zero"]), "tape_zero_rate_arcsec_h": c["zero_rate"] * arcsec_h,
+                    "damping_per_s": d}
+        out = {"north_reading_deg": math.degrees(self.mount_reading_rad),
+               "mount_azimuth_deg": float(self.p.mount_azimuth_deg or 0.0)}
+        if self.has("earth_rotation"):
+            centre = self.equilibrium_reading_rad()
+            out.update({"centre_reading_deg": math.degrees(centre),
+                        "centre_from_north_arcsec": (centre - self.mount_reading_rad) * 648000.0 / math.pi})
+        if self.tape[0]:
+            out.update({"tape_zero_reading_deg": math.degrees(c["zero"]), "tape_zero_rate_arcsec_h": c["zero_rate"] * arcsec_h})
+        return out
 
     def predictions(self) -> dict:
         """Eq. (9) (or the cone form), the finite-amplitude factor and eq. (10)'s ingredients, for
         the model as simulated: without ``earth_rotation`` n = 0, there is no directing torque
         μ n ρ0 sin ω and the durations are infinite (``null`` in JSON); without
-        ``finite_amplitude`` the small-angle model swings in T0 at any amplitude."""
+        ``finite_amplitude`` the small-angle model swings in T0 at any amplitude. A horizontal
+        gyroscope asked for north adds :meth:`_north_predictions`; with its rotor off (a torsion
+        pendulum on its tape) its swing is the tape's alone and the gyroscope's words (sin ω, the
+        conserved spin, the tape ratio) are left out."""
         n = self.model_earth_rate()
         T0 = self._swing_duration_small_s(n)
         factor = finite_amplitude_factor(self.p.initial_angle_rad) if self.has("finite_amplitude") else 1.0
-        out = {"sin_omega": self.sin_omega,
-               "swing_duration_small_s": T0,
+        north = self._north_predictions()
+        out = {"swing_duration_small_s": T0,
                "swing_duration_s": T0 * factor if math.isfinite(T0) else math.inf,
-               "period_s": 2.0 * T0,
-               "conserved_spin_rad_s": self.p.spin_rate_rad_s + n * self.sin_omega * math.cos(self.p.initial_angle_rad)}
+               "period_s": 2.0 * T0}
+        if "torsion_period_s" in north:       # a torsion pendulum: linear tape, its period at any amplitude
+            return north | {"swing_duration_small_s": T0, "swing_duration_s": T0}
+        out = north | {"sin_omega": self.sin_omega} | out | {
+            "conserved_spin_rad_s": self.p.spin_rate_rad_s + n * self.sin_omega * math.cos(self.p.initial_angle_rad)}
         if self.tape[0]:
             out.update(self.tape_predictions())
         T_site = self._swing_duration_small_s(self.site.earth_rate_rad_s)
