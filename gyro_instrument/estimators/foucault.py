@@ -361,7 +361,8 @@ def _centred(t, e, nn, period, n_win):
 
 def _period_sigma(t, y, fit, scatter) -> float:
     """σ of the full swing period: the sine fit's (white residuals), or with ``scatter`` (the record
-    is not white) at least half the difference of its halves' periods (batch means, estimators/scatter.py)."""
+    is not white) at least half the difference of its halves' periods (batch means over two batches:
+    B. Schmeiser, Oper. Res. 30 (1982) 556–568)."""
     sig = 2.0 * math.pi * fit.omega_sigma_rad_s / fit.omega_rad_s ** 2
     if not scatter:
         return sig

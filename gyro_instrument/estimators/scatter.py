@@ -19,10 +19,11 @@ the line (ordinary least squares), (b) the Newey–West heteroskedasticity- and 
 consistent (HAC) standard error of the slope (W. K. Newey and K. D. West, "A simple, positive
 semi-definite, heteroskedasticity and autocorrelation consistent covariance matrix", Econometrica
 55 (1987) 703–708; Bartlett weights 1 − j/(L + 1), L = ⌊4 (n/100)^(2/9)⌋ lags, Newey and West,
-Rev. Econ. Stud. 61 (1994) 631–653) and (c) the batch-means estimate from two batches, half the
-difference of the halves' rates (B. Schmeiser, "Batch size effects in the analysis of simulation
-output", Oper. Res. 30 (1982) 556–568): a rate that changes within the record is known no better
-than its halves agree. The basis is stated (``sigma_basis``).
+Rev. Econ. Stud. 61 (1994) 631–653) and (c) swing-to-swing blocks: the line through the means of
+blocks of 2, 4, 8 ... consecutive swings (at least :data:`MIN_BLOCKS` blocks), whose scatter grows
+with the block until the blocks are uncorrelated (the blocking method of H. Flyvbjerg and H. G.
+Petersen, "Error estimates on averages of correlated data", J. Chem. Phys. 91 (1989) 461–466,
+applied to the slope); its largest value is taken. The basis is stated (``sigma_basis``).
 """
 
 import math
@@ -39,6 +40,9 @@ HALVES_Z = 4.0
 
 #: Fewest values for the autocorrelation and halves tests (3 per half for a line with a dof).
 MIN_FOR_TESTS = 6
+
+#: Fewest blocks a blocked line's scatter is taken from (6 degrees of freedom).
+MIN_BLOCKS = 8
 
 WHITE = "white"
 RECORD = "record scatter"
@@ -58,7 +62,7 @@ class LineSigma:
     white_sigma: float
     ols_sigma: float
     hac_sigma: float
-    batch_sigma: float
+    block_sigma: float
     chi2_per_dof: float
     dof: int
     autocorrelation: float
@@ -71,7 +75,7 @@ class LineSigma:
         if self.sigma_basis == WHITE:
             return "white noise: the record's noise through the Cramer-Rao bound (residuals white)"
         return (f"record scatter ({'; '.join(self.reasons)}): the largest of the residuals' scatter (OLS), "
-                f"Newey-West HAC ({self.hac_lags} lags, Bartlett) and the halves' batch means")
+                f"Newey-West HAC ({self.hac_lags} lags, Bartlett) and swing-to-swing blocks")
 
 
 def slope(t, y) -> tuple:
@@ -110,6 +114,22 @@ def nw_lags(n) -> int:
     return max(1, int(4.0 * (n / 100.0) ** (2.0 / 9.0)))
 
 
+def blocked_slope_sigma(t, y) -> float:
+    """The largest OLS slope σ over lines through block means of 1, 2, 4 ... consecutive values with
+    at least :data:`MIN_BLOCKS` blocks (Flyvbjerg and Petersen 1989's blocking, on the slope)."""
+    n, size, best = len(t), 1, 0.0
+    while n // size >= MIN_BLOCKS:
+        m = n // size
+        tb = np.asarray(t[:m * size]).reshape(m, size).mean(axis=1)
+        yb = np.asarray(y[:m * size]).reshape(m, size).mean(axis=1)
+        _, _, u, x = slope(tb, yb)
+        sxx = float(x @ x)
+        if sxx > 0:
+            best = max(best, math.sqrt(float(u @ u) / (m - 2) / sxx))
+        size *= 2
+    return best
+
+
 def line_with_record_sigma(t, y, white_sigma) -> LineSigma:
     """The least-squares rate of ``y`` over ``t`` (one value per swing) with σ as the module says.
 
@@ -130,7 +150,7 @@ def line_with_record_sigma(t, y, white_sigma) -> LineSigma:
     halves = None
     lags = nw_lags(n)
     hac = newey_west_slope_sigma(x, u, lags) if n > 2 else math.inf
-    batch = 0.0
+    block = blocked_slope_sigma(t, y)
     if n >= MIN_FOR_TESTS:
         if r1 > AUTOCORR_Z / math.sqrt(n):
             reasons.append(f"swing-to-swing autocorrelation {r1:.2f} > {AUTOCORR_Z / math.sqrt(n):.2f}")
@@ -145,10 +165,9 @@ def line_with_record_sigma(t, y, white_sigma) -> LineSigma:
         s12 = math.hypot(s1, s2)
         z = (b2 - b1) / s12 if s12 > 0 else (0.0 if b2 == b1 else math.inf)
         halves = (b1, s1, b2, s2, z)
-        batch = 0.5 * abs(b2 - b1)
         if not abs(z) <= HALVES_Z:
             reasons.append(f"halves differ by {abs(z):.3g} sigma")
     if not reasons:
-        return LineSigma(b, white_sigma, WHITE, white_sigma, ols, hac, batch, chi2, dof, r1, halves, reasons, lags)
-    sigma = max(white_sigma, ols, hac if math.isfinite(hac) else 0.0, batch)
-    return LineSigma(b, sigma, RECORD, white_sigma, ols, hac, batch, chi2, dof, r1, halves, reasons, lags)
+        return LineSigma(b, white_sigma, WHITE, white_sigma, ols, hac, block, chi2, dof, r1, halves, reasons, lags)
+    sigma = max(white_sigma, ols, hac if math.isfinite(hac) else 0.0, block)
+    return LineSigma(b, sigma, RECORD, white_sigma, ols, hac, block, chi2, dof, r1, halves, reasons, lags)
