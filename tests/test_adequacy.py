@@ -159,8 +159,10 @@ def test_every_estimate_reports_its_checks(capsys):
     for inst in ("gyro_horizontal", "gyro_meridian"):
         for check in ("amplitude", "sampling", "signal", "period", "fit"):
             assert kinds[(inst, check)] == "passed"
+    # the combination of two gyroscopes is compared with the scene's site: the 11th check
+    assert kinds[("combined", "site")] == "passed"
     code, out, err = run(capsys, "estimate", SCENE)
-    assert "checks: 10 of 10 passed" in out
+    assert "checks: 11 of 11 passed" in out
 
 
 DAMAGE = st.one_of(

@@ -219,3 +219,23 @@ def test_verify_the_other_shipped_scenes_hold(executor, scene):
     # the shipped cos-latitude scenes (|latitude| reported, hemisphere not determined): the plan
     # holds for the one mode reported, within the same ~3-sigma 20 % band
     _check_verify(scene, [], "latitude_arcsec=1", executor)
+
+
+def test_a_pendulum_alone_gets_a_latitude_plan_as_estimate_answers_it():
+    # issue 34 item 6: estimate answers foucault_pantheon's latitude with n known (k = n sin γ), so
+    # plan must too. The planned bound at the planned T is the target (bisection to 1e-4 relative);
+    # the estimate's own Cramér–Rao σ over the scene's 3600 s (0.0176°, `estimate foucault_pantheon`)
+    # lies on the plan's T^-3/2 curve: the plan's bound at 3600 s within 5 % of it (the curve's
+    # phase ripple and the short-record correction are below 1 % at 219 periods)
+    d = plan("foucault_pantheon", targets=parse_targets(["latitude_deg=1", "earth_rate_deg_h=0.01"]), floor=False)
+    lat, rate = d["targets"]
+    assert lat["observation_s"] is not None and lat["planned_sigma"] <= 1.0
+    assert "not estimated" in rate["reason"]
+    scene = load_scene("foucault_pantheon")
+    models, _ = instrument_models(scene)
+    known = {"earth_rate": None, "n_known": scene.site.earth_rate_rad_s, "n_source": "the scene"}
+    sig = Planner(models, SensorSpec.from_scene(scene), None, known).sigma("latitude", 3600.0)
+    assert math.degrees(sig) == pytest.approx(0.0176, rel=0.05)
+    # estimator.earth_rate: estimate refuses the latitude in estimate, and so in plan
+    d = plan("foucault_pantheon", ["estimator.earth_rate=estimate"], parse_targets(["latitude_deg=1"]), floor=False)
+    assert d["targets"][0]["observation_s"] is None

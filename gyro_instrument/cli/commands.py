@@ -162,13 +162,13 @@ def estimate_command(args) -> int:
     scene = scene or scene_from_args(args)
     table_flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
                    "--angle-unit": (args.angle_unit, None), "--column": (args.columns, []),
-                   "--separator": (args.separator, None), "--scale-division": (args.scale_division, None)}
+                   "--separator": (args.separator, None), "--scale-division": (args.scale_division, None)} | camera_flags(args)
     if args.data:
         from gyro_instrument.estimators.data_io import TableOptions, estimate_data
         if args.scale_division is not None:
             raise SceneError("--scale-division", args.scale_division, "reads a field book: give --reversal-points")
-        options = TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad", args.columns,
-                                          args.separator)
+        options = with_camera(TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad",
+                                                      args.columns, args.separator), args)
         result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)
     elif given := [(flag, v) for flag, (v, default) in table_flags.items() if v != default]:
         raise SceneError(*given[0], "reads a table: give --data FILE (or leave the flag out)")
@@ -181,6 +181,30 @@ def estimate_command(args) -> int:
     else:
         print_estimate(result, angle_format=args.angle_format)
     return 0
+
+
+def camera_flags(args) -> dict:
+    """The camera-track flags as ``flag: (value, default)`` (refused without a table)."""
+    return {"--metres-per-pixel": (args.metres_per_pixel, None), "--y-down": (args.y_down, False),
+            "--rotation-deg": (args.rotation_deg, None), "--frame-column": (args.frame_column, None),
+            "--frame-rate": (args.frame_rate, None), "--no-header": (args.no_header, False),
+            "--names": (args.names, None)}
+
+
+def with_camera(options, args) -> "TableOptions":
+    """``options`` (TableOptions) with the camera track's and a headerless file's flags, checked."""
+    import dataclasses
+    from gyro_instrument.estimators.table_camera import CameraOptions
+    if args.names is not None and not args.no_header:
+        raise SceneError("--names", args.names, "names the columns of a file without a header: add --no-header "
+                                                "(a header's columns are renamed with --column)")
+    names = tuple(n.strip() for n in (args.names or "").split(",")) if args.no_header else None
+    if args.no_header and (not names or not all(names)):
+        raise SceneError("--no-header", args.names, "needs the columns' names: --names time,x,y (one per column)")
+    camera = CameraOptions.from_flags(args.metres_per_pixel, args.y_down, args.rotation_deg, args.frame_column,
+                                      args.frame_rate, options.time_column, options.time_unit)
+    time_column = args.frame_column if args.frame_column is not None else options.time_column
+    return dataclasses.replace(options, camera=camera, names=names, time_column=time_column)
 
 
 def _field_book_estimate(args) -> int:

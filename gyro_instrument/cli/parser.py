@@ -169,7 +169,24 @@ def _add_scene_commands(sub):
     p.add_argument("--separator", default=None, choices=[",", ";", "tab"],
                    help="with --data or --reversal-points, CSV: the field separator (default: sniffed from the "
                         "header line; ';' reads decimal commas)")
+    add_camera_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
+
+
+def add_camera_arguments(p) -> None:
+    """A camera track's table options (estimators/table_camera.py; msg_docs/csv.md)."""
+    p.add_argument("--metres-per-pixel", type=float, default=None, metavar="S",
+                   help="with --data: the track's x_east, y_north are pixels of S metres each")
+    p.add_argument("--y-down", action="store_true", help="with --data: the image y axis points down (y is negated)")
+    p.add_argument("--rotation-deg", type=float, default=None, metavar="A",
+                   help="with --data: the camera's x axis is A degrees from east, counter-clockwise seen from above")
+    p.add_argument("--frame-column", default=None, metavar="NAME",
+                   help="with --data: time from this column's frame numbers (with --frame-rate; instead of "
+                        "--time-column)")
+    p.add_argument("--frame-rate", type=float, default=None, metavar="HZ", help="with --frame-column: frames per second")
+    p.add_argument("--no-header", action="store_true",
+                   help="with --data, CSV: the file has no header row (name its columns with --names)")
+    p.add_argument("--names", default=None, metavar="A,B,C", help="with --no-header: the columns' names, in order")
 
 
 def _add_bag_commands(sub):

@@ -236,15 +236,20 @@ def estimate_headline(r, angle_format="deg") -> list:
     swing-plane rate in °/h with its full turn in hours."""
     lat = r.get("latitude_deg")
     lines = north_lines(r["north"], angle_format) if r.get("north") else []
+    site = r.get("site") or {}
+    off = {d["instrument"]: d for d in site.get("disagreements") or ()}
+    lines += [f"{d['headline']} (site check failed: {abs(d['z']):.3g} sigma)" for d in off.values()]
     if lat is None:
         lines += [f"latitude: not determined ({r.get('reason') or 'see the methods below'})"]
     else:
         sig = r.get("latitude_sigma_deg")
         lines += [f"latitude {'|' if r.get('latitude_is_absolute') else ''}{_hemisphere(lat)}"
-                 f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")]
+                 f"{'|' if r.get('latitude_is_absolute') else ''}" + (f" +/- {sig:.2g}°" if sig is not None else "")
+                 + (" if the pendulum were free" if set(off) - {"combined"} else "")
+                 + (" (not the site's)" if "combined" in off else "")]
     for name, e in r.get("instruments", {}).items():
         k = e.get("foucault_rate_rad_s") if isinstance(e, dict) else None
-        if k:
+        if k and name not in off:
             lines.append(turn_line(name, k))
     return lines
 

@@ -39,6 +39,9 @@ SITE_PARAMS = (
           doc="Earth rotation rate n, rad/s (sidereal 7.2921150e-5)"),
     Param("gravity_m_s2", default=None, low=0.0, high=1000.0, open_low=True,
           doc="local gravity, m/s^2 (default: WGS-84 normal gravity at the latitude)"),
+    Param("latitude_known", kind="bool", default=True,
+          doc="false: the site's latitude is a placeholder (a record from an unknown place): estimates are not "
+              "compared with it (no site check)"),
 )
 
 TOP_PARAMS = (
@@ -273,7 +276,8 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
     if "site" not in data:
         raise SceneError("site", None, "is required (a mapping with latitude_deg)")
     site_raw = validate_params("site", SITE_PARAMS, data["site"])
-    site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"])
+    site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"],
+                site_raw["latitude_known"])
     effects_raw, effects = _build_effects(data.get("effects"), effect_registry)
     instruments = _build_instruments(data.get("instruments"), instrument_registry, effect_registry, effects)
     _check_effects_used(effects_raw, effects, instruments, instrument_registry)

@@ -64,11 +64,15 @@ class Site:
     gravity_m_s2 : float, optional
         Local gravity g (plumb-line, includes the centrifugal part at the site).
         Defaults to WGS-84 normal gravity at the latitude.
+    latitude_known : bool
+        False when the latitude is a placeholder (a measured record from an unknown place): the
+        estimator then does not compare its estimate with it (scene key ``site.latitude_known``).
     """
 
     latitude_rad: float
     earth_rate_rad_s: float = SIDEREAL_RATE_RAD_S
     gravity_m_s2: float = field(default=None)
+    latitude_known: bool = True
 
     def __post_init__(self):
         lat = float(self.latitude_rad)

@@ -278,3 +278,101 @@ def hemisphere_entry(hemisphere, basis, scene_latitude_deg) -> dict | None:
                   f"the data measure the {hemisphere}ern hemisphere but the scene's latitude is {scene_latitude_deg:g} "
                   "deg: east and north swapped, an axis mirrored (a pendulum's sense of turning reversed), or the "
                   "wrong scene", hemisphere, scene_side)
+
+
+def halves_entry(name, line) -> dict:
+    """The pendulum's ``halves`` check: the swing plane's rate over the first and the second half of
+    the record (estimators/scatter.py); ``flagged`` beyond :data:`~.scatter.HALVES_Z` σ (σ then from
+    the record's scatter), ``not_applicable`` with fewer than 6 swings."""
+    from gyro_instrument.estimators.scatter import HALVES_Z
+    if line is None or line.halves is None:
+        return check_entry(name, "halves", "not_applicable", "fewer than 6 swings: the halves are not compared")
+    b1, s1, b2, s2, z = line.halves
+    ok = abs(z) <= HALVES_Z
+    return check_entry(name, "halves", "passed" if ok else "flagged",
+                       f"plane rate over the first half {_deg_h(b1)} +/- {_deg_h(s1, '.2g')}, over the second "
+                       f"{_deg_h(b2)} +/- {_deg_h(s2, '.2g')} deg/h: {abs(z):.3g} sigma apart (at most {HALVES_Z:g})"
+                       + ("" if ok else ": the rate changes within the record; sigma from its scatter"), z, 0.0)
+
+
+def _deg_h(rate_rad_s, spec="+.4g") -> str:
+    return format(math.degrees(rate_rad_s) * 3600.0, spec)
+
+
+#: An estimate further than this many σ from what the scene's site predicts fails the ``site`` check.
+SITE_Z = 4.0
+
+SITE_CAUSES = ("a driven or damped pendulum (a drive, a Charron ring or the air moves the plane), an anisotropic "
+               "support, a wrong length or pixel scale (the ellipse correction scales with the swing in radians), "
+               "or the wrong scene (set site.latitude_deg, or site.latitude_known=false for an unknown place)")
+
+
+def site_check(result, site) -> None:
+    """The ``site`` checks: each pendulum's Foucault rate against n sin γ at the scene's site, and a
+    combination with a gyroscope's latitude (and an estimated Earth rate) against the site's; beyond
+    :data:`SITE_Z` σ ``failed`` (the estimate stands: the measurement is the answer). Sets
+    ``result["site"]``; nothing is compared when ``site.latitude_known`` is false."""
+    lat = site.latitude_deg
+    block = {"latitude_known": site.latitude_known, "latitude_deg": lat, "earth_rate_rad_s": site.earth_rate_rad_s}
+    result["site"] = block
+    if not site.latitude_known:
+        block["detail"] = "site.latitude_known is false: the estimate is not compared with the site"
+        return
+    where = f"{abs(lat):.2f}° {'N' if lat >= 0 else 'S'}"
+    k0 = site.k_vertical_rad_s
+    block["expected_foucault_rate_rad_s"] = k0
+    entries, disagree = [], []
+    gyro = False
+    for name, e in result.get("instruments", {}).items():
+        gyro = gyro or e.get("swing_duration_s") is not None
+        k, sk = e.get("foucault_rate_rad_s"), e.get("foucault_rate_sigma_rad_s")
+        if k is None:
+            continue
+        z = _z(k - k0, sk)
+        ell = e.get("ellipse_correction_rad_s") or 0.0
+        m, sm = e.get("measured_plane_rate_rad_s", k), e.get("measured_plane_rate_sigma_rad_s", sk)
+        said = (f"the plane turns {_deg_h(m, '+.2f')} ± {_deg_h(sm, '.2g')} °/h"
+                + (f" ({_deg_h(k, '+.2f')} ± {_deg_h(sk, '.2g')} °/h less the ellipse's {_deg_h(ell, '+.2f')})"
+                   if ell else "")
+                + f"; a free pendulum at {where} turns {_deg_h(k0, '+.2f')} °/h"
+                + (f" ({_deg_h(k0 + ell, '+.2f')} with this swing's ellipse)" if ell else ""))
+        entries.append(_site_entry(name, z, said, k, k0))
+        if entries[-1]["status"] == "failed":
+            disagree.append({"instrument": name, "what": "foucault_rate", "z": z, "measured_rad_s": m,
+                             "measured_sigma_rad_s": sm, "foucault_rate_rad_s": k, "foucault_rate_sigma_rad_s": sk,
+                             "expected_rad_s": k0 + ell, "free_rate_rad_s": k0, "headline": f"{name}: {said}"})
+    glat = result.get("latitude_deg")
+    if gyro and glat is not None:
+        sig = result.get("latitude_sigma_deg")
+        if sig is None and result.get("latitude_interval_3sigma_deg"):
+            lo3, hi3 = result["latitude_interval_3sigma_deg"]
+            sig = (glat - lo3 if lat < glat else hi3 - glat) / 3.0
+        z = _z(glat - lat, sig)
+        said = f"latitude {glat:.4f} ± {_fmt_sig(sig)}° against the site's {lat:.4f}°"
+        if result.get("earth_rate_known") is False and result.get("earth_rate_rad_s") is not None:
+            zn = _z(result["earth_rate_rad_s"] - site.earth_rate_rad_s, result.get("earth_rate_sigma_rad_s"))
+            said += f", Earth rate {zn:+.3g} sigma from the site's"
+            z = max(z, zn, key=abs)
+        entries.append(_site_entry("combined", z, said, glat, lat))
+        if entries[-1]["status"] == "failed":
+            disagree.append({"instrument": "combined", "what": "latitude", "z": z, "headline": said})
+    block["agrees"] = not disagree
+    block["disagreements"] = disagree
+    result["checks"] += entries
+
+
+def _z(diff, sigma) -> float:
+    if sigma is not None and sigma > 0:
+        return diff / sigma
+    return 0.0 if abs(diff) <= 1e-12 else math.copysign(math.inf, diff)
+
+
+def _fmt_sig(sig) -> str:
+    return "null" if sig is None else f"{sig:.2g}"
+
+
+def _site_entry(name, z, said, value, expected) -> dict:
+    ok = abs(z) <= SITE_Z
+    return check_entry(name, "site", "passed" if ok else "failed",
+                       f"{said}: {abs(z):.3g} sigma apart (at most {SITE_Z:g})"
+                       + ("" if ok else f"; likely causes: {SITE_CAUSES}"), value, expected)

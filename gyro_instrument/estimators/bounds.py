@@ -265,9 +265,11 @@ def counting_sigma(m, T) -> float:
     return abs(m.value) * 2.0 * t_swing / (math.sqrt(3.0) * T)
 
 
-def combined(models, sigmas, hemisphere=None, latitude_rad=None) -> dict:
+def combined(models, sigmas, hemisphere=None, latitude_rad=None, known=None) -> dict:
     """Combined 1-σ bounds from per-instrument σ: dict with latitude_rad, earth_rate_rad_s (None with
-    ``*_reason`` when not determined), via ``solve_latitude(..., use_crlb=True)``."""
+    ``*_reason`` when not determined), via ``solve_latitude(..., use_crlb=True)``. ``known``: the
+    keyword arguments ``earth_rate``, ``n_known``, ``n_source`` of :func:`solve_latitude`, as
+    ``estimate`` passes them (a pendulum alone: the latitude with n known)."""
     # a noise-free sensor has a zero bound: keep its structure (what it can determine) with a vanishing σ
     sigmas = [s if s > 0 else 1e-20 * abs(m.value) for m, s in zip(models, sigmas)]
     meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s)
@@ -276,8 +278,10 @@ def combined(models, sigmas, hemisphere=None, latitude_rad=None) -> dict:
         return {"latitude_rad": None, "earth_rate_rad_s": None,
                 "latitude_reason": "no instrument can measure yet (record too short)",
                 "earth_rate_reason": "no instrument can measure yet (record too short)"}
-    sol = solve_latitude(meas, use_crlb=True, hemisphere=hemisphere)
+    sol = solve_latitude(meas, use_crlb=True, hemisphere=hemisphere, **(known or {}))
     out = {"latitude_rad": sol.latitude_sigma_rad, "earth_rate_rad_s": sol.earth_rate_sigma_rad_s}
+    if sol.earth_rate_known:
+        out["earth_rate_reason"] = f"the Earth rate is not estimated: {sol.earth_rate_basis}"
     if sol.latitude_rad is None:
         out["latitude_reason"] = sol.reason
         if sol.earth_rate_sigma_rad_s is None:
@@ -292,8 +296,10 @@ def combined(models, sigmas, hemisphere=None, latitude_rad=None) -> dict:
 class Planner:
     """The bounds of one scene's instruments as functions of the observation time T (s)."""
 
-    def __init__(self, models, sensor, hemisphere=None):
+    def __init__(self, models, sensor, hemisphere=None, known=None):
         self.models, self.sensor, self.hemisphere = models, sensor, hemisphere
+        #: how ``estimate`` treats the Earth rate (:func:`combined`'s ``known``)
+        self.known = known
 
     def min_record_s(self) -> float:
         return max(m.min_record_s for m in self.models)
@@ -302,7 +308,7 @@ class Planner:
         """Combined bounds at T (dict, see :func:`combined`) and the per-instrument σ (name -> rad/s)."""
         models = [m for m in self.models if not counting or m.kind == SWING_RATE]
         sig = [counting_sigma(m, T) if counting else instrument_sigma(m, T, self.sensor)[0] for m in models]
-        return combined(models, sig, self.hemisphere), dict(zip((m.name for m in models), sig))
+        return combined(models, sig, self.hemisphere, known=self.known), dict(zip((m.name for m in models), sig))
 
     def sigma(self, quantity, T, counting=False) -> float | None:
         return self.bounds(T, counting)[0].get(f"{quantity}_rad" if quantity == "latitude" else "earth_rate_rad_s")

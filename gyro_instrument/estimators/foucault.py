@@ -35,6 +35,7 @@ from scipy.special import ellipe, ellipk
 
 from gyro_instrument.estimators.adequacy import detection_snr
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal, fit_oscillation
+from gyro_instrument.estimators.scatter import WHITE, line_with_record_sigma, newey_west_mean_sigma, nw_lags, slope
 from gyro_instrument.instruments.pendulum import (SWING_WINDOW_MIN_SAMPLES, apsidal_angle, areal_constant_over_omega0,
                                                   min_deflection_for_areal_constant)
 
@@ -57,6 +58,12 @@ class FoucaultEstimate:
     noise_rad: float = math.nan
     plane_chi2_per_dof: float = math.nan
     plane_dof: int = 0
+    measured_rate_sigma_rad_s: float = math.nan
+    sigma_basis: str = "white"
+    sigma_basis_text: str = ""
+    plane_line: object = None
+    period_sigma_s: float = math.nan
+    rest_point: dict = field(default_factory=dict)
 
 
 def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None) -> FoucaultEstimate:
@@ -85,6 +92,7 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     n_win = int((t[-1] - t[0]) // period)
     if n_win < 3:
         raise EstimationError(f"record holds {n_win} swing periods; need at least 3 to fit a precession")
+    e, nn, rest = _centred(t, e, nn, period, n_win)
     # σ (a local uncertainty) from the record's own noise; the bound from the sensor model's
     noise_data = noise_from_differences(t, e, nn)
     if noise_rad is None:
@@ -97,7 +105,6 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     psi, tc, H, r2, amp, minor, w = _swing_windows(t, e, nn, period, n_win, h_seg)
     if len(psi) < 3:
         raise EstimationError("fewer than 3 complete swing periods with samples")
-    m, sig_scatter = _plane_rate(psi, tc)
     ok = np.isfinite(H)
     Hm = float(np.average(np.asarray(H)[ok], weights=np.asarray(w)[ok])) if ok.any() else 0.0
     # σ of ⟨H⟩ from the noise: per sample the noise enters as 2 θ̇ × (noise across the swing) once
@@ -111,18 +118,17 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     # ⟨sin²θ⟩ less the noise's share 2σ² (both components)
     r2m = max(float(np.average(r2, weights=w)) - 2.0 * sigma_noise ** 2, 0.0)
     # the plane rate's σ from the noise the record shows (the window estimator is efficient: its
-    # scatter matches this bound over seeds), unless the windows' azimuths scatter more than that
-    # noise explains (χ²/dof of the line beyond 1 + 5 √(2/dof): the swing is disturbed or the
-    # model misses an effect) — then their scatter is the honest σ, and a note says so
+    # scatter matches this bound over seeds) while the azimuths scatter about their line as white
+    # noise does; otherwise (χ²/dof, swing-to-swing correlation, halves that disagree) from the
+    # record's own scatter (estimators/scatter.py), and ⟨H⟩'s σ from its windows' (Newey–West)
     span = float(t[-1] - t[0])
-    sig_noise_m = foucault_crlb_rad_s(noise_data, r2m, t.size, span)
-    dof = max(len(psi) - 2, 1)
-    chi2 = (sig_scatter / sig_noise_m) ** 2 if sig_noise_m > 0 else math.inf
-    sig_m = sig_noise_m
-    if not chi2 <= 1.0 + 5.0 * math.sqrt(2.0 / dof):
-        sig_m = sig_scatter
-        notes.append(f"swing-plane azimuths scatter {math.sqrt(chi2):.3g}x what the noise explains "
-                     f"(chi2/dof {chi2:.3g} over {dof}): sigma from their scatter")
+    line = line_with_record_sigma(tc, np.unwrap(2.0 * np.asarray(psi)) / 2.0,
+                                  foucault_crlb_rad_s(noise_data, r2m, t.size, span))
+    m, sig_m = line.rate, line.sigma
+    if line.sigma_basis != WHITE:
+        notes.append(f"sigma of the plane rate from the record's scatter ({'; '.join(line.reasons)})")
+        if ok.sum() > 2:
+            H_se = max(H_se, newey_west_mean_sigma(np.asarray(H)[ok], nw_lags(int(ok.sum()))))
     alpha = float(np.mean(amp))
     dk_dm = 1.0
     if correct_ellipse:
@@ -136,8 +142,10 @@ def estimate_foucault(t, theta_e, theta_n, correct_ellipse=True, noise_rad=None)
     crlb = foucault_crlb_rad_s(sigma_noise, r2m, t.size, span, dk_dm)
     if correct_ellipse:
         crlb = math.hypot(crlb, dk_dH * H_bound)
+    sig_p = _period_sigma(t, main, fit, line.sigma_basis != WHITE)
     return FoucaultEstimate(k, sig_k, m, m - k, alpha, float(np.median(minor)), period, len(psi), crlb, span, notes,
-                            noise_data, chi2, dof)
+                            noise_data, line.chi2_per_dof, line.dof, sig_m, line.sigma_basis, line.basis_text(), line,
+                            sig_p, rest)
 
 
 def foucault_crlb_rad_s(sigma_rad, mean_sin2, n_samples, span_s, dk_dm=1.0) -> float:
@@ -324,6 +332,47 @@ def _clean_deflections(t, theta_e, theta_n):
     t, e, nn = t[order], e[order], nn[order]
     keep = np.concatenate([[True], np.diff(t) > 0]) if t.size else np.array([], bool)
     return t[keep], e[keep], nn[keep], notes
+
+
+def swing_centre(t, e, nn, period, n_win) -> tuple:
+    """The swing's rest point as a line in time (centre and slow drift): each component's mean over
+    exactly one period per window (the integral of its piecewise-linear interpolant between the
+    window's edges: a swing about its centre averages to zero over a period), then a least-squares
+    line through the windows' means. Returns (east centre at each t, north centre at each t, dict of
+    the centre at the record's middle and its drift, rad and rad/s)."""
+    edges = t[0] + period * np.arange(n_win + 1)
+    tc = 0.5 * (edges[:-1] + edges[1:])
+    out, info = [], {}
+    for key, x in (("east", e), ("north", nn)):
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (x[1:] + x[:-1]) * np.diff(t))])
+        means = np.diff(np.interp(edges, t, cum)) / period
+        drift, mid, *_ = slope(tc, means)
+        out.append(mid + drift * (t - tc.mean()))
+        info[f"{key}_rad"], info[f"drift_{key}_rad_s"] = mid, drift
+    info["at_time_s"] = float(tc.mean())
+    return out[0], out[1], info
+
+
+def _centred(t, e, nn, period, n_win):
+    """The deflections about the fitted rest point (:func:`swing_centre`): (east, north, rest point)."""
+    ce, cn, info = swing_centre(t, e, nn, period, n_win)
+    return e - ce, nn - cn, info
+
+
+def _period_sigma(t, y, fit, scatter) -> float:
+    """σ of the full swing period: the sine fit's (white residuals), or with ``scatter`` (the record
+    is not white) at least half the difference of its halves' periods (batch means over two batches:
+    B. Schmeiser, Oper. Res. 30 (1982) 556–568)."""
+    sig = 2.0 * math.pi * fit.omega_sigma_rad_s / fit.omega_rad_s ** 2
+    if not scatter:
+        return sig
+    mid = 0.5 * (t[0] + t[-1])
+    try:
+        p = [2.0 * math.pi / fit_oscillation(t[s], y[s], omega_guess=fit.omega_rad_s).omega_rad_s
+             for s in (t <= mid, t > mid)]
+    except EstimationError:
+        return sig
+    return max(sig, 0.5 * abs(p[1] - p[0]))
 
 
 def _swing_windows(t, e, nn, period, n_win, areal_rate=None):

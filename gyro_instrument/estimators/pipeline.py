@@ -16,7 +16,7 @@ plane's precession, :func:`estimate_foucault`), and the observation supplies the
 
 from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
 from gyro_instrument.estimators.adequacy import InadequateData, check_before_fit, check_entry, check_period, \
-    hemisphere_entry, plane_fit_entry
+    halves_entry, hemisphere_entry, plane_fit_entry, site_check
 from gyro_instrument.estimators.combine import classic_methods, combined, null_combined
 from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement
@@ -109,6 +109,7 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     classic_methods(result, gyros, pend, scene.estimator.get("earth_rate"))
     entry = hemisphere_entry(result.get("hemisphere"), result.get("hemisphere_basis", ""), site.latitude_deg)
     result["checks"] = checks + ([entry] if entry else [])
+    site_check(result, site)
     return result
 
 
@@ -156,15 +157,18 @@ def _pendulum_estimate(obs, rec, corrections, checks, sensor):
     est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
            "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
            "measured_plane_rate_rad_s": f.measured_rate_rad_s,
+           "measured_plane_rate_sigma_rad_s": f.measured_rate_sigma_rad_s, "sigma_basis": f.sigma_basis,
+           "sigma_basis_detail": f.sigma_basis_text,
            "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
-           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "windows": f.windows,
-           "notes": f.notes}
+           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "period_sigma_s": f.period_sigma_s,
+           "rest_point": f.rest_point, "windows": f.windows, "notes": f.notes}
     checks.append(check_entry(name, "signal", "passed", f"swing detected (A^2 N / (4 sigma^2) >= {DETECTION_SNR:g}; "
                                                        "estimators/foucault.py)", expected=DETECTION_SNR))
     entry = check_period(name, inst, f.period_s)
     if entry:
         checks.append(entry)
     checks.append(plane_fit_entry(name, f.plane_chi2_per_dof, f.plane_dof, f.noise_rad))
+    checks.append(halves_entry(name, f.plane_line))
     # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
     return est, RateMeasurement(name, PLANE_RATE, f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
 

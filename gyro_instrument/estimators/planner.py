@@ -19,6 +19,7 @@ import numpy as np
 from gyro_instrument import effects
 from gyro_instrument.core.effect import FRAME_RATE
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
 from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, GYRO_MIN_CYCLES,  # noqa: F401
                                                MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
                                                Planner, SensorSpec, combined, counting_sigma, instrument_models,
@@ -144,7 +145,13 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
                          + (f" ({'; '.join(f'{k}: {v}' for k, v in az_skipped.items())})" if az_skipped else ""))
     sensor = SensorSpec.from_scene(scene)
     hemi = scene.estimator.get("hemisphere")
-    planner = Planner(models, sensor, hemi) if models else None
+    # the Earth rate as estimate takes it (pipeline.known_earth_rate): the site's, known where the
+    # instruments cannot separate it from the latitude (a pendulum alone), unless estimator.earth_rate says
+    n_known = scene.site.earth_rate_rad_s
+    known = {"earth_rate": scene.estimator.get("earth_rate"), "n_known": n_known,
+             "n_source": ("the IERS conventional value, the scene's site.earth_rate_rad_s"
+                          if n_known == SIDEREAL_RATE_RAD_S else "the scene's site.earth_rate_rad_s")}
+    planner = Planner(models, sensor, hemi, known) if models else None
     out = {"scene": scene.name, "source": scene.source, "overrides": list(overrides),
            "latitude_deg": scene.site.latitude_deg, "earth_rate_rad_s": scene.site.earth_rate_rad_s,
            "sensor": {"noise_rad": sensor.noise_rad, "quantization_rad": sensor.quantization_rad,
@@ -293,7 +300,7 @@ def _sensitivity(planner, quantity, si, T, noise_factors, rate_factors):
     for what, factors in (("noise", noise_factors), ("rate", rate_factors)):
         for f in factors:
             sensor = planner.sensor.scaled(noise=f) if what == "noise" else planner.sensor.scaled(rate=f)
-            p = Planner(planner.models, sensor, planner.hemisphere)
+            p = Planner(planner.models, sensor, planner.hemisphere, planner.known)
             T2, note = p.solve(quantity, si)
             law = T * (f ** 2) ** (1 / 3) if what == "noise" else T * (1.0 / f) ** (1 / 3)
             rows.append({"change": f"{what} x{f:g}", "factor": f, "observation_s": T2,

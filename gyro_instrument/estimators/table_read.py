@@ -50,6 +50,10 @@ class TableOptions:
         channel column NAME.
     separator : str or None
         CSV separator (``,``, ``;`` or ``tab``; ``--separator``); None sniffs it from the header.
+    camera : CameraOptions or None
+        A camera track's pixels, y axis, rotation and frame numbers (:mod:`.table_camera`).
+    names : tuple of str or None
+        A CSV without a header: its columns' names (``--no-header --names a,b,c``).
     """
 
     time_column: str = TIME_COLUMN
@@ -57,6 +61,8 @@ class TableOptions:
     angle_unit: str = "rad"
     columns: tuple = ()
     separator: str | None = None
+    camera: object = None
+    names: tuple | None = None
 
     @classmethod
     def from_flags(cls, time_column=TIME_COLUMN, time_unit=None, angle_unit="rad", columns=(),
@@ -130,25 +136,50 @@ def _csv_separator(first_line, path, field, separator):
     return found[0] if found else ","
 
 
-def _read_csv(path, field, separator):
-    """(names, arrays, notes) of a CSV file (UTF-8, with or without a byte-order mark)."""
+def _open_text(path):
+    """A text file, gzip, bz2 or xz compressed by its suffix (as pandas reads ``.csv.gz``)."""
+    import bz2
+    import gzip
+    import lzma
+    opener = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}.get(os.path.splitext(str(path))[1].lower(), open)
+    return opener(path, "rt", newline="", encoding="utf-8-sig")       # the BOM, if any, is skipped
+
+
+def _read_csv(path, field, separator, time_source=None, names=None):
+    """(names, arrays, notes) of a CSV file (UTF-8, with or without a byte-order mark; compressed
+    by its suffix; a spreadsheet's ``sep=;`` first line read as the separator); a ``time_source``
+    column of ISO date-time text converted to seconds; ``names`` for a file without a header."""
     notes = []
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:     # the BOM, if any, is skipped
+        with _open_text(path) as fh:
             first = ""
             for line in fh:
                 if line.strip():
                     first = line
                     break
-            sep = _csv_separator(first, path, field, separator)
+            excel = first.strip().lower().startswith("sep=") and len(first.strip()) == 5
+            sep = first.strip()[4] if excel and separator is None else _csv_separator(
+                first if not excel else "", path, field, separator)
             fh.seek(0)
             rows = list(csv.reader(fh, delimiter=sep))
+            if excel:
+                notes.append(f"first line {first.strip()!r}: the separator")
+                rows = rows[[bool(r and any(c.strip() for c in r)) for r in rows].index(True) + 1:]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         utf8 = "; UTF-8 expected" if isinstance(exc, UnicodeDecodeError) else ""
         raise SceneError(field, path, f"cannot be read as CSV ({exc.__class__.__name__}{utf8})") from None
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if not rows:
         raise SceneError(field, path, "is empty; expected a header row time_s,<instrument>.<channel>,...")
+    if names:
+        if len(names) != len(rows[0]):
+            raise SceneError("--names", ",".join(names), f"gives {len(names)} names for the {len(rows[0])} columns "
+                                                         f"of {path}'s first row")
+        rows = [list(names)] + rows
+        notes.append(f"no header: columns named {', '.join(names)}")
+    elif _numeric_row(rows[0], sep):
+        raise SceneError(field, path, f"its first row ({sep.join(rows[0])[:60]}) is numbers, not a header: the file "
+                                      f"has none; pass --no-header --names NAME,NAME,... ({len(rows[0])} names)")
     header = [h.strip() for h in rows[0]]
     _refuse_duplicates(header, path, field)
     decimal_comma = sep == ";"
@@ -156,21 +187,53 @@ def _read_csv(path, field, separator):
         notes.append(f"CSV separated by {'tab' if sep == chr(9) else repr(sep)}"
                      + (" (decimal commas read as points)" if decimal_comma else ""))
     cols = [np.full(len(rows) - 1, np.nan) for _ in header]
-    for i, row in enumerate(rows[1:], start=2):
+    texts = ([], [], [])                          # the time column's date-time texts: row, line, text
+    line0 = 1 if names else 2
+    for i, row in enumerate(rows[1:], start=line0):
         for j, (h, cell) in enumerate(zip(header, row)):
             cell = cell.strip()
             if cell:
                 try:
-                    cols[j][i - 2] = float(cell)
+                    cols[j][i - line0] = float(cell)
                 except ValueError:
                     if decimal_comma and cell.count(",") == 1 and "." not in cell:
                         try:
-                            cols[j][i - 2] = float(cell.replace(",", "."))
+                            cols[j][i - line0] = float(cell.replace(",", "."))
                             continue
                         except ValueError:
                             pass
+                    if h == time_source and cell[:1].isdigit():
+                        for k, v in zip(texts, (i - line0, i, cell)):
+                            k.append(v)
+                        continue
                     raise SceneError(field, path, f"line {i}, column {h}: {cell!r} is not a number") from None
+    if texts[0]:
+        from gyro_instrument.estimators.table_camera import datetime_seconds
+        j = header.index(time_source)
+        if len(texts[0]) < int(np.isfinite(cols[j]).sum()) + len(texts[0]):
+            raise SceneError(field, path, f"column {time_source} mixes numbers and date-time text")
+        secs, note = datetime_seconds(texts[2], texts[1], time_source, path, field)
+        cols[j][np.array(texts[0])] = secs
+        notes.append(note)
     return header, cols, notes
+
+
+def _numeric_row(row, sep):
+    """True when every non-empty cell of ``row`` reads as a number (decimal commas with ``;``) or an
+    ISO date-time, and one at least as a number: data, not a header."""
+    import datetime as dt
+    cells = [c.strip() for c in row if c.strip()]
+    numbers = 0
+    for c in cells:
+        try:
+            float(c.replace(",", ".") if sep == ";" and c.count(",") == 1 and "." not in c else c)
+            numbers += 1
+        except ValueError:
+            try:
+                dt.datetime.fromisoformat(c[:-1] + "+00:00" if c.endswith("Z") else c)
+            except ValueError:
+                return False
+    return numbers > 0
 
 
 def _arrow_time_seconds(pa, column, name, time_unit, path, field):
@@ -259,7 +322,7 @@ def load_table(path, field="--data", options=None) -> tuple:
     if not os.path.isfile(path):
         raise SceneError(field, path, "file not found" if not os.path.exists(path) else "is not a file")
     if table_kind(path) == "csv":
-        names, arrays, notes = _read_csv(path, field, opts.separator)
+        names, arrays, notes = _read_csv(path, field, opts.separator, opts.time_column, opts.names)
     else:
         names, arrays, notes = _read_parquet(path, field, opts.time_column, opts.time_unit)
     raw = dict(zip(names, arrays))
@@ -300,6 +363,8 @@ def load_table(path, field="--data", options=None) -> tuple:
         for c in converted:
             cols[c] = np.radians(cols[c])
         notes.append("angles in degrees converted to rad: " + (", ".join(converted) or "no angle column"))
+    if opts.camera is not None:
+        cols = opts.camera.apply(cols, notes, path, field)
     return cols, notes
 
 
