@@ -223,3 +223,17 @@ def test_a_swing_too_anharmonic_for_the_period_law_gives_north_and_no_rate():
     assert "too anharmonic" in res["instruments"]["gak1"]["reason"]
     n = res["north"]
     assert abs(_err_arcsec(n["mount_azimuth_deg"], 151.0)) < 4 * n["sigma_arcsec"]
+
+
+@pytest.mark.parametrize("duration", [600.0, 1800.0])
+def test_short_records_give_north_from_the_fit(duration):
+    """A record of little more than one rotor-on swing (600 s of an 480 s period), and a rotor-off swing
+    shorter than its own 1592 s period: the exact fit still gives north within 4σ (its start falls back
+    on the scene's declared tape, a start, not an answer); the reversal-point methods are refused with
+    the reason where the
+    reversal points are too few (this was a traceback: 'the Schuler mean needs ≥ 3 reversal points')."""
+    scene = _scene(359.75, 47.41, [f"duration_s={duration}"])
+    n = _north(scene, simulate_truth(scene), 2)
+    assert abs(_err_arcsec(n["mount_azimuth_deg"], 359.75)) < 4 * n["sigma_arcsec"]
+    for name in ("schuler_mean", "lavrov", "transit"):      # each given, or refused with its reason
+        assert name in n["methods"] or "reversal points" in n["refused"][name], name

@@ -39,10 +39,9 @@ def north_accuracy_vs_time(durations_s, period_s=20.0, amplitude_rad=0.05, dampi
         clean = north.damped_swing(t, centre_rad, amplitude_rad, w, damping_per_s, 0.3, drift_rad_s, float(np.mean(t)))
         mark = centre_rad + mark_offset_rad
         crlb = north.crlb_centre(t, amplitude_rad, w, noise_rad, damping_per_s, 0.3, drift=bool(drift_rad_s))
-        try:
-            floor, _ = north.north_methods(t, clean, noise_rad, mark)
-        except ValueError as exc:          # too short for any reversal point
-            rows.append({"duration_s": float(dur), "method": "all", "refused": str(exc)})
+        floor, refused = north.north_methods(t, clean, noise_rad, mark)
+        if not floor:                      # too short for any reversal point: every method refused
+            rows.append({"duration_s": float(dur), "method": "all", "refused": next(iter(refused.values()), "")})
             continue
         errs = {}
         for s in range(seeds):

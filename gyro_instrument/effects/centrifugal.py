@@ -33,6 +33,8 @@ class Centrifugal(Effect):
         w0 = scales.restoring_rate_rad_s
         if not w0:
             return math.inf, "(n / omega0)^2 with no restoring rate (omega0 = 0): nothing for it to be small against"
+        if scales.torsion_share >= 1.0:
+            return (n / w0) ** 2, "(n / omega0)^2: the O(n^2) torque against the tape's (a torsion pendulum)"
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
 
     def point_mass_term(self, ctx) -> Callable:

@@ -35,6 +35,9 @@ class EarthRotation(Effect):
     def relative_size(self, ctx) -> tuple:
         if ctx.scales.gyro_rate_rad_s:
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
+        if ctx.scales.torsion_share >= 1.0:
+            return 0.0, ("no rotor spin, no directing torque (Quet sec. 4 §1 eq. 2 with rho = 0): a torsion "
+                         "pendulum on its tape; the Earth's rate enters only at O(n^2) (centrifugal)")
         n = ctx.scales.earth_rate_rad_s
         return n * ctx.scales.duration_s, "n * duration (swing-plane turn over the run, rad, at most)"
 

@@ -80,8 +80,11 @@ def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tup
     a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``
     (with a linear drift of the centre when ``drift``: the centre at the mean sample time).
     """
-    rp = reversal_points(t, u, noise_sigma_rad)
     out, refused = {}, {}
+    try:
+        rp = reversal_points(t, u, noise_sigma_rad)
+    except SceneError as exc:                      # too short for two reversal points: every method refused
+        return out, {k: str(exc) for k in ("schuler_mean", "lavrov", "transit", "fit")}
     runs = {"schuler_mean": lambda: schuler_mean(rp.readings_rad, rp.sigmas_rad),
             "lavrov": lambda: lavrov(rp.readings_rad, rp.sigmas_rad),
             "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None

@@ -39,8 +39,9 @@ def _fit_start(tau, u, rp, damping, drift):
     """Starting parameters: ω from the reversal-point spacing, δ from the decay of their deviations,
     then c, a, b (and d) by linear least squares."""
     w = math.pi / rp.half_period_s
-    dev = np.abs(rp.readings_rad - schuler_mean(rp.readings_rad).centre_rad)
-    dl = float(-np.polyfit(rp.times_s, np.log(dev), 1)[0]) if damping and rp.readings_rad.size >= 3 else 0.0
+    a = rp.readings_rad
+    centre = schuler_mean(a).centre_rad if a.size >= 3 else float(np.mean(a))   # two points: their mean
+    dl = float(-np.polyfit(rp.times_s, np.log(np.abs(a - centre)), 1)[0]) if damping and a.size >= 3 else 0.0
     E = np.exp(-dl * tau)
     cols = [np.ones_like(tau), E * np.cos(w * tau), E * np.sin(w * tau)] + ([tau] if drift else [])
     lin, *_ = np.linalg.lstsq(np.column_stack(cols), u, rcond=None)
