@@ -93,6 +93,8 @@ def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tup
     for name, run in runs.items():
         try:
             out[name] = run()
-        except (SceneError, KeyError, np.linalg.LinAlgError) as exc:
+        except KeyError:                           # transit's mark is the Schuler mean's centre
+            refused[name] = f"its mark is the Schuler mean's centre, refused: {refused.get('schuler_mean')}"
+        except (SceneError, np.linalg.LinAlgError) as exc:
             refused[name] = str(exc)
     return out, refused
