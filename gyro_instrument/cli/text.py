@@ -101,10 +101,11 @@ def north_prediction_lines(name, p) -> list:
         return [f"{name}: {north}; no directing torque, no swing centre"]
     pull = (f"; the tape pulls it toward its zero at {p['tape_zero_reading_deg']:.6f}° (exact equilibrium "
             f"K sin(c - N) = k_B (Z - c))" if "tape_zero_reading_deg" in p else "")
-    off = p["centre_from_north_arcsec"]
-    off = f"{off:+.4g}\"" if abs(off) < 3600.0 else f"{off / 3600.0:+.6f}°"
-    return [f"{name}: swing centre predicted at {p['centre_reading_deg']:.6f}° on the scale, {off} from north{pull}",
-            f"{name}: {north}"]
+    off = -p["centre_from_north_arcsec"]           # the scale reads counter-clockwise: east of north is −
+    side = "east" if off > 0 else "west"
+    off = f"{abs(off):.4g}\"" if abs(off) < 3600.0 else f"{abs(off) / 3600.0:.6f}°"
+    return [f"{name}: swing centre predicted at {p['centre_reading_deg']:.6f}° on the scale, {off} {side} of north "
+            f"(the estimate's pre_orientation, clockwise){pull}", f"{name}: {north}"]
 
 
 def turn_line(name, rate_rad_s) -> str:

@@ -12,7 +12,7 @@ length of the record; the caller calls it about four times per swing.
 
 With a torsion tape the rotor-on centre c is pulled toward the tape zero Z; :func:`live_north`
 then needs the rotor-off swing's tracker too: Z its Schuler mean (≥ 3 of its reversal points) and
-D_B/D_K from the two mean reversal-point spacings (:func:`.north.tape_ratio`), N = c + (D_B/D_K)(c − Z)
+D_B/D_K from the two mean reversal-point spacings (:func:`.north.tape_ratio`), N = c − atan(x (Z − c))
 (:func:`.north.tape_corrected`). Until then there is no live north (a centre pulled by the tape is
 not north). The full-record estimate (the fit, ``north`` block) replaces these at the end.
 

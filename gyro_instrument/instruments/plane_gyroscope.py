@@ -177,7 +177,7 @@ class PlaneGyroscope(Instrument):
             raise SceneError(f"effects.tape_torsion.torsion_constant_n_m_rad", D_B,
                              f"must be < D_K = C rho0 n cos(latitude) = {D_K:.6g} N m/rad of {self.name} at latitude "
                              f"{self.site.latitude_deg:g} deg: a tape at least as stiff cancels or reverses the directing "
-                             f"torque's hold on the swing centre (N = c + (D_B/D_K)(c - Z)){where}")
+                             f"torque's hold on the swing centre (D_K sin(c - N) = D_B (Z - c)){where}")
 
     def tape_ratio(self) -> float:
         """D_B/D_K of the scene (nan without rotor or directing torque)."""

@@ -20,7 +20,8 @@ Sign convention (the scale of issue 24, item 1)
   sought is mount_azimuth = (−u_N) mod 2π (:func:`mount_azimuth_rad`).
 * Without a torsion tape the swing centre c *is* u_N. With a tape (torsion constant D_B, tape zero
   Z on the scale) the centre is pulled toward Z: c = (D_K u_N + D_B Z)/(D_K + D_B), hence
-  u_N = c + (D_B/D_K)(c − Z) (:func:`tape_corrected`; physics_notes "North finding").
+  u_N = c + (D_B/D_K)(c − Z) near north; exactly, tan(c − u_N) = x (Z − c) with x the period ratio
+  (:func:`tape_north`, :func:`tape_corrected`; physics_notes "North finding").
 
 The methods (issue 24, item 3), each returning a :class:`NorthEstimate`
 ------------------------------------------------------------------------
