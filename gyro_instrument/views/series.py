@@ -10,8 +10,9 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 
 
-def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE") -> tuple:
-    """What to draw from a table or a bag.
+def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE", options=None) -> tuple:
+    """What to draw from a table (read as ``options`` say: :class:`~gyro_instrument.estimators.
+    table_read.TableOptions`, the reader of ``estimate --data``) or a bag.
 
     Returns
     -------
@@ -33,7 +34,7 @@ def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE") -> 
     from gyro_instrument.scenes import load_scene
     scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
     if not os.path.isdir(path) and not str(path).lower().endswith(".mcap"):
-        series, scene, notes = _table_series(path, field, scene, overrides)
+        series, scene, notes = _table_series(path, field, scene, overrides, options)
     else:
         series, scene, notes = _bag_series(path, scene, topics)
     if not series:
@@ -54,13 +55,14 @@ def _table_scene(path, scene, overrides):
     return found[0], [f"no --scene given: using the scene {found[0].name!r} from {found[1]}"]
 
 
-def _table_series(path, field, scene, overrides=()):
+def _table_series(path, field, scene, overrides=(), options=None):
     """:func:`load_series` for a CSV or Parquet table; returns (series, scene, notes)."""
-    from gyro_instrument.estimators.data_io import TIME_COLUMN, read_table
+    from gyro_instrument.estimators.data_io import TIME_COLUMN, load_table
     from gyro_instrument.instruments import REGISTRY
     from gyro_instrument.scenes import build_instruments
-    cols = read_table(path, field)
+    cols, read_notes = load_table(path, field, options)
     scene, notes = _table_scene(path, scene, overrides)
+    notes = read_notes + notes
     t = cols[TIME_COLUMN]
     insts = build_instruments(scene) if scene else {}
     names = list(dict.fromkeys(c.split(".", 1)[0] for c in cols if "." in c))
