@@ -197,8 +197,11 @@ def test_animation_frame_count(south, tmp_path):
                       "--format", "svg"]) == 0
     assert (tmp_path / "a" / "angles.svg").exists()
     with Image.open(tmp_path / "a" / "animation.gif") as im:
-        assert im.n_frames == len(frame_times(0.0, 900.0 - 0.05)) == 12
+        # issue 34 item 5: at least 20 frames for any record length, sized for a slide (>= 1200 px)
+        assert im.n_frames == len(frame_times(0.0, 900.0 - 0.05)) == 20
+        assert im.size[0] >= 1200
     assert len(frame_times(0.0, 86400.0)) == 120               # a day in 20 s at 6 frames/s
+    assert len(frame_times(0.0, 60.0)) == 20
 
 
 def test_describe_leads_with_the_answer_and_wraps(capsys):

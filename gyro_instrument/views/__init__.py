@@ -81,12 +81,14 @@ def draw_views(series, scene, out_dir, title="", fmt="png", dpi=DPI, window=None
         written.append(p)
 
     with plt.rc_context(STYLE):
-        fig = angles_figure(plt, series, axis, title)
-        fig.tight_layout()
-        save(fig, "angles")
+        save(angles_figure(plt, series, axis, title), "angles")
         rows = []
         if pend:
-            fig, rows = azimuth_figure(plt, series, pend, {n: expected_line(scene, n) for n in pend}, axis)
+            lines = {n: expected_line(scene, n) for n in pend}
+            for n, line in lines.items():      # a measurement's line through its first swing (no release known)
+                if line is not None:
+                    line["anchor"] = "release" if series[n].get("simulated") else "first swing"
+            fig, rows = azimuth_figure(plt, series, pend, lines, axis)
             save(fig, "swing_azimuth")
             save(rosette_figure(plt, series, pend, window, axis), "bob_path")
         rows += gyroscope_residual_rows(series)
