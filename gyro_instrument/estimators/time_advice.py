@@ -77,7 +77,7 @@ def _what_to_pass(ratio, raw, options, fps, per) -> str | None:
     return f"time looks like {name} ({column}); pass --time-unit {flag}" + (f" (not {given})" if given else "")
 
 
-def camera_of(options):
+def camera_of(options) -> "CameraOptions | None":
     """The table options' camera options, or None."""
     return getattr(options, "camera", None)
 
