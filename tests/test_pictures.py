@@ -197,8 +197,11 @@ def test_animation_frame_count(south, tmp_path):
                       "--format", "svg"]) == 0
     assert (tmp_path / "a" / "angles.svg").exists()
     with Image.open(tmp_path / "a" / "animation.gif") as im:
-        assert im.n_frames == len(frame_times(0.0, 900.0 - 0.05)) == 12
+        # issue 34 item 5: at least 20 frames for any record length, sized for a slide (>= 1200 px)
+        assert im.n_frames == len(frame_times(0.0, 900.0 - 0.05)) == 20
+        assert im.size[0] >= 1200
     assert len(frame_times(0.0, 86400.0)) == 120               # a day in 20 s at 6 frames/s
+    assert len(frame_times(0.0, 60.0)) == 20
 
 
 def test_describe_leads_with_the_answer_and_wraps(capsys):
@@ -214,3 +217,116 @@ def test_closed_pipe_is_quiet():
                        cwd=ROOT)
     assert len(r.stdout.splitlines()) == 2 and "Traceback" not in r.stderr and "BrokenPipe" not in r.stderr
     assert r.stderr.strip().splitlines()[-1] in ("0", "141")
+
+
+REALDATA = ROOT.parent.parent / "shared" / "realdata"
+if not REALDATA.is_dir():
+    REALDATA = Path("/work/shared/realdata")
+HEIGVD_SCENE = """name: heigvd
+site: {latitude_deg: 46.78}
+duration_s: 150
+sample_rate_hz: 4
+effects: {earth_rotation: {}, finite_amplitude: {}}
+sensor: {noise_rad: 1.0e-5}
+instruments:
+  pendulum: {type: spherical_pendulum, length_m: 19.9, initial_deflection_deg: 4.0, initial_azimuth_deg: 90.0}
+"""
+HEIGVD_OPTIONS = ["--no-header", "--names", "pendulum.x_east,pendulum.y_north,time_s", "--metres-per-pixel", "0.001"]
+
+
+def _data_boxes_clear_of(fig, ax):
+    """True when no plotted point of ``ax`` lies inside its legend's or its texts' boxes (pixels)."""
+    fig.canvas.draw()
+    boxes = [a.get_window_extent() for a in [ax.get_legend()] + list(ax.texts) if a is not None]
+    for line in ax.get_lines():
+        xy = ax.transData.transform(np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float))
+        xy = xy[np.isfinite(xy).all(axis=1)]
+        for b in boxes:
+            if np.any((xy[:, 0] > b.x0) & (xy[:, 0] < b.x1) & (xy[:, 1] > b.y0) & (xy[:, 1] < b.y1)):
+                return False
+    return True
+
+
+def test_heigvd_plot_with_the_documented_options(tmp_path, capsys):
+    # item 4/5: plot reads the published track (no header, mm, date-time text) with estimate's flags
+    (tmp_path / "h.yaml").write_text(HEIGVD_SCENE)
+    data = str(REALDATA / "heigvd_periode_06_22_09_27.csv")
+    out = tmp_path / "v"
+    assert core_main(["plot", data, "--scene", str(tmp_path / "h.yaml"), "--out", str(out), "--animate"]
+                     + HEIGVD_OPTIONS) == 0
+    assert "date-time text" in capsys.readouterr().err
+    assert {"angles.png", "swing_azimuth.png", "bob_path.png", "residuals.png", "animation.gif"} <= \
+        {p.name for p in out.iterdir()}
+    # without the flags the headerless file is refused in one line saying what to pass
+    assert core_main(["plot", data, "--out", str(tmp_path / "w")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--no-header --names" in err[0]
+
+
+def test_measured_expected_line_goes_through_the_first_swing_and_nothing_covers_the_data(tmp_path):
+    # item 5: with a --scene (a measurement, no release known) the expected line passes through the
+    # first measured swing's azimuth (the HEIG-VD record starts 89° from the scene's release); every
+    # legend and caption box is clear of every plotted point
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from gyro_instrument.estimators.table_read import TableOptions
+    from gyro_instrument.estimators.table_camera import CameraOptions
+    from gyro_instrument.views import load_series, record_span
+    from gyro_instrument.views.figures import angles_figure, azimuth_figure, residuals_figure, time_axis
+    from gyro_instrument.views.measure import expected_line, swing_azimuth
+    from gyro_instrument.views.rosette import rosette_figure
+    (tmp_path / "h.yaml").write_text(HEIGVD_SCENE)
+    opts = TableOptions(names=tuple(HEIGVD_OPTIONS[2].split(",")), camera=CameraOptions(metres_per_pixel=0.001))
+    series, scene, _ = load_series(str(REALDATA / "heigvd_periode_06_22_09_27.csv"), str(tmp_path / "h.yaml"),
+                                   options=opts)
+    assert series["pendulum"]["simulated"] is False
+    line = expected_line(scene, "pendulum")
+    line["anchor"] = "first swing"
+    lo, hi = record_span(series)
+    axis = time_axis(hi - lo)
+    fig, rows = azimuth_figure(plt, series, ["pendulum"], {"pendulum": line}, axis)
+    ax = fig.axes[0]
+    s = series["pendulum"]
+    tc, az, _ = swing_azimuth(s["t"], s["east"], s["north"])
+    expected = ax.get_lines()[1]
+    x, y = np.asarray(expected.get_xdata()), np.asarray(expected.get_ydata())
+    # the line at the first swing's time is the first swing's azimuth (to rounding: 1e-9°)
+    at_first = y[0] + (y[1] - y[0]) * (tc[0] / axis[0] - x[0]) / (x[1] - x[0])
+    assert at_first == pytest.approx(math.degrees(az[0]), abs=1e-9)
+    # its slope is a free pendulum's n sin(latitude) at the scene's site
+    assert (y[1] - y[0]) / ((x[1] - x[0]) * axis[0]) == pytest.approx(math.degrees(line["k_rad_s"]), rel=1e-9)
+    assert _data_boxes_clear_of(fig, ax)
+    figs = [angles_figure(plt, series, axis, ""), residuals_figure(plt, rows, axis),
+            rosette_figure(plt, series, ["pendulum"], None, axis)]
+    for f in figs:
+        for a in f.axes:
+            if a.get_lines():
+                assert _data_boxes_clear_of(f, a)
+    # the residual about the anchored line starts at zero (not 89°, the issue's "rms 54.6°")
+    assert abs(rows[0][3][0]) < 1e-9
+    plt.close("all")
+
+
+def test_first_animation_frame_shows_the_release_plane(south, tmp_path):
+    # item 5: the first frame's swing plane lies along the release azimuth (the scene: 0°, north-
+    # south; and an east-west release east-west), not the identity's north-south whatever the release
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from gyro_instrument.views import load_series
+    from gyro_instrument.views.animate import _pendulum_frames
+    (tmp_path / "ew.yaml").write_text(SOUTH.replace("initial_azimuth_deg: 0.0", "initial_azimuth_deg: 90.0")
+                                      .replace("duration_s: 900", "duration_s: 120"))
+    assert core_main(["simulate", str(tmp_path / "ew.yaml"), "--out", str(tmp_path / "ew.parquet"), "--quiet"]) == 0
+    for path, release_deg in ((south / "s.parquet", 0.0), (tmp_path / "ew.parquet", 90.0)):
+        series, _, _ = load_series(str(path))
+        fig, ax = plt.subplots()
+        draw = _pendulum_frames(ax, series["pendulum"])
+        draw(float(np.nanmin(series["pendulum"]["t"])))
+        plane = next(ln for ln in ax.get_lines() if ln.get_label() == "swing plane")
+        xs, ys = plane.get_xdata(), plane.get_ydata()
+        az = math.degrees(math.atan2(xs[1] - xs[0], ys[1] - ys[0])) % 180.0
+        # within 1° of the release (the plane turns ~0.2° in the first 40 s at 37.8° S)
+        assert min(abs(az - release_deg), 180.0 - abs(az - release_deg)) < 1.0
+        plt.close(fig)

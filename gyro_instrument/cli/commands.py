@@ -164,12 +164,10 @@ def estimate_command(args) -> int:
                    "--angle-unit": (args.angle_unit, None), "--column": (args.columns, []),
                    "--separator": (args.separator, None), "--scale-division": (args.scale_division, None)} | camera_flags(args)
     if args.data:
-        from gyro_instrument.estimators.data_io import TableOptions, estimate_data
+        from gyro_instrument.estimators.data_io import estimate_data
         if args.scale_division is not None:
             raise SceneError("--scale-division", args.scale_division, "reads a field book: give --reversal-points")
-        options = with_camera(TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad",
-                                                      args.columns, args.separator), args)
-        result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=options)), scene)
+        result = api.finish_estimate(to_jsonable(estimate_data(scene, args.data, options=table_options(args))), scene)
     elif given := [(flag, v) for flag, (v, default) in table_flags.items() if v != default]:
         raise SceneError(*given[0], "reads a table: give --data FILE (or leave the flag out)")
     else:
@@ -181,6 +179,22 @@ def estimate_command(args) -> int:
     else:
         print_estimate(result, angle_format=args.angle_format)
     return 0
+
+
+def table_options(args) -> "TableOptions":
+    """The table options of ``estimate --data`` and ``plot`` (the same flags, one reader:
+    :func:`~gyro_instrument.estimators.table_read.load_table`), checked."""
+    from gyro_instrument.estimators.table_read import TableOptions
+    return with_camera(TableOptions.from_flags(args.time_column, args.time_unit, args.angle_unit or "rad",
+                                               args.columns, args.separator), args)
+
+
+def given_table_flags(args) -> list:
+    """(flag, value) of every table flag given with a value other than its default."""
+    flags = {"--time-column": (args.time_column, "time_s"), "--time-unit": (args.time_unit, None),
+             "--angle-unit": (args.angle_unit, None), "--column": (args.columns, []),
+             "--separator": (args.separator, None)} | camera_flags(args)
+    return [(flag, v) for flag, (v, default) in flags.items() if v != default]
 
 
 def camera_flags(args) -> dict:
@@ -327,8 +341,10 @@ def plot_command(args) -> int:
     out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
     t0 = time.perf_counter()
     window = parse_window(args.window)
+    options = table_options(args)
     pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite,
-                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate)
+                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate, options=options,
+                            given=given_table_flags(args))
     for note in notes:
         print(f"gyro-instrument: note: {note}", file=sys.stderr)
     views = [p for p in pngs if not p.endswith(".gif")]

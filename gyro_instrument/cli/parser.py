@@ -138,8 +138,9 @@ def _add_scene_commands(sub):
                         "or a duration")
     p.add_argument("--time-column", default="time_s", metavar="NAME",
                    help="with --data: the table's time column (default time_s)")
-    p.add_argument("--time-unit", default=None, choices=list(BOOK_TIME_UNITS),
-                   help="with --data: unit of a numeric time column, converted to s (s, ms, us, ns, min; default s; "
+    p.add_argument("--time-unit", default=None, choices=list(BOOK_TIME_UNITS) + ["h", "day"],
+                   help="with --data: unit of a numeric time column, converted to s (s, ms, us, ns, min, h, day: "
+                        "Excel serial days; default s; "
                         "not for a Parquet timestamp or duration, which carries its unit); with --reversal-points: "
                         "the unit of a bare time column (also hms: clock times mm:ss or hh:mm:ss)")
     p.add_argument("--angle-unit", default=None, choices=list(ANGLE_UNITS),
@@ -173,20 +174,40 @@ def _add_scene_commands(sub):
     p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/estimate.md)")
 
 
-def add_camera_arguments(p) -> None:
-    """A camera track's table options (estimators/table_camera.py; msg_docs/csv.md)."""
+def add_camera_arguments(p, when="with --data: ") -> None:
+    """A camera track's table options (estimators/table_camera.py; msg_docs/csv.md); ``when`` starts
+    each help ("with --data: " for estimate, "" for plot, whose FILE is the table)."""
     p.add_argument("--metres-per-pixel", type=float, default=None, metavar="S",
-                   help="with --data: the track's x_east, y_north are pixels of S metres each")
-    p.add_argument("--y-down", action="store_true", help="with --data: the image y axis points down (y is negated)")
+                   help=f"{when}the track's x_east, y_north are pixels of S metres each (the ellipse correction "
+                        "scales as S squared; positions that cannot be metres exit 2 asking for it)")
+    p.add_argument("--y-down", action="store_true", help=f"{when}the image y axis points down (y is negated)")
     p.add_argument("--rotation-deg", type=float, default=None, metavar="A",
-                   help="with --data: the camera's x axis is A degrees from east, counter-clockwise seen from above")
+                   help=f"{when}the camera's x axis is A degrees from east, counter-clockwise seen from above")
     p.add_argument("--frame-column", default=None, metavar="NAME",
-                   help="with --data: time from this column's frame numbers (with --frame-rate; instead of "
+                   help=f"{when}time from this column's frame numbers (with --frame-rate; instead of "
                         "--time-column)")
     p.add_argument("--frame-rate", type=float, default=None, metavar="HZ", help="with --frame-column: frames per second")
     p.add_argument("--no-header", action="store_true",
-                   help="with --data, CSV: the file has no header row (name its columns with --names)")
+                   help=f"{when}CSV: the file has no header row (name its columns with --names)")
     p.add_argument("--names", default=None, metavar="A,B,C", help="with --no-header: the columns' names, in order")
+
+
+def add_table_arguments(p) -> None:
+    """plot: every table option of ``estimate --data`` (the same reader, estimators/table_read.py)."""
+    from gyro_instrument.estimators.table_read import ANGLE_UNITS as TABLE_ANGLE_UNITS
+    from gyro_instrument.estimators.table_read import TIME_UNITS as TABLE_TIME_UNITS
+    p.add_argument("--time-column", default="time_s", metavar="NAME",
+                   help="a table's time column (default time_s)")
+    p.add_argument("--time-unit", default=None, choices=list(TABLE_TIME_UNITS),
+                   help="unit of a numeric time column, converted to s (default s; day: Excel serial days)")
+    p.add_argument("--angle-unit", default=None, choices=list(TABLE_ANGLE_UNITS),
+                   help="unit of the angle channels (default rad)")
+    p.add_argument("--column", dest="columns", action="append", default=[], metavar="NAME=SOURCE",
+                   help="read the table's column SOURCE as the channel column NAME, e.g. --column "
+                        "pendulum.x_east=X (repeatable)")
+    p.add_argument("--separator", default=None, choices=[",", ";", "tab"],
+                   help="CSV: the field separator (default: sniffed from the header line; ';' reads decimal commas)")
+    add_camera_arguments(p, when="")
 
 
 def _add_bag_commands(sub):
@@ -226,6 +247,7 @@ def _add_bag_commands(sub):
                    help="also write animation.gif: the bob's path and turning swing plane seen from above (a "
                         "gyroscope: its axis swinging about the meridian), a day in about 20 s, with a clock and "
                         "the latitude")
+    add_table_arguments(p)
     add_scene_option(p, "the scene (a table's instrument types and lengths, a foreign bag's instruments; the "
                         "expected line's latitude). A bag written by this package carries its own, and so does "
                         "a table written by 'simulate' (used when --scene is absent, noted)",

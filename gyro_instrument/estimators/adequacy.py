@@ -116,11 +116,20 @@ def _unit_for(ratio):
 
 def _time_unit_refusal(name, ratio, period_data, expected):
     unit, flag = _unit_for(ratio)
-    return InadequateData(check_entry(
+    return InadequateData(_with_periods(check_entry(
         name, "time_unit", "refused",
         f"the record's swing period is {period_data:.6g} time units against the scene's predicted "
         f"{expected.period_s:.6g} s (ratio {ratio:.4g}): time looks like {unit}; pass --time-unit {flag}",
-        ratio, 1.0))
+        ratio, 1.0), period_data, expected))
+
+
+def _with_periods(entry, period_data, expected):
+    """``entry`` with ``record_period`` (the record's own period in its time units) and
+    ``expected_period_s``: what a reader that knows the table's time conversion advises from
+    (:mod:`.time_advice`)."""
+    entry["record_period"] = period_data
+    entry["expected_period_s"] = expected.period_s
+    return entry
 
 
 def check_before_fit(name, inst, rec) -> list:
@@ -185,10 +194,11 @@ def _refuse_undersampled(name, inst, rec, dt, spp, expected, need):
     if math.isfinite(period_data) and period_data / dt >= MIN_SAMPLES_PER_PERIOD \
             and _unit_for(period_data / expected.period_s):
         raise _time_unit_refusal(name, period_data / expected.period_s, period_data, expected)
-    raise InadequateData(check_entry(
+    raise InadequateData(_with_periods(check_entry(
         name, "sampling", "refused",
         f"{spp:.3g} samples per predicted period of {expected.period_s:.6g} s (one every {dt:.6g} s); below "
-        f"{need:g} {expected.sampling_reason}: sample at least {need / expected.period_s:.3g} Hz", spp, need))
+        f"{need:g} {expected.sampling_reason}: sample at least {need / expected.period_s:.3g} Hz", spp, need),
+        period_data if math.isfinite(period_data) and period_data / dt >= need else None, expected))
 
 
 def check_period(name, inst, period_s) -> dict | None:
@@ -200,11 +210,11 @@ def check_period(name, inst, period_s) -> dict | None:
     if _unit_for(ratio) and not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
         raise _time_unit_refusal(name, ratio, period_s, expected)
     if not (1.0 / PERIOD_FACTOR <= ratio <= PERIOD_FACTOR):
-        raise InadequateData(check_entry(
+        raise InadequateData(_with_periods(check_entry(
             name, "period", "refused",
             f"the fitted period {period_s:.6g} s is {ratio:.4g}x the scene's predicted {expected.period_s:.6g} s "
             f"(within a factor {PERIOD_FACTOR:g} is accepted): the scene does not describe this instrument "
-            f"(check {expected.source})", ratio, 1.0))
+            f"(check {expected.source})", ratio, 1.0), period_s, expected))
     return check_entry(name, "period", "passed", f"fitted period {period_s:.6g} s, predicted {expected.period_s:.6g} s "
                                             f"(ratio {ratio:.6g})", ratio, 1.0)
 

@@ -219,9 +219,10 @@ def _name_a_length_unit(exc, insts, cols) -> None:
         return
     ratio = exc.check["value"] / exc.check["expected"] if exc.check.get("expected") else math.inf
     unit = next((u for f, u in LENGTH_UNITS if abs(math.log(ratio / f)) < math.log(2.0)), None)
-    cause = (f"{name}.x_east/y_north look like {unit}, not metres: convert them to metres" if unit else
+    cause = (f"{name}.x_east/y_north look like {unit}, not metres: convert them to metres (or pass "
+             f"--metres-per-pixel {1.0 / dict((u, f) for f, u in LENGTH_UNITS)[unit]:g})" if unit else
              f"{name}.x_east/y_north are metres divided by the scene's length_m ({length:g} m): "
-             "check the length and the columns' unit")
+             "check the length and the columns' unit (pixels of a camera: pass --metres-per-pixel S)")
     exc.restate(f"deflection amplitude {exc.check['value']:.6g} rad (positions / length_m) is {ratio:.3g}x the "
                  f"scene's release {exc.check['expected']:.6g} rad (at most {AMPLITUDE_FACTOR:g}x): {cause}")
 
@@ -246,7 +247,9 @@ def estimate_data(scene, path, field="--data", options=None) -> dict:
     try:
         result = estimate_records(scene, {n: insts[n] for n in records}, records)
     except InadequateData as exc:
+        from gyro_instrument.estimators.time_advice import advise_time
         _name_a_length_unit(exc, insts, cols)
+        advise_time(exc, options, cols[TIME_COLUMN], read_notes)   # from the column as written: never loops
         raise
     result["observation_s"] = span
     result["data"] = os.path.basename(path)

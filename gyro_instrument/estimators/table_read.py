@@ -17,8 +17,18 @@ TIME_COLUMN = "time_s"
 
 #: ``--time-unit``: how many of the unit make a second (divided by, so that a whole number of ms,
 #: us or ns becomes the double nearest the exact time: IEEE division is correctly rounded), or for
-#: minutes the seconds in one (multiplied by).
-TIME_UNITS = {"s": 1, "ms": 1000, "us": 1_000_000, "ns": 1_000_000_000, "min": 60}
+#: minutes, hours and days (:data:`MULTIPLIED_UNITS`) the seconds in one (multiplied by; days, as a
+#: spreadsheet's serial date-times are, from the earliest first: one exact subtraction, one rounding).
+TIME_UNITS = {"s": 1, "ms": 1000, "us": 1_000_000, "ns": 1_000_000_000, "min": 60, "h": 3600, "day": 86400}
+MULTIPLIED_UNITS = ("min", "h", "day")
+
+
+def seconds_per_unit(time_unit) -> float:
+    """Seconds in one ``--time-unit`` (1 for None): 1e-3 for ms, 60 for min, 86400 for day."""
+    if time_unit is None:
+        return 1.0
+    k = TIME_UNITS[time_unit]
+    return float(k) if time_unit in MULTIPLIED_UNITS else 1.0 / k
 
 #: ``--angle-unit``: the channels read as angles (rad, or deg converted to rad). Not ``x_east`` /
 #: ``y_north`` (m) nor ``spin_rate`` (rad/s, a rate).
@@ -332,7 +342,8 @@ def load_table(path, field="--data", options=None) -> tuple:
         return ", ".join(cols[:6]) + (", ..." if len(cols) > 6 else "") or "none"
 
     if opts.time_column not in raw:
-        hint = "pass --time-column NAME or " if opts.time_column == TIME_COLUMN else ""
+        hint = ("pass --time-column NAME (frame numbers: --frame-column NAME --frame-rate HZ) or "
+                if opts.time_column == TIME_COLUMN else "")
         raise SceneError(field, path, f"has no time column '{opts.time_column}' (columns: {shown(raw)}); "
                                       f"{hint}see msg_docs/csv.md")
     sources = {src for _, src in opts.columns} | {opts.time_column}
@@ -355,9 +366,12 @@ def load_table(path, field="--data", options=None) -> tuple:
     if opts.columns:
         notes.append("columns read as channels: " + ", ".join(f"{src} as {name}" for name, src in opts.columns))
     if opts.time_unit not in (None, "s"):
-        k = TIME_UNITS[opts.time_unit]
-        cols[TIME_COLUMN] = cols[TIME_COLUMN] * k if opts.time_unit == "min" else cols[TIME_COLUMN] / k
-        notes.append(f"{opts.time_column} in {opts.time_unit}: converted to s")
+        k, t = TIME_UNITS[opts.time_unit], cols[TIME_COLUMN]
+        if opts.time_unit == "day" and np.isfinite(t).any():
+            t = t - np.nanmin(t)                  # a serial date (45000 days): seconds from the earliest
+        cols[TIME_COLUMN] = t * k if opts.time_unit in MULTIPLIED_UNITS else t / k
+        notes.append(f"{opts.time_column} in {opts.time_unit}: converted to s"
+                     + (" from the earliest sample" if opts.time_unit == "day" else ""))
     if opts.angle_unit == "deg":
         converted = [c for c in cols if "." in c and c.split(".", 1)[1] in ANGLE_CHANNELS]
         for c in converted:

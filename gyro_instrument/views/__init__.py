@@ -81,12 +81,14 @@ def draw_views(series, scene, out_dir, title="", fmt="png", dpi=DPI, window=None
         written.append(p)
 
     with plt.rc_context(STYLE):
-        fig = angles_figure(plt, series, axis, title)
-        fig.tight_layout()
-        save(fig, "angles")
+        save(angles_figure(plt, series, axis, title), "angles")
         rows = []
         if pend:
-            fig, rows = azimuth_figure(plt, series, pend, {n: expected_line(scene, n) for n in pend}, axis)
+            lines = {n: expected_line(scene, n) for n in pend}
+            for n, line in lines.items():      # a measurement's line through its first swing (no release known)
+                if line is not None:
+                    line["anchor"] = "release" if series[n].get("simulated") else "first swing"
+            fig, rows = azimuth_figure(plt, series, pend, lines, axis)
             save(fig, "swing_azimuth")
             save(rosette_figure(plt, series, pend, window, axis), "bob_path")
         rows += gyroscope_residual_rows(series)
@@ -117,15 +119,18 @@ def gyroscope_residual_rows(series) -> list:
 
 
 def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False, fmt="png", dpi=DPI,
-              window=None, animate=False) -> tuple:
+              window=None, animate=False, options=None, given=()) -> tuple:
     """Read ``path`` (table or bag), draw the views into ``out_dir`` (and ``animation.gif`` with
-    ``animate``); return (paths written, notes).
+    ``animate``); return (paths written, notes). ``options``: how to read a table (:class:`~gyro_
+    instrument.estimators.table_read.TableOptions`, the flags of ``estimate --data``); ``given``: the
+    (flag, value) pairs the user gave for them, refused for a bag or a field book.
 
     Raises
     ------
     SceneError
         matplotlib missing; unreadable input; a bad ``fmt``, ``dpi`` or ``window``; a view's file
-        already in ``out_dir`` without ``overwrite`` (nothing is written then); ``out_dir`` is a file.
+        already in ``out_dir`` without ``overwrite`` (nothing is written then); ``out_dir`` is a file;
+        a table flag for a bag or a field book.
     """
     pyplot()
     if fmt not in FORMATS:
@@ -135,6 +140,10 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise SceneError("--out", out_dir, "is a file; give a directory for the views")
     from gyro_instrument.views.field_book_view import is_field_book, plot_field_book
+    bag = os.path.isdir(path) or str(path).lower().endswith(".mcap")
+    if given and (bag or is_field_book(path)):
+        raise SceneError(given[0][0], given[0][1], f"reads a table (CSV or Parquet); {path} is a "
+                                                   f"{'bag' if bag else 'field book'}: leave the flag out")
     if is_field_book(path):                          # a surveyor's field book (views/field_book_view.py)
         from gyro_instrument.scenes import load_scene
         scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
@@ -145,7 +154,7 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
         if existing:
             raise SceneError("--out", out_dir, f"already holds {', '.join(existing)}; pass "
                                                f"--overwrite to replace them, or give a new directory")
-    series, scene, notes = load_series(path, scene_arg, overrides, topics)
+    series, scene, notes = load_series(path, scene_arg, overrides, topics, options=options)
     title = f"({os.path.basename(str(path).rstrip('/'))})"
     written = draw_views(series, scene, out_dir, title, fmt, dpi, window)
     if animate:

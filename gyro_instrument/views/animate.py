@@ -13,12 +13,16 @@ from gyro_instrument.views.series import finite
 #: Frames per second of the GIF and record seconds per frame: a day (86400 s) in 20 s.
 FPS = 6
 RECORD_S_PER_FRAME = 86400.0 / (20.0 * FPS)
-MIN_FRAMES, MAX_FRAMES = 12, 120
+#: At least 20 frames (a short record is slowed down to them), at most 120.
+MIN_FRAMES, MAX_FRAMES = 20, 120
+#: The GIF's size: 12.8 x 7.2 in at 100 dpi, 1280 x 720 px (a 16:9 slide).
+FIGSIZE_IN, GIF_DPI = (12.8, 7.2), 100
 
 
 def frame_times(t0, t1) -> np.ndarray:
     """The record times the frames show: one per :data:`RECORD_S_PER_FRAME` (a day in 20 s at
-    :data:`FPS`), at least :data:`MIN_FRAMES` and at most :data:`MAX_FRAMES`, first to last sample."""
+    :data:`FPS`), at least :data:`MIN_FRAMES` (whatever the record's length) and at most
+    :data:`MAX_FRAMES`, first to last sample."""
     n = int(min(MAX_FRAMES, max(MIN_FRAMES, math.ceil((t1 - t0) / RECORD_S_PER_FRAME) + 1)))
     return np.linspace(t0, t1, n)
 
@@ -37,16 +41,17 @@ def write_animation(series, scene, path) -> str:
     name = pend[0] if pend else next(iter(series))
     s = series[name]
     lat = f"latitude {latitude_words(scene.site.latitude_deg)}" if scene is not None else "latitude unknown (no scene)"
-    fig, ax = plt.subplots(figsize=(7.2, 7.2))
+    fig = plt.figure(figsize=FIGSIZE_IN)
+    ax = fig.add_axes((0.06, 0.08, 0.5, 0.84))     # square data area on the left, words on the right
     draw = _pendulum_frames(ax, s) if pend else _gyroscope_frames(ax, s)
     t = np.asarray(s["t"], float)
     times = frame_times(float(np.nanmin(t)), float(np.nanmax(t)))
-    ax.set_title(f"{name} seen from above, {lat}", fontsize=13)
-    clock = ax.text(0.02, 0.02, "", transform=ax.transAxes, fontsize=13)
+    fig.text(0.62, 0.9, f"{name} seen from above\n{lat}", fontsize=15, va="top")
+    clock = fig.text(0.62, 0.12, "", fontsize=14)
     writer = PillowWriter(fps=FPS)
     tmp = f"{path}.partial.gif"                 # Pillow picks the format from the extension
     try:
-        with writer.saving(fig, tmp, dpi=80):
+        with writer.saving(fig, tmp, dpi=GIF_DPI):
             for tf in times:
                 draw(tf)
                 clock.set_text(_clock(tf))
@@ -60,40 +65,59 @@ def write_animation(series, scene, path) -> str:
 
 
 def _pendulum_frames(ax, s):
-    """Set up a pendulum's axes; return draw(t): its last ~2 swings and its swing plane at t."""
+    """Set up a pendulum's axes (about the swing's centre); return draw(t): the path over about 40 s
+    ending at t (the first 40 s for the first frames) and the swing plane fitted to that path (its
+    principal axis), so the first frame shows the release's plane (an east-west release east-west)."""
+    from gyro_instrument.views.rosette import swing_centre
     t, e, n = finite(s["t"], s["east"], s["north"])
-    r = float(np.max(np.hypot(e, n))) or 1.0
+    ce, cn = swing_centre(e, n) if e.size else (0.0, 0.0)
+    e, n = e - ce, n - cn
+    r = float(np.max(np.hypot(e, n))) if e.size else 1.0
+    r = r or 1.0
     unit = "m" if s["path_unit"] == "m" else "deflection, degrees"
     ax.set_xlim(-1.2 * r, 1.2 * r)
     ax.set_ylim(-1.2 * r, 1.2 * r)
     ax.set_aspect("equal")
-    ax.set_xlabel(f"east ({unit})")
+    ax.set_xlabel(f"east of the swing's centre ({unit})")
     ax.set_ylabel(f"north ({unit})")
-    ax.text(0, 1.1 * r, "N", ha="center", fontsize=14)
+    ax.text(0, 1.08 * r, "N", ha="center", fontsize=14)
     path, = ax.plot([], [], lw=1.0, color="C0")
     plane, = ax.plot([], [], lw=3, color="C3", label="swing plane")
     first, = ax.plot([], [], lw=1.5, ls="--", color="0.5", label="swing plane at the start")
-    bob, = ax.plot([], [], "o", ms=10, color="k")
-    ax.legend(loc="upper right", fontsize=11)
+    bob, = ax.plot([], [], "o", ms=10, color="k", label="bob")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.1, 0.7), fontsize=12, borderaxespad=0.0)
     dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
     span = max(20, int(40.0 / dt))          # ~40 s of path: a few swings of a long pendulum
 
-    def axis_at(i):
-        a, b = max(0, i - span), i + 1
-        ee, nn = e[a:b], n[a:b]
-        _, v = np.linalg.eigh(np.cov(np.vstack([ee, nn])) if b - a > 2 else np.eye(2))
-        return v[:, -1] * 1.15 * r
+    def window(i):
+        b = min(e.size, max(i + 1, span + 1))           # the first frames look ahead: never fewer samples
+        return max(0, b - span - 1), b
 
-    start = axis_at(min(span, e.size - 1))
+    def axis_at(i):
+        a, b = window(i)
+        v = plane_direction(e[a:b], n[a:b])
+        return v * 1.15 * r
+
+    start = axis_at(0)
     first.set_data([-start[0], start[0]], [-start[1], start[1]])
 
     def draw(tf):
         i = int(min(e.size - 1, np.searchsorted(t, tf)))
-        path.set_data(e[max(0, i - span):i + 1], n[max(0, i - span):i + 1])
+        a, b = window(i)
+        path.set_data(e[a:b], n[a:b])
         ax_ = axis_at(i)
         plane.set_data([-ax_[0], ax_[0]], [-ax_[1], ax_[1]])
         bob.set_data([e[i]], [n[i]])
     return draw
+
+
+def plane_direction(east, north) -> np.ndarray:
+    """Unit vector (east, north) along the swing plane: the principal axis of the positions' covariance
+    (east and north when there are fewer than 3 samples or no swing, never a made-up direction: NaN)."""
+    if east.size < 3 or not (np.ptp(east) > 0 or np.ptp(north) > 0):
+        return np.array([np.nan, np.nan])
+    _, v = np.linalg.eigh(np.cov(np.vstack([east, north])))
+    return v[:, -1]
 
 
 def _gyroscope_frames(ax, s):
@@ -111,7 +135,7 @@ def _gyroscope_frames(ax, s):
     ax.text(0, 1.12, "meridian (N)", ha="center", fontsize=13)
     needle, = ax.plot([], [], lw=4, color="C3", label=f"rotor axis ({label})")
     trail, = ax.plot([], [], lw=1, color="C0")
-    ax.legend(loc="lower right", fontsize=11)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.1, 0.7), fontsize=12, borderaxespad=0.0)
     dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
     span = max(10, int(30.0 / dt))
 

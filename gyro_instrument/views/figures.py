@@ -24,6 +24,8 @@ STYLE = {"font.size": 13, "axes.titlesize": 14, "axes.labelsize": 13, "legend.fo
          "xtick.labelsize": 12, "ytick.labelsize": 12, "figure.titlesize": 15}
 #: Minimum height of an azimuth axis, degrees: a drift of 0.01° is drawn at its true size.
 MIN_AZIMUTH_SPAN_DEG = 2.0
+#: Characters per line of a note beside a panel (12 pt: about 4.4 in of the figure's 16).
+NOTE_CHARS_SIDE = 48
 
 
 def time_axis(span_s) -> tuple:
@@ -72,43 +74,40 @@ def trace(ax, t, y, scale, label, period=None) -> None:
                     alpha=0.55, label=f"{label} (min-max over bins of {per})")
 
 
+def outside_legend(ax, *handles) -> None:
+    """The axes' legend outside it, to the right of its top (never over the data)."""
+    ax.legend(*handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+
+
+def side_note(ax, text, width=NOTE_CHARS_SIDE, y=0.0, va="bottom", **kw) -> "object":
+    """``text`` wrapped to ``width`` characters beside the axes, to the right of its plotting area
+    (never over the data): bottom-aligned at ``y`` (axes fraction) by default."""
+    wrapped = "\n".join(textwrap.fill(part, width) for part in str(text).split("\n"))
+    return ax.text(1.01, y, wrapped, transform=ax.transAxes, va=va, ha="left", fontsize=12, **kw)
+
+
 def angles_figure(plt, series, axis, title) -> "object":
     """The ``angles`` view: every measured angle (degrees) or position (m) over time, one panel per
-    instrument, from the record's first to its last sample."""
+    channel (two channels of one instrument on one axis hide each other when they swing alike: a
+    pendulum swinging at 45°), from the record's first to its last sample; legends beside the panels."""
     scale, tlabel = axis
-    names = list(series)
-    fig, axes = plt.subplots(len(names), 1, figsize=(WIDTH_IN, 3.6 * len(names) + 1), squeeze=False)
-    for ax, n in zip(axes[:, 0], names):
+    panels = [(n, label, y, unit) for n, s in series.items() for label, y, unit in s["channels"]]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(WIDTH_IN, 3.0 * len(panels) + 1), squeeze=False,
+                             sharex=True, layout="constrained")
+    for i, (ax, (n, label, y, unit)) in enumerate(zip(axes[:, 0], panels)):
         s = series[n]
-        units = sorted({u for _, _, u in s["channels"]})
-        swings = [(lab, v) for lab, v, _ in s["channels"] if not is_azimuth(lab)]
-        turns = [(lab, v) for lab, v, _ in s["channels"] if is_azimuth(lab)]
-        for label, y in swings:
-            trace(ax, np.asarray(s["t"], float), np.asarray(y, float), scale, label, _band_period(s["t"], y))
-        handles = ax.get_legend_handles_labels()
-        if turns:      # turning azimuths on their own axis, continuous (not a ±180° sawtooth)
-            tw = ax.twinx() if swings else ax
-            for i, (label, y) in enumerate(turns):
-                y = unwrapped_deg(y)
-                n_lines, n_fills = len(tw.lines), len(tw.collections)
-                trace(tw, np.asarray(s["t"], float), y, scale, f"{label} (unwrapped, right axis, dashed)" if swings
-                      else f"{label} (unwrapped)", _band_period(s["t"], y))
-                colour = f"C{len(swings) + i}"      # a twin axis restarts the colour cycle
-                for ln in tw.lines[n_lines:]:
-                    ln.set_color(colour)
-                    ln.set_linestyle("--" if swings else "-")
-                for band in tw.collections[n_fills:]:
-                    band.set_facecolor(colour)
-            tw.set_ylabel("azimuth (degrees, unwrapped)")
-            if swings:
-                more = tw.get_legend_handles_labels()
-                handles = (handles[0] + more[0], handles[1] + more[1])
-        what = "position (m)" if units == ["m"] else "angle (degrees)"
-        ax.set_ylabel(what if swings or not turns else "azimuth (degrees, unwrapped)")
+        t = np.asarray(s["t"], float)
+        turn = is_azimuth(label)
+        y = unwrapped_deg(y) if turn else np.asarray(y, float)
+        trace(ax, t, y, scale, f"{label} (unwrapped)" if turn else label, _band_period(t, y))
+        for artist in ax.lines[-1:] + ax.collections[-1:]:
+            artist.set_color(f"C{i % 10}")
+        ax.set_ylabel("azimuth (degrees, unwrapped)" if turn else "position (m)" if unit == "m"
+                      else "angle (degrees)")
         ax.set_title(f"{n} ({(s['type'] or 'type unknown').replace('_', ' ')})"
-                     + (": length unknown, bob position in metres" if units == ["m"] else ""))
-        ax.legend(*handles, loc="upper right")
-        _say_why_flat(ax, s)
+                     + (": length unknown, bob position in metres" if unit == "m" else ""), fontsize=13)
+        outside_legend(ax)
+        _say_why_flat(ax, label, y)
     axes[-1, 0].set_xlabel(tlabel)
     fig.suptitle(f"angles over time {title}".strip())
     return fig
@@ -133,22 +132,23 @@ def unwrapped_deg(y_deg) -> np.ndarray:
     return y
 
 
-def _say_why_flat(ax, s):
-    """A note on a panel whose channels never move (all zero or constant)."""
-    flat = [lab for lab, v, _ in s["channels"] if np.all(~np.isfinite(v)) or not np.nanmax(v) > np.nanmin(v)]
-    if flat:
-        ax.text(0.01, 0.04, "constant (never moves): " + ", ".join(flat), transform=ax.transAxes, fontsize=12,
-                color="0.3")
+def _say_why_flat(ax, label, y):
+    """A note beside a panel whose channel never moves (all zero or constant)."""
+    if np.all(~np.isfinite(y)) or not np.nanmax(y) > np.nanmin(y):
+        side_note(ax, f"constant (never moves): {label}", color="0.3")
 
 
 def azimuth_figure(plt, series, pend, lines, axis) -> tuple:
     """The ``swing_azimuth`` view: each pendulum's swing-plane azimuth per swing (degrees, compass)
-    with its expected line anchored at the release (``lines[name]``: :func:`~gyro_instrument.views.
-    measure.expected_line`, or a fitted line without a scene) and the rates in °/h written on the
-    plot. Returns (figure, residual rows (name, label, t, deg, note))."""
+    with its expected line (``lines[name]``: :func:`~gyro_instrument.views.measure.expected_line`;
+    anchored at the release for a simulation, ``anchor`` ``"release"``, the default, or at the first
+    measured swing, ``"first swing"``, at a free pendulum's rate), the line fitted to the points, and
+    the rates in °/h written beside the panel. Returns (figure, residual rows (name, label, t, deg,
+    note, span))."""
     scale, tlabel = axis
     rows = []
-    fig, axes = plt.subplots(len(pend), 1, figsize=(WIDTH_IN, 5.0 * len(pend) + 1), squeeze=False)
+    fig, axes = plt.subplots(len(pend), 1, figsize=(WIDTH_IN, 5.0 * len(pend) + 1), squeeze=False,
+                             layout="constrained")
     for ax, n in zip(axes[:, 0], pend):
         s = series[n]
         t = np.asarray(s["t"], float)
@@ -162,73 +162,89 @@ def azimuth_figure(plt, series, pend, lines, axis) -> tuple:
                               "constant positions, or shorter than two periods)", ha="center", va="center",
                     transform=ax.transAxes, wrap=True)
             continue
-        row = _azimuth_panel(ax, n, t, tc, az, lines.get(n), scale)
-        rows.append(row)
-    fig.tight_layout()
+        rows.append(_azimuth_panel(ax, n, t, tc, az, lines.get(n), scale))
     return fig, rows
 
 
+def _expected(line, tc, az):
+    """(rate, anchor time, anchor azimuth, label, words) of the expected line, or None without one."""
+    if line is None:
+        return None
+    if line.get("anchor", "release") == "release":
+        rate = line["rate_rad_s"]
+        words = (f"expected: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)}: a full turn in "
+                 f"{line['full_turn_h']:.1f} h at latitude {latitude_words(line['latitude_deg'])}"
+                 + (f", released at {math.degrees(line['release'][0]):.1f}° (exact finite-amplitude rate; "
+                    f"n·sin(latitude) alone: {deg_per_h(line['k_rad_s']):+.3f} °/h)" if line["exact_amplitude"]
+                    else " (n·sin(latitude))"))
+        return rate, 0.0, line["release"][1], "expected, from the release", words
+    rate = line["k_rad_s"]
+    words = (f"expected for a free pendulum at {latitude_words(line['latitude_deg'])}: {deg_per_h(rate):+.3f} "
+             f"°/h (n·sin(latitude); a swing's ellipse adds its own turn), {sense_words(rate)}, drawn through "
+             f"the first measured swing")
+    return rate, float(tc[0]), float(az[0]), "expected (free pendulum), through the first swing", words
+
+
 def _azimuth_panel(ax, n, t, tc, az, line, scale):
-    """One pendulum's azimuth panel: points, the anchored (or fitted) line over the whole record,
-    the rates written, autoscale at least :data:`MIN_AZIMUTH_SPAN_DEG` tall."""
+    """One pendulum's azimuth panel: points, the expected line over the whole record (anchored as
+    :func:`_expected` says), the fitted line, the rates beside the panel, autoscale at least
+    :data:`MIN_AZIMUTH_SPAN_DEG` tall."""
     t = t[np.isfinite(t)]
-    t_ends = np.array([min(0.0, t.min()) if line else t.min(), t.max()])
-    measured = float(np.polyfit(tc, az, 1)[0])
-    if line is not None:
-        rate, t0, a0 = line["rate_rad_s"], 0.0, line["release"][1]
-        az = anchored(tc, az, rate, t0, a0)
-        text = (f"expected: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)}: a full turn in "
-                f"{line['full_turn_h']:.1f} h\nat latitude {latitude_words(line['latitude_deg'])}"
-                + (f", released at {math.degrees(line['release'][0]):.1f}° (exact finite-amplitude rate; "
-                   f"n·sin(latitude) alone: {deg_per_h(line['k_rad_s']):+.3f} °/h)" if line["exact_amplitude"]
-                   else " (n·sin(latitude))")
-                + f"\nmeasured (slope of the points): {deg_per_h(measured):+.3f} °/h")
-        label = "expected, from the release"
+    release = line is not None and line.get("anchor", "release") == "release"
+    t_ends = np.array([min(0.0, t.min()) if release else t.min(), t.max()])
+    exp = _expected(line, tc, az)
+    if exp is not None:
+        az = anchored(tc, az, exp[0], exp[1], exp[2])
+    slope, icpt = (float(v) for v in np.polyfit(tc - tc[0], az, 1))
+    fitted = np.degrees(icpt + slope * (t_ends - tc[0]))
+    measured_words = f"measured (the line fitted to the points): {deg_per_h(slope):+.3f} °/h, {sense_words(slope)}"
+    # every trace seen: the lines over the points (thin), the fitted line dashed over the expected one
+    ax.plot(tc / scale, np.degrees(az), "o", ms=6 if tc.size < 60 else 3.5, color="C0", alpha=0.8, zorder=2,
+            label="measured, one point per swing")
+    if exp is not None:
+        rate, t0, a0, label, words = exp
+        yline = np.degrees(a0 + rate * (t_ends - t0))
+        ax.plot(t_ends / scale, yline, "-", lw=2.2, color="C3", zorder=3, label=label)
+        ax.plot(t_ends / scale, fitted, ls=(0, (4, 4)), lw=1.6, color="C2", zorder=4, label="fitted to the points")
+        text = f"{words}\n{measured_words}"
     else:
-        rate = measured
-        t0, a0 = float(tc[0]), float(np.mean(az - rate * (tc - tc[0])))
+        rate, t0, a0 = slope, float(tc[0]), icpt
+        yline = fitted
         lat = math.degrees(math.asin(max(-1.0, min(1.0, rate / SIDEREAL_RATE_RAD_S))))
-        text = (f"fitted: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)} (no scene: no expected line)\n"
+        ax.plot(t_ends / scale, yline, "-", lw=2.2, color="C3", zorder=3, label="fitted line (no scene)")
+        text = (f"fitted: {deg_per_h(rate):+.3f} °/h, {sense_words(rate)} (no scene: no expected line); "
                 f"the latitude it implies: {latitude_words(lat)} (rate = Earth's sidereal rate · sin(latitude))")
-        label = "fitted line (no scene)"
-    yline = np.degrees(a0 + rate * (t_ends - t0))
-    ax.plot(tc / scale, np.degrees(az), ".", ms=5, label="measured, one point per swing")
-    ax.plot(t_ends / scale, yline, "-", lw=2, color="C3", label=label)
-    ax.text(0.01, 0.97, text, transform=ax.transAxes, va="top", fontsize=12,
-            bbox={"boxstyle": "round", "fc": "white", "alpha": 0.85})
-    lo = min(np.degrees(az).min(), yline.min())
-    hi = max(np.degrees(az).max(), yline.max())
+    lo = min(np.degrees(az).min(), yline.min(), fitted.min())
+    hi = max(np.degrees(az).max(), yline.max(), fitted.max())
     pad = max(0.5 * (MIN_AZIMUTH_SPAN_DEG - (hi - lo)), 0.08 * (hi - lo))
-    ax.set_ylim(lo - pad, hi + pad + 0.45 * (hi - lo + 2 * pad))     # room for the text above the data
-    ax.legend(loc="upper right")
+    ax.set_ylim(lo - pad, hi + pad)
+    outside_legend(ax)
+    side_note(ax, text)
     resid = np.degrees(az - (a0 + rate * (tc - t0)))
-    slope = deg_per_h(float(np.polyfit(tc, resid, 1)[0]) * math.pi / 180.0)
-    note = (f"a slope is a rate difference: measured − {'expected' if line else 'fitted'} = {slope:+.4f} °/h; "
-            f"a curve, a rate that changes (the expected line is the rate at release); the ripple, the "
+    diff = deg_per_h(float(np.polyfit(tc, resid, 1)[0]) * math.pi / 180.0)
+    about_fit = np.degrees(az - (icpt + slope * (tc - tc[0])))
+    which = "expected" if exp is not None else "fitted"
+    note = (f"a slope is a rate difference: measured − {which} = {diff:+.4f} °/h; rms about the fitted line "
+            f"{float(np.sqrt(np.mean(about_fit ** 2))):.3g}°; a curve, a rate that changes; the ripple, the "
             f"ellipse's own turning within each swing")
-    return n, "swing-plane azimuth less the " + ("expected" if line else "fitted") + " line (degrees)", tc, resid, \
-        note, (t_ends[0], t_ends[1])
-
-
-
-#: Characters per line of a note inside a panel of the figure's width at 12 pt.
-NOTE_CHARS = 140
+    return n, f"swing-plane azimuth less the {which} line (degrees)", tc, resid, note, (t_ends[0], t_ends[1])
 
 
 def residuals_figure(plt, rows, axis) -> "object":
     """The ``residuals`` view: one panel per (instrument, label, t, residual in degrees, note, span)
-    row, with its rms and what a trend in it means."""
+    row, with its rms in the title and what a trend in it means beside the panel."""
     scale, tlabel = axis
-    fig, axes = plt.subplots(len(rows), 1, figsize=(WIDTH_IN, 3.8 * len(rows) + 1), squeeze=False)
+    fig, axes = plt.subplots(len(rows), 1, figsize=(WIDTH_IN, 3.8 * len(rows) + 1), squeeze=False,
+                             layout="constrained")
     for ax, (n, label, tt, rr, note, span) in zip(axes[:, 0], rows):
         trace(ax, tt, rr, scale, label)
-        ax.plot(np.array(span) / scale, [0.0, 0.0], "k-", lw=0.8)
+        if ax.lines and len(tt) < 500:             # a few points (one per swing): each one seen
+            ax.lines[-1].set_marker("o")
+            ax.lines[-1].set_markersize(4)
+        ax.plot(np.array(span) / scale, [0.0, 0.0], "k-", lw=0.8, zorder=1)
         rms = float(np.sqrt(np.mean(rr ** 2))) if rr.size else float("nan")
         ax.set_title(f"{n}: {label}, rms {rms:.3g}°")
         ax.set_ylabel("degrees")
-        # wrapped to the panel's width (a line running past the figure made tight_layout shrink the panel)
-        ax.text(0.01, 0.04, textwrap.fill(note, NOTE_CHARS), transform=ax.transAxes, fontsize=12, color="0.25",
-                bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "ec": "none"})
+        side_note(ax, note, y=1.0, va="top", color="0.25")
         ax.set_xlabel(tlabel)
-    fig.tight_layout()
     return fig

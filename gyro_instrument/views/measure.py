@@ -26,8 +26,8 @@ def dominant_period(t, y) -> float | None:
 
 def swing_azimuth(t, east, north) -> tuple:
     """Swing-plane azimuth per swing period: (window centre times s, compass azimuth rad, unwrapped
-    modulo π, period s); the principal axis of the deflection over each period (as the Foucault
-    estimator measures it), the first value in [0, π). Empty arrays (and a None period) when there
+    modulo π, period s); the principal axis of the deflection about its mean over each period (as
+    the Foucault estimator measures it, whose rest point is fitted: the track's origin is irrelevant), the first value in [0, π). Empty arrays (and a None period) when there
     is no swing (a still, all-zero or constant bob)."""
     t, e, n = finite(t, east, north)
     main = e if np.var(e) >= np.var(n) else n
@@ -43,9 +43,10 @@ def swing_azimuth(t, east, north) -> tuple:
     cnt = np.maximum((b - a).astype(float), 1.0)
     end = int(b[-1])                      # segments a[i]:a[i+1], the last one a[-1]:b[-1]
     e, n = e[:end], n[:end]
-    see = np.add.reduceat(e * e, a) / cnt
-    snn = np.add.reduceat(n * n, a) / cnt
-    sen = np.add.reduceat(e * n, a) / cnt
+    me, mn = np.add.reduceat(e, a) / cnt, np.add.reduceat(n, a) / cnt     # each swing's centre: an offset
+    see = np.add.reduceat(e * e, a) / cnt - me * me                        # origin is no minor axis
+    snn = np.add.reduceat(n * n, a) / cnt - mn * mn
+    sen = np.add.reduceat(e * n, a) / cnt - me * mn
     psi = 0.5 * np.arctan2(2 * sen, snn - see)
     tc = 0.5 * (t[a] + t[np.maximum(b - 1, a)])
     psi, tc = psi[good], tc[good]

@@ -52,8 +52,8 @@ def rosette_figure(plt, series, pend, window, axis) -> "object":
     plane's turn over the window and its size written."""
     from matplotlib.collections import LineCollection
     scale, tlabel = axis
-    fig, axes = plt.subplots(1, len(pend), figsize=(16.0, 8.5 if len(pend) == 1 else 16.0 / len(pend) + 1.5),
-                             squeeze=False)
+    fig, axes = plt.subplots(1, len(pend), figsize=(16.0, 9.0 if len(pend) == 1 else 16.0 / len(pend) + 2.5),
+                             squeeze=False, layout="constrained")
     for ax, n in zip(axes[0, :], pend):
         s = series[n]
         t, e, nn = finite(s["t"], s["east"], s["north"])
@@ -70,6 +70,8 @@ def rosette_figure(plt, series, pend, window, axis) -> "object":
                                                      "the bob does not move (all-zero or constant positions)"),
                     ha="center", va="center", transform=ax.transAxes)
             continue
+        centre = swing_centre(e, nn)
+        e, nn = e - centre[0], nn - centre[1]      # about the swing's centre (an origin anywhere)
         period = dominant_period(t, e if np.var(e) >= np.var(nn) else nn)
         m = _spread_swings(t, period)
         pts = np.column_stack([e, nn])
@@ -78,21 +80,30 @@ def rosette_figure(plt, series, pend, window, axis) -> "object":
         lc = LineCollection(seg, array=tm, cmap="viridis", linewidths=1.0)
         ax.add_collection(lc)
         ax.autoscale_view()
-        fig.colorbar(lc, ax=ax, label=tlabel, shrink=0.85)
+        fig.colorbar(lc, ax=ax, label=tlabel, shrink=0.6, location="bottom")
         ax.plot(e[0], nn[0], "o", ms=12, color="C3", label=f"start ({t[0] / scale:.4g} {tlabel.split('(')[-1]}")
-        ax.set_title(f"{n}: the bob seen from above, {(t[-1] - t[0]) / scale:.3g} {tlabel.split('(')[-1][:-1]}"
-                     + (f" ({min(MAX_SWINGS, int((t[-1] - t[0]) / period))} swings shown, evenly spread)"
-                        if period and (t[-1] - t[0]) / period > MAX_SWINGS else ""))
-        _turn_arrow(ax, t, e, nn)
-        ax.legend(loc="lower left")
+        off = float(np.hypot(*centre))
+        title = (f"{n}: the bob seen from above, {(t[-1] - t[0]) / scale:.3g} {tlabel.split('(')[-1][:-1]}"
+                 + (f" ({min(MAX_SWINGS, int((t[-1] - t[0]) / period))} swings shown, evenly spread)"
+                    if period and (t[-1] - t[0]) / period > MAX_SWINGS else "")
+                 + (f"\nabout the swing's centre, ({centre[0]:.4g}, {centre[1]:.4g}) {unit} from the track's origin"
+                    if off > 0.01 * float(np.max(np.hypot(e, nn))) else ""))
+        words = _turn_arrow(ax, t, e, nn)
+        ax.set_title(title + (f"\n{words}" if words else ""))
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
     return fig
 
 
+def swing_centre(east, north) -> tuple:
+    """The swing's centre (east, north): the midpoint of the 0.5 % and 99.5 % points of each
+    coordinate (a swing spends as long on either side; robust to a few wild points)."""
+    return tuple(0.5 * float(np.percentile(v, 0.5) + np.percentile(v, 99.5)) for v in (east, north))
+
+
 def _turn_arrow(ax, t, e, nn):
-    """An arc arrow from the swing plane's azimuth at the window's start to its end, and the turn
-    written beside it (or that it is too small to see)."""
+    """An arc arrow from the swing plane's azimuth at the window's start to its end; returns the turn
+    in words (or that it is too small to see; None without two swings) for the title."""
     from matplotlib.patches import FancyArrowPatch
     tc, az, _ = swing_azimuth(t, e, nn)
     if tc.size < 2:
@@ -103,8 +114,7 @@ def _turn_arrow(ax, t, e, nn):
     words = (f"the swing plane turned {abs(math.degrees(turned)):.2f}° {sense_words(turned)}\n"
              f"in {(tc[-1] - tc[0]) / 3600.0:.3g} h ({deg_per_h(rate):+.2f} °/h)")
     if abs(math.degrees(turned)) < 1.0:
-        ax.text(0.02, 0.98, words + ": too little to see here", transform=ax.transAxes, va="top", fontsize=12)
-        return
+        return words.replace("\n", " ") + ": too little to see here"
     # from the end of the plane nearer the top toward where it turned to (compass: east = sin, north = cos)
     a0 = float(az[0]) % math.pi
     a0 = a0 if math.cos(a0) >= 0 else a0 - math.pi
@@ -113,7 +123,6 @@ def _turn_arrow(ax, t, e, nn):
     arc = 0.35 * (1 if turned > 0 else -1) * min(1.0, abs(turned))
     ax.add_patch(FancyArrowPatch(p0, p1, connectionstyle=f"arc3,rad={-arc}", arrowstyle="-|>",
                                  mutation_scale=28, lw=3, color="C3"))
-    ax.text(0.02, 0.98, words, transform=ax.transAxes, va="top", fontsize=12,
-            bbox={"boxstyle": "round", "fc": "white", "alpha": 0.85})
     ax.update_datalim([(-r, -r), (r, r)])
     ax.autoscale_view()
+    return words.replace("\n", " ")

@@ -10,16 +10,18 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 
 
-def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE") -> tuple:
-    """What to draw from a table or a bag.
+def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE", options=None) -> tuple:
+    """What to draw from a table (read as ``options`` say: :class:`~gyro_instrument.estimators.
+    table_read.TableOptions`, the reader of ``estimate --data``) or a bag.
 
     Returns
     -------
     series : dict
         instrument -> {``type`` (None when unknown), ``t`` (s), ``channels`` [(label, values,
         unit)] with unit ``deg`` or ``m``; pendulums also ``east``, ``north`` (bob from above),
-        ``path_unit`` (``m``, or ``deg`` for a deflection of unknown length) and ``release`` (a
-        scene pendulum's release: deflection and compass azimuth, rad; else None)}.
+        ``path_unit`` (``m``, or ``deg`` for a deflection of unknown length); ``simulated``: the
+        scene is the file's own (a table written by ``simulate``, a bag of ``run``), so a pendulum's
+        release is known (else the expected line goes through the first measured swing)}.
     scene : Scene or None
         ``--scene``, the bag's record or the table's own (:func:`~gyro_instrument.estimators.
         data_io.scene_of_table`).
@@ -33,7 +35,7 @@ def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE") -> 
     from gyro_instrument.scenes import load_scene
     scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
     if not os.path.isdir(path) and not str(path).lower().endswith(".mcap"):
-        series, scene, notes = _table_series(path, field, scene, overrides)
+        series, scene, notes = _table_series(path, field, scene, overrides, options)
     else:
         series, scene, notes = _bag_series(path, scene, topics)
     if not series:
@@ -54,13 +56,16 @@ def _table_scene(path, scene, overrides):
     return found[0], [f"no --scene given: using the scene {found[0].name!r} from {found[1]}"]
 
 
-def _table_series(path, field, scene, overrides=()):
+def _table_series(path, field, scene, overrides=(), options=None):
     """:func:`load_series` for a CSV or Parquet table; returns (series, scene, notes)."""
-    from gyro_instrument.estimators.data_io import TIME_COLUMN, read_table
+    from gyro_instrument.estimators.data_io import TIME_COLUMN, load_table
     from gyro_instrument.instruments import REGISTRY
     from gyro_instrument.scenes import build_instruments
-    cols = read_table(path, field)
+    cols, read_notes = load_table(path, field, options)
+    simulated = scene is None                 # the table's own scene (written by simulate), if it has one
     scene, notes = _table_scene(path, scene, overrides)
+    simulated = simulated and scene is not None
+    notes = read_notes + notes
     t = cols[TIME_COLUMN]
     insts = build_instruments(scene) if scene else {}
     names = list(dict.fromkeys(c.split(".", 1)[0] for c in cols if "." in c))
@@ -76,6 +81,7 @@ def _table_series(path, field, scene, overrides=()):
             s = {"type": inst.type_name if inst else None, "t": t,
                  "channels": [(c, np.degrees(v), "deg") for c, v in ch.items() if c in angle_names]}
         if s["channels"]:
+            s["simulated"] = simulated
             series[name] = s
     return series, scene, notes
 
@@ -110,6 +116,7 @@ def _bag_series(path, scene, topics):
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments
     scan = scan_path(path)
+    simulated = scene is None and not topics      # the bag's own scene record: a run of this package
     if scene is None and not topics:
         from gyro_instrument.recording.bag_samples import samples_from_bag
         from gyro_instrument.scenes import scene_from_data
@@ -137,6 +144,7 @@ def _bag_series(path, scene, topics):
         else:
             s = {"type": inst.type_name, "t": rec["t"],
                  "channels": [(c, np.degrees(rec[c]), "deg") for c in obs.layout.measured if c in rec]}
+        s["simulated"] = simulated
         series[name] = s
     return series, scene, list(notes)
 
