@@ -175,6 +175,13 @@ def test_heigvd_tracks_measured_rate_period_and_honest_sigma(tmp_path, capsys, n
     assert rest_mm < 20.0
     checks = {c["check"]: c["status"] for c in r["checks"] if c["instrument"] == "pendulum"}
     assert checks["halves"] in ("passed", "flagged") and "site" in checks
+    # the ellipse correction (43-75 % of the turn on these tracks: issue 34) grows as the square of the
+    # position scale: at twice the scale it is 4x, at half 1/4, the measured turn unchanged
+    sc, c = p["ellipse_scale"], p["ellipse_correction_rad_s"]
+    assert sc["matters"] == (0.75 * abs(c) > p["foucault_rate_sigma_rad_s"])     # the longest two tracks: True
+    assert sc["k_without_correction_rad_s"] == p["measured_plane_rate_rad_s"]
+    assert sc["k_at_double_scale_rad_s"] == pytest.approx(p["measured_plane_rate_rad_s"] - 4 * c, rel=1e-12)
+    assert sc["k_at_half_scale_rad_s"] == pytest.approx(p["measured_plane_rate_rad_s"] - c / 4, rel=1e-12)
 
 
 def test_heigvd_against_the_site_with_the_record_sigma(tmp_path, capsys):

@@ -301,6 +301,13 @@ def _print_estimate_body(r, w):
             w(f"  {name}: k = {e['foucault_rate_rad_s']:.6e} +/- {e['foucault_rate_sigma_rad_s']:.2g} rad/s "
               f"({deg_h(e['foucault_rate_rad_s'])}; ellipse correction {e['ellipse_correction_rad_s']:.2g} rad/s), "
               f"swing period {e['period_s']:.6g} s {FULL_PERIOD}\n")
+            sc = e.get("ellipse_scale") or {}
+            if sc.get("matters"):
+                w(f"    the ellipse (Airy) correction, {deg_h(e['ellipse_correction_rad_s'])}, is "
+                  f"{100 * abs(sc['share_of_measured_rate'] or 0):.0f} % of the measured turn and grows as the square "
+                  f"of the position scale: k = {deg_h(sc['k_at_half_scale_rad_s'])} at half the scale, "
+                  f"{deg_h(sc['k_at_double_scale_rad_s'])} at twice it, {deg_h(sc['k_without_correction_rad_s'])} "
+                  f"without it (positions in pixels need --metres-per-pixel; check the length)\n")
         else:
             w(f"  {name}: null: {e.get('reason')}\n")
     for mname, m in r["methods"].items():
