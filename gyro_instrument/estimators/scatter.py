@@ -79,11 +79,14 @@ class LineSigma:
 
 
 def slope(t, y) -> tuple:
-    """(slope, intercept at mean t, residuals, centred t) of the least-squares line."""
+    """(slope, intercept at mean t, residuals, centred t) of the least-squares line. Sums by numpy's
+    pairwise reduction, not BLAS's dot: the same doubles under every BLAS kernel (the shipped bags'
+    estimates are compared across OPENBLAS_CORETYPE choices; the pendulum's rest-point drift fed
+    through the ellipse correction moved k by 2e-12 relative between kernels with ``@``)."""
     t, y = np.asarray(t, float), np.asarray(y, float)
     x = t - t.mean()
-    sxx = float(x @ x)
-    b = float(x @ (y - y.mean()) / sxx) if sxx > 0 else 0.0
+    sxx = float(np.sum(x * x))
+    b = float(np.sum(x * (y - y.mean())) / sxx) if sxx > 0 else 0.0
     a = float(y.mean())
     return b, a, y - a - b * x, x
 
