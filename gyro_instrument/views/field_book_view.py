@@ -58,7 +58,7 @@ def field_book_figure(plt, path, scene=None, title="") -> "object":
     def arcmin(rad):
         return (np.asarray(rad) - ref) * 10800.0 / math.pi      # the readings are unwrapped about the first
 
-    fig, (ax, bx) = plt.subplots(2, 1, figsize=(16.0, 9.0), height_ratios=[3, 2], sharex=False)
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(16.0, 9.0), height_ratios=[3, 2], sharex=False, layout="constrained")
     x, xm, label = _x(book.on, True)
     y = arcmin(book.on.readings_rad)
     cut = np.flatnonzero(np.diff(book.on.index) > 1) + 1          # no line across a missed turning point
@@ -81,20 +81,24 @@ def field_book_figure(plt, path, scene=None, title="") -> "object":
     for o in n["outliers"]:
         j = pos[o["turning_point"]]
         ax.plot(x[j], arcmin(book.on.readings_rad[j]), "o", ms=16, mfc="none", mec="tab:red", mew=2)
-        ax.annotate(f"line {o['line']}: {o['sigmas']:+.1f} σ", (x[j], arcmin(book.on.readings_rad[j])),
-                    xytext=(14, 0), textcoords="offset points", color="tab:red", fontsize=12, va="center")
+        yj = float(arcmin(book.on.readings_rad[j]))
+        up = yj > float(np.median(y))                # beyond the turning point, where the swing's lines are not
+        ax.annotate(f"line {o['line']}: {o['sigmas']:+.1f} σ", (x[j], yj), xytext=(0, 16 if up else -16),
+                    textcoords="offset points", color="tab:red", fontsize=12, ha="center",
+                    va="bottom" if up else "top")
     if n["outliers"]:
         ax.plot([], [], "o", ms=12, mfc="none", mec="tab:red", mew=2, label="outlier (named, kept)")
+    lo, hi = float(np.min(y)), float(np.max(y))
+    ax.set_ylim(lo - 0.18 * (hi - lo), hi + 0.18 * (hi - lo))     # room for the outliers' labels
     ax.set_ylabel("reading − north (arcmin)")
     if label == "turning point":
         from matplotlib.ticker import MaxNLocator
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel(label)
-    ax.legend(loc="best", ncol=2, framealpha=0.9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9)     # outside: never over data
     ax.set_title(f"field book {os.path.basename(str(path))}: mount azimuth {n['mount_azimuth_dms']} "
                  f"± {n['sigma_arcsec']:.3g}″ ({n['reduction'].split(':')[0].split(' (')[0]}) {title}")
     _means_axis(bx, book, n, x, nr, label)
-    fig.tight_layout()
     return fig
 
 
@@ -115,7 +119,7 @@ def _means_axis(bx, book, n, x, nr, label) -> None:
     if label == "turning point":
         from matplotlib.ticker import MaxNLocator
         bx.xaxis.set_major_locator(MaxNLocator(integer=True))
-    bx.legend(loc="best", framealpha=0.9)
+    bx.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9)
 
 
 def plot_field_book(path, out_dir, scene=None, fmt="png", dpi=110, overwrite=False) -> list:
