@@ -473,8 +473,10 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     sim = subprocess.Popen([str(BIN / "pendulum_sim"), "--ros-args", "-p", "scene:=foucault_pantheon",
                             "-p", "duration_s:=600.0", "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
-                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=3"],
+                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=30"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # wait_timeout_s 30: the wait ends when the recorder is seen (~1 s idle); with 3 s a recorder slow to
+    # start on a loaded CI machine was missed, the run began without it and never filled its queue
     try:
         t0 = time.monotonic()
         while not (os.path.exists(bag) and os.path.getsize(bag) > 100_000):
