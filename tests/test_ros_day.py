@@ -471,12 +471,19 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
                             "-p", "duration_s:=600.0", "-p", f"output:={bag}", "-p", "stop_when_complete:=true",
                             "-p", "topics:=['clock', 'pendulum/joint_states']"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    # the simulator starts once the recorder says it records (its subscriptions exist): a recorder slow
+    # to start on a loaded machine was otherwise missed and the run began without it (CI, 21:06).
+    # (wait_for names the recorder, but it records a subset of the topics, which the wait does not
+    # count as ready: it times out after wait_timeout_s either way.)
+    head = []
+    for line in rec.stdout:
+        head.append(line)
+        if "recording " in line:
+            break
     sim = subprocess.Popen([str(BIN / "pendulum_sim"), "--ros-args", "-p", "scene:=foucault_pantheon",
                             "-p", "duration_s:=600.0", "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
-                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=30"],
+                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=3"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    # wait_timeout_s 30: the wait ends when the recorder is seen (~1 s idle); with 3 s a recorder slow to
-    # start on a loaded CI machine was missed, the run began without it and never filled its queue
     try:
         t0 = time.monotonic()
         while not (os.path.exists(bag) and os.path.getsize(bag) > 100_000):
@@ -486,6 +493,7 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
         time.sleep(3.0)
         rec.send_signal(signal.SIGCONT)
         rec_out, _ = rec.communicate(timeout=120)       # stop_when_complete: it exits when all is in
+        rec_out = "".join(head) + rec_out
         sim.send_signal(signal.SIGINT)                    # a simulator stays up once done, as a node does
         sim_out, _ = sim.communicate(timeout=60)
     finally:
