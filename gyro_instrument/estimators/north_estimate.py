@@ -152,8 +152,7 @@ def _methods(eq, records, sigma, drift) -> tuple:
     """The reversal-point methods on the rotor-on record, tape-corrected (exact relation, undamped
     periods, the drifting zero fitted): ({name: NorthEstimate}, refused, tape dict or None)."""
     on = records[0]
-    ests, refused = north.north_methods(on.t, on.w, sigma, drift=drift)
-    ests.pop("fit", None)
+    ests, refused = north.north_methods(on.t, on.w, sigma, drift=drift, fit=False)
     refused.pop("fit", None)
     tape = None
     if eq.tape:

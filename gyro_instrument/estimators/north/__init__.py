@@ -73,13 +73,14 @@ from gyro_instrument.estimators.north.fit import (  # noqa: F401
 
 
 # ----------------------------------------------------------------------------- all together
-def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tuple:
+def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False, fit=True) -> tuple:
     """Every method on one record: ({name: NorthEstimate}, {name: why it was refused}).
 
     Names: ``schuler_mean`` and ``lavrov`` (on the reversal points, σ propagated from their σ),
     ``transit`` (the mark: ``mark_rad``, default the Schuler mean — a mark set near the centre, as
     a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``
-    (with a linear drift of the centre when ``drift``: the centre at the mean sample time).
+    (with a linear drift of the centre when ``drift``: the centre at the mean sample time; left out
+    when not ``fit``).
     """
     out, refused = {}, {}
     try:
@@ -91,6 +92,8 @@ def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False) -> tup
             "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None
                                               else mark_rad, noise_sigma_rad),
             "fit": lambda: fit_record(t, u, noise_sigma_rad, drift=drift)}
+    if not fit:                                    # the estimate's fit is the exact one (.exact)
+        runs.pop("fit")
     for name, run in runs.items():
         try:
             out[name] = run()
