@@ -219,19 +219,7 @@ def test_closed_pipe_is_quiet():
     assert r.stderr.strip().splitlines()[-1] in ("0", "141")
 
 
-REALDATA = ROOT.parent.parent / "shared" / "realdata"
-if not REALDATA.is_dir():
-    REALDATA = Path("/work/shared/realdata")
-HEIGVD_SCENE = """name: heigvd
-site: {latitude_deg: 46.78}
-duration_s: 150
-sample_rate_hz: 4
-effects: {earth_rotation: {}, finite_amplitude: {}}
-sensor: {noise_rad: 1.0e-5}
-instruments:
-  pendulum: {type: spherical_pendulum, length_m: 19.9, initial_deflection_deg: 4.0, initial_azimuth_deg: 90.0}
-"""
-HEIGVD_OPTIONS = ["--no-header", "--names", "pendulum.x_east,pendulum.y_north,time_s", "--metres-per-pixel", "0.001"]
+from realdata import HEIGVD_OPTIONS, HEIGVD_SCENE, REALDATA  # noqa: E402
 
 
 def _data_boxes_clear_of(fig, ax):

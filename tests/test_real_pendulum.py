@@ -15,9 +15,7 @@ from gyro_instrument.estimators.foucault import estimate_foucault, foucault_crlb
 
 DEG_H = math.radians(1.0) / 3600.0
 SIDEREAL = 7.2921150e-5
-REALDATA = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "realdata"
-if not REALDATA.is_dir():
-    REALDATA = Path("/work/shared/realdata")
+from realdata import HEIGVD_SCENE as SCENE_HEIGVD, REALDATA
 
 
 def swing(seed, plane_rate_rad_s, span_s=1200.0, rate_hz=30.0, length_m=1.96, alpha=0.05, noise=1e-4,
@@ -135,16 +133,6 @@ def heigvd(name, tmp_path, length_m=19.9):
     return _write(tmp_path, ms / 1000.0, x, y, name)
 
 
-SCENE_HEIGVD = """\
-name: heigvd
-site: {latitude_deg: 46.78}
-duration_s: 150
-sample_rate_hz: 4
-effects: {earth_rotation: {}, finite_amplitude: {}}
-sensor: {noise_rad: 1.0e-5}
-instruments:
-  pendulum: {type: spherical_pendulum, length_m: 19.9, initial_deflection_deg: 4.0, initial_azimuth_deg: 90.0}
-"""
 
 #: realdata/README.md's independent reading of the raw positions (swing direction per swing,
 #: regressed on time): the plane's measured rate, °/h.

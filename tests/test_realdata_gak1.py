@@ -1,6 +1,6 @@
 """A published GAK1 field book, read as printed (issue 33 item 6).
 
-Williams & Belling 1967 (Tijdschrift voor Kadaster en Landmeetkunde, table p. 273; /work/shared/realdata/
+Williams & Belling 1967 (Tijdschrift voor Kadaster en Landmeetkunde, table p. 273; ../shared/realdata/
 README.md): twenty consecutive turning points of a Wild GAK1 no. 3139 on a Wild T2 at Johannesburg,
 circle readings in degrees-minutes-seconds as printed, with ``turning_point`` and ``side`` columns; no
 times and no tape readings, so the raw reduction. The printed means beside the table are the triple
@@ -18,13 +18,10 @@ import pytest
 from gyro_instrument.cli import main
 from gyro_instrument.core.angle_formats import parse_dms
 
-REALDATA = os.environ.get("GYRO_REALDATA", os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared",
-                                                                          "realdata")))
+from realdata import REALDATA  # noqa: E402
+
 BOOK = os.path.join(REALDATA, "williams_belling_1967_gak1.csv")
 MEANS = os.path.join(REALDATA, "williams_belling_1967_printed_means.csv")
-if not os.path.exists(BOOK):                                   # the worktrees live in /work/wt/<name>
-    BOOK, MEANS = (os.path.join("/work/shared/realdata", os.path.basename(p)) for p in (BOOK, MEANS))
-pytestmark = pytest.mark.skipif(not os.path.exists(BOOK), reason="the real records are not on this machine")
 
 
 def _printed_means():
