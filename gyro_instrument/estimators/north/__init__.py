@@ -90,7 +90,7 @@ def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False, fit=Tr
     runs = {"schuler_mean": lambda: schuler_mean(rp.readings_rad, rp.sigmas_rad),
             "lavrov": lambda: lavrov(rp.readings_rad, rp.sigmas_rad),
             "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None
-                                              else mark_rad, noise_sigma_rad),
+                                              else mark_rad, noise_sigma_rad, rp),
             "fit": lambda: fit_record(t, u, noise_sigma_rad, drift=drift)}
     if not fit:                                    # the estimate's fit is the exact one (.exact)
         runs.pop("fit")

@@ -153,15 +153,23 @@ def _local_poly(t, u, t0, h, degree):
 
 def _poly_root(coef, x0, order):
     """Root of the ``order``-th derivative of the polynomial ``coef`` (increasing powers) near x0,
-    by Newton; None if it leaves (−0.9, 0.9)."""
-    p = np.polynomial.Polynomial(coef).deriv(order)
-    dp = p.deriv()
+    by Newton (Horner on floats); None if it leaves (−0.9, 0.9)."""
+    p = [float(c) for c in coef]
+    for _ in range(order):
+        p = [k * p[k] for k in range(1, len(p))]
+    dp = [k * p[k] for k in range(1, len(p))]
+
+    def horner(c, x):
+        v = 0.0
+        for a in reversed(c):
+            v = v * x + a
+        return v
     x = x0
     for _ in range(50):
-        d = dp(x)
+        d = horner(dp, x)
         if d == 0:
             return None
-        step = p(x) / d
+        step = horner(p, x) / d
         x -= step
         if abs(step) < 1e-13:
             break

@@ -59,7 +59,7 @@ def transit_times(t, u, mark_rad, noise_sigma_rad, half_period_s, band_rad, wind
     return np.asarray(times), np.asarray(sig), np.asarray(side)
 
 
-def transit_method(t, u, mark_rad, noise_sigma_rad=None) -> NorthEstimate:
+def transit_method(t, u, mark_rad, noise_sigma_rad=None, rp=None) -> NorthEstimate:
     """Swing centre from the timed transits of a reference mark (the transit or timing method).
 
     Each run of three consecutive transits t1 < t2 < t3 spans one full period T = t3 − t1; the
@@ -67,10 +67,11 @@ def transit_method(t, u, mark_rad, noise_sigma_rad=None) -> NorthEstimate:
     half the difference of the two reversal points between t1 and t3; then c = mark +
     A sin(πΔt/(2T)) (:func:`transit_offset`). The centre is the mean over all runs of three; σ is
     propagated from the transit times' σ (linearised; the amplitude's σ enters multiplied by x0/A
-    and is left out). Needs a mark inside the swing (|c − mark| < A) and ≥ 3 transits.
+    and is left out). Needs a mark inside the swing (|c − mark| < A) and ≥ 3 transits. ``rp``: the
+    record's :func:`reversal_points` when the caller has them.
     """
     t, u = _finite(t, u)
-    rp = reversal_points(t, u, noise_sigma_rad)
+    rp = reversal_points(t, u, noise_sigma_rad) if rp is None else rp
     amp = 0.5 * np.abs(np.diff(rp.readings_rad))
     band = 0.2 * float(np.min(amp))
     tt, ts, side = transit_times(t, u, mark_rad, rp.noise_sigma_rad, rp.half_period_s, band)
