@@ -473,8 +473,8 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     # the simulator starts once the recorder says it records (its subscriptions exist): a recorder slow
     # to start on a loaded machine was otherwise missed and the run began without it (CI, 21:06).
-    # (wait_for names the recorder, but it records a subset of the topics, which the wait does not
-    # count as ready: it times out after wait_timeout_s either way.)
+    # (its wait_for cannot say it: the recorder records a subset of the topics, which the wait never
+    # counts as ready, so it would time out whatever the recorder does)
     head = []
     for line in rec.stdout:
         head.append(line)
@@ -482,7 +482,7 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
             break
     sim = subprocess.Popen([str(BIN / "pendulum_sim"), "--ros-args", "-p", "scene:=foucault_pantheon",
                             "-p", "duration_s:=600.0", "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
-                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=3"],
+                            "-p", "wait_for:=[]"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         t0 = time.monotonic()
