@@ -176,10 +176,15 @@ class HorizontalSwing(_ScaleReading, SwingRate):
                 f"period's amplitude law (factor {F:.6f} beyond 1 + {self.MAX_ANHARMONIC:g}): no Earth-rate measurement "
                 "from it; north (the exact fit of the swing equation) is unaffected")
 
+    def _directing_and_offset(self) -> tuple:
+        """(K, sin(c − N)): the scene's directing constant per inertia (1/s²) and the equilibrium's offset
+        from north, K sin(c − N) = k_B (Z − c) with Z − c from :meth:`rate_terms` (0 when K ≤ 0)."""
+        K = self.instrument.reduced_coefficients()["a"] * self.instrument.p.spin_rate_rad_s
+        sn = max(-1.0, min(1.0, self.tape_constant_per_inertia * self.centre_from_zero_rad / K)) if K > 0 else 0.0
+        return K, sn
+
     def _offset_from_north(self) -> float:
-        c = self.instrument.reduced_coefficients()
-        K = c["a"] * self.instrument.p.spin_rate_rad_s
-        return math.asin(max(-1.0, min(1.0, self.tape_constant_per_inertia * self.centre_from_zero_rad / K))) if K > 0 else 0.0
+        return math.asin(self._directing_and_offset()[1])
 
     def amplitude_factor(self, amplitude_rad) -> "float | np.ndarray":
         """T(a)/T0. Without a tape :meth:`SwingRate.amplitude_factor` (the sine law's elliptic factor). With
@@ -191,11 +196,10 @@ class HorizontalSwing(_ScaleReading, SwingRate):
         the next term is O(a⁴) (4e-8 at a = 0.06 rad)."""
         if not self.has_tape():
             return super().amplitude_factor(amplitude_rad)
-        c = self.instrument.reduced_coefficients()
-        K, kb = c["a"] * self.instrument.p.spin_rate_rad_s, self.tape_constant_per_inertia
+        K, sn = self._directing_and_offset()
         if not K > 0:
             return super().amplitude_factor(amplitude_rad)
-        sn = max(-1.0, min(1.0, kb * self.centre_from_zero_rad / K))
+        kb = self.tape_constant_per_inertia
         cs = math.sqrt(1.0 - sn * sn)
         w2 = K * cs + kb
         return 1.0 + np.square(amplitude_rad) * (K * cs / (16.0 * w2) + 5.0 * (K * sn) ** 2 / (48.0 * w2 * w2))
