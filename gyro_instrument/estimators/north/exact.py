@@ -258,6 +258,9 @@ def fit(eq, records, start, noise_sigma_rad=None, max_nfev=60) -> ExactFit:
 
     sol = least_squares(lambda x: both(x)[0], x0, jac=lambda x: both(x)[1], method="lm", x_scale="jac",
                         xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=max_nfev)
+    if sol.status <= 0:
+        raise SceneError("record", f"{sum(r.t.size for r in records)} samples", f"the swing equation's fit did not "
+                         f"converge in {sol.nfev} evaluations ({sol.message}): no north from it")
     r, J = both(sol.x)
     n = r.size
     info = J.T @ J
