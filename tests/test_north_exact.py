@@ -243,8 +243,7 @@ def test_short_records_give_north_from_the_fit(duration):
 def test_a_fit_that_does_not_converge_is_refused_not_reported():
     """Found on a 48 h record (quet_gyroscopes at 1 Hz, 6750 swings): started 25 rad of phase off, the
     least squares stopped at its evaluation limit with residuals 670× the noise and reported
-    −14″ ± 0.05″. A fit that does not converge is refused; joint_fit reaches a long record through
-    growing windows (measured on the 48 h record: −0.07″ ± 0.05″, residual rms = the sensor's σ)."""
+    −14″ ± 0.05″. A fit that does not converge is refused (north null with the reason)."""
     scene = _scene(45.0, 51.5, noise=False)
     truth = simulate_truth(scene)
     inst = truth[1]["gak1"]
