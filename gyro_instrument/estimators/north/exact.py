@@ -232,6 +232,10 @@ class ExactFit:
         return _split(self.names, self.params)
 
 
+class NotConverged(SceneError):
+    """:func:`fit` stopped at its evaluation limit (a start too far from the optimum)."""
+
+
 def fit(eq, records, start, noise_sigma_rad=None, max_nfev=60) -> ExactFit:
     """Least squares of the swing equation over ``records`` (each a :class:`Record`).
 
@@ -240,9 +244,10 @@ def fit(eq, records, start, noise_sigma_rad=None, max_nfev=60) -> ExactFit:
 
     Raises
     ------
+    NotConverged
+        (a SceneError) when the fit does not converge.
     SceneError
-        When the fit does not converge or its information matrix is singular (a parameter the
-        records cannot determine).
+        When its information matrix is singular (a parameter the records cannot determine).
     """
     kinds = tuple(r.kind for r in records)
     names = eq.names(kinds)
@@ -259,7 +264,7 @@ def fit(eq, records, start, noise_sigma_rad=None, max_nfev=60) -> ExactFit:
     sol = least_squares(lambda x: both(x)[0], x0, jac=lambda x: both(x)[1], method="lm", x_scale="jac",
                         xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=max_nfev)
     if sol.status <= 0:
-        raise SceneError("record", f"{sum(r.t.size for r in records)} samples", f"the swing equation's fit did not "
+        raise NotConverged("record", f"{sum(r.t.size for r in records)} samples", f"the swing equation's fit did not "
                          f"converge in {sol.nfev} evaluations ({sol.message}): no north from it")
     r, J = both(sol.x)
     n = r.size
