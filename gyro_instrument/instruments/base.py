@@ -10,6 +10,9 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
 ``summary``, ``PARAMS``  one line for ``describe``; the parameter specifications
 ``MECHANICS``            the kinds of mechanics its right-hand side sums effect terms for
                          (:mod:`gyro_instrument.core.effect`); ``SUPPORTED_EFFECTS`` follows
+``MODELS``, ``model_taken``  the models it can integrate, the term kinds each carries
+                         (:data:`~gyro_instrument.core.effect.TERM_KINDS`), and which one a run
+                         takes: chosen from the effects' declared terms, never their names
 ``COLUMNS``              the simulated output channels
 ``MEASURED_CHANNELS``    the angles a sensor reads (:meth:`Instrument.measured_angles`)
 ``JOINTS``               the ``sensor_msgs/JointState`` joints it publishes
@@ -36,8 +39,8 @@ from typing import ClassVar
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.effect import (CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, EffectContext, Scales,
-                                         supporting_effects)
+from gyro_instrument.core.effect import (CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, VISCOUS_DAMPING, VISCOUS_SPIN,
+                                         Effect, EffectContext, Scales, supporting_effects, uncarried_terms)
 from gyro_instrument.core.integrate import Trajectory
 from gyro_instrument.core.params import params_dataclass
 from gyro_instrument.effects import canonical_order
@@ -256,6 +259,46 @@ class Instrument:
     SHOWS_AXIS: ClassVar[bool] = False
     #: True when :meth:`stream` is overridden to integrate window by window in bounded memory
     STREAMS: ClassVar[bool] = False
+    #: The models (integration paths) the instrument can take: name -> the term kinds that model
+    #: carries (:data:`~gyro_instrument.core.effect.TERM_KINDS`: a form a hand-derived equation holds,
+    #: or a kind of mechanics whose hook the model sums, so every term of that kind). Empty: one model,
+    #: which sums every kind of ``MECHANICS`` through the hooks (nothing to check).
+    MODELS: ClassVar[dict] = {}
+
+    @classmethod
+    def model_taken(cls, params, effects) -> "str | None":
+        """The key of ``MODELS`` a run with the validated ``params`` and the active ``effects`` (name ->
+        Effect class or object) takes, chosen from what the effects' terms are (their term kinds), never
+        from their names. The default: the first model (None without ``MODELS``)."""
+        return next(iter(cls.MODELS), None)
+
+    @classmethod
+    def check_carried(cls, prefix, params, effect_names) -> None:
+        """Refuse an effect the model taken (:meth:`model_taken`) cannot carry: one of its term kinds
+        (those of this instrument's ``MECHANICS``) is not among the model's ``MODELS`` entry.
+
+        Raises
+        ------
+        SceneError
+            On ``<prefix>.effects`` with the effect's name, naming the instrument type, the model and the
+            models that would carry it.
+        """
+        from gyro_instrument.core.errors import SceneError
+        from gyro_instrument.effects import REGISTRY
+        classes = {n: REGISTRY[n] for n in effect_names if n in REGISTRY}
+        model = cls.model_taken(params, classes)
+        if model is None:
+            return
+        for name, ecls in classes.items():
+            missing = uncarried_terms(ecls, cls.MODELS[model], cls.MECHANICS)
+            if missing:
+                others = [m for m, kinds in cls.MODELS.items() if not uncarried_terms(ecls, kinds, cls.MECHANICS)]
+                raise SceneError(f"{prefix}.effects", name,
+                                 f"cannot be carried by the {model} model of {cls.type_name}: its terms "
+                                 f"{', '.join(sorted(missing))} are not among those that model sums "
+                                 f"({', '.join(sorted(cls.MODELS[model]))}); "
+                                 + (f"the {' or '.join(others)} model of {cls.type_name} carries it" if others else
+                                    f"no model of {cls.type_name} carries it: leave it out for this instrument"))
 
     @classmethod
     def check_params(cls, prefix, params) -> None:
@@ -278,7 +321,9 @@ class Instrument:
     def check_effects(cls, prefix, params, effect_names) -> None:
         """Check the parameters against the instrument's effect list (tuple of names, all in
         ``SUPPORTED_EFFECTS``), e.g. an integrator that needs an effect. Raises SceneError; the
-        default accepts everything."""
+        default refuses an effect the model taken cannot carry (:meth:`check_carried`); an override
+        calls it too (``super().check_effects(...)``)."""
+        cls.check_carried(prefix, params, effect_names)
 
     def observation(self) -> Observation:
         """What this instrument measures and how (:class:`~.observation.Observation`), built by
@@ -364,6 +409,40 @@ class Instrument:
     def effects_of(self, kind) -> list:
         """The active effects contributing to the mechanics ``kind`` (list, summing order)."""
         return [e for e in self.effects.values() if kind in e.MECHANICS]
+
+    def effects_with_term(self, term) -> list:
+        """The active effects with a term of kind ``term`` (:data:`~gyro_instrument.core.effect.TERM_KINDS`;
+        a kind of mechanics: a term of general form), list, summing order."""
+        return [e for e in self.effects.values() if term in e.terms()]
+
+    def has_term(self, term) -> bool:
+        """True when an active effect has a term of kind ``term``."""
+        return bool(self.effects_with_term(term))
+
+    def taken_model(self) -> "str | None":
+        """The model this instrument's runs take (:meth:`model_taken` with its parameters and effects)."""
+        return self.model_taken(self.params, self.effects)
+
+    def frame_rotates(self) -> bool:
+        """True when an active effect turns the Earth-fixed frame (a ``frame_rate`` term: the Earth's
+        rotation simulated)."""
+        return bool(self.effects_of(FRAME_RATE))
+
+    def viscous_damping_rate_per_s(self, inertia) -> float:
+        """d (1/s): the sum over the active ``viscous_damping`` terms of their rates, the hinge torque
+        being −d J q̇ on a hinge of inertia J = ``inertia`` (kg m²); 0.0 without one."""
+        total = 0.0
+        for e in self.effects_with_term(VISCOUS_DAMPING):
+            total = total + e.viscous_damping_rate_per_s(self.context, inertia)
+        return total
+
+    def spin_decay_time_s(self, inertia) -> "float | None":
+        """τ (s) of the active ``viscous_spin_friction`` terms together (the spin torque −C ρ/τ on a rotor
+        of axial moment C = ``inertia``, kg m²): one term's own τ, several 1/Σ(1/τ_i); None without one."""
+        times = [e.spin_decay_time_s(self.context, inertia) for e in self.effects_with_term(VISCOUS_SPIN)]
+        if not times:
+            return None
+        return times[0] if len(times) == 1 else 1.0 / sum(1.0 / t for t in times)
 
     def restoring_law(self) -> Callable | None:
         """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
@@ -454,6 +533,15 @@ class Instrument:
         if effect_name in self.SUPPORTED_EFFECTS and not self.has(effect_name):
             return f"{effect_name} not simulated: {consequence}"
         return None
+
+    def missing_term_note(self, term, consequence) -> str | None:
+        """``"<effects> not simulated: <consequence>"`` when some supported effect has a term of kind
+        ``term`` and no active one has, else None; <effects> are those supported effects' names."""
+        from gyro_instrument.effects import REGISTRY
+        if self.has_term(term):
+            return None
+        names = [n for n, c in REGISTRY.items() if n in self.SUPPORTED_EFFECTS and term in c.terms()]
+        return f"{' or '.join(names)} not simulated: {consequence}" if names else None
 
 
 def with_notes(predictions, *notes) -> dict:
