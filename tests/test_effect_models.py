@@ -245,3 +245,35 @@ def test_the_literal_check_catches_what_it_looks_for():
     assert EFFECT_LITERAL.search('if self.has("spin_decay"):')
     assert EFFECT_LITERAL.search("x = {'tape_torsion', 'tape_drift'}")
     assert not EFFECT_LITERAL.search("``spin_decay`` in a docstring, effects.tape_torsion.zero_deg")
+
+
+def test_a_plug_in_effect_the_model_cannot_carry_is_one_line_exit_2(registered, capsys):
+    """Bad input (issue 35): the command line prints the refusal on one line and exits 2, no traceback."""
+    from gyro_instrument.cli import main
+    assert main(["describe", "free_gyroscope", "--set", "effects.bearing_drag_test={}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "bearing_drag_test" in err and "analytic model of free_gyroscope" in err, err
+
+
+def test_registration_refuses_terms_an_effect_does_not_have():
+    """A term kind refining a kind the effect does not declare, an unknown one, or one whose coefficient
+    hook is not implemented: refused at registration, the registry unchanged."""
+    before = dict(effects.REGISTRY)
+
+    class WrongKind(EddyCurrent):
+        name = "wrong_kind_test"
+        TERMS = frozenset({"viscous_spin_friction"})        # refines spin, not damping
+
+    class Unknown(EddyCurrent):
+        name = "unknown_term_test"
+        TERMS = frozenset({"magnetic_something"})
+
+    class NoCoefficient(EddyCurrent):
+        name = "no_coefficient_test"
+        TERMS = frozenset({"viscous_damping"})              # without viscous_damping_rate_per_s
+
+    for cls, words in ((WrongKind, "not term kinds refining"), (Unknown, "not term kinds refining"),
+                       (NoCoefficient, "viscous_damping_rate_per_s")):
+        with pytest.raises(ValueError, match=words):
+            effects.register(cls)
+    assert effects.REGISTRY == before

@@ -137,6 +137,11 @@ TERM_KINDS = {kind: kind for kind in sorted(MECHANICS)} | {
     SINE_LAW: RESTORING_LAW, VISCOUS_DAMPING: DAMPING, VISCOUS_SPIN: SPIN}
 
 
+#: The coefficient hook a term kind reads (the models carrying the form multiply by it): an effect
+#: declaring the term kind implements it.
+TERM_HOOKS = {VISCOUS_DAMPING: "viscous_damping_rate_per_s", VISCOUS_SPIN: "spin_decay_time_s"}
+
+
 def register_term_kind(term, mechanics) -> str:
     """Add the term kind ``term`` refining the kind of mechanics ``mechanics`` (:data:`MECHANICS`) to
     :data:`TERM_KINDS` (a model derived by hand for a new form declares it in ``Instrument.MODELS``).

@@ -27,23 +27,26 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
                          :class:`~.observation.SwingRate` is built from)
 =======================  ===================================================================
 
+What it asks of its active effects, by the kinds of their terms (never their names), is
+:class:`~.effect_terms.EffectTerms`, mixed in.
+
 Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports.
 """
 
 import itertools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.effect import (CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, VISCOUS_DAMPING, VISCOUS_SPIN,
-                                         Effect, EffectContext, Scales, supporting_effects, uncarried_terms)
+from gyro_instrument.core.effect import EffectContext, Scales, supporting_effects
 from gyro_instrument.core.integrate import Trajectory
 from gyro_instrument.core.params import params_dataclass
 from gyro_instrument.effects import canonical_order
+from gyro_instrument.instruments.effect_terms import EffectTerms
 from gyro_instrument.instruments.observation import Observation, SwingRate
 
 #: Most periods (swings, turns) one run may hold. An adaptive 8th-order step covers a few percent
@@ -206,7 +209,7 @@ class _SupportedEffects:
         return supporting_effects(REGISTRY, cls.MECHANICS)
 
 
-class Instrument:
+class Instrument(EffectTerms):
     """Base class: parameters in, one ``simulate`` call, columns out.
 
     Subclasses set the class members below and implement ``simulate``, ``scales`` and
@@ -271,34 +274,6 @@ class Instrument:
         Effect class or object) takes, chosen from what the effects' terms are (their term kinds), never
         from their names. The default: the first model (None without ``MODELS``)."""
         return next(iter(cls.MODELS), None)
-
-    @classmethod
-    def check_carried(cls, prefix, params, effect_names) -> None:
-        """Refuse an effect the model taken (:meth:`model_taken`) cannot carry: one of its term kinds
-        (those of this instrument's ``MECHANICS``) is not among the model's ``MODELS`` entry.
-
-        Raises
-        ------
-        SceneError
-            On ``<prefix>.effects`` with the effect's name, naming the instrument type, the model and the
-            models that would carry it.
-        """
-        from gyro_instrument.core.errors import SceneError
-        from gyro_instrument.effects import REGISTRY
-        classes = {n: REGISTRY[n] for n in effect_names if n in REGISTRY}
-        model = cls.model_taken(params, classes)
-        if model is None:
-            return
-        for name, ecls in classes.items():
-            missing = uncarried_terms(ecls, cls.MODELS[model], cls.MECHANICS)
-            if missing:
-                others = [m for m, kinds in cls.MODELS.items() if not uncarried_terms(ecls, kinds, cls.MECHANICS)]
-                raise SceneError(f"{prefix}.effects", name,
-                                 f"cannot be carried by the {model} model of {cls.type_name}: its terms "
-                                 f"{', '.join(sorted(missing))} are not among those that model sums "
-                                 f"({', '.join(sorted(cls.MODELS[model]))}); "
-                                 + (f"the {' or '.join(others)} model of {cls.type_name} carries it" if others else
-                                    f"no model of {cls.type_name} carries it: leave it out for this instrument"))
 
     @classmethod
     def check_params(cls, prefix, params) -> None:
@@ -398,66 +373,6 @@ class Instrument:
             return self.context
         return EffectContext.of_site(self.site, self.scales(duration_s))
 
-    def has(self, effect_name) -> bool:
-        """True when the effect is listed for this instrument (and so is evaluated)."""
-        return effect_name in self.effects
-
-    def effect(self, effect_name) -> Effect | None:
-        """The active Effect object, or None."""
-        return self.effects.get(effect_name)
-
-    def effects_of(self, kind) -> list:
-        """The active effects contributing to the mechanics ``kind`` (list, summing order)."""
-        return [e for e in self.effects.values() if kind in e.MECHANICS]
-
-    def effects_with_term(self, term) -> list:
-        """The active effects with a term of kind ``term`` (:data:`~gyro_instrument.core.effect.TERM_KINDS`;
-        a kind of mechanics: a term of general form), list, summing order."""
-        return [e for e in self.effects.values() if term in e.terms()]
-
-    def has_term(self, term) -> bool:
-        """True when an active effect has a term of kind ``term``."""
-        return bool(self.effects_with_term(term))
-
-    def taken_model(self) -> "str | None":
-        """The model this instrument's runs take (:meth:`model_taken` with its parameters and effects)."""
-        return self.model_taken(self.params, self.effects)
-
-    def frame_rotates(self) -> bool:
-        """True when an active effect turns the Earth-fixed frame (a ``frame_rate`` term: the Earth's
-        rotation simulated)."""
-        return bool(self.effects_of(FRAME_RATE))
-
-    def viscous_damping_rate_per_s(self, inertia) -> float:
-        """d (1/s): the sum over the active ``viscous_damping`` terms of their rates, the hinge torque
-        being −d J q̇ on a hinge of inertia J = ``inertia`` (kg m²); 0.0 without one."""
-        total = 0.0
-        for e in self.effects_with_term(VISCOUS_DAMPING):
-            total = total + e.viscous_damping_rate_per_s(self.context, inertia)
-        return total
-
-    def spin_decay_time_s(self, inertia) -> "float | None":
-        """τ (s) of the active ``viscous_spin_friction`` terms together (the spin torque −C ρ/τ on a rotor
-        of axial moment C = ``inertia``, kg m²): one term's own τ, several 1/Σ(1/τ_i); None without one."""
-        times = [e.spin_decay_time_s(self.context, inertia) for e in self.effects_with_term(VISCOUS_SPIN)]
-        if not times:
-            return None
-        return times[0] if len(times) == 1 else 1.0 / sum(1.0 / t for t in times)
-
-    def restoring_law(self) -> Callable | None:
-        """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
-        ``finite_amplitude``), or None: the small-angle law g(u) = u."""
-        laws = [e.restoring_law(self.context) for e in self.effects_of(RESTORING_LAW)]
-        return laws[-1] if laws else None
-
-    def carrier_inertia(self, inertia) -> float | np.ndarray:
-        """What a carrier (gimbal ring) of moment ``inertia`` (kg m²) contributes to the motion: the
-        sum over the active ``carrier_inertia`` effects, 0.0 (massless) without one."""
-        total = 0.0
-        for e in self.effects_of(CARRIER_INERTIA):
-            total = total + e.carrier_inertia(self.context, inertia)
-        return total
-
     def scales(self, duration_s) -> Scales:
         """Characteristic scales (:class:`~gyro_instrument.core.effect.Scales`) of a run of
         ``duration_s`` seconds, for effect-size estimates (``Effect.relative_size`` reads them from
@@ -519,30 +434,6 @@ class Instrument:
         prediction would be with them.
         """
         return {}
-
-    def model_earth_rate(self) -> float:
-        """n as simulated (rad/s): the sum of the active ``frame_rate`` effects' rates (the site's
-        Earth rate with ``earth_rotation``), 0 without one."""
-        total = 0.0
-        for e in self.effects_of(FRAME_RATE):
-            total = total + e.frame_rate_rad_s(self.context)
-        return total
-
-    def missing_effect_note(self, effect_name, consequence) -> str | None:
-        """``"<effect> not simulated: <consequence>"`` when a supported effect is not listed, else None."""
-        if effect_name in self.SUPPORTED_EFFECTS and not self.has(effect_name):
-            return f"{effect_name} not simulated: {consequence}"
-        return None
-
-    def missing_term_note(self, term, consequence) -> str | None:
-        """``"<effects> not simulated: <consequence>"`` when some supported effect has a term of kind
-        ``term`` and no active one has, else None; <effects> are those supported effects' names."""
-        from gyro_instrument.effects import REGISTRY
-        if self.has_term(term):
-            return None
-        names = [n for n, c in REGISTRY.items() if n in self.SUPPORTED_EFFECTS and term in c.terms()]
-        return f"{' or '.join(names)} not simulated: {consequence}" if names else None
-
 
 def with_notes(predictions, *notes) -> dict:
     """``predictions`` with a ``notes`` list of the non-None notes (no key when there are none)."""

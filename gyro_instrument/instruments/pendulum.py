@@ -85,12 +85,6 @@ WINDOW_SAMPLING = (float(SWING_WINDOW_MIN_SAMPLES),
                    "period, which needs that many samples in it")
 
 
-def _effects_with(effect_names, kind) -> list:
-    """The registered effects among ``effect_names`` contributing to the mechanics ``kind``."""
-    from gyro_instrument.effects import REGISTRY
-    return [n for n in effect_names if n in REGISTRY and kind in REGISTRY[n].MECHANICS]
-
-
 def _not_conservative(effect_names) -> list:
     """The effects among ``effect_names`` (registered names) that do not declare ``conservative``, sorted."""
     from gyro_instrument.effects import REGISTRY
@@ -148,7 +142,7 @@ class SphericalPendulum(SwingDynamics, Instrument):
         from gyro_instrument.core.errors import SceneError
         super().check_effects(prefix, p, effects)
         if p["integrator"] == "parareal":
-            if not _effects_with(effects, RESTORING_LAW):
+            if not cls.named_with_term(effects, RESTORING_LAW):
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs the effect finite_amplitude (the "
                                  "full model); the linear model has Binet's closed form")
             dissipative = _not_conservative(effects)

@@ -47,7 +47,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.core.effect import (CENTRIFUGAL_TORQUE, DAMPING, GYROSCOPIC, RESTORING_LAW, RIGID_BODY, SINE_LAW, SPIN,
-                                         TORSION, VISCOUS_DAMPING, VISCOUS_SPIN, Scales, uncarried_terms)
+                                         TORSION, VISCOUS_DAMPING, VISCOUS_SPIN, Scales)
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 from gyro_instrument.instruments.observation_azimuth import HorizontalSwing
@@ -143,29 +143,17 @@ class PlaneGyroscope(Instrument):
     def model_taken(cls, params, effects) -> str:
         """``chain`` on a cone, when the scene asks for it, or when an active effect has a term the reduced
         equation does not carry (:data:`MODELS`); else ``reduced``."""
-        if params["cone_half_angle_deg"] < 90.0 or cls.outside_reduced(effects):
+        if params["cone_half_angle_deg"] < 90.0 or cls.uncarried_effects("reduced", effects):
             return "chain"
         return params["model"]
-
-    @classmethod
-    def outside_reduced(cls, effects) -> dict:
-        """The effects of ``effects`` (name -> Effect class or object) the reduced model does not carry,
-        name -> their term kinds it lacks."""
-        out = {}
-        for name, e in effects.items():
-            missing = uncarried_terms(e, cls.MODELS["reduced"], cls.MECHANICS)
-            if missing:
-                out[name] = sorted(missing)
-        return out
 
     @classmethod
     def check_effects(cls, prefix, params, effect_names) -> None:
         """Every effect carried by the model taken (:meth:`~.base.Instrument.check_carried`); a tape (the
         ``torsion`` effects) hangs a horizontal gyroscope only (a tape's drift alone has no stiffness to
         act through: it changes nothing)."""
-        from gyro_instrument.effects import REGISTRY
         super().check_effects(prefix, params, effect_names)
-        tape = sorted(n for n in effect_names if n in REGISTRY and TORSION in REGISTRY[n].MECHANICS)
+        tape = sorted(cls.named_with_term(effect_names, TORSION))
         if tape and (params["plane"] != "horizontal" or params["cone_half_angle_deg"] < 90.0):
             raise SceneError(f"{prefix}.effects", tape, "a torsion tape hangs a horizontal gyroscope: "
                              "needs plane = horizontal and no cone")
@@ -208,13 +196,10 @@ class PlaneGyroscope(Instrument):
                              f"torque's hold on the swing centre (D_K sin(c - N) = D_B (Z - c)){where}")
 
     def _stiffness_field(self) -> str:
-        """``effects.<effect>.<parameter>``: where the scene gives the tape's stiffness (the first
-        ``torsion`` effect with one, and its parameter holding it), for messages."""
-        for e in self.effects_of(TORSION):
-            D = e.torsion_term(self.context)[0]
-            if D:
-                held = [p.name for p in e.PARAMS if e.params.get(p.name) == D]
-                return f"effects.{e.name}" + (f".{held[0]}" if held else "")
+        """``effects.<effect>.<parameter>`` of the tape's stiffness (the first ``torsion`` effect with one)."""
+        for e in (e for e in self.effects_of(TORSION) if e.torsion_term(self.context)[0]):
+            held = [p.name for p in e.PARAMS if e.params.get(p.name) == e.torsion_term(self.context)[0]]
+            return f"effects.{e.name}" + (f".{held[0]}" if held else "")
         return "effects"
 
     def tape_ratio(self) -> float:
@@ -444,7 +429,7 @@ class PlaneGyroscope(Instrument):
         """(driver, reason): the DOP853 driver a run uses (``integrator``; auto: the scalar driver for
         the reduced model, scipy's for the hinge chain)."""
         if self._model() == "chain":
-            outside = self.outside_reduced(self.effects)
+            outside = self.uncarried_effects("reduced", self.effects)
             why = "a cone" if self.is_cone else (
                 "; ".join(f"{n}: its terms {', '.join(k)} are outside the reduced equation" for n, k in outside.items())
                 if outside else "model: chain")
@@ -455,7 +440,7 @@ class PlaneGyroscope(Instrument):
 
     def _model(self, model=None):
         taken = self.taken_model()
-        return "chain" if taken == "chain" and (self.is_cone or self.outside_reduced(self.effects)) else (model or taken)
+        return "chain" if taken == "chain" and (self.is_cone or self.uncarried_effects("reduced", self.effects)) else (model or taken)
 
     def simulate(self, t, model=None, **options) -> Simulation:
         """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model

@@ -61,8 +61,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.core.effect import (CARRIER_INERTIA, CENTRIFUGAL_TORQUE, DAMPING, GYROSCOPIC, RIGID_BODY, SPIN, Scales,
-                                         uncarried_terms)
+from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, GYROSCOPIC, RIGID_BODY, SPIN, Scales
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
@@ -201,27 +200,6 @@ class GimbalGyroscope(GimbalRuns, Instrument):
                   "(then hinge_chain)"),
     )
     MECHANICS = frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA})
-    #: The hinge chain sums every term through the hooks; the closed form (:mod:`.dynamics`, run on
-    #: Python floats or compiled) holds the inertia torque's parts linear and quadratic in Ω, whose
-    #: coefficients it measures on the effects' own terms (:func:`~.dynamics.rigid_body_coefficients`),
-    #: and calls the hinge torques' hooks (the compiled kernels take them when linear in the rates).
-    MODELS = {"hinge_chain": frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA}),
-              "closed_form": frozenset({GYROSCOPIC, CENTRIFUGAL_TORQUE, DAMPING, SPIN, CARRIER_INERTIA})}
-
-    @classmethod
-    def model_taken(cls, params, effects) -> str:
-        """``hinge_chain`` when the scene asks for it, or under ``auto`` when an active effect has a
-        rigid-body term of another form than those the closed form holds; else ``closed_form`` (its
-        ``compiled`` driver included)."""
-        if params.get("integrator", "auto") == "hinge_chain" or (
-                params.get("integrator", "auto") == "auto" and cls.outside_closed_form(effects)):
-            return "hinge_chain"
-        return "closed_form"
-
-    @classmethod
-    def outside_closed_form(cls, effects) -> list:
-        """The names of ``effects`` (name -> Effect class or object) with a term the closed form does not hold."""
-        return [n for n, e in effects.items() if uncarried_terms(e, cls.MODELS["closed_form"], cls.MECHANICS)]
     MEASURED_CHANNELS = ("outer_angle", "inner_angle")
     JOINTS = ("outer_ring", "inner_ring", "rotor")
     OBSERVATION = SwingRate        # RotorObservation with free rings (no directing line)
@@ -288,12 +266,10 @@ class GimbalGyroscope(GimbalRuns, Instrument):
             exactly when A1 = A2 = 0 and inner_angle = ±90°); the message names the ring
             parameters and the nearest accepted inner angle.
         """
-        from gyro_instrument.effects import REGISTRY
         super().check_effects(prefix, p, effects)
         if p["configuration"] != "free":
             return                     # locked: diag(A + C1 + A2, C); outer_fixed: diag(A + A1, C)
-        carriers = [n for n in effects if n in REGISTRY and CARRIER_INERTIA in REGISTRY[n].MECHANICS]
-        rings = bool(carriers)
+        rings = bool(cls.named_with_term(effects, CARRIER_INERTIA))
         A = p["transverse_inertia_kg_m2"]
         C = p["inertia_ratio"] * A
         A1 = p["inner_ring_diametral_inertia_kg_m2"] if rings else 0.0
@@ -358,7 +334,7 @@ class GimbalGyroscope(GimbalRuns, Instrument):
             inner0 = 0.0 if self.p.initial_inner_angle_deg is None else self.p.initial_inner_angle_deg
         self.inner0 = math.radians(inner0)
         # measured on the effects' own terms, for the effects declaring the forms the closed form holds
-        self.rigid_body_coefficients = None if self.outside_closed_form(self.effects) else \
+        self.rigid_body_coefficients = None if self.uncarried_effects("closed_form", self.effects) else \
             rigid_body_coefficients(self.effects.values(), self.context)
         if self.p.integrator == "closed_form" and self.rigid_body_coefficients is None:
             raise SceneError(f"{name}.integrator", "closed_form",
