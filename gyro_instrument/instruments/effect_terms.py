@@ -37,16 +37,14 @@ class EffectTerms:
         model = cls.model_taken(params, classes)
         if model is None:
             return
-        for name, ecls in classes.items():
-            missing = uncarried_terms(ecls, cls.MODELS[model], cls.MECHANICS)
-            if missing:
-                others = [m for m, kinds in cls.MODELS.items() if not uncarried_terms(ecls, kinds, cls.MECHANICS)]
-                raise SceneError(f"{prefix}.effects", name,
-                                 f"cannot be carried by the {model} model of {cls.type_name}: its terms "
-                                 f"{', '.join(sorted(missing))} are not among those that model sums "
-                                 f"({', '.join(sorted(cls.MODELS[model]))}); "
-                                 + (f"the {' or '.join(others)} model of {cls.type_name} carries it" if others else
-                                    f"no model of {cls.type_name} carries it: leave it out for this instrument"))
+        for name, missing in cls.uncarried_effects(model, classes).items():
+            others = [m for m in cls.MODELS if not cls.uncarried_effects(m, {name: classes[name]})]
+            raise SceneError(f"{prefix}.effects", name,
+                             f"cannot be carried by the {model} model of {cls.type_name}: its terms "
+                             f"{', '.join(missing)} are not among those that model sums "
+                             f"({', '.join(sorted(cls.MODELS[model]))}); "
+                             + (f"the {' or '.join(others)} model of {cls.type_name} carries it" if others else
+                                f"no model of {cls.type_name} carries it: leave it out for this instrument"))
 
     @classmethod
     def uncarried_effects(cls, model, effects) -> dict:
@@ -58,7 +56,6 @@ class EffectTerms:
             if missing:
                 out[name] = sorted(missing)
         return out
-
 
     @staticmethod
     def named_with_term(effect_names, term) -> list:

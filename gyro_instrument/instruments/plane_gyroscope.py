@@ -97,7 +97,8 @@ class PlaneGyroscope(Instrument):
               doc="initial angle u0 of the axis from the equilibrium line, degrees"),
         Param("initial_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6, doc="initial u̇0, degrees/s"),
         Param("model", kind="str", default="reduced", choices=("reduced", "chain"),
-              doc="reduced 1-DOF equation or the generic hinge chain (cone: always chain)"),
+              doc="reduced 1-DOF equation or the generic hinge chain (cone, or an effect whose terms the reduced "
+                  "equation does not carry: always chain)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=("auto", "scalar", "vector"),
               doc="DOP853 driver of the reduced model: scalar (Python floats, ~5x faster on its 3 components), "
