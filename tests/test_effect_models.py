@@ -210,6 +210,15 @@ def test_scales_are_an_open_mapping_an_instrument_fills():
         s["duration_s"] = 1.0                            # frozen, as the context holding it
 
 
+def test_describe_sizes_a_new_effect_from_a_scale_the_instrument_provides(registered):
+    """``describe`` shows the eddy current's size c · duration / (2 J) from the plane gyroscope's own scale
+    ``swing_inertia_kg_m2`` (J = A = 1.62e-3 kg m² in the gyrotheodolite scene), 600 s: 1.85e-7."""
+    from gyro_instrument import api
+    out = api.describe(load_scene("gyrotheodolite", THEO + EDDY))
+    size = out["instruments"]["gak1"]["effects"]["eddy_current_test"]
+    assert size["active"] and size["relative_size"] == pytest.approx(EDDY_C * 600.0 / (2.0 * 1.62e-3), rel=1e-12)
+
+
 def test_the_shipped_effects_are_registered():
     """Each shipped effect module's class is in the registry under its name, in the summing order;
     any other registered effect may exist beside them (this test does not freeze the set)."""

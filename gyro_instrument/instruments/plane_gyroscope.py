@@ -338,12 +338,14 @@ class PlaneGyroscope(Instrument):
                                           "has no restoring torque (Quet sec. 4 §1 item 4)")
 
     def scales(self, duration_s) -> Scales:
+        """The common scales, and this instrument's own: ``torsion_share`` (D_B/(D_K + D_B) of a tape) and
+        ``swing_inertia_kg_m2`` (the swinging hinge's inertia A, kg m²)."""
         n = self.site.earth_rate_rad_s
         T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
         return Scales(earth_rate_rad_s=n, gyro_rate_rad_s=abs(self.p.inertia_ratio * self.p.spin_rate_rad_s) or None,
                 restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) else 0.0,
                 amplitude_rad=abs(self.p.initial_angle_rad), duration_s=duration_s,
-                torsion_share=self._torsion_share())
+                torsion_share=self._torsion_share(), swing_inertia_kg_m2=self.p.transverse_inertia_kg_m2)
 
     def _torsion_share(self) -> float:
         """D_B / (D_K + D_B) (0 without a tape; 1 with the rotor off)."""
