@@ -39,8 +39,8 @@ ENU and the instrument's characteristic :class:`Scales`. An effect needing g or 
 them there, never off Ω's direction or a constant. The instrument builds the context
 (``Instrument.effect_context``).
 
-What its terms are (``TERMS``, model: Orekit's ``dependsOnPositionOnly``, an effect telling a
-propagator what it is): each term kind refines one kind of mechanics (:data:`TERM_KINDS`, term kind
+An effect also declares what its terms are (``TERMS``; model: Orekit's ``dependsOnPositionOnly``, a
+force model telling the propagator what it is): each term kind refines one kind of mechanics (:data:`TERM_KINDS`, term kind
 -> its kind of mechanics) and says the term's form, so a model derived by hand for that form can
 carry it. A kind of mechanics the effect declares and no declared term kind refines is a term of
 general form (:meth:`Effect.terms`): only a model summing that kind's hook carries it.
