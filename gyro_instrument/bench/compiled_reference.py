@@ -106,9 +106,14 @@ def reference_run(p, t_end_s, steps_per_swing=STEPS_PER_SWING) -> tuple:
     period = p._first_swing(*p.initial_state())[0]
     h = period / steps_per_swing
     n_steps = int(math.floor(t_end_s / h))
-    omega = p.site.earth_rate_enu() if p.has("earth_rotation") else np.zeros(3)
-    if not p.has("centrifugal") and np.any(omega):
-        raise ValueError("compiled reference: earth_rotation without centrifugal is not its equations")
+    from gyro_instrument.core.effect import CENTRIFUGAL_GRADIENT, CORIOLIS, SINE_LAW, uncarried_terms
+    held = {CORIOLIS, CENTRIFUGAL_GRADIENT, SINE_LAW}                 # the terms the reference's kernel holds
+    other = [e.name for e in p.effects.values() if uncarried_terms(e, held, p.MECHANICS)]
+    if other:
+        raise ValueError(f"compiled reference: {', '.join(other)} are not terms of its equations")
+    omega = p.site.earth_rate_enu() if p.has_term(CORIOLIS) else np.zeros(3)
+    if not p.has_term(CENTRIFUGAL_GRADIENT) and np.any(omega):
+        raise ValueError("compiled reference: the Coriolis term without the centrifugal gradient is not its equations")
     kernel = compiled_rk8_reference()
     y0 = np.concatenate(p.initial_state())
     c0 = time.process_time()

@@ -77,6 +77,7 @@ def systematic_floor_rows(minutes) -> list:
     with its own effects."""
     from gyro_instrument.bench.effect_cost import NOISE_FREE
     from gyro_instrument.estimators.pipeline import CORRECTIONS, estimate_records, measure, simulate_truth
+    from gyro_instrument.instruments.observation import AMPLITUDE_CORRECTION, ELLIPSE_CORRECTION, SPIN_CORRECTION
     from gyro_instrument.scenes import load_scene
     if isinstance(minutes, tuple):
         name, overrides, minutes = minutes
@@ -88,14 +89,14 @@ def systematic_floor_rows(minutes) -> list:
     records = measure(scene, truth)
     lat0, n0 = scene.site.latitude_deg, scene.site.earth_rate_rad_s
     rows = []
-    for left_out in ("none", "finite_amplitude", "spin_decay", "ellipse_precession"):
+    for left_out in ("none", AMPLITUDE_CORRECTION, SPIN_CORRECTION, ELLIPSE_CORRECTION):
         r = estimate_records(scene, truth[1], records, corrections=CORRECTIONS - {left_out})
-        if left_out != "ellipse_precession":
+        if left_out != ELLIPSE_CORRECTION:
             lat = r["methods"].get("item9", {}).get("latitude_deg")
             n = r["methods"].get("item8_eq10", {}).get("earth_rate_rad_s")
             rows.append((minutes, left_out, GYRO_PAIR, None if lat is None else lat - lat0,
                          None if n is None else n - n0))
-        if left_out in ("none", "ellipse_precession"):
+        if left_out in ("none", ELLIPSE_CORRECTION):
             k = next((e.get("foucault_rate_rad_s") for e in r["instruments"].values()
                       if isinstance(e, dict) and "foucault_rate_rad_s" in e), None)
             lat = None if k is None or abs(k) > n0 else math.degrees(math.asin(k / n0))

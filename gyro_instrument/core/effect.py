@@ -39,8 +39,36 @@ ENU and the instrument's characteristic :class:`Scales`. An effect needing g or 
 them there, never off Ω's direction or a constant. The instrument builds the context
 (``Instrument.effect_context``).
 
-Beside the kinds it contributes to, an effect declares what it is (``CAPABILITIES``, a subset of
-:data:`CAPABILITIES`; model: Orekit's ``dependsOnPositionOnly``):
+An effect also declares what its terms are (``TERMS``; model: Orekit's ``dependsOnPositionOnly``, a
+force model telling the propagator what it is): each term kind refines one kind of mechanics (:data:`TERM_KINDS`, term kind
+-> its kind of mechanics) and says the term's form, so a model derived by hand for that form can
+carry it. A kind of mechanics the effect declares and no declared term kind refines is a term of
+general form (:meth:`Effect.terms`): only a model summing that kind's hook carries it.
+
+=========================  ================  =========================================================
+term kind                  refines           the term, and how a hand-derived model reads it
+=========================  ================  =========================================================
+``coriolis_acceleration``  ``point_mass``    −2 Ω × v (Quet sec. 1 eq. 16)
+``gyroscopic_torque``      ``rigid_body``    the inertia torque's part linear in Ω,
+                                             I(Ω × w) + w × IΩ + Ω × Iw
+``centrifugal_gradient``   ``point_mass``    −Ω × (Ω × δr) (sec. 1 eq. 19)
+``centrifugal_torque``     ``rigid_body``    Ω × I Ω, the inertia torque's part quadratic in Ω
+``sine_restoring_law``     ``restoring_law`` the exact law sin u (the law of the potential 1 − cos u)
+``viscous_damping``        ``damping``       −d J q̇ on a hinge of inertia J: d from
+                                             :meth:`Effect.viscous_damping_rate_per_s`
+``viscous_spin_friction``  ``spin``          −C ρ / τ on a rotor of axial moment C: τ from
+                                             :meth:`Effect.spin_decay_time_s`
+=========================  ================  =========================================================
+
+Every kind of mechanics is also a term kind of its own (a term of general form, read through the
+kind's hook): ``torsion`` (D, Z0, Ż: already coefficients), ``frame_rate`` (a rate),
+``carrier_inertia`` and the rest. :func:`register_term_kind` adds a term kind without editing this
+module. An instrument declares, per model it can integrate, the term kinds that model carries
+(``Instrument.MODELS``); a model carries an effect when it carries each of the effect's term kinds
+or the kind of mechanics it refines (:func:`uncarried_terms`), and a scene listing an effect the
+model taken cannot carry is refused, naming the effect, the instrument and the model.
+
+An effect also declares capabilities (``CAPABILITIES``, a subset of :data:`CAPABILITIES`):
 
 ==================  ==================================================================================
 ``conservative``    its terms do no net work over a closed path of the relative motion: derivable from a
@@ -53,11 +81,15 @@ Beside the kinds it contributes to, an effect declares what it is (``CAPABILITIE
 ==================  ==================================================================================
 
 ``relative_size`` estimates, from the context's scales, how much leaving the effect out would
-change the result, for ``gyro-instrument describe``.
+change the result, for ``gyro-instrument describe``. The scales are an open mapping
+(:class:`Scales`): the instrument fills in what it has (a name per scale, SI units in the name), an
+effect reads what it needs, with a default when an instrument does not provide it
+(``ctx.scales.get("torsion_share", 0.0)``): a new effect needing a new scale edits the instruments
+that provide it, never this module.
 """
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -90,14 +122,72 @@ HOOKS = {POINT_MASS: "point_mass_term", RIGID_BODY: "rigid_body_torque", DAMPING
          FRAME_RATE: "frame_rate_rad_s", TORSION: "torsion_term"}
 
 
-@dataclass(frozen=True)
-class Scales:
-    """An instrument's characteristic scales, for effect-size estimates (``Effect.relative_size``).
+CORIOLIS = "coriolis_acceleration"
+GYROSCOPIC = "gyroscopic_torque"
+CENTRIFUGAL_GRADIENT = "centrifugal_gradient"
+CENTRIFUGAL_TORQUE = "centrifugal_torque"
+SINE_LAW = "sine_restoring_law"
+VISCOUS_DAMPING = "viscous_damping"
+VISCOUS_SPIN = "viscous_spin_friction"
 
-    Attributes
-    ----------
+#: Every term kind (see the module docstring) -> the kind of mechanics whose hook gives it; each kind
+#: of mechanics is a term kind of its own (a term of general form). Open: :func:`register_term_kind`.
+TERM_KINDS = {kind: kind for kind in sorted(MECHANICS)} | {
+    CORIOLIS: POINT_MASS, GYROSCOPIC: RIGID_BODY, CENTRIFUGAL_GRADIENT: POINT_MASS, CENTRIFUGAL_TORQUE: RIGID_BODY,
+    SINE_LAW: RESTORING_LAW, VISCOUS_DAMPING: DAMPING, VISCOUS_SPIN: SPIN}
+
+
+#: The coefficient hook a term kind reads (the models carrying the form multiply by it): an effect
+#: declaring the term kind implements it.
+TERM_HOOKS = {VISCOUS_DAMPING: "viscous_damping_rate_per_s", VISCOUS_SPIN: "spin_decay_time_s"}
+
+
+def register_term_kind(term, mechanics) -> str:
+    """Add the term kind ``term`` refining the kind of mechanics ``mechanics`` (:data:`MECHANICS`) to
+    :data:`TERM_KINDS` (a model derived by hand for a new form declares it in ``Instrument.MODELS``).
+    Returns ``term``.
+
+    Raises
+    ------
+    ValueError
+        When ``mechanics`` is not a kind of mechanics, or ``term`` is taken by another kind.
+    """
+    if mechanics not in MECHANICS:
+        raise ValueError(f"register_term_kind: {mechanics!r} is not a kind of mechanics ({sorted(MECHANICS)})")
+    if TERM_KINDS.get(term, mechanics) != mechanics:
+        raise ValueError(f"register_term_kind: {term!r} already refines {TERM_KINDS[term]}")
+    TERM_KINDS[term] = mechanics
+    return term
+
+
+def uncarried_terms(effect, carried, mechanics=None) -> frozenset:
+    """The term kinds of ``effect`` (an Effect or its class: :meth:`Effect.terms`) that a model carrying
+    ``carried`` (term kinds, or kinds of mechanics: every term refining one) does not carry, among those
+    refining one of ``mechanics`` (the instrument's kinds; None: all): an empty frozenset when it
+    carries the effect."""
+    out = set()
+    for term in effect.terms():
+        kind = TERM_KINDS.get(term, term)
+        if mechanics is not None and kind not in mechanics:
+            continue
+        if term not in carried and kind not in carried:
+            out.add(term)
+    return frozenset(out)
+
+
+class Scales(Mapping):
+    """An instrument's characteristic scales, for effect-size estimates (``Effect.relative_size``): an
+    open mapping, name -> value, that the instrument fills (``Instrument.scales``) and an effect reads.
+
+    A scale is named with its unit (SI). The shipped instruments fill the scales below; any other name
+    may be added by an instrument and read by an effect (``scales.get(name, default)``), so a new
+    effect needing a new scale edits the instruments providing it, not this class. The ones below
+    read as attributes too (``scales.amplitude_rad``), with their defaults when not filled.
+
+    Common scales
+    -------------
     earth_rate_rad_s : float
-        The site's Earth rate n, rad/s.
+        The site's Earth rate n, rad/s (required).
     duration_s : float or None
         The run's duration, s (None when the context is built for dynamics only).
     restoring_rate_rad_s : float
@@ -106,20 +196,41 @@ class Scales:
         μ ρ0, the gyroscopic rate, rad/s; None for an instrument without a rotor's directing torque.
     amplitude_rad : float
         The release amplitude, rad.
-    ring_inertia_ratio : float
-        (C1 + A2)/A of a gimbal's rings, 0 without rings.
-    torsion_share : float
-        The share of the restoring constant an elastic suspension (a torsion tape) gives,
-        D_B / (D_K + D_B); 0 without one.
+
+    Scales of one instrument kind are its own: the gimbal fills ``ring_inertia_ratio`` ((C1 + A2)/A
+    of its rings), the plane gyroscope ``torsion_share`` (D_B / (D_K + D_B) of a torsion tape); the
+    effects that need them read them with ``get`` and a default.
     """
 
-    earth_rate_rad_s: float
-    duration_s: float | None = None
-    restoring_rate_rad_s: float = 0.0
-    gyro_rate_rad_s: float | None = None
-    amplitude_rad: float = 0.0
-    ring_inertia_ratio: float = 0.0
-    torsion_share: float = 0.0
+    #: The common scales and their values when an instrument does not fill them.
+    DEFAULTS = {"duration_s": None, "restoring_rate_rad_s": 0.0, "gyro_rate_rad_s": None, "amplitude_rad": 0.0}
+
+    def __init__(self, earth_rate_rad_s, **scales) -> None:
+        self._values = dict(self.DEFAULTS, earth_rate_rad_s=earth_rate_rad_s, **scales)
+
+    def __getitem__(self, name):
+        return self._values[name]
+
+    def __iter__(self):
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __hash__(self) -> int:
+        return hash(frozenset(self._values.items()))
+
+    def __repr__(self) -> str:
+        return f"Scales({', '.join(f'{k}={v!r}' for k, v in self._values.items())})"
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(f"Scales has no scale {name!r} (filled: {', '.join(sorted(self))}); "
+                                 f"read an optional one with .get(name, default)") from None
 
 
 @dataclass(frozen=True)
@@ -135,7 +246,7 @@ class EffectContext:
     omega_enu : tuple of 3 float
         The Earth-rate vector Ω in ENU, rad/s: n (0, cos γ, sin γ).
     scales : Scales or None
-        The instrument's characteristic scales (None when built without them).
+        The instrument's characteristic scales, an open mapping (None when built without them).
     """
 
     site: object
@@ -166,7 +277,8 @@ class Effect:
     """Base class of all physical effects.
 
     Subclasses set ``name``, ``summary``, ``PARAMS`` (a tuple of :class:`~gyro_instrument.core.params.Param`), ``MECHANICS``
-    (the kinds they contribute to, a subset of :data:`MECHANICS`), ``CAPABILITIES`` (a subset of
+    (the kinds they contribute to, a subset of :data:`MECHANICS`), ``TERMS`` (the forms of those terms
+    a hand-derived model may carry, :data:`TERM_KINDS`; none: general form), ``CAPABILITIES`` (a subset of
     :data:`CAPABILITIES`), implement :meth:`relative_size` and the hook of each declared kind. A
     hook's default contributes nothing. Every hook takes an :class:`EffectContext` first.
     The validated parameters are ``self.p``, a frozen dataclass generated once per class from
@@ -177,6 +289,8 @@ class Effect:
     summary: ClassVar[str] = ""
     PARAMS: ClassVar[tuple] = ()
     MECHANICS: ClassVar[frozenset] = frozenset()
+    #: The term kinds refining some of ``MECHANICS`` (:data:`TERM_KINDS`); the rest are of general form.
+    TERMS: ClassVar[frozenset] = frozenset()
     CAPABILITIES: ClassVar[frozenset] = frozenset()
     #: For a ``default_on`` effect, the scene note's words when no instrument simulates it, when one
     #: instrument leaves it out, and for an instrument that cannot simulate it.
@@ -187,6 +301,13 @@ class Effect:
     def __init__(self, field_prefix="effects", **params) -> None:
         self.params = validate_params(f"{field_prefix}.{self.name}", self.PARAMS, params)
         self.p = params_dataclass(type(self))(**self.params)
+
+    @classmethod
+    def terms(cls) -> frozenset:
+        """Every term kind of the effect: its ``TERMS`` and each kind of ``MECHANICS`` none of them refines
+        (a term of general form, carried only by a model summing that kind's hook)."""
+        refined = {TERM_KINDS.get(t, t) for t in cls.TERMS}
+        return frozenset(cls.TERMS) | (frozenset(cls.MECHANICS) - refined)
 
     @classmethod
     def is_conservative(cls) -> bool:
@@ -250,6 +371,16 @@ class Effect:
         """``frame_rate``: the rotation rate (rad/s) this effect gives the Earth-fixed frame at
         ``ctx.site``."""
         raise NotImplementedError(f"{self.name} declares no frame rate")
+
+    def viscous_damping_rate_per_s(self, ctx, inertia) -> float:
+        """``viscous_damping``: d (1/s) of this effect's damping torque −d J q̇ on a hinge of swinging
+        inertia J = ``inertia`` (kg m²), for the models that carry the form by its coefficient."""
+        raise NotImplementedError(f"{self.name} declares no viscous damping")
+
+    def spin_decay_time_s(self, ctx, inertia) -> float:
+        """``viscous_spin_friction``: τ (s) of this effect's spin torque −C ρ / τ on a rotor of axial
+        moment C = ``inertia`` (kg m²): the relative spin decays as e^(−t/τ)."""
+        raise NotImplementedError(f"{self.name} declares no viscous spin friction")
 
     def torsion_term(self, ctx) -> tuple:
         """``torsion``: ``(stiffness_n_m_per_rad, zero_rad, zero_rate_rad_s)`` this effect adds to an

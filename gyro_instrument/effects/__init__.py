@@ -5,7 +5,7 @@ instruments sum the effects' terms (:func:`canonical_order`). A new effect is on
 :func:`register` call (docs/extending.md).
 """
 
-from gyro_instrument.core.effect import CAPABILITIES, MECHANICS, Effect
+from gyro_instrument.core.effect import CAPABILITIES, MECHANICS, TERM_HOOKS, TERM_KINDS, Effect
 from gyro_instrument.effects.air_drag import AirDrag
 from gyro_instrument.effects.centrifugal import Centrifugal
 from gyro_instrument.effects.earth_rotation import EarthRotation
@@ -28,7 +28,9 @@ def register(cls) -> type:
     ------
     ValueError
         When ``cls`` is not an Effect subclass, its ``name`` is empty or taken, or its
-        ``MECHANICS`` name no known kind (:data:`gyro_instrument.core.effect.MECHANICS`), or its
+        ``MECHANICS`` name no known kind (:data:`gyro_instrument.core.effect.MECHANICS`), its ``TERMS``
+        a term kind not refining one of them (:data:`gyro_instrument.core.effect.TERM_KINDS`) or one
+        whose coefficient hook (:data:`gyro_instrument.core.effect.TERM_HOOKS`) it does not implement, or its
         ``CAPABILITIES`` no known capability (:data:`gyro_instrument.core.effect.CAPABILITIES`).
     """
     if not (isinstance(cls, type) and issubclass(cls, Effect)):
@@ -40,6 +42,15 @@ def register(cls) -> type:
     if unknown or not cls.MECHANICS:
         raise ValueError(f"register: {cls.name} MECHANICS {sorted(cls.MECHANICS)} must be a non-empty subset "
                          f"of {sorted(MECHANICS)}")
+    bad = sorted(t for t in cls.TERMS if TERM_KINDS.get(t) not in cls.MECHANICS)
+    if bad:
+        raise ValueError(f"register: {cls.name} TERMS {bad} are not term kinds refining its MECHANICS "
+                         f"{sorted(cls.MECHANICS)} (gyro_instrument.core.effect.TERM_KINDS)")
+    lacking = sorted(TERM_HOOKS[t] for t in cls.TERMS if t in TERM_HOOKS and
+                     getattr(cls, TERM_HOOKS[t]) is getattr(Effect, TERM_HOOKS[t]))
+    if lacking:
+        raise ValueError(f"register: {cls.name} declares TERMS {sorted(cls.TERMS)} but does not implement "
+                         f"{', '.join(lacking)}")
     if set(cls.CAPABILITIES) - CAPABILITIES:
         raise ValueError(f"register: {cls.name} CAPABILITIES {sorted(cls.CAPABILITIES)} must be a subset "
                          f"of {sorted(CAPABILITIES)}")

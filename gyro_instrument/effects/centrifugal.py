@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gyro_instrument.core.effect import CONSERVATIVE, POINT_MASS, RIGID_BODY, Effect
+from gyro_instrument.core.effect import CENTRIFUGAL_GRADIENT, CENTRIFUGAL_TORQUE, CONSERVATIVE, POINT_MASS, RIGID_BODY, Effect
 from gyro_instrument.core.vector import cross3
 
 
@@ -23,6 +23,7 @@ class Centrifugal(Effect):
     name = "centrifugal"
     summary = "centrifugal gradient, second order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY})
+    TERMS = frozenset({CENTRIFUGAL_GRADIENT, CENTRIFUGAL_TORQUE})   # −Ω × (Ω × δr); Ω × I Ω
     CAPABILITIES = frozenset({CONSERVATIVE})   # the gradient of the centrifugal potential
 
     def relative_size(self, ctx) -> tuple:
@@ -33,7 +34,7 @@ class Centrifugal(Effect):
         w0 = scales.restoring_rate_rad_s
         if not w0:
             return math.inf, "(n / omega0)^2 with no restoring rate (omega0 = 0): nothing for it to be small against"
-        if scales.torsion_share >= 1.0:
+        if scales.get("torsion_share", 0.0) >= 1.0:
             return (n / w0) ** 2, "(n / omega0)^2: the O(n^2) torque against the tape's (a torsion pendulum)"
         return (n / w0) ** 2, "(n / omega0)^2 (n^2 l / g for a pendulum)"
 

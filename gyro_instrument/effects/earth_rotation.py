@@ -12,7 +12,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gyro_instrument.core.effect import CONSERVATIVE, DEFAULT_ON, FRAME_RATE, POINT_MASS, RIGID_BODY, Effect
+from gyro_instrument.core.effect import (CONSERVATIVE, CORIOLIS, DEFAULT_ON, FRAME_RATE, GYROSCOPIC, POINT_MASS, RIGID_BODY,
+                                         Effect)
 from gyro_instrument.core.vector import cross3
 
 
@@ -22,6 +23,8 @@ class EarthRotation(Effect):
     name = "earth_rotation"
     summary = "Coriolis / gyroscopic coupling, first order in the Earth rate n"
     MECHANICS = frozenset({POINT_MASS, RIGID_BODY, FRAME_RATE})
+    #: −2 Ω × v on points, the inertia torque's part linear in Ω on bodies; the frame rate n itself.
+    TERMS = frozenset({CORIOLIS, GYROSCOPIC})
     #: Gyroscopic (Coriolis does no work) and assumed by a reader: a scene without it gets a note.
     CAPABILITIES = frozenset({CONSERVATIVE, DEFAULT_ON})
     #: What a scene leaving it out simulates, for the note (:func:`gyro_instrument.scenes.scene_notes`).
@@ -35,7 +38,7 @@ class EarthRotation(Effect):
     def relative_size(self, ctx) -> tuple:
         if ctx.scales.gyro_rate_rad_s:
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
-        if ctx.scales.torsion_share >= 1.0:
+        if ctx.scales.get("torsion_share", 0.0) >= 1.0:
             return 0.0, ("no rotor spin, no directing torque (Quet sec. 4 §1 eq. 2 with rho = 0): a torsion "
                          "pendulum on its tape; the Earth's rate enters only at O(n^2) (centrifugal)")
         n = ctx.scales.earth_rate_rad_s

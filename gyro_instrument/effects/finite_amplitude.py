@@ -13,7 +13,7 @@ import numpy as np
 
 from scipy.special import ellipk
 
-from gyro_instrument.core.effect import CONSERVATIVE, RESTORING_LAW, Effect
+from gyro_instrument.core.effect import CONSERVATIVE, RESTORING_LAW, SINE_LAW, Effect
 
 
 class FiniteAmplitude(Effect):
@@ -22,6 +22,7 @@ class FiniteAmplitude(Effect):
     name = "finite_amplitude"
     summary = "exact trigonometry (sin u) instead of the small-angle model (u)"
     MECHANICS = frozenset({RESTORING_LAW})
+    TERMS = frozenset({SINE_LAW})
     CAPABILITIES = frozenset({CONSERVATIVE})   # the law of a potential (1 − cos u)
 
     def relative_size(self, ctx) -> tuple:

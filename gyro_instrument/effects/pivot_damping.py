@@ -4,7 +4,7 @@ A torque −2 J q̇ / τ on a hinge of swinging inertia J makes small oscillatio
 e^(−t/τ) in amplitude. Applied to the swinging hinges of gyroscopes and compound pendulums.
 """
 
-from gyro_instrument.core.effect import DAMPING, Effect
+from gyro_instrument.core.effect import DAMPING, VISCOUS_DAMPING, Effect
 from gyro_instrument.core.params import Param
 
 
@@ -14,6 +14,7 @@ class PivotDamping(Effect):
     name = "pivot_damping"
     summary = "viscous friction at the swinging hinges (amplitude time constant tau)"
     MECHANICS = frozenset({DAMPING})
+    TERMS = frozenset({VISCOUS_DAMPING})     # −(2/τ) J q̇: 2/τ from viscous_damping_rate_per_s
     PARAMS = (Param("time_constant_s", default=3600.0, low=0.0, open_low=True,
                     doc="e-folding time of the oscillation amplitude"),)
 
@@ -23,6 +24,10 @@ class PivotDamping(Effect):
     def rate(self) -> float:
         """Damping rate 2/τ (per second) multiplying J q̇ in the hinge torque."""
         return 2.0 / self.p.time_constant_s
+
+    def viscous_damping_rate_per_s(self, ctx, inertia) -> float:
+        """d = 2/τ (1/s) of the torque −d J q̇, whatever the hinge's inertia J."""
+        return self.rate()
 
     def damping_torque(self, ctx, inertia, rate) -> float:
         """−(2/τ) J q̇ (N m) on a hinge of swinging inertia J = ``inertia`` turning at q̇ = ``rate``."""

@@ -21,7 +21,7 @@ class RingInertia(Effect):
     CAPABILITIES = frozenset({CONSERVATIVE})   # inertia: no work
 
     def relative_size(self, ctx) -> tuple:
-        r = ctx.scales.ring_inertia_ratio
+        r = ctx.scales.get("ring_inertia_ratio", 0.0)       # the gimbal's scale: (C1 + A2)/A
         return r / 2.0, "(C1 + A2) / (2 A): relative change of the locked-ring period"
 
     def carrier_inertia(self, ctx, inertia) -> float | np.ndarray:

@@ -33,7 +33,7 @@ class TapeDrift(Effect):
         s = ctx.scales
         if not (s.duration_s and s.amplitude_rad):
             return 0.0, "no run or no swing"
-        return (s.torsion_share * abs(self.zero_rate_rad_s()) * s.duration_s / (2.0 * s.amplitude_rad),
+        return (s.get("torsion_share", 0.0) * abs(self.zero_rate_rad_s()) * s.duration_s / (2.0 * s.amplitude_rad),
                 "D_B/(D_K + D_B) · Ż · duration / (2 amplitude): the centre's move against the swing's range")
 
     def torsion_term(self, ctx) -> tuple:

@@ -25,7 +25,7 @@ class TapeTorsion(Effect):
                     doc="Z, the tape's torque-free reading on the instrument's scale (the tape zero), degrees"))
 
     def relative_size(self, ctx) -> tuple:
-        return 0.5 * ctx.scales.torsion_share, "D_B / (2 (D_K + D_B)): the relative change of the swing frequency"
+        return 0.5 * ctx.scales.get("torsion_share", 0.0), "D_B / (2 (D_K + D_B)): the relative change of the swing frequency"
 
     def torsion_term(self, ctx) -> tuple:
         """(D_B, Z, 0): stiffness (N m/rad), tape zero (rad, scale reading), no drift."""

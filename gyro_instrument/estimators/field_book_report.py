@@ -51,7 +51,7 @@ def scene_gyroscope(scene) -> tuple:
                                                 "the raw reduction")
     name, inst = found[0]
     lat = scene.site.latitude_deg
-    if abs(math.cos(math.radians(lat))) < POLE_COS or not inst.has("earth_rotation"):
+    if abs(math.cos(math.radians(lat))) < POLE_COS or not inst.frame_rotates():
         raise SceneError("site.latitude_deg", lat, "the directing torque n cos(latitude) vanishes there (a "
                                                    "horizontal gyroscope at a pole, or without earth_rotation): "
                                                    "no north from a field book; a latitude in (-90, 90)")

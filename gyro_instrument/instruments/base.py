@@ -10,6 +10,9 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
 ``summary``, ``PARAMS``  one line for ``describe``; the parameter specifications
 ``MECHANICS``            the kinds of mechanics its right-hand side sums effect terms for
                          (:mod:`gyro_instrument.core.effect`); ``SUPPORTED_EFFECTS`` follows
+``MODELS``, ``model_taken``  the models it can integrate, the term kinds each carries
+                         (:data:`~gyro_instrument.core.effect.TERM_KINDS`), and which one a run
+                         takes: chosen from the effects' declared terms, never their names
 ``COLUMNS``              the simulated output channels
 ``MEASURED_CHANNELS``    the angles a sensor reads (:meth:`Instrument.measured_angles`)
 ``JOINTS``               the ``sensor_msgs/JointState`` joints it publishes
@@ -24,23 +27,26 @@ table by its ``type_name`` (``tests/test_architecture.py`` fails when a module o
                          :class:`~.observation.SwingRate` is built from)
 =======================  ===================================================================
 
+What it asks of its active effects, by the kinds of their terms (never their names), is
+:class:`~.effect_terms.EffectTerms`, mixed in.
+
 Model: rosbags' typed ``StorageProtocol``; Drake's systems declaring their ports.
 """
 
 import itertools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.effect import (CARRIER_INERTIA, FRAME_RATE, RESTORING_LAW, Effect, EffectContext, Scales,
-                                         supporting_effects)
+from gyro_instrument.core.effect import EffectContext, Scales, supporting_effects
 from gyro_instrument.core.integrate import Trajectory
 from gyro_instrument.core.params import params_dataclass
 from gyro_instrument.effects import canonical_order
+from gyro_instrument.instruments.effect_terms import EffectTerms
 from gyro_instrument.instruments.observation import Observation, SwingRate
 
 #: Most periods (swings, turns) one run may hold. An adaptive 8th-order step covers a few percent
@@ -203,7 +209,7 @@ class _SupportedEffects:
         return supporting_effects(REGISTRY, cls.MECHANICS)
 
 
-class Instrument:
+class Instrument(EffectTerms):
     """Base class: parameters in, one ``simulate`` call, columns out.
 
     Subclasses set the class members below and implement ``simulate``, ``scales`` and
@@ -256,6 +262,18 @@ class Instrument:
     SHOWS_AXIS: ClassVar[bool] = False
     #: True when :meth:`stream` is overridden to integrate window by window in bounded memory
     STREAMS: ClassVar[bool] = False
+    #: The models (integration paths) the instrument can take: name -> the term kinds that model
+    #: carries (:data:`~gyro_instrument.core.effect.TERM_KINDS`: a form a hand-derived equation holds,
+    #: or a kind of mechanics whose hook the model sums, so every term of that kind). Empty: one model,
+    #: which sums every kind of ``MECHANICS`` through the hooks (nothing to check).
+    MODELS: ClassVar[dict] = {}
+
+    @classmethod
+    def model_taken(cls, params, effects) -> "str | None":
+        """The key of ``MODELS`` a run with the validated ``params`` and the active ``effects`` (name ->
+        Effect class or object) takes, chosen from what the effects' terms are (their term kinds), never
+        from their names. The default: the first model (None without ``MODELS``)."""
+        return next(iter(cls.MODELS), None)
 
     @classmethod
     def check_params(cls, prefix, params) -> None:
@@ -278,7 +296,9 @@ class Instrument:
     def check_effects(cls, prefix, params, effect_names) -> None:
         """Check the parameters against the instrument's effect list (tuple of names, all in
         ``SUPPORTED_EFFECTS``), e.g. an integrator that needs an effect. Raises SceneError; the
-        default accepts everything."""
+        default refuses an effect the model taken cannot carry (:meth:`check_carried`); an override
+        calls it too (``super().check_effects(...)``)."""
+        cls.check_carried(prefix, params, effect_names)
 
     def observation(self) -> Observation:
         """What this instrument measures and how (:class:`~.observation.Observation`), built by
@@ -353,32 +373,6 @@ class Instrument:
             return self.context
         return EffectContext.of_site(self.site, self.scales(duration_s))
 
-    def has(self, effect_name) -> bool:
-        """True when the effect is listed for this instrument (and so is evaluated)."""
-        return effect_name in self.effects
-
-    def effect(self, effect_name) -> Effect | None:
-        """The active Effect object, or None."""
-        return self.effects.get(effect_name)
-
-    def effects_of(self, kind) -> list:
-        """The active effects contributing to the mechanics ``kind`` (list, summing order)."""
-        return [e for e in self.effects.values() if kind in e.MECHANICS]
-
-    def restoring_law(self) -> Callable | None:
-        """The restoring law g(u) of the active ``restoring_law`` effect (``numpy.sin`` for
-        ``finite_amplitude``), or None: the small-angle law g(u) = u."""
-        laws = [e.restoring_law(self.context) for e in self.effects_of(RESTORING_LAW)]
-        return laws[-1] if laws else None
-
-    def carrier_inertia(self, inertia) -> float | np.ndarray:
-        """What a carrier (gimbal ring) of moment ``inertia`` (kg m²) contributes to the motion: the
-        sum over the active ``carrier_inertia`` effects, 0.0 (massless) without one."""
-        total = 0.0
-        for e in self.effects_of(CARRIER_INERTIA):
-            total = total + e.carrier_inertia(self.context, inertia)
-        return total
-
     def scales(self, duration_s) -> Scales:
         """Characteristic scales (:class:`~gyro_instrument.core.effect.Scales`) of a run of
         ``duration_s`` seconds, for effect-size estimates (``Effect.relative_size`` reads them from
@@ -440,21 +434,6 @@ class Instrument:
         prediction would be with them.
         """
         return {}
-
-    def model_earth_rate(self) -> float:
-        """n as simulated (rad/s): the sum of the active ``frame_rate`` effects' rates (the site's
-        Earth rate with ``earth_rotation``), 0 without one."""
-        total = 0.0
-        for e in self.effects_of(FRAME_RATE):
-            total = total + e.frame_rate_rad_s(self.context)
-        return total
-
-    def missing_effect_note(self, effect_name, consequence) -> str | None:
-        """``"<effect> not simulated: <consequence>"`` when a supported effect is not listed, else None."""
-        if effect_name in self.SUPPORTED_EFFECTS and not self.has(effect_name):
-            return f"{effect_name} not simulated: {consequence}"
-        return None
-
 
 def with_notes(predictions, *notes) -> dict:
     """``predictions`` with a ``notes`` list of the non-None notes (no key when there are none)."""

@@ -22,7 +22,10 @@ M(q) q̈ = Q − bias(q, q̇), solved at every step.
 Gravity acts through each body's centre-of-mass offset ``com_m`` and ``mass_kg``. Hinge torques
 come from the effects too: a link declared swinging (``swing_inertia``) gets each ``damping``
 effect's torque, a link declared a rotor's spin hinge (``spin_inertia``) each ``spin`` effect's
-torque — the instrument declares its hinges, the chain turns effects into torques in one place.
+torque, a link hung on an elastic suspension (``scale_offset_rad``: its angle's reading on the
+instrument's scale at q = 0) the ``torsion`` effects' torque −ΣD (q + offset − ΣZ0 − ΣŻ t) — the
+instrument declares its hinges, the chain turns effects into torques in one place. The chain so
+carries every kind of hinge torque a hand-derived model of the same instrument carries.
 """
 
 from collections.abc import Callable
@@ -30,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN, bound_hooks
+from gyro_instrument.core.effect import DAMPING, RIGID_BODY, SPIN, TORSION, bound_hooks
 from gyro_instrument.core.vector import cross3
 
 
@@ -66,6 +69,9 @@ class Link:
         A swinging hinge's inertia J (kg m²): ``damping`` effects act on it (e.g. −(2/τ) J q̇).
     spin_inertia : float, optional
         A rotor's spin hinge and the rotor's axial moment C (kg m²): ``spin`` effects act on it.
+    scale_offset_rad : float, optional
+        A hinge hung on an elastic suspension (a torsion tape): the reading (rad) of q = 0 on the
+        instrument's scale, on which the ``torsion`` effects' zero Z is given; they act on it.
     """
 
     name: str
@@ -78,6 +84,7 @@ class Link:
     com_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
     swing_inertia: float = None
     spin_inertia: float = None
+    scale_offset_rad: float = None
 
 
 class HingeChain:
@@ -95,7 +102,8 @@ class HingeChain:
     effects : iterable of Effect
         The instrument's active effects in summing order: their ``rigid_body`` terms enter every
         body's inertia torque (dropped when Ω = 0: they vanish), their ``damping`` and ``spin``
-        terms the declared hinges (:func:`effect_hinge_torques`).
+        terms the declared hinges (:func:`effect_hinge_torques`), their ``torsion`` terms the hinges
+        hung on a suspension (:func:`effect_torsion`).
     context : EffectContext, optional
         What the effects' hooks receive first (``Instrument.context``).
     """
@@ -112,6 +120,7 @@ class HingeChain:
         rotating = bool(np.any(self.omega_base != 0.0))
         self.body_terms = bound_hooks(effects, RIGID_BODY, context) if rotating else []
         self.hinge_torques = effect_hinge_torques(self.links, effects, context)
+        self.torsion = effect_torsion(self.links, effects, context)
         self.axes = [np.asarray(L.axis, dtype=float) / np.linalg.norm(L.axis) for L in self.links]
         self.gravity_on = any(L.mass_kg != 0.0 and np.any(L.com_m) for L in self.links)
 
@@ -158,8 +167,8 @@ class HingeChain:
             w_prev, a_prev = wk, ak
         return w, a0, B, P
 
-    def accelerations(self, qf, qdf) -> np.ndarray:
-        """q̈ of the free coordinates."""
+    def accelerations(self, qf, qdf, t=0.0) -> np.ndarray:
+        """q̈ of the free coordinates at time ``t`` (s since release; the torsion zero's drift reads it)."""
         q, qd = self.full_coordinates(qf, qdf)
         w, a0, B, P = self.kinematics(q, qd)
         nf = self.nf
@@ -168,6 +177,11 @@ class HingeChain:
         if self.hinge_torques is not None:
             w_axis = np.array([np.dot(w[k], self.axes[k]) for k in range(self.nl)])
             Q = self.hinge_torques(q, qd, w_axis)
+            rhs += Q[self.free]
+        if self.torsion:
+            Q = np.zeros(self.nl)
+            for k, stiffness, zero, rate, offset in self.torsion:
+                Q[k] -= stiffness * (q[k] + offset - zero - rate * t)
             rhs += Q[self.free]
         for k, L in enumerate(self.links):
             I = L.inertia
@@ -196,7 +210,7 @@ class HingeChain:
     def rhs(self, t, y) -> np.ndarray:
         """State derivative for y = [q_free, q̇_free]."""
         nf = self.nf
-        return np.concatenate([y[nf:], self.accelerations(y[:nf], y[nf:])])
+        return np.concatenate([y[nf:], self.accelerations(y[:nf], y[nf:], t)])
 
     def energy_relative(self, qf, qdf) -> float:
         """Relative kinetic energy ½ Σ w_kᵀ I_k w_k plus gravity potential (J)."""
@@ -214,6 +228,19 @@ class HingeChain:
         q, _ = self.full_coordinates(qf, np.zeros(self.nf))
         B = self.orientations(q)[link]
         return self.base @ (B @ np.asarray(axis_body, dtype=float))
+
+
+def effect_torsion(links, effects, context=None) -> list:
+    """The ``torsion`` effects' suspension on each link with a ``scale_offset_rad``: a list of
+    (link index, ΣD N m/rad, ΣZ0 rad, ΣŻ rad/s, offset rad), the hinge torque being
+    −ΣD (q + offset − ΣZ0 − ΣŻ t) (``tape_torsion``: D and Z0; ``tape_drift``: Ż); empty when no
+    ``torsion`` effect is active or no link is hung on a suspension."""
+    terms = [hook() for hook in bound_hooks(effects, TORSION, context)]
+    if not terms:
+        return []
+    stiffness, zero, rate = (float(sum(x)) for x in zip(*terms))
+    return [(k, stiffness, zero, rate, float(L.scale_offset_rad)) for k, L in enumerate(links)
+            if L.scale_offset_rad is not None]
 
 
 def effect_hinge_torques(links, effects, context=None) -> Callable | None:

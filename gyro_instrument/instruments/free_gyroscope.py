@@ -120,7 +120,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.core.effect import FRAME_RATE, SPIN, Scales
+from gyro_instrument.core.effect import FRAME_RATE, SPIN, VISCOUS_SPIN, Scales
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.rigid_body_flow import COMPOSITIONS
 from gyro_instrument.core.params import Param
@@ -200,6 +200,14 @@ class FreeGyroscope(FreeGyroscopeRuns, Instrument):
                   "m g d k × (−up)"),
     )
     MECHANICS = frozenset({FRAME_RATE, SPIN})
+    #: The closed form is torque-free (the frame rate only); the numerical paths (splitting's kicks,
+    #: DOP853) carry a viscous spin friction −C ρ/τ by its τ (:meth:`viscous_spin_time_s`).
+    MODELS = {"analytic": frozenset({FRAME_RATE}), "numerical": frozenset({FRAME_RATE, VISCOUS_SPIN})}
+
+    @classmethod
+    def model_taken(cls, params, effects) -> str:
+        """The ``model`` parameter: ``analytic`` (default) or ``numerical``."""
+        return params.get("model", "analytic")
     MEASURED_CHANNELS = ("axis_altitude", "axis_azimuth")
     JOINTS = ("axis_altitude", "axis_azimuth", "rotor")
     OBSERVATION = RotorObservation
@@ -245,22 +253,23 @@ class FreeGyroscope(FreeGyroscopeRuns, Instrument):
 
     @classmethod
     def check_effects(cls, prefix, p, effect_names) -> None:
-        """Refuse the torque-free closed form (``model: analytic``) under a torque: ``spin_decay`` listed
-        or ``center_of_mass_offset_m`` ≠ 0 (use ``model: numerical``); raises SceneError."""
-        if p.get("model", "analytic") != "analytic":
-            return
-        if p.get("center_of_mass_offset_m", 0.0):
+        """Refuse an effect the model taken cannot carry (a spin torque under the torque-free closed form,
+        ``model: analytic``; one of general form under either: :data:`MODELS`) and the closed form under
+        a mass unbalance (``center_of_mass_offset_m`` ≠ 0; use ``model: numerical``); raises SceneError."""
+        super().check_effects(prefix, p, effect_names)
+        if p.get("model", "analytic") == "analytic" and p.get("center_of_mass_offset_m", 0.0):
             raise SceneError(f"{prefix}.center_of_mass_offset_m", p["center_of_mass_offset_m"],
                              "must be 0 with model = analytic: the mass unbalance's gravity torque has no closed "
                              "form here (set model: numerical)")
-        if "spin_decay" in effect_names:
-            raise SceneError(f"{prefix}.model", "analytic",
-                             "cannot carry the effect spin_decay (a bearing torque on the spin): the closed form "
-                             "is torque-free; set model: numerical, or remove spin_decay")
 
     def torqued(self) -> bool:
-        """True when a torque acts: ``spin_decay`` listed or a mass unbalance (``center_of_mass_offset_m``)."""
-        return self.has("spin_decay") or self.p.center_of_mass_offset_m != 0.0
+        """True when a torque acts: a viscous spin friction (``spin_decay``) or a mass unbalance
+        (``center_of_mass_offset_m``)."""
+        return self.has_term(VISCOUS_SPIN) or self.p.center_of_mass_offset_m != 0.0
+
+    def viscous_spin_time_s(self) -> "float | None":
+        """τ (s) of the active viscous spin friction (the bearing torque −C ρ/τ), None without one."""
+        return self.spin_decay_time_s(self.C)
 
     def unbalance_torque_per_inertia(self) -> float:
         """m g d / A, rad/s²: the gravity torque of the mass unbalance over the transverse moment."""
@@ -365,8 +374,8 @@ class FreeGyroscope(FreeGyroscopeRuns, Instrument):
         if self.p.center_of_mass_offset_m != 0.0 and k["omega3"] != 0.0:
             # gyroscopic (fast-top) precession of the axis about the vertical under the unbalance torque
             out["unbalance_precession_rate_rad_s"] = self.unbalance_torque_per_inertia() / (mu * k["omega3"])
-        return with_notes(out, self.missing_effect_note(
-            "earth_rotation", f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
+        return with_notes(out, self.missing_term_note(
+            FRAME_RATE, f"n = 0 in the model: the axis keeps its direction relative to the Earth (no "
                               f"parallactic motion; with it the hour angle grows at n = {self.site.earth_rate_rad_s:.8g} "
                               f"rad/s)"))
 

@@ -65,8 +65,9 @@ class FreeGyroscopeRuns:
         L = self.p.transverse_inertia_kg_m2 * self.motion_constants()["lam"]
         torque = abs(self.unbalance_torque_per_inertia()) * self.p.transverse_inertia_kg_m2
         rates = [torque / L if L > 0.0 else math.sqrt(abs(self.unbalance_torque_per_inertia()))]
-        if self.has("spin_decay"):
-            rates.append(1.0 / self.effect("spin_decay").p.time_constant_s)
+        tau = self.viscous_spin_time_s()
+        if tau:
+            rates.append(1.0 / tau)
         return max(rates)
 
     def splitting_step(self) -> float:
@@ -90,7 +91,8 @@ class FreeGyroscopeRuns:
         n, e = self.model_rate(), self.e_axis
         z = np.array([0.0, 0.0, 1.0])
         par = float(z @ e) * e
-        rate = 1.0 / self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
+        tau = self.viscous_spin_time_s()
+        rate = 1.0 / tau if tau else 0.0
         return np.concatenate([[self.unbalance_torque_per_inertia(), n, rate], e, par, z - par, np.cross(e, z)])
 
     # ---------------------------------------------------------------- solution paths
@@ -133,9 +135,8 @@ class FreeGyroscopeRuns:
         ``span_s``). The two take the same steps up to round-off (and the scalar one's last)."""
         y0 = np.concatenate([self.q0, self.R0.T @ self.motion_constants()["omega0"]])
         if compiled and jit.enabled():
-            decay = self.effect("spin_decay")
-            params = rhs_params(self.p.inertia_ratio, self.baumgarte_rate(),
-                                decay.p.time_constant_s if decay is not None else 0.0, self.torque_array())
+            params = rhs_params(self.p.inertia_ratio, self.baumgarte_rate(), self.viscous_spin_time_s() or 0.0,
+                                self.torque_array())
             return CompiledRun(compiled_rhs_kernel(), params, y0, 0.0, rtol, self.DOP853_ATOL)
         return integration(self.rhs_scalar(), y0, 0.0, span_s, method="DOP853-scalar", rtol=rtol,
                            atol=self.DOP853_ATOL)
@@ -167,19 +168,19 @@ class FreeGyroscopeRuns:
 
     def torque_rates(self) -> Callable | None:
         """``f(t, q, ω3) -> (ω̇1, ω̇2, ω̇3)``: the torques over the body moments, rad/s² — the mass
-        unbalance m g d (up_b × e3) / A and ``spin_decay``'s −ρ/τ (:meth:`SpinDecay.spin_torque_per_inertia`)
-        on ρ = ω3 − n k·ê; None without a torque (the torque-free equations are then unchanged)."""
+        unbalance m g d (up_b × e3) / A and the viscous spin friction's −ρ/τ (``spin_decay``: τ from
+        :meth:`viscous_spin_time_s`) on ρ = ω3 − n k·ê; None without a torque (the torque-free equations are then unchanged)."""
         if not self.torqued():
             return None
         tq = self.torque_array()
         gam, n, par, perp, cross = tq[0], tq[1], tuple(tq[6:9]), tuple(tq[9:12]), tuple(tq[12:15])
         e = tuple(float(v) for v in self.e_axis)
-        decay = self.effect("spin_decay")
+        tau = self.viscous_spin_time_s()
 
         def f(t, q, w3):
             c, s = math.cos(n * t), math.sin(n * t)
             ux, uy, _ = to_body(q, [par[i] + c * perp[i] + s * cross[i] for i in range(3)])
-            d3 = decay.spin_torque_per_inertia(w3 - n * to_body(q, e)[2]) if decay is not None else 0.0
+            d3 = -(w3 - n * to_body(q, e)[2]) / tau if tau else 0.0
             return gam * uy, -gam * ux, d3
         return f
 

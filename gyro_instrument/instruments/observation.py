@@ -37,6 +37,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from gyro_instrument.core.effect import FRAME_RATE, RESTORING_LAW, SINE_LAW
+from gyro_instrument.effects import REGISTRY, FiniteAmplitude, SpinDecay
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 
 #: Measurement kinds (the ``kind`` of the estimator's ``RateMeasurement``): a gyroscope's swing about
@@ -49,13 +51,13 @@ PLANE_RATE = "pendulum"
 #: any out; ``gyro-instrument bench`` measures what each is worth): a swing reduced to small amplitude
 #: through its amplitude law; a swing fitted in the spin-warped time of its measured spin history; the
 #: Foucault rate less the finite-amplitude precession of the swing ellipse (sec. 2 §III).
-AMPLITUDE_CORRECTION = "finite_amplitude"
-SPIN_CORRECTION = "spin_decay"
+AMPLITUDE_CORRECTION = FiniteAmplitude.name
+SPIN_CORRECTION = SpinDecay.name
 ELLIPSE_CORRECTION = "ellipse_precession"
 CORRECTIONS = frozenset((AMPLITUDE_CORRECTION, SPIN_CORRECTION, ELLIPSE_CORRECTION))
 
 #: The corrections that undo the finite-amplitude law. An instrument whose model can leave the
-#: ``finite_amplitude`` effect out (it is in its SUPPORTED_EFFECTS) and does is a small-angle model:
+#: sine law out (it sums ``restoring_law`` terms) and does (no active effect gives it) is a small-angle model:
 #: it swings in T0 at any amplitude and its apsides turn at exactly k, so correcting it would bias
 #: the rate (by 2 x 6e-4 at 0.1 rad). Instruments without that choice (the gimbal, the compound
 #: pendulum) always integrate the exact, nonlinear equations.
@@ -63,8 +65,6 @@ FINITE_AMPLITUDE_CORRECTIONS = frozenset((AMPLITUDE_CORRECTION, ELLIPSE_CORRECTI
 
 #: The rotor's spin channel (rad/s) of the shipped rotor instruments.
 SPIN_RATE = "spin_rate"
-#: The effect whose frame rate an instrument's measurement observes.
-_EARTH = "earth_rotation"
 
 
 @dataclass(frozen=True)
@@ -251,14 +251,15 @@ class Observation:
 
     # ------------------------------------------------------------------ estimation
     def rotating(self) -> bool:
-        """True when the instrument simulates the Earth's rotation (its measurement observes n)."""
-        return self.instrument.has(_EARTH)
+        """True when the instrument simulates the Earth's rotation (a ``frame_rate`` term: its measurement observes n)."""
+        return self.instrument.frame_rotates()
 
     def unmeasured_reason(self) -> str | None:
         """Why the instrument gives no Earth-rate measurement in this scene, or None when it does."""
-        inst = self.instrument
-        if not inst.has(_EARTH) and _EARTH in inst.SUPPORTED_EFFECTS:
-            return f"{_EARTH} is not simulated for it: it measures no Earth rate"
+        inst, turning = self.instrument, [n for n, c in REGISTRY.items() if FRAME_RATE in c.MECHANICS]
+        turning = [n for n in turning if n in inst.SUPPORTED_EFFECTS]
+        if not inst.frame_rotates() and turning:
+            return f"{' or '.join(turning)} is not simulated for it: it measures no Earth rate"
         if self.MEASUREMENT is None:
             return f"{self.type_name} has no directing line: it gives no Earth-rate measurement"
         return None
@@ -266,8 +267,7 @@ class Observation:
     def small_angle_model(self) -> bool:
         """True when the instrument is simulated in its small-angle (linear) model (see
         :data:`FINITE_AMPLITUDE_CORRECTIONS`)."""
-        return AMPLITUDE_CORRECTION in type(self.instrument).SUPPORTED_EFFECTS and \
-            not self.instrument.has(AMPLITUDE_CORRECTION)
+        return RESTORING_LAW in type(self.instrument).MECHANICS and not self.instrument.has_term(SINE_LAW)
 
     def applicable_corrections(self, corrections) -> frozenset:
         """The corrections of ``corrections`` that apply to this record (a small-angle model has no
@@ -500,5 +500,5 @@ class PlanePrecession(Observation):
 
     def models_finite_amplitude(self) -> bool:
         """True when the finite-amplitude law is simulated (the apse line turns at the exact rate)."""
-        return self.instrument.has(AMPLITUDE_CORRECTION)
+        return self.instrument.has_term(SINE_LAW)
 

@@ -137,9 +137,10 @@ class HorizontalSwing(_ScaleReading, SwingRate):
         return bool(self.tape_constant_per_inertia)
 
     def centre_drifts(self) -> bool:
-        """True when the swing's centre moves during the record (the tape zero drifts,
-        ``tape_drift``): the full-record fit then fits a linear drift of the centre."""
-        return self.instrument.has("tape_drift")
+        """True when the swing's centre moves during the record (the tape zero drifts: the active
+        ``torsion`` terms give it a rate, ``tape_drift``): the full-record fit then fits a linear drift
+        of the centre."""
+        return self.instrument.tape[2] != 0.0
 
     #: the swing centre's offset from the tape zero on the scale, Z − c (rad), from :meth:`rate_terms`
     centre_from_zero_rad = 0.0

@@ -32,7 +32,8 @@ from collections.abc import Iterator
 import numpy as np
 
 from gyro_instrument.core.angles import Unwrapper
-from gyro_instrument.core.effect import DAMPING, POINT_MASS, RIGID_BODY, RESTORING_LAW, SPIN, Scales
+from gyro_instrument.core.effect import (CORIOLIS, DAMPING, GYROSCOPIC, POINT_MASS, RIGID_BODY, RESTORING_LAW, SINE_LAW,
+                                         SPIN, Scales)
 from gyro_instrument.core.integrate import integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import (Column, ExpectedSwing, Instrument, Simulation, check_period_count,
@@ -84,12 +85,6 @@ WINDOW_SAMPLING = (float(SWING_WINDOW_MIN_SAMPLES),
                    "period, which needs that many samples in it")
 
 
-def _effects_with(effect_names, kind) -> list:
-    """The registered effects among ``effect_names`` contributing to the mechanics ``kind``."""
-    from gyro_instrument.effects import REGISTRY
-    return [n for n in effect_names if n in REGISTRY and kind in REGISTRY[n].MECHANICS]
-
-
 def _not_conservative(effect_names) -> list:
     """The effects among ``effect_names`` (registered names) that do not declare ``conservative``, sorted."""
     from gyro_instrument.effects import REGISTRY
@@ -127,6 +122,10 @@ class SphericalPendulum(SwingDynamics, Instrument):
               doc="parareal: largest change of a swing's start state (relative to the amplitude) accepted"),
     )
     MECHANICS = frozenset({POINT_MASS, RESTORING_LAW})
+    #: Both models sum every ``point_mass`` term through its hook (:meth:`~.pendulum_dynamics.SwingDynamics.rhs_exact`,
+    #: ``rhs_linear``); the exact (Cartesian) model is exact in the angle, the sine law, and is taken
+    #: when an effect gives a restoring law (:meth:`model_taken`), the small-angle model otherwise.
+    MODELS = {"exact": frozenset({POINT_MASS, SINE_LAW}), "linear": frozenset({POINT_MASS})}
     COLUMNS = PENDULUM_COLUMNS
     MEASURED_CHANNELS = PENDULUM_MEASURED
     JOINTS = PENDULUM_JOINTS
@@ -134,10 +133,16 @@ class SphericalPendulum(SwingDynamics, Instrument):
     SIMULATOR_NODE = "pendulum_sim"
 
     @classmethod
+    def model_taken(cls, params, effects) -> str:
+        """``exact`` when an active effect has a ``restoring_law`` term (the sine law), else ``linear``."""
+        return "exact" if any(RESTORING_LAW in e.MECHANICS for e in effects.values()) else "linear"
+
+    @classmethod
     def check_effects(cls, prefix, p, effects) -> None:
         from gyro_instrument.core.errors import SceneError
+        super().check_effects(prefix, p, effects)
         if p["integrator"] == "parareal":
-            if not _effects_with(effects, RESTORING_LAW):
+            if not cls.named_with_term(effects, RESTORING_LAW):
                 raise SceneError(f"{prefix}.integrator", "parareal", "needs the effect finite_amplitude (the "
                                  "full model); the linear model has Binet's closed form")
             dissipative = _not_conservative(effects)
@@ -238,9 +243,9 @@ class SphericalPendulum(SwingDynamics, Instrument):
         is β/that − 1 (0 for an east–west release), and ``beyond_the_paper`` (str) says so in words.
         """
         k_site = self.site.k_vertical_rad_s
-        rotating = self.has("earth_rotation")
+        rotating = self.has_term(CORIOLIS)
         k = k_site if rotating else 0.0
-        if self.has("finite_amplitude"):
+        if self.has_term(SINE_LAW):
             beta = abs(min_deflection_from_rest_rad(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad))
             quarter = quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta)
             k_h = self.site.earth_rate_enu()[1] if rotating else 0.0
@@ -260,13 +265,13 @@ class SphericalPendulum(SwingDynamics, Instrument):
                "min_deflection_from_rest_rad": beta,
                "apsidal_rate_from_rest_rad_s": apsidal,
                "apsidal_rate_quet_series_rad_s": series}
-        if self.has("finite_amplitude") and rotating and 0.0 < self.p.initial_deflection_rad < math.pi:
+        if self.has_term(SINE_LAW) and rotating and 0.0 < self.p.initial_deflection_rad < math.pi:
             out.update(self._horizontal_rate_beta(beta))
-        return with_notes(out, self.missing_effect_note(
-            "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s "
+        return with_notes(out, self.missing_term_note(
+            CORIOLIS, f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s "
                               f"= {math.degrees(k_site) * 3600.0:.4g} deg/h)"),
-            self.missing_effect_note(
-            "finite_amplitude", "small-angle (linear) model: Binet's ellipse, quarter period π/(2√(g/l + k²)), "
+            self.missing_term_note(
+            SINE_LAW, "small-angle (linear) model: Binet's ellipse, quarter period π/(2√(g/l + k²)), "
                                 "apsides turning at k"))
 
     def _horizontal_rate_beta(self, beta) -> dict:
@@ -390,17 +395,17 @@ class CompoundPendulum(Instrument):
         ``absolute_spin_rad_s`` = ρ0 + Ω·e0, the constant of eq. (55) (ρ + Ω·e, e the figure axis
         from the pivot to the centre of mass, Ω the Earth rate as simulated), rad/s."""
         k_site = self.site.k_vertical_rad_s
-        k = k_site if self.has("earth_rotation") else 0.0
+        k = k_site if self.has_term(GYROSCOPIC) else 0.0
         lam = self.equivalent_length_m
         g = self.site.gravity_m_s2
         e0 = np.array([math.sin(self.p.initial_deflection_rad) * math.sin(self.p.initial_azimuth_rad), math.sin(self.p.initial_deflection_rad) * math.cos(self.p.initial_azimuth_rad),
                        -math.cos(self.p.initial_deflection_rad)])
-        om = self.site.earth_rate_enu() if self.has("earth_rotation") else np.zeros(3)
+        om = self.site.earth_rate_enu() if self.has_term(GYROSCOPIC) else np.zeros(3)
         out = {"equivalent_length_m": lam, "foucault_rate_rad_s": k, "precession_sense": precession_sense(k),
                "quarter_period_s": quarter_period_s(lam, g, self.p.initial_deflection_rad, 0.0),
                "absolute_spin_rad_s": self.p.spin_rate_rad_s + float(om @ e0)}
-        return with_notes(out, self.missing_effect_note(
-            "earth_rotation", f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
+        return with_notes(out, self.missing_term_note(
+            GYROSCOPIC, f"the swing plane keeps its azimuth (k = 0; with it k = n sin γ = {k_site:.6g} rad/s)"))
 
     def scales(self, duration_s) -> Scales:
         return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, gyro_rate_rad_s=None,

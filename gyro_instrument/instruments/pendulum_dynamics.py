@@ -20,7 +20,7 @@ import numpy as np
 
 from gyro_instrument.core import dop853, jit
 from gyro_instrument.core.angles import Unwrapper
-from gyro_instrument.core.effect import POINT_MASS
+from gyro_instrument.core.effect import CORIOLIS, POINT_MASS
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.parareal import compiled_hermite_samples, dense_output, hermite_rows
 from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
@@ -270,7 +270,7 @@ class SwingDynamics:
         release, which the first guess of every swing start uses (sec. 2: the non-rotating
         motion turned by k t)."""
         from gyro_instrument.core.dop853 import first_crossing
-        k = self.site.k_vertical_rad_s if self.has("earth_rotation") else 0.0
+        k = self.site.k_vertical_rad_s if self.has_term(CORIOLIS) else 0.0
         beta = min_deflection_from_rest_rad(self.p.length_m, self.context.gravity_m_s2, k, self.p.initial_deflection_rad)
         guess = 4.0 * quarter_period_s(self.p.length_m, self.context.gravity_m_s2, self.p.initial_deflection_rad, beta)
         rhs = self.rhs_exact()

@@ -28,8 +28,8 @@ zero at azimuth ``mount_azimuth_deg`` M (clockwise from true north) and reads li
 counter-clockwise seen from above, so the reading is u + M (M wrapped to (−180°, 180°]; true north
 reads +M; the clockwise reading of ``estimators/north.py`` is its negative, −angle = azimuth − M).
 M = 0 (or M unstated, read as 0: the estimate still reports north, null with its reason when the
-record cannot give it) reads u itself. A torsion tape (effects ``tape_torsion``, ``tape_drift``: the ``torsion``
-mechanics) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
+record cannot give it) reads u itself. A torsion tape (the ``torsion`` effects, e.g. ``tape_torsion``,
+``tape_drift``) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
 to the equilibrium D_K sin(c − N) = D_B (Z − c) (:meth:`PlaneGyroscope.equilibrium_reading_rad`; near
 north the linear c = (D_K N + D_B Z)/(D_K + D_B)) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
 with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
@@ -46,7 +46,8 @@ from gyro_instrument.core.integrate import integrate, integration
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
-from gyro_instrument.core.effect import DAMPING, RESTORING_LAW, RIGID_BODY, SPIN, TORSION, Scales
+from gyro_instrument.core.effect import (CENTRIFUGAL_TORQUE, DAMPING, GYROSCOPIC, RESTORING_LAW, RIGID_BODY, SINE_LAW, SPIN,
+                                         TORSION, VISCOUS_DAMPING, VISCOUS_SPIN, Scales)
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, Simulation, run_span, with_notes
 from gyro_instrument.instruments.chain import HingeChain, Link, axis_rotation
 from gyro_instrument.instruments.observation_azimuth import HorizontalSwing
@@ -96,7 +97,8 @@ class PlaneGyroscope(Instrument):
               doc="initial angle u0 of the axis from the equilibrium line, degrees"),
         Param("initial_rate_deg_s", default=0.0, low=-1.0e6, high=1.0e6, doc="initial u̇0, degrees/s"),
         Param("model", kind="str", default="reduced", choices=("reduced", "chain"),
-              doc="reduced 1-DOF equation or the generic hinge chain (cone: always chain)"),
+              doc="reduced 1-DOF equation or the generic hinge chain (cone, or an effect whose terms the reduced "
+                  "equation does not carry: always chain)"),
         Param("rtol", default=1e-11, low=1e-14, high=1e-3, doc="integrator relative tolerance"),
         Param("integrator", kind="str", default="auto", choices=("auto", "scalar", "vector"),
               doc="DOP853 driver of the reduced model: scalar (Python floats, ~5x faster on its 3 components), "
@@ -131,16 +133,31 @@ class PlaneGyroscope(Instrument):
             raise SceneError(f"{prefix}.mount_azimuth_deg", p["mount_azimuth_deg"],
                              "must be left out unless plane = horizontal (a flat plane: the scale's zero is an azimuth)")
 
+    #: The models and the term kinds each carries (:data:`~gyro_instrument.core.effect.TERM_KINDS`): the
+    #: reduced equation (:meth:`reduced_rhs_scalar`) is derived by hand for these forms; the hinge chain
+    #: (:meth:`build_chain`) sums every ``rigid_body``, ``damping``, ``spin`` and ``torsion`` term through
+    #: the hooks and is exact in the angle (the sine law).
+    MODELS = {"reduced": frozenset({GYROSCOPIC, CENTRIFUGAL_TORQUE, SINE_LAW, VISCOUS_DAMPING, VISCOUS_SPIN, TORSION}),
+              "chain": frozenset({RIGID_BODY, DAMPING, SPIN, TORSION, SINE_LAW})}
+
+    @classmethod
+    def model_taken(cls, params, effects) -> str:
+        """``chain`` on a cone, when the scene asks for it, or when an active effect has a term the reduced
+        equation does not carry (:data:`MODELS`); else ``reduced``."""
+        if params["cone_half_angle_deg"] < 90.0 or cls.uncarried_effects("reduced", effects):
+            return "chain"
+        return params["model"]
+
     @classmethod
     def check_effects(cls, prefix, params, effect_names) -> None:
-        """The tape (``torsion``) acts in the reduced model of the horizontal plane only (``tape_drift``
-        alone has no stiffness to act through: it changes nothing)."""
-        tape = {"tape_torsion", "tape_drift"} & set(effect_names)
-        if not tape:
-            return
-        if params["plane"] != "horizontal" or params["cone_half_angle_deg"] < 90.0 or params["model"] == "chain":
-            raise SceneError(f"{prefix}.effects", sorted(tape), "a torsion tape hangs a horizontal gyroscope: "
-                             "needs plane = horizontal, no cone and model = reduced")
+        """Every effect carried by the model taken (:meth:`~.base.Instrument.check_carried`); a tape (the
+        ``torsion`` effects) hangs a horizontal gyroscope only (a tape's drift alone has no stiffness to
+        act through: it changes nothing)."""
+        super().check_effects(prefix, params, effect_names)
+        tape = sorted(cls.named_with_term(effect_names, TORSION))
+        if tape and (params["plane"] != "horizontal" or params["cone_half_angle_deg"] < 90.0):
+            raise SceneError(f"{prefix}.effects", tape, "a torsion tape hangs a horizontal gyroscope: "
+                             "needs plane = horizontal and no cone")
 
     def __init__(self, name, site, params, effects) -> None:
         super().__init__(name, site, params, effects)
@@ -170,14 +187,21 @@ class PlaneGyroscope(Instrument):
         if not D_B or not self.p.spin_rate_rad_s:
             return
         D_K = self.directing_constant_n_m()
-        if self.has("earth_rotation") and D_B >= D_K:
+        if self.frame_rotates() and D_B >= D_K:
             per_cos = self.C * self.p.spin_rate_rad_s * self.site.earth_rate_rad_s
             lim = math.degrees(math.acos(D_B / per_cos)) if 0 < D_B < per_cos else None
             where = f"; for this tape |site.latitude_deg| < {lim:.4g}" if lim is not None else ""
-            raise SceneError(f"effects.tape_torsion.torsion_constant_n_m_rad", D_B,
+            raise SceneError(self._stiffness_field(), D_B,
                              f"must be < D_K = C rho0 n cos(latitude) = {D_K:.6g} N m/rad of {self.name} at latitude "
                              f"{self.site.latitude_deg:g} deg: a tape at least as stiff cancels or reverses the directing "
                              f"torque's hold on the swing centre (D_K sin(c - N) = D_B (Z - c)){where}")
+
+    def _stiffness_field(self) -> str:
+        """``effects.<effect>.<parameter>`` of the tape's stiffness (the first ``torsion`` effect with one)."""
+        for e in (e for e in self.effects_of(TORSION) if e.torsion_term(self.context)[0]):
+            held = [p.name for p in e.PARAMS if e.params.get(p.name) == e.torsion_term(self.context)[0]]
+            return f"effects.{e.name}" + (f".{held[0]}" if held else "")
+        return "effects"
 
     def tape_ratio(self) -> float:
         """D_B/D_K of the scene (nan without rotor or directing torque)."""
@@ -247,7 +271,7 @@ class PlaneGyroscope(Instrument):
                     "damping_per_s": d}
         out = {"north_reading_deg": math.degrees(self.mount_reading_rad),
                "mount_azimuth_deg": float(self.p.mount_azimuth_deg or 0.0)}
-        if self.has("earth_rotation"):
+        if self.frame_rotates():
             centre = self.equilibrium_reading_rad()
             out.update({"centre_reading_deg": math.degrees(centre),
                         "centre_from_north_arcsec": (centre - self.mount_reading_rad) * 648000.0 / math.pi})
@@ -265,7 +289,7 @@ class PlaneGyroscope(Instrument):
         conserved spin, the tape ratio) are left out."""
         n = self.model_earth_rate()
         T0 = self._swing_duration_small_s(n)
-        factor = finite_amplitude_factor(self.p.initial_angle_rad) if self.has("finite_amplitude") else 1.0
+        factor = finite_amplitude_factor(self.p.initial_angle_rad) if self.has_term(SINE_LAW) else 1.0
         north = self._north_predictions()
         out = {"swing_duration_small_s": T0,
                "swing_duration_s": T0 * factor if math.isfinite(T0) else math.inf,
@@ -277,12 +301,12 @@ class PlaneGyroscope(Instrument):
         if self.tape[0]:
             out.update(self.tape_predictions())
         T_site = self._swing_duration_small_s(self.site.earth_rate_rad_s)
-        rest = " (only the O(n²) centrifugal term acts)" if self.has("centrifugal") else ""
-        return with_notes(out, self.missing_effect_note(
-            "earth_rotation", f"no directing torque μ n ρ0 sin ω (eq. 9): the axis stays where it is released{rest}, "
-                              f"swing durations null (with it T0 = {T_site:.6g} s)"),
-            self.missing_effect_note(
-            "finite_amplitude", "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
+        rest = " (only the O(n²) centrifugal term acts)" if self.has_term(CENTRIFUGAL_TORQUE) else ""
+        return with_notes(out, self.missing_term_note(
+            GYROSCOPIC, f"no directing torque μ n ρ0 sin ω (eq. 9): the axis stays where it is released{rest}, "
+                        f"swing durations null (with it T0 = {T_site:.6g} s)"),
+            self.missing_term_note(
+            SINE_LAW, "small-angle model: swing_duration_s = swing_duration_small_s at any amplitude"))
 
     def axis_direction_enu(self, position) -> "np.ndarray":
         """Rotor axis in ENU, (m, 3): cos u · ox + sin u · oy in the plane's frame (``core.site.plane_frame``),
@@ -314,12 +338,14 @@ class PlaneGyroscope(Instrument):
                                           "has no restoring torque (Quet sec. 4 §1 item 4)")
 
     def scales(self, duration_s) -> Scales:
+        """The common scales, and this instrument's own: ``torsion_share`` (D_B/(D_K + D_B) of a tape) and
+        ``swing_inertia_kg_m2`` (the swinging hinge's inertia A, kg m²)."""
         n = self.site.earth_rate_rad_s
         T0 = self._swing_duration_small_s(n)           # the scales of the rotating Earth (effect sizes)
         return Scales(earth_rate_rad_s=n, gyro_rate_rad_s=abs(self.p.inertia_ratio * self.p.spin_rate_rad_s) or None,
                 restoring_rate_rad_s=math.pi / T0 if math.isfinite(T0) else 0.0,
                 amplitude_rad=abs(self.p.initial_angle_rad), duration_s=duration_s,
-                torsion_share=self._torsion_share())
+                torsion_share=self._torsion_share(), swing_inertia_kg_m2=self.p.transverse_inertia_kg_m2)
 
     def _torsion_share(self) -> float:
         """D_B / (D_K + D_B) (0 without a tape; 1 with the rotor off)."""
@@ -349,7 +375,7 @@ class PlaneGyroscope(Instrument):
                 su = law(u)
                 return (ud, -(a * rho + b * cos(u)) * su - kb * (u - zb - zr * t) - damp * ud,
                         pr * sin(u) * ud - decay * rho)
-        elif self.restoring_law() is not None:       # finite_amplitude: sin u
+        elif c["sine_law"]:                          # the sine law (finite_amplitude): sin u
             def rhs(t, u, ud, rho):
                 su = sin(u)
                 return ud, -(a * rho + b * cos(u)) * su - damp * ud, pr * su * ud - decay * rho
@@ -367,13 +393,13 @@ class PlaneGyroscope(Instrument):
         exact fit (:mod:`gyro_instrument.estimators.north.exact`) fits the same equation."""
         p = self.site.earth_rate_rad_s * self.sin_omega
         mu = self.p.inertia_ratio
-        rot = self.has("earth_rotation")
-        tau_s = self.effect("spin_decay").p.time_constant_s if self.has("spin_decay") else 0.0
+        rot = self.has_term(GYROSCOPIC)
+        tau_s = self.spin_decay_time_s(self.C) or 0.0
         return {"a": mu * p if rot else 0.0, "pr": p if rot else 0.0,
-                "b": (mu - 1.0) * p * p if self.has("centrifugal") else 0.0,
-                "damping": self.effect("pivot_damping").rate() if self.has("pivot_damping") else 0.0,
+                "b": (mu - 1.0) * p * p if self.has_term(CENTRIFUGAL_TORQUE) else 0.0,
+                "damping": self.viscous_damping_rate_per_s(self.p.transverse_inertia_kg_m2),
                 "kb": self.tape[0] / self.p.transverse_inertia_kg_m2, "zero": self.tape[1], "zero_rate": self.tape[2],
-                "decay": 1.0 / tau_s if tau_s else 0.0, "sine_law": self.restoring_law() is not None}
+                "decay": 1.0 / tau_s if tau_s else 0.0, "sine_law": self.has_term(SINE_LAW)}
 
     def reduced_rhs(self) -> Callable:
         """Right-hand side of the reduced model for y = [u, u̇, ρ] (array form of
@@ -388,7 +414,10 @@ class PlaneGyroscope(Instrument):
     def build_chain(self) -> HingeChain:
         """The same instrument as a hinge chain: swing hinge about the normal (massless frame),
         an optional fixed tilt to the cone, then the rotor's spin hinge."""
-        links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)))]
+        # the frame's hinge reads u + M on a horizontal plane's scale: a torsion tape acts on it there
+        flat = self.p.plane == "horizontal" and not self.is_cone
+        links = [Link("frame", np.array([0.0, 0.0, 1.0]), np.zeros((3, 3)),
+                      scale_offset_rad=self.mount_reading_rad if flat else None)]
         # Rotor axis along body x; tilt about y by (π/2 − ε) puts it at ε from the normal.
         tilt = axis_rotation([0.0, 1.0, 0.0], -(math.pi / 2 - self.p.cone_half_angle_rad)) if self.is_cone else np.eye(3)
         links[0].swing_inertia = self.p.transverse_inertia_kg_m2 * (math.sin(self.p.cone_half_angle_rad) ** 2 if self.is_cone else 1.0)
@@ -397,32 +426,29 @@ class PlaneGyroscope(Instrument):
         g = np.array([0.0, 0.0, -self.site.gravity_m_s2])
         return HingeChain(links, self.frame, self.site.earth_rate_enu(), g, self.effects.values(), self.context)
 
-    #: The effects :meth:`reduced_rhs_scalar` is derived for by hand. With any other active effect
-    #: (one registered later for a kind this instrument sums) the hinge chain, which sums every
-    #: active effect's terms, is integrated instead, as for a cone.
-    REDUCED_EFFECTS = frozenset({"earth_rotation", "centrifugal", "finite_amplitude", "spin_decay", "pivot_damping",
-                                 "tape_torsion", "tape_drift"})
-
     STREAMS = True
 
     def chosen_integrator(self, duration_s=None) -> tuple:
         """(driver, reason): the DOP853 driver a run uses (``integrator``; auto: the scalar driver for
         the reduced model, scipy's for the hinge chain)."""
         if self._model() == "chain":
-            why = "a cone" if self.is_cone else ("an effect outside the reduced equations" if self.p.model == "reduced"
-                                                 else "model: chain")
+            outside = self.uncarried_effects("reduced", self.effects)
+            why = "a cone" if self.is_cone else (
+                "; ".join(f"{n}: its terms {', '.join(k)} are outside the reduced equation" for n, k in outside.items())
+                if outside else "model: chain")
             return "vector", f"the hinge chain ({why}) runs scipy's DOP853 on arrays"
         if self.p.integrator != "auto":
             return self.p.integrator, "chosen in the scene"
         return "scalar", "auto: the reduced model's 3 components on Python floats, the fast path (same steps as vector)"
 
     def _model(self, model=None):
-        return "chain" if self.is_cone or not set(self.effects) <= self.REDUCED_EFFECTS else (model or self.p.model)
+        taken = self.taken_model()
+        return "chain" if taken == "chain" and (self.is_cone or self.uncarried_effects("reduced", self.effects)) else (model or taken)
 
     def simulate(self, t, model=None, **options) -> Simulation:
         """Integrate from rest relative to the Earth at u0 (with u̇0) and spin ρ0: the reduced model
-        (scalar DOP853) or the hinge chain — always the chain on a cone or with an active effect
-        outside :data:`REDUCED_EFFECTS` (``extra["model"]`` says which ran). One block of
+        (scalar DOP853) or the hinge chain — always the chain on a cone or with an active effect the
+        reduced equation does not carry (:data:`MODELS`; ``extra["model"]`` says which ran). One block of
         :meth:`stream`; sample times that are not increasing go to the generic driver, which refuses
         them with ``solve_ivp``'s ValueError."""
         t = np.asarray(t, dtype=float)

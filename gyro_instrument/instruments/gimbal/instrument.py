@@ -61,7 +61,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, RIGID_BODY, SPIN, Scales
+from gyro_instrument.core.effect import CARRIER_INERTIA, DAMPING, GYROSCOPIC, RIGID_BODY, SPIN, Scales
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
@@ -266,9 +266,10 @@ class GimbalGyroscope(GimbalRuns, Instrument):
             exactly when A1 = A2 = 0 and inner_angle = ±90°); the message names the ring
             parameters and the nearest accepted inner angle.
         """
+        super().check_effects(prefix, p, effects)
         if p["configuration"] != "free":
             return                     # locked: diag(A + C1 + A2, C); outer_fixed: diag(A + A1, C)
-        rings = "ring_inertia" in effects
+        rings = bool(cls.named_with_term(effects, CARRIER_INERTIA))
         A = p["transverse_inertia_kg_m2"]
         C = p["inertia_ratio"] * A
         A1 = p["inner_ring_diametral_inertia_kg_m2"] if rings else 0.0
@@ -332,7 +333,9 @@ class GimbalGyroscope(GimbalRuns, Instrument):
                                        else self.p.initial_outer_angle_deg)
             inner0 = 0.0 if self.p.initial_inner_angle_deg is None else self.p.initial_inner_angle_deg
         self.inner0 = math.radians(inner0)
-        self.rigid_body_coefficients = rigid_body_coefficients(self.effects.values(), self.context)
+        # measured on the effects' own terms, for the effects declaring the forms the closed form holds
+        self.rigid_body_coefficients = None if self.uncarried_effects("closed_form", self.effects) else \
+            rigid_body_coefficients(self.effects.values(), self.context)
         if self.p.integrator == "closed_form" and self.rigid_body_coefficients is None:
             raise SceneError(f"{name}.integrator", "closed_form",
                              "needs rigid-body effect terms of first and second order in the Earth rate "
@@ -417,13 +420,13 @@ class GimbalGyroscope(GimbalRuns, Instrument):
         Without ``earth_rotation`` n = 0 in the model: no directing torque, every T is infinite
         (``null`` in JSON) and a ``notes`` entry says so.
         """
-        rotating = self.has("earth_rotation")
+        rotating = self.has_term(GYROSCOPIC)
         out = self._predictions(rotating)
         T_site = None if rotating else self._predictions(True)["swing_duration_small_s"]
         with_it = f" (with it, the configured swing lasts {T_site:.6g} s)" \
             if T_site is not None and math.isfinite(T_site) else ""
-        return with_notes(out, self.missing_effect_note(
-            "earth_rotation", "no directing torque C n ρ0 sin ω (sec. 4 §IV): T, T', T'', T''' are null" + with_it))
+        return with_notes(out, self.missing_term_note(
+            GYROSCOPIC, "no directing torque C n ρ0 sin ω (sec. 4 §IV): T, T', T'', T''' are null" + with_it))
 
     def _predictions(self, rotating) -> dict:
         """The predictions with the site's Earth rate (``rotating``) or with n = 0."""

@@ -15,6 +15,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from gyro_instrument.core.effect import CARRIER_INERTIA, CENTRIFUGAL_TORQUE, DAMPING, GYROSCOPIC, RIGID_BODY, SPIN
 from gyro_instrument.core.integrate import Trajectory, integrate, report
 from gyro_instrument.instruments.base import Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link
@@ -29,6 +30,19 @@ ATOL = 1e-13
 
 class GimbalRuns:
     """The chain, the integrators and the columns of :class:`~.instrument.GimbalGyroscope`."""
+
+    #: The hinge chain sums every term through the hooks; the closed form (:mod:`.dynamics`, Python or
+    #: compiled) the Ω-linear and quadratic inertia torques (coefficients measured) and the hinge hooks.
+    MODELS = {"hinge_chain": frozenset({RIGID_BODY, DAMPING, SPIN, CARRIER_INERTIA}),
+              "closed_form": frozenset({GYROSCOPIC, CENTRIFUGAL_TORQUE, DAMPING, SPIN, CARRIER_INERTIA})}
+
+    @classmethod
+    def model_taken(cls, params, effects) -> str:
+        """``hinge_chain`` if asked, or under ``auto`` for a term the closed form lacks; else ``closed_form``."""
+        chosen = params.get("integrator", "auto")
+        if chosen == "hinge_chain" or (chosen == "auto" and cls.uncarried_effects("closed_form", effects)):
+            return "hinge_chain"
+        return "closed_form"
 
     # ---------------------------------------------------------------- model
     def swing_inertias(self) -> tuple:
