@@ -6,16 +6,20 @@ tables, the views, the bench) asks it and never asks whether the instrument is a
 directing model it has. An observation declares
 
 =============================  ====================================================================
-``channels``                   the measured channels (:class:`Channel`: name, unit)
+``channels``                   the measured channels (:class:`Channel`: name, unit, meaning: angle,
+                               rate or position); ``table_channels`` every channel a table may give
 ``layout``                     the ``sensor_msgs/JointState`` layout (:class:`JointLayout`), one
                                definition used to write rows (:meth:`Observation.joint_rows`) and to
                                read them back (:meth:`Observation.joint_record`)
 ``spin_channel``               the rotor's spin channel (rad/s), or None
 ``sensor_inputs``              the sensor draws: record key, true values, angle or rate
-``MEASUREMENT``                what a record gives: None (no Earth rate), :data:`SWING_RATE` (a swing
-                               about a directing line: y = n s(γ)) or :data:`PLANE_RATE` (a swing
-                               plane's precession: k = n sin γ); the estimator's and planner's
-                               engine for that kind does the fit, the observation supplies its laws
+``MEASUREMENT``,                the measurement kinds a record gives (names of registered kinds,
+``ALSO_MEASURES``              :mod:`.measurement`): None (no Earth rate), :data:`SWING_RATE` (a swing
+                               about a directing line: y = n s(γ)), :data:`PLANE_RATE` (a swing
+                               plane's precession: k = n sin γ), an azimuth beside a swing; the
+                               kind's engine, probe and bound do the fit, the observation supplies
+                               its laws
+``companions``                 {record key: instrument} of the other records its kinds read
 ``applicable_corrections``     which systematic corrections apply to its record
 =============================  ====================================================================
 
