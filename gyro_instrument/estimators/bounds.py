@@ -47,8 +47,7 @@ from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import foucault_crlb_small_swing_rad_s
 from gyro_instrument.estimators.latitude import RateMeasurement, solve_latitude
 from gyro_instrument.estimators.period import EstimationError, fit_oscillation
-from gyro_instrument.instruments.measurement import declared_kinds, kind
-from gyro_instrument.instruments.measurement import load as load_kinds
+from gyro_instrument.instruments.measurement import declared_kinds, kind, load as load_kinds
 from gyro_instrument.instruments.observation import SWING_RATE, SwingRate
 
 #: Up to this many samples the Fisher information is summed exactly on the sample grid.
@@ -71,7 +70,9 @@ class InstrumentModel:
     full period 2π/ω = 2 T_swing), ``coef`` (a1, b1, a3, b3) the noise-free harmonic swing on t from
     0, ``spin`` the rotor's spin; 'pendulum': ``omega`` its swing frequency and ``amplitude`` α.
     ``observation``: the instrument's, whose laws (amplitude law, spin and period exponents) the
-    bound uses."""
+    bound uses. ``axis``: ``geometry`` is a sensitive axis (:class:`~.latitude.RateMeasurement`).
+    Another rate kind's model (its ``probe``) carries ``name``, ``kind``, ``value``, ``geometry``,
+    ``axis`` and ``min_record_s`` too."""
 
     name: str
     kind: str
@@ -83,6 +84,7 @@ class InstrumentModel:
     spin: float = 0.0
     label: str = ""
     observation: object = field(default=None, repr=False, compare=False)
+    axis: bool = False
 
     @property
     def min_record_s(self) -> float:
@@ -277,7 +279,7 @@ def combined(models, sigmas, hemisphere=None, latitude_rad=None, known=None) -> 
     ``estimate`` passes them (a pendulum alone: the latitude with n known)."""
     # a noise-free sensor has a zero bound: keep its structure (what it can determine) with a vanishing σ
     sigmas = [s if s > 0 else 1e-20 * abs(m.value) for m, s in zip(models, sigmas)]
-    meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s)
+    meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s, axis=m.axis)
             for m, s in zip(models, sigmas) if math.isfinite(s) and s > 0]
     if not meas:
         return {"latitude_rad": None, "earth_rate_rad_s": None,

@@ -376,3 +376,14 @@ def rotor_off_plan(m, sensor, T, unit) -> dict:
                                        "after, each a release of its own; the same joint fit's bound (the estimate "
                                        "here reads one simultaneous record)"}}
 
+
+def azimuth_entry(m) -> dict:
+    """The plan's entry of a horizontal gyroscope's azimuth model (``plan --json``, ``north_instruments``)."""
+    d = {"kind": m.kind, "measures": "mount azimuth: the swing centre on the scale is true north",
+         "period_s": 2 * math.pi / m.omega, "amplitude_rad": m.amplitude, "damping_per_s": m.damping,
+         "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
+         "drift_fitted": m.drift}
+    if m.tape_ratio:
+        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0],
+                  "rotor_off_instrument": m.rotor_off_name, "rotor_off_min_record_s": m.min_off_s})
+    return d

@@ -12,19 +12,12 @@
   live as the instrument's heading.
 
 Each is an entry point of ``gyro_instrument.measurements`` (setup.py); a package adds its own kind
-the same way (docs/extending.md).
+the same way (docs/extending.md). The engines are imported when first called: registering the
+kinds (every command line does, to report a refused plug-in) costs no estimator import.
 """
 
 import math
 
-from gyro_instrument.estimators import bounds, bounds_azimuth
-from gyro_instrument.estimators.adequacy import check_entry, check_period, halves_entry, plane_fit_entry
-from gyro_instrument.estimators.foucault import estimate_foucault
-from gyro_instrument.estimators.latitude import RateMeasurement
-from gyro_instrument.estimators.north_estimate import best_block, north_entry
-from gyro_instrument.estimators.north_live import NorthTracker, live_north
-from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
-from gyro_instrument.estimators.swing import swing_estimate
 from gyro_instrument.instruments.measurement import LiveTracker, MeasurementKind
 from gyro_instrument.instruments.observation import ELLIPSE_CORRECTION, PLANE_RATE, SWING_RATE
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH, ROTOR_OFF
@@ -40,13 +33,16 @@ class SwingKind(MeasurementKind):
     CLASSIC = "gyro"
 
     def estimate(self, obs, rec, corrections, checks, sensor) -> tuple:
+        from gyro_instrument.estimators.swing import swing_estimate
         return swing_estimate(obs, rec, corrections, checks, sensor)
 
     def probe(self, scene, obs) -> tuple:
-        return bounds.swing_model(scene, obs)
+        from gyro_instrument.estimators.bounds import swing_model
+        return swing_model(scene, obs)
 
     def bound(self, model, T, sensor) -> tuple:
-        return bounds.swing_sigma(model, T, sensor)
+        from gyro_instrument.estimators.bounds import swing_sigma
+        return swing_sigma(model, T, sensor)
 
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
         return None
@@ -72,10 +68,12 @@ class PlaneKind(MeasurementKind):
         return plane_estimate(obs, rec, corrections, checks, sensor)
 
     def probe(self, scene, obs) -> tuple:
-        return bounds.plane_model(scene, obs)
+        from gyro_instrument.estimators.bounds import plane_model
+        return plane_model(scene, obs)
 
     def bound(self, model, T, sensor) -> tuple:
-        return bounds.plane_sigma(model, T, sensor)
+        from gyro_instrument.estimators.bounds import plane_sigma
+        return plane_sigma(model, T, sensor)
 
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
         return None
@@ -98,13 +96,16 @@ class AzimuthKind(MeasurementKind):
     LIVE = "heading"
 
     def estimate(self, obs, rec, corrections, checks, sensor) -> tuple:
+        from gyro_instrument.estimators.north_estimate import north_entry
         return north_entry(obs, rec, corrections, checks, sensor)
 
     def probe(self, scene, obs) -> tuple:
-        return bounds_azimuth.azimuth_model(scene, obs)
+        from gyro_instrument.estimators.bounds_azimuth import azimuth_model
+        return azimuth_model(scene, obs)
 
     def bound(self, model, T, sensor) -> tuple:
-        return bounds_azimuth.fit_bound(model, T, sensor), "Cramer-Rao bound of the whole joint fit"
+        from gyro_instrument.estimators.bounds_azimuth import fit_bound
+        return fit_bound(model, T, sensor), "Cramer-Rao bound of the whole joint fit"
 
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
         swing = obs.instrument.predictions().get("swing_duration_small_s", math.inf)
@@ -115,6 +116,7 @@ class AzimuthKind(MeasurementKind):
         return NorthLive(obs.name, swing, scene.sensor.get("noise_rad") or None, off, off_s)
 
     def combine(self, blocks) -> dict | None:
+        from gyro_instrument.estimators.north_estimate import best_block
         return best_block(blocks)
 
     def plan(self, scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
@@ -123,7 +125,7 @@ class AzimuthKind(MeasurementKind):
         return plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor)
 
     def plan_entry(self, model) -> dict:
-        from gyro_instrument.estimators.planner import azimuth_entry
+        from gyro_instrument.estimators.bounds_azimuth import azimuth_entry
         return azimuth_entry(model)
 
 
@@ -132,6 +134,7 @@ class NorthLive(LiveTracker):
     per record, the Schuler mean (tape-corrected, :func:`.north_live.live_north`) at each new reversal point."""
 
     def __init__(self, name, swing_s, sigma, off_name=None, off_swing_s=None):
+        from gyro_instrument.estimators.north_live import NorthTracker
         self.name = name
         self.trackers = {name: NorthTracker(swing_s, sigma)}
         if off_name is not None:
@@ -147,6 +150,7 @@ class NorthLive(LiveTracker):
         return self.trackers[name].window_s()
 
     def update(self, name, rec) -> tuple | None:
+        from gyro_instrument.estimators.north_live import live_north
         if not self.trackers[name].update(rec["t"], -rec["angle"]):
             return None
         est = live_north(self.trackers[self.name], self.trackers.get(self.off))
@@ -167,6 +171,10 @@ class NorthLive(LiveTracker):
 
 def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     """The Foucault rate of one pendulum record (estimators/foucault.py) and its checks."""
+    from gyro_instrument.estimators.adequacy import check_entry, check_period, halves_entry, plane_fit_entry
+    from gyro_instrument.estimators.foucault import estimate_foucault
+    from gyro_instrument.estimators.latitude import RateMeasurement
+    from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
     name, inst = obs.name, obs.instrument
     east, north = obs.layout.measured
     try:

@@ -23,12 +23,10 @@ from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
 from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, GYRO_MIN_CYCLES,  # noqa: F401
                                                MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
                                                Planner, SensorSpec, combined, counting_sigma, instrument_models,
-                                               instrument_sigma, samples, sine_fit_covariance)
-from gyro_instrument.estimators.bounds import shortest_time
+                                               instrument_sigma, samples, shortest_time, sine_fit_covariance)
 from gyro_instrument.estimators.bounds_azimuth import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
                                                        rotor_off_plan, solve_azimuth)
-from gyro_instrument.instruments.measurement import kind
-from gyro_instrument.instruments.measurement import load as load_kinds
+from gyro_instrument.instruments.measurement import kind, load as load_kinds
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
 DEG_H_RAD_S = math.pi / (180.0 * 3600.0)
@@ -220,17 +218,6 @@ def _plan_by_bound(models, skipped, sensor, name, value, si) -> dict:
                   "planned_sigma": sig / TARGETS[name][1], "note": note or None, "limited_by": how,
                   "per_instrument_observation_s": {n: v[0] for n, v in solved.items()}})
     return entry
-
-
-def azimuth_entry(m) -> dict:
-    d = {"kind": m.kind, "measures": "mount azimuth: the swing centre on the scale is true north",
-         "period_s": 2 * math.pi / m.omega, "amplitude_rad": m.amplitude, "damping_per_s": m.damping,
-         "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
-         "drift_fitted": m.drift}
-    if m.tape_ratio:
-        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0],
-                  "rotor_off_instrument": m.rotor_off_name, "rotor_off_min_record_s": m.min_off_s})
-    return d
 
 
 def _finite(x):
