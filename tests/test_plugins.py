@@ -364,3 +364,56 @@ def test_an_incomplete_kind_is_refused_by_name_in_process():
     with pytest.raises(ValueError, match=r"measurement kind half .* incomplete: missing probe, bound, tracker$"):
         register_kind(HalfKind)
     assert KINDS == before
+
+
+def test_a_kind_giving_a_block_as_the_main_measurement(tmp_path, monkeypatch):
+    """A kind with ``RATE`` False named in ``MEASUREMENT`` (a north finder's kind: its answer is a block,
+    not an Earth-rate component): its block goes under ``BLOCK`` in the instrument's entry and, combined,
+    in the estimate; the instrument is measured and carries no 'not used' reason (in process, the
+    plug-in's modules imported from the temporary directory and registered by hand)."""
+    import importlib
+    from gyro_instrument import instruments
+    from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
+    from gyro_instrument.instruments.measurement import measured, register_kind, unregister_kind
+    from gyro_instrument.scenes import scene_from_data
+    monkeypatch.syspath_prepend(write_package(tmp_path))
+    inst_mod, kind_mod = (importlib.import_module(f"gyro_rig_demo.{m}") for m in ("instrument", "kind"))
+
+    class VerticalRateBlock(kind_mod.VerticalRate):
+        name = "vertical_rate_block"
+        RATE = False
+        BLOCK = "vertical"
+
+        def estimate(self, obs, rec, corrections, checks, sensor) -> tuple:
+            entry, _ = super().estimate(obs, rec, corrections, checks, sensor)
+            return {"instrument": obs.name, **{k: v for k, v in entry.items() if k != "type"}}, None
+
+        def combine(self, blocks) -> dict:
+            return min(blocks, key=lambda b: b["vertical_rate_sigma_rad_s"])
+
+    class BlockObservation(inst_mod.RateIntegration):
+        MEASUREMENT = "vertical_rate_block"
+
+    class BlockGyro(inst_mod.RateIntegratingGyro):
+        type_name = "rate_integrating_gyro_block"
+        OBSERVATION = BlockObservation
+
+    register_kind(VerticalRateBlock)
+    instruments.register(BlockGyro)
+    try:
+        data = scene()
+        data["effects"] = {"earth_rotation": {}}
+        data["instruments"] = {"rig": {"type": BlockGyro.type_name}}
+        sc = scene_from_data(data)
+        truth = simulate_truth(sc)
+        assert measured(truth[1]["rig"])
+        r = estimate_records(sc, truth[1], measure(sc, truth))
+        entry = r["instruments"]["rig"]
+        assert "reason" not in entry and r["vertical"] == entry["vertical"]
+        # the slope of n sin(latitude) t within 4 sigma (one draw), sigma the straight line's bound
+        k_true = EARTH_RATE * math.sin(math.radians(LATITUDE_DEG))
+        assert abs(r["vertical"]["vertical_rate_rad_s"] - k_true) < 4 * r["vertical"]["vertical_rate_sigma_rad_s"]
+        assert r["latitude_deg"] is None       # a block is no Earth-rate component: no latitude from it
+    finally:
+        instruments.unregister(BlockGyro.type_name)
+        unregister_kind(VerticalRateBlock.name)

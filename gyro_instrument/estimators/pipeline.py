@@ -19,7 +19,7 @@ from gyro_instrument.estimators.adequacy import InadequateData, check_before_fit
 from gyro_instrument.estimators.combine import classic_methods, combined, null_combined
 from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
-from gyro_instrument.instruments.measurement import kind, measured
+from gyro_instrument.instruments.measurement import declared_kinds, kind, measured
 from gyro_instrument.instruments.observation import CORRECTIONS, FINITE_AMPLITUDE_CORRECTIONS
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
@@ -119,12 +119,14 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
 
 def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     """(the instrument's entry of the estimate, its RateMeasurement or None); appends its checks. The
-    entry is the engine's of the observation's ``MEASUREMENT`` kind; without one (or without a
-    record) it says the instrument is not used."""
+    entry is the engine's of the observation's ``MEASUREMENT`` kind when that kind gives a rate
+    (``RATE``); a kind that gives a block (an azimuth) goes under its ``BLOCK``
+    (:func:`_also_measured`); with neither (or without a record) the entry says the instrument is not
+    used."""
     engine = kind(obs.MEASUREMENT) if obs.MEASUREMENT is not None else None
-    if engine is None or not obs.has_record(rec):
+    if engine is None or not engine.RATE or not obs.has_record(rec):
         entry = {"type": obs.type_name}
-        if not obs.ALSO_MEASURES or not obs.has_record(rec):
+        if not _block_kinds(obs) or not obs.has_record(rec):
             entry["reason"] = "not used by the estimator (no Earth-rate measurement from this instrument)"
         return entry, None
     corrections = obs.applicable_corrections(corrections)
@@ -132,12 +134,19 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     return engine.estimate(obs, rec, corrections, checks, sensor)
 
 
+def _block_kinds(obs) -> list:
+    """The registered kinds of ``obs`` that give a block of their own (``RATE`` False: an azimuth),
+    ``MEASUREMENT`` first, then ``ALSO_MEASURES``."""
+    found = [kind(k) for k in declared_kinds(obs)]
+    return [k for k in found if k is not None and not k.RATE]
+
+
 def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
-    """The engines of the kinds an observation measures beside its ``MEASUREMENT``
-    (``ALSO_MEASURES``: an azimuth), on its record and its companions' (``companions()``: record key ->
+    """The engines of the kinds an observation measures that give a block (:func:`_block_kinds`: the
+    azimuth of ``ALSO_MEASURES``), on its record and its companions' (``companions()``: record key ->
     instrument name); each result goes into the instrument's entry under the kind's ``BLOCK``.
     Returns ``(BLOCK, kind, block)`` for each."""
-    kinds = [kind(k) for k in obs.ALSO_MEASURES]
+    kinds = _block_kinds(obs)
     if not kinds or not obs.has_record(records.get(obs.name, {})):
         return []
     rec = dict(records[obs.name])
