@@ -35,6 +35,32 @@ setup(
     description="Gyrocompass and Foucault pendulum on the rotating Earth: simulators, estimator, MCAP recording.",
     license="Apache-2.0",
     entry_points={
+        # plug-ins (gyro_instrument/core/plugins.py): the shipped instruments, effects and measurement
+        # kinds are entry points of the groups a package extends (docs/extending.md)
+        "gyro_instrument.instruments": [
+            "plane_gyroscope = gyro_instrument.instruments.plane_gyroscope:PlaneGyroscope",
+            "spherical_pendulum = gyro_instrument.instruments.pendulum:SphericalPendulum",
+            "compound_pendulum = gyro_instrument.instruments.pendulum:CompoundPendulum",
+            "free_gyroscope = gyro_instrument.instruments.free_gyroscope:FreeGyroscope",
+            "puiseux_body = gyro_instrument.instruments.puiseux.instrument:PuiseuxBody",
+            "gimbal_gyroscope = gyro_instrument.instruments.gimbal.instrument:GimbalGyroscope",
+        ],
+        "gyro_instrument.effects": [
+            "earth_rotation = gyro_instrument.effects.earth_rotation:EarthRotation",
+            "centrifugal = gyro_instrument.effects.centrifugal:Centrifugal",
+            "finite_amplitude = gyro_instrument.effects.finite_amplitude:FiniteAmplitude",
+            "ring_inertia = gyro_instrument.effects.ring_inertia:RingInertia",
+            "spin_decay = gyro_instrument.effects.spin_decay:SpinDecay",
+            "pivot_damping = gyro_instrument.effects.pivot_damping:PivotDamping",
+            "air_drag = gyro_instrument.effects.air_drag:AirDrag",
+            "tape_torsion = gyro_instrument.effects.tape_torsion:TapeTorsion",
+            "tape_drift = gyro_instrument.effects.tape_drift:TapeDrift",
+        ],
+        "gyro_instrument.measurements": [
+            "gyro = gyro_instrument.estimators.kinds:SwingKind",
+            "pendulum = gyro_instrument.estimators.kinds:PlaneKind",
+            "azimuth = gyro_instrument.estimators.kinds:AzimuthKind",
+        ],
         "console_scripts": [
             "gyro-instrument = gyro_instrument.ros.cli:main",
             "gyrocompass_sim = gyro_instrument.ros.main:gyrocompass_sim",

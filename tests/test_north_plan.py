@@ -19,9 +19,10 @@ import pytest
 from gyro_instrument.cli import main as cli_main
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.bounds import PROBES, SensorSpec
+from gyro_instrument.estimators.bounds import SensorSpec
 from gyro_instrument.estimators.bounds_azimuth import AzimuthModel, azimuth_sigmas, solve_azimuth
 from gyro_instrument.estimators.planner import ARCSEC_RAD, parse_targets, plan, verify_plan
+from gyro_instrument.instruments.measurement import kind
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 MOUNT_DEG = 123.4567
@@ -35,7 +36,8 @@ def planned():
 
 
 def test_the_azimuth_kind_has_a_probe_not_a_type_switch():
-    assert AZIMUTH in PROBES
+    k = kind(AZIMUTH)
+    assert k is not None and not k.missing() and k.BLOCK == "north" and k.TARGET == "azimuth"
 
 
 def test_the_fit_time_meets_the_target_at_the_crlb_of_the_centre(planned):

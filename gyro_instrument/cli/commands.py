@@ -112,7 +112,23 @@ def _ignore_sigint():
 
 def run_command(args) -> int:
     """Run the parsed subcommand ``args.command``; its exit status."""
+    report_plugins()
     return COMMANDS[args.command](args)
+
+
+def report_plugins() -> None:
+    """One line on stderr for each plug-in left out (:data:`gyro_instrument.core.plugins.REFUSED`:
+    it could not be loaded, or its registry refused it, naming what is missing), once per process.
+    The measurement kinds are loaded first, so instruments naming an incomplete kind are among them."""
+    from gyro_instrument.core import plugins
+    from gyro_instrument.instruments import measurement
+    measurement.load()
+    for line in plugins.REFUSED[len(_REPORTED):]:
+        print(f"gyro-instrument: {line}", file=sys.stderr)
+        _REPORTED.append(line)
+
+
+_REPORTED = []
 
 
 def scenes_command(args) -> int:

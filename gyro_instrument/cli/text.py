@@ -308,8 +308,11 @@ def _print_estimate_body(r, w):
                   f"of the position scale: k = {deg_h(sc['k_at_half_scale_rad_s'])} at half the scale, "
                   f"{deg_h(sc['k_at_double_scale_rad_s'])} at twice it, {deg_h(sc['k_without_correction_rad_s'])} "
                   f"without it (positions in pixels need --metres-per-pixel; check the length)\n")
-        else:
+        elif e.get("reason") is not None or len(e) <= 1:
             w(f"  {name}: null: {e.get('reason')}\n")
+        else:                       # another kind's entry (a plug-in's): its numbers as they are
+            w(f"  {name}: " + ", ".join(f"{k} = {_fmt(v, '.6g')}" for k, v in e.items()
+                                          if isinstance(v, (int, float)) and not isinstance(v, bool)) + "\n")
     for mname, m in r["methods"].items():
         lat = m.get("latitude_deg")
         w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
@@ -365,10 +368,12 @@ def print_plan(d, stream=None) -> None:
       + (f", {100 * sen['dropout_fraction']:.3g} % dropouts" if sen["dropout_fraction"] else "")
       + f" at {sen['sample_rate_hz']:g} Hz\n")
     for name, m in d["instruments"].items():
-        what = (f"swing {m['swing_duration_s']:.6g} s {SWING}" if m["kind"] == "gyro"
-                else f"period {m['period_s']:.6g} s {FULL_PERIOD}")
-        w(f"  {name} ({m['configuration']}): {what}, amplitude {m['amplitude_rad']:.3g} rad, measures "
-          f"{m['measures']}\n")
+        # a swing's duration, a period, an amplitude: what the kind's plan entry gives (plan_entry)
+        what = [f"swing {m['swing_duration_s']:.6g} s {SWING}" if "swing_duration_s" in m
+                else f"period {m['period_s']:.6g} s {FULL_PERIOD}" if "period_s" in m else ""]
+        what += [f"amplitude {m['amplitude_rad']:.3g} rad"] if "amplitude_rad" in m else []
+        w(f"  {name} ({m.get('configuration') or m['kind']}): {', '.join(x for x in what if x)}"
+          f"{', ' if any(what) else ''}measures {m['measures']}\n")
     for name, why in d.get("not_used", {}).items():
         w(f"  {name}: not used ({why})\n")
     for e in d["targets"]:

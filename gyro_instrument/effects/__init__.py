@@ -1,10 +1,13 @@
 """Physical effects, one module each. Effects never import each other or any instrument.
 
 ``REGISTRY`` maps the name used in scene files to the effect class, in the order in which
-instruments sum the effects' terms (:func:`canonical_order`). A new effect is one module and one
-:func:`register` call (docs/extending.md).
+instruments sum the effects' terms (:func:`canonical_order`): the shipped ones, then those of
+plug-ins. A new effect is one class, found through an entry point of the group
+``gyro_instrument.effects`` (:mod:`gyro_instrument.core.plugins`; the shipped ones are entry points of
+it too, setup.py) or registered with :func:`register` (docs/extending.md).
 """
 
+from gyro_instrument.core import plugins
 from gyro_instrument.core.effect import CAPABILITIES, MECHANICS, TERM_HOOKS, TERM_KINDS, Effect
 from gyro_instrument.effects.air_drag import AirDrag
 from gyro_instrument.effects.centrifugal import Centrifugal
@@ -70,8 +73,10 @@ def canonical_order(effects) -> dict:
     return dict(sorted(effects.items(), key=lambda item: order.get(item[0], len(order))))
 
 
-for _cls in (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag, TapeTorsion, TapeDrift):
-    register(_cls)
+#: The shipped effects, in the order their terms are summed (also entry points of ``gyro_instrument.effects``).
+SHIPPED = (EarthRotation, Centrifugal, FiniteAmplitude, RingInertia, SpinDecay, PivotDamping, AirDrag, TapeTorsion,
+           TapeDrift)
+plugins.discover("effects", register, lambda c: REGISTRY.get(getattr(c, "name", None)) is c, SHIPPED)
 
 __all__ = ["REGISTRY", "AirDrag", "Centrifugal", "EarthRotation", "FiniteAmplitude", "PivotDamping",
            "RingInertia", "SpinDecay", "TapeDrift", "TapeTorsion", "canonical_order", "register", "unregister"]

@@ -47,7 +47,8 @@ from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
 from gyro_instrument.estimators.foucault import foucault_crlb_small_swing_rad_s
 from gyro_instrument.estimators.latitude import RateMeasurement, solve_latitude
 from gyro_instrument.estimators.period import EstimationError, fit_oscillation
-from gyro_instrument.instruments.observation import PLANE_RATE, SWING_RATE, SwingRate
+from gyro_instrument.instruments.measurement import declared_kinds, kind, load as load_kinds
+from gyro_instrument.instruments.observation import SWING_RATE, SwingRate
 
 #: Up to this many samples the Fisher information is summed exactly on the sample grid.
 EXACT_SAMPLES = 200_000
@@ -69,7 +70,9 @@ class InstrumentModel:
     full period 2π/ω = 2 T_swing), ``coef`` (a1, b1, a3, b3) the noise-free harmonic swing on t from
     0, ``spin`` the rotor's spin; 'pendulum': ``omega`` its swing frequency and ``amplitude`` α.
     ``observation``: the instrument's, whose laws (amplitude law, spin and period exponents) the
-    bound uses."""
+    bound uses. ``axis``: ``geometry`` is a sensitive axis (:class:`~.latitude.RateMeasurement`).
+    Another rate kind's model (its ``probe``) carries ``name``, ``kind``, ``value``, ``geometry``,
+    ``axis`` and ``min_record_s`` too."""
 
     name: str
     kind: str
@@ -81,6 +84,7 @@ class InstrumentModel:
     spin: float = 0.0
     label: str = ""
     observation: object = field(default=None, repr=False, compare=False)
+    axis: bool = False
 
     @property
     def min_record_s(self) -> float:
@@ -89,22 +93,20 @@ class InstrumentModel:
 
 
 def instrument_models(scene, kinds=None) -> tuple:
-    """(models, skipped): a model per measurement of ``kinds`` (default :data:`RATE_KINDS`: the
+    """(models, skipped): a model per measurement of ``kinds`` (default :func:`rate_kinds`: the
     Earth-rate instruments, :class:`InstrumentModel`) each instrument of ``scene`` declares
-    (:func:`measured_kinds`), from its kind's probe (:data:`PROBES`: a noise-free simulation of a
-    few periods, its amplitudes and frequency as the fit sees them), and name -> reason for the
-    instruments that give none."""
-    kinds = RATE_KINDS if kinds is None else tuple(kinds)
+    (:func:`~gyro_instrument.instruments.measurement.declared_kinds`), from its kind's ``probe`` (for
+    a swing a noise-free simulation of a few periods, its amplitudes and frequency as the fit sees
+    them), and name -> reason for the instruments that give none."""
+    kinds = rate_kinds() if kinds is None else tuple(kinds)
     from gyro_instrument.scenes import build_instruments
-    site = scene.site
-    n = site.earth_rate_rad_s
     models, skipped = [], {}
     for name, inst in build_instruments(scene).items():
         obs = inst.observation()
         reason = obs.unmeasured_reason()
         found = False
-        for kind in (k for k in measured_kinds(obs) if k in kinds) if reason is None else ():
-            model, why = PROBES[kind](scene, obs)
+        for k in (k for k in declared_kinds(obs) if k in kinds) if reason is None else ():
+            model, why = kind(k).probe(scene, obs)
             if model is not None:
                 models.append(model)
                 found = True
@@ -115,7 +117,7 @@ def instrument_models(scene, kinds=None) -> tuple:
     return models, skipped
 
 
-def _plane_model(scene, obs):
+def plane_model(scene, obs) -> tuple:
     """A swing plane's model: its period and release amplitude α = sin θ0, k = n sin γ."""
     site = scene.site
     value = site.earth_rate_rad_s * math.sin(site.latitude_rad)
@@ -123,7 +125,7 @@ def _plane_model(scene, obs):
                            amplitude=obs.release_amplitude(), label="pendulum", observation=obs), None
 
 
-def _swing_model(scene, obs):
+def swing_model(scene, obs) -> tuple:
     """A swing's model from a noise-free simulation of four periods (amplitudes and frequency as the
     fit sees them); (None, reason) without a swing to time."""
     inst, site = obs.instrument, scene.site
@@ -146,18 +148,14 @@ def _swing_model(scene, obs):
                            spin=obs.model.spin_rate_rad_s, label=obs.label, observation=obs), None
 
 
-#: How the planner models each measurement kind an observation declares: ``probe(scene, observation)
-#: -> (model or None, reason)``; an :class:`InstrumentModel` for the Earth-rate kinds, an
-#: :class:`AzimuthModel` for :data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH`
-#: (defined below with its bounds).
-PROBES = {SWING_RATE: _swing_model, PLANE_RATE: _plane_model}
-#: The kinds whose bounds combine into a latitude and an Earth rate (:class:`Planner`).
-RATE_KINDS = (SWING_RATE, PLANE_RATE)
+def rate_kinds() -> tuple:
+    """The registered kinds whose bounds combine into a latitude and an Earth rate (``RATE``)."""
+    return tuple(k for k, v in load_kinds().items() if v.RATE)
 
 
 def measured_kinds(obs) -> tuple:
     """Every measurement kind an observation declares: its ``MEASUREMENT`` and ``ALSO_MEASURES``."""
-    return (obs.MEASUREMENT,) + tuple(obs.ALSO_MEASURES)
+    return declared_kinds(obs)
 
 
 @dataclass(frozen=True)
@@ -234,15 +232,24 @@ def sine_fit_covariance(T, rate_hz, omega, coef, sigma, keep=1.0) -> tuple:
 
 
 def instrument_sigma(m, T, sensor) -> tuple:
-    """1-σ Cramér–Rao bound on the measurement of ``m`` (rad/s: y = n s(γ) or k) over T s, and how."""
+    """1-σ Cramér–Rao bound on the measurement of ``m`` over T s, and how: its kind's ``bound``."""
+    return kind(m.kind).bound(m, T, sensor)
+
+
+def plane_sigma(m, T, sensor) -> tuple:
+    """1-σ Cramér–Rao bound of a swing plane's rate k (rad/s) over T s, and how."""
+    keep = 1.0 - sensor.dropout_fraction
+    n = samples(T, sensor.rate_hz) * keep
+    if n < 3 or m.amplitude <= 0:
+        return math.inf, "too few samples"
+    span = (samples(T, sensor.rate_hz) - 1) / sensor.rate_hz
+    return foucault_crlb_small_swing_rad_s(sensor.sigma_rad, m.amplitude, m.omega, n, span), "Foucault rate bound"
+
+
+def swing_sigma(m, T, sensor) -> tuple:
+    """1-σ Cramér–Rao bound of a swing's rate y = n s(γ) (rad/s) over T s, and how."""
     keep = 1.0 - sensor.dropout_fraction
     sigma = sensor.sigma_rad
-    if m.kind == PLANE_RATE:
-        n = samples(T, sensor.rate_hz) * keep
-        if n < 3 or m.amplitude <= 0:
-            return math.inf, "too few samples"
-        span = (samples(T, sensor.rate_hz) - 1) / sensor.rate_hz
-        return foucault_crlb_small_swing_rad_s(sigma, m.amplitude, m.omega, n, span), "Foucault rate bound"
     var_w, var_a, cov_wa, how = sine_fit_covariance(T, sensor.rate_hz, m.omega, m.coef, sigma, keep)
     if not math.isfinite(var_w):
         return math.inf, how
@@ -272,7 +279,7 @@ def combined(models, sigmas, hemisphere=None, latitude_rad=None, known=None) -> 
     ``estimate`` passes them (a pendulum alone: the latitude with n known)."""
     # a noise-free sensor has a zero bound: keep its structure (what it can determine) with a vanishing σ
     sigmas = [s if s > 0 else 1e-20 * abs(m.value) for m, s in zip(models, sigmas)]
-    meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s)
+    meas = [RateMeasurement(m.name, m.kind, m.value, s, m.geometry, True, s, axis=m.axis)
             for m, s in zip(models, sigmas) if math.isfinite(s) and s > 0]
     if not meas:
         return {"latitude_rad": None, "earth_rate_rad_s": None,
@@ -306,7 +313,7 @@ class Planner:
 
     def bounds(self, T, counting=False) -> tuple:
         """Combined bounds at T (dict, see :func:`combined`) and the per-instrument σ (name -> rad/s)."""
-        models = [m for m in self.models if not counting or m.kind == SWING_RATE]
+        models = [m for m in self.models if not counting or kind(m.kind).CLASSIC == "gyro"]
         sig = [counting_sigma(m, T) if counting else instrument_sigma(m, T, self.sensor)[0] for m in models]
         return combined(models, sig, self.hemisphere, known=self.known), dict(zip((m.name for m in models), sig))
 
@@ -316,7 +323,7 @@ class Planner:
     def solve(self, quantity, target, counting=False) -> tuple:
         """Shortest T (s) with the bound ≤ ``target`` (SI), the estimator's minimum record included:
         (T or None, note). Bisection in log T to 1e-4 relative."""
-        t_min = max(m.min_record_s for m in self.models if m.kind == SWING_RATE) if counting else self.min_record_s()
+        t_min = max(m.min_record_s for m in self.models if kind(m.kind).CLASSIC == "gyro") if counting else self.min_record_s()
         s0 = self.sigma(quantity, t_min, counting)
         if s0 is None:
             return None, self.bounds(t_min, counting)[0].get(f"{quantity}_reason", "not determined")

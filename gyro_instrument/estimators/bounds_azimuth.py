@@ -2,8 +2,8 @@
 time T, per north method, for ``plan --target azimuth_arcsec=...`` (issue 24 item 4, issue 33 item 3).
 
 The rate bounds and the probes of the other measurement kinds are :mod:`.bounds`'s; this module
-adds the probe of :data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH` to
-:data:`.bounds.PROBES` when imported (:mod:`.planner` imports it). Sources: the fit's σ is the
+adds the probe and bound of :data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH`, which
+its kind declares (:class:`.kinds.AzimuthKind`). Sources: the fit's σ is the
 Cramér–Rao bound of the WHOLE joint problem the estimate solves (:func:`.north.exact.crlb`: the
 swing equation in scale readings, rotor-on and rotor-off records, tape calibration included) at the
 scene's true constants (:func:`exact_truth`); the reversal-point and transit methods of :mod:`.north`
@@ -21,9 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, PROBES, samples, shortest_time,
+from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, samples, shortest_time,
                                                sine_fit_covariance)
-from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 
 # ----------------------------------------------------------------------------- the azimuth (north)
@@ -167,7 +166,7 @@ def exact_truth(inst, off_inst=None) -> tuple:
     return swing_equation(inst, 0.0), par, tuple(initial)
 
 
-def _azimuth_model(scene, obs):
+def azimuth_model(scene, obs) -> tuple:
     """The azimuth model of a horizontal gyroscope (and its rotor-off companion with a tape)."""
     from gyro_instrument.scenes import build_instruments
     inst = obs.instrument
@@ -378,4 +377,13 @@ def rotor_off_plan(m, sensor, T, unit) -> dict:
                                        "here reads one simultaneous record)"}}
 
 
-PROBES[AZIMUTH] = _azimuth_model
+def azimuth_entry(m) -> dict:
+    """The plan's entry of a horizontal gyroscope's azimuth model (``plan --json``, ``north_instruments``)."""
+    d = {"kind": m.kind, "measures": "mount azimuth: the swing centre on the scale is true north",
+         "period_s": 2 * math.pi / m.omega, "amplitude_rad": m.amplitude, "damping_per_s": m.damping,
+         "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
+         "drift_fitted": m.drift}
+    if m.tape_ratio:
+        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0],
+                  "rotor_off_instrument": m.rotor_off_name, "rotor_off_min_record_s": m.min_off_s})
+    return d

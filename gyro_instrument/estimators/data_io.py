@@ -33,9 +33,9 @@ import os
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.table_read import (ANGLE_CHANNELS, ANGLE_UNITS, ARROW_TIME_UNITS, SEPARATORS,  # noqa: F401
-                                                   TIME_COLUMN, TIME_UNITS, TableOptions, _pyarrow, load_table,
-                                                   read_table, table_kind)
+from gyro_instrument.estimators.table_read import (ANGLE_UNITS, ARROW_TIME_UNITS, SEPARATORS,  # noqa: F401
+                                                   TIME_COLUMN, TIME_UNITS, TableOptions, _pyarrow, channel_meanings,
+                                                   load_table, read_table, table_kind)
 from gyro_instrument.estimators.table_write import (BYTES_PER_VALUE, QUEUED_WRITES, ROWS_PER_WRITE,  # noqa: F401
                                                     SCALE_KEY, SCENE_KEY, TableWriter, output_bytes, scale_readings_text,
                                                     scene_of_table, scene_sidecar_path, scene_yaml_text, table_metadata,
@@ -241,7 +241,7 @@ def estimate_data(scene, path, field="--data", options=None) -> dict:
     from gyro_instrument.estimators.pipeline import estimate_records
     from gyro_instrument.scenes import build_instruments
     insts = build_instruments(scene)
-    cols, read_notes = load_table(path, field, options)
+    cols, read_notes = load_table(path, field, options, channel_meanings(insts))
     records, notes, span = records_from_table(insts, cols, path, field)
     notes = read_notes + notes
     try:

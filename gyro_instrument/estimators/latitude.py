@@ -57,6 +57,8 @@ class RateMeasurement:
 
     ``geometry`` is the plane normal in ENU for a gyroscope (s = √(1 − (N·a(γ))²), a(γ) the unit
     Earth axis (0, cos γ, sin γ)); ``gain_known`` False means y = K/ρ and the gain is fitted.
+    ``axis`` True: ``geometry`` is a sensitive axis instead, and y = n (N·a(γ))/|N|, signed (a rate
+    measured along an axis: a measurement kind of a plug-in or a rate gyroscope).
     """
 
     name: str
@@ -66,15 +68,19 @@ class RateMeasurement:
     geometry: tuple = (0.0, 0.0, 1.0)
     gain_known: bool = True
     crlb_sigma: float = math.nan
+    axis: bool = False
 
     def shape(self, gamma) -> np.ndarray | float:
-        """s(γ): sin γ for a pendulum, sin ω(γ) for a gyroscope (γ scalar or array, rad)."""
+        """s(γ): sin γ for a pendulum, sin ω(γ) for a gyroscope, N·a(γ) along an axis (γ scalar or
+        array, rad)."""
         gamma = np.asarray(gamma, dtype=float)
         if self.kind == "pendulum":
             return np.sin(gamma)
         nx, ny, nz = self.geometry
         norm = math.sqrt(nx * nx + ny * ny + nz * nz)
         c = (ny * np.cos(gamma) + nz * np.sin(gamma)) / norm
+        if self.axis:
+            return c
         return np.sqrt(np.maximum(1.0 - c * c, 0.0))
 
     def sign_sensitive(self) -> bool:
@@ -126,7 +132,7 @@ def _shape_scalar(m, gamma):
         return math.sin(gamma)
     nx, ny, nz = m.geometry
     c = (ny * math.cos(gamma) + nz * math.sin(gamma)) / math.sqrt(nx * nx + ny * ny + nz * nz)
-    return math.sqrt(max(1.0 - c * c, 0.0))
+    return c if m.axis else math.sqrt(max(1.0 - c * c, 0.0))
 
 
 def _chi2_scalar(gamma, meas, use_crlb, n_known=None):

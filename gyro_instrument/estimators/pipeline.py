@@ -9,48 +9,50 @@ bounds. Quantities that cannot be estimated are ``None`` with a reason — never
 crash.
 
 Each instrument's record is estimated as its observation says
-(:meth:`~gyro_instrument.instruments.base.Instrument.observation`): its ``MEASUREMENT`` kind picks
-the fit (:data:`ENGINES`: a swing about a directing line, :func:`.swing.swing_estimate`; a swing
-plane's precession, :func:`estimate_foucault`), and the observation supplies the laws.
+(:meth:`~gyro_instrument.instruments.base.Instrument.observation`): each measurement kind it declares
+(:mod:`gyro_instrument.instruments.measurement`; the shipped ones in :mod:`.kinds`) runs its engine
+on the record, and the observation supplies the laws.
 """
 
 from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
-from gyro_instrument.estimators.adequacy import InadequateData, check_before_fit, check_entry, check_period, \
-    halves_entry, hemisphere_entry, plane_fit_entry, site_check
+from gyro_instrument.estimators.adequacy import InadequateData, check_before_fit, hemisphere_entry, site_check
 from gyro_instrument.estimators.combine import classic_methods, combined, null_combined
-from gyro_instrument.estimators.foucault import estimate_foucault
 from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
-from gyro_instrument.estimators.north_estimate import best_block, north_entry
-from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
-from gyro_instrument.estimators.swing import swing_estimate
-from gyro_instrument.instruments.observation import (CORRECTIONS, ELLIPSE_CORRECTION, FINITE_AMPLITUDE_CORRECTIONS,
-                                                     PLANE_RATE, SWING_RATE)
-from gyro_instrument.instruments.observation_azimuth import AZIMUTH
+from gyro_instrument.instruments.measurement import declared_kinds, kind, measured
+from gyro_instrument.instruments.observation import CORRECTIONS, FINITE_AMPLITUDE_CORRECTIONS
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
-__all__ = ["CORRECTIONS", "ENGINES", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStream", "estimable", "estimate_records",
-           "estimator_instruments", "known_earth_rate", "measure", "missing_companions", "seed_sweep",
-           "simulate_truth"]
+__all__ = ["CORRECTIONS", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStream", "estimable", "estimate_records",
+           "estimated_instruments", "estimator_instruments", "known_earth_rate", "measure", "missing_companions",
+           "seed_sweep", "simulate_truth"]
 
 
 def estimable(inst) -> bool:
-    """True for instruments whose observation gives an Earth-rate measurement (``MEASUREMENT`` not
-    None): pendulums (k = n sin γ) and gyroscopes with a directing line (y = n s(γ)). Free
-    gyroscopes and Puiseux's body do not."""
-    return inst.observation().MEASUREMENT is not None
+    """True for the instruments the estimator measures: those whose observation declares a registered
+    measurement kind (:func:`~gyro_instrument.instruments.measurement.measured`, the one predicate of
+    ``estimate``, ``run``, the estimator node and ``replay``). Free gyroscopes and Puiseux's body are not."""
+    return measured(inst)
 
 
 def estimator_instruments(insts) -> list:
     """The names of the instruments whose records the estimator reads, in the scene's order: the
-    estimable ones and the records they read beside their own (``companions()``: a horizontal
+    measured ones and the records they read beside their own (``companions()``: a horizontal
     gyroscope's rotor-off swing with a tape). What a live ``run`` keeps, ``replay`` decodes from a bag
     and ``estimate --data`` asks columns for, so that each builds the record ``estimate`` measures."""
-    names = {n for n, inst in insts.items() if estimable(inst)}
+    names = {n for n, inst in insts.items() if measured(inst)}
     for n in list(names):
         names.update(v for v in insts[n].observation().companions().values() if v in insts)
     return [n for n in insts if n in names]
+
+
+def estimated_instruments(insts, records) -> dict:
+    """The instruments an estimate reports on, in the scene's order: every one that has a record and
+    every one the estimator does not measure (its entry says why); a measured instrument without a
+    record (a bag cut before its third message) is left out. What ``estimate``, the live estimate of
+    ``run`` and ``replay`` pass to :func:`estimate_records`."""
+    return {n: inst for n, inst in insts.items() if n in records or not measured(inst)}
 
 
 def missing_companions(insts, records) -> list:
@@ -80,13 +82,14 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
               "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": site.earth_rate_rad_s},
               "instruments": {}, "methods": {}}
-    meas, gyros, pend, checks, norths = [], {}, None, [], []
+    meas, gyros, pend, checks, blocks = [], {}, None, [], {}
     sensor = SensorModel.from_scene(scene)
     for name, inst in insts.items():
         obs = inst.observation()
         try:
-            est, m = _instrument_estimate(name, obs, records[name], corrections, checks, sensor)
-            norths += _also_measured(obs, est, records, corrections, checks, sensor)
+            est, m = _instrument_estimate(name, obs, records.get(name, {}), corrections, checks, sensor)
+            for key, k, block in _also_measured(obs, est, records, corrections, checks, sensor):
+                blocks.setdefault(key, []).append((k, block))
         except InadequateData as exc:
             if len(insts) > 1:
                 exc.add_hint(f"or leave {name} out: --set instruments.{name}=null")
@@ -94,9 +97,10 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
         result["instruments"][name] = est
         if m is not None:
             meas.append(m)
-            if m.kind == PLANE_RATE:
+            role = kind(m.kind).CLASSIC
+            if role == "pendulum":
                 pend = (obs, est, m)
-            else:
+            elif role == "gyro":
                 gyros[name] = (obs, est, m)
     if meas:
         result.update(combined(meas, scene.estimator.get("hemisphere"), *known_earth_rate(scene, insts, meas),
@@ -104,8 +108,8 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
     else:
         result.update(null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                      "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
-    if norths:
-        result["north"] = best_block(norths)
+    for key, found in blocks.items():
+        result[key] = found[0][0].combine([b for _, b in found])
     classic_methods(result, gyros, pend, scene.estimator.get("earth_rate"))
     entry = hemisphere_entry(result.get("hemisphere"), result.get("hemisphere_basis", ""), site.latitude_deg)
     result["checks"] = checks + ([entry] if entry else [])
@@ -114,77 +118,46 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
 
 
 def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
-    """(the instrument's entry of the estimate, its RateMeasurement or None); appends its checks."""
-    engine = ENGINES.get(obs.MEASUREMENT)
-    if engine is None or not obs.has_record(rec):
-        return {"type": obs.type_name, "reason": "not used by the estimator (no Earth-rate measurement from this "
-                                                 "instrument)"}, None
+    """(the instrument's entry of the estimate, its RateMeasurement or None); appends its checks. The
+    entry is the engine's of the observation's ``MEASUREMENT`` kind when that kind gives a rate
+    (``RATE``); a kind that gives a block (an azimuth) goes under its ``BLOCK``
+    (:func:`_also_measured`); with neither (or without a record) the entry says the instrument is not
+    used."""
+    engine = kind(obs.MEASUREMENT) if obs.MEASUREMENT is not None else None
+    if engine is None or not engine.RATE or not obs.has_record(rec):
+        entry = {"type": obs.type_name}
+        if not _block_kinds(obs) or not obs.has_record(rec):
+            entry["reason"] = "not used by the estimator (no Earth-rate measurement from this instrument)"
+        return entry, None
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)
-    return engine(obs, rec, corrections, checks, sensor)
+    return engine.estimate(obs, rec, corrections, checks, sensor)
+
+
+def _block_kinds(obs) -> list:
+    """The registered kinds of ``obs`` that give a block of their own (``RATE`` False: an azimuth),
+    ``MEASUREMENT`` first, then ``ALSO_MEASURES``."""
+    found = [kind(k) for k in declared_kinds(obs)]
+    return [k for k in found if k is not None and not k.RATE]
 
 
 def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
-    """The engines of the kinds an observation measures beside its ``MEASUREMENT``
-    (``ALSO_MEASURES``: an azimuth), on its record and its companions' (``companions()``: record key ->
-    instrument name); each result goes into the instrument's entry under the kind's key
-    (:data:`ALSO_KEYS`). Returns the ``north`` blocks."""
-    kinds = obs.ALSO_MEASURES
-    if not kinds or not obs.has_record(records[obs.name]):
+    """The engines of the kinds an observation measures that give a block (:func:`_block_kinds`: the
+    azimuth of ``ALSO_MEASURES``), on its record and its companions' (``companions()``: record key ->
+    instrument name); each result goes into the instrument's entry under the kind's ``BLOCK``.
+    Returns ``(BLOCK, kind, block)`` for each."""
+    kinds = _block_kinds(obs)
+    if not kinds or not obs.has_record(records.get(obs.name, {})):
         return []
     rec = dict(records[obs.name])
     for key, other in obs.companions().items():
         rec[key] = records.get(other)
     out = []
-    for kind in kinds:
-        block, _ = ENGINES[kind](obs, rec, corrections, checks, sensor)
-        est[ALSO_KEYS[kind]] = block
-        out.append(block)
+    for k in kinds:
+        block, _ = k.estimate(obs, rec, corrections, checks, sensor)
+        est[k.BLOCK] = block
+        out.append((k.BLOCK, k, block))
     return out
-
-
-def _pendulum_estimate(obs, rec, corrections, checks, sensor):
-    """The Foucault rate of one pendulum record (estimators/foucault.py) and its checks."""
-    name, inst = obs.name, obs.instrument
-    east, north = obs.layout.measured
-    try:
-        f = estimate_foucault(rec["t"], rec[east], rec[north], correct_ellipse=ELLIPSE_CORRECTION in corrections,
-                              noise_rad=sensor.effective_sigma_rad())
-    except EstimationError as exc:
-        if isinstance(exc, NoSignal):
-            checks.append(check_entry(name, "signal", "no_signal", str(exc), expected=DETECTION_SNR))
-        return {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}, None
-    est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
-           "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
-           "measured_plane_rate_rad_s": f.measured_rate_rad_s,
-           "measured_plane_rate_sigma_rad_s": f.measured_rate_sigma_rad_s, "sigma_basis": f.sigma_basis,
-           "sigma_basis_detail": f.sigma_basis_text,
-           "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
-           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "period_sigma_s": f.period_sigma_s,
-           "rest_point": f.rest_point, "windows": f.windows, "notes": f.notes,
-           "ellipse_scale": ellipse_scale(f.measured_rate_rad_s, f.airy_correction_rad_s, f.k_sigma_rad_s)}
-    checks.append(check_entry(name, "signal", "passed", f"swing detected (A^2 N / (4 sigma^2) >= {DETECTION_SNR:g}; "
-                                                       "estimators/foucault.py)", expected=DETECTION_SNR))
-    entry = check_period(name, inst, f.period_s)
-    if entry:
-        checks.append(entry)
-    checks.append(plane_fit_entry(name, f.plane_chi2_per_dof, f.plane_dof, f.noise_rad))
-    checks.append(halves_entry(name, f.plane_line))
-    # a noise-free record's bound is 0; the combination weights it as exact (1/σ² finite)
-    return est, RateMeasurement(name, PLANE_RATE, f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
-
-
-def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> dict:
-    """How the ellipse (Airy) correction hangs on the position scale: it is (3/8) a b / l² times the
-    swing frequency (physics_notes "Real Foucault pendulums"), a and b the axes read from the track, so
-    a scale s times the assumed one multiplies it by s² while the measured turn is unchanged. ``matters``:
-    halving the scale would move k by more than its σ (3/4 of the correction > σ) — then positions given
-    in pixels (or a wrong length) decide the answer, and ``k_at_half_scale_rad_s`` /
-    ``k_at_double_scale_rad_s`` say by how much."""
-    m, c = float(measured_rad_s), float(correction_rad_s)
-    return {"exponent": 2, "share_of_measured_rate": c / m if m else None,
-            "k_without_correction_rad_s": m, "k_at_half_scale_rad_s": m - c / 4.0, "k_at_double_scale_rad_s": m - 4.0 * c,
-            "matters": bool(abs(0.75 * c) > float(sigma_rad_s or 0.0))}
 
 
 def known_earth_rate(scene, insts, meas) -> tuple:
@@ -198,16 +171,6 @@ def known_earth_rate(scene, insts, meas) -> tuple:
     source = ("the IERS conventional value, the scene's site.earth_rate_rad_s" if n == SIDEREAL_RATE_RAD_S
               else "the scene's site.earth_rate_rad_s")
     return n, source
-
-
-#: The fit for each measurement kind an observation declares
-#: (:data:`~gyro_instrument.instruments.observation.SWING_RATE`, ``PLANE_RATE``): ``engine(observation,
-#: record, corrections, checks, sensor) -> (entry, RateMeasurement or None)``.
-#: An azimuth (:data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH`): the ``north`` block of a
-#: horizontal gyroscope (:func:`.north_estimate.north_entry`; its second item is always None).
-ENGINES = {SWING_RATE: swing_estimate, PLANE_RATE: _pendulum_estimate, AZIMUTH: north_entry}
-#: The key of the estimate entry each ``ALSO_MEASURES`` kind's result goes under.
-ALSO_KEYS = {AZIMUTH: "north"}
 
 
 def seed_sweep(job) -> list:

@@ -23,10 +23,10 @@ from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
 from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES, GYRO_MIN_CYCLES,  # noqa: F401
                                                MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
                                                Planner, SensorSpec, combined, counting_sigma, instrument_models,
-                                               instrument_sigma, samples, sine_fit_covariance)
+                                               instrument_sigma, samples, shortest_time, sine_fit_covariance)
 from gyro_instrument.estimators.bounds_azimuth import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
                                                        rotor_off_plan, solve_azimuth)
-from gyro_instrument.instruments.observation_azimuth import AZIMUTH
+from gyro_instrument.instruments.measurement import kind, load as load_kinds
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
 DEG_H_RAD_S = math.pi / (180.0 * 3600.0)
@@ -130,7 +130,8 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     scene = load_scene(scene_arg, list(overrides))
     models, skipped = instrument_models(scene)
     azimuth = any(TARGETS[name][0] == "azimuth" for name, _, _ in targets)
-    az_models, az_skipped = instrument_models(scene, (AZIMUTH,)) if azimuth else ([], {})
+    block_kinds = tuple(k for k, v in load_kinds().items() if v.TARGET == "azimuth")
+    az_models, az_skipped = instrument_models(scene, block_kinds) if azimuth else ([], {})
     if not models and not az_models:
         what = ("a horizontal gyroscope with earth_rotation (its swing centre is north)" if azimuth else
                 "an instrument that measures an Earth rate (a gyroscope with a directing line or a pendulum, with "
@@ -157,16 +158,16 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
            "sensor": {"noise_rad": sensor.noise_rad, "quantization_rad": sensor.quantization_rad,
                       "effective_noise_rad": sensor.sigma_rad, "spin_noise_rad_s": sensor.spin_noise_rad_s,
                       "dropout_fraction": sensor.dropout_fraction, "sample_rate_hz": sensor.rate_hz},
-           "instruments": {m.name: _model_dict(m) for m in models},
+           "instruments": {m.name: kind(m.kind).plan_entry(m) for m in models},
            "not_used": skipped, "min_record_s": planner.min_record_s() if planner else None, "targets": []}
     if azimuth:
-        out["north_instruments"] = {m.name: _azimuth_dict(m) for m in az_models}
+        out["north_instruments"] = {m.name: kind(m.kind).plan_entry(m) for m in az_models}
     for name, value, si in targets:
         if progress:
             progress(f"planning {name} = {value:g}")
         if TARGETS[name][0] == "azimuth":
-            out["targets"].append(plan_azimuth(scene_arg, overrides, az_models, az_skipped, sensor, name, value, si,
-                                               floor))
+            out["targets"].append(_plan_block(scene_arg, overrides, az_models, az_skipped, sensor, name, value, si,
+                                              floor))
         elif planner is None:
             out["targets"].append({"target": name, "value": value, "quantity": TARGETS[name][0],
                                    "observation_s": None, "reason": "no instrument of the scene measures an Earth rate"})
@@ -176,27 +177,47 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     return out
 
 
-def _model_dict(m):
-    d = {"kind": m.kind, "configuration": m.label, "measures": ("n sin(omega), rad/s" if m.kind == "gyro"
-                                                              else "Foucault rate k = n sin(latitude), rad/s"),
-         "true_value_rad_s": m.value, "period_s": 2 * math.pi / m.omega, "min_record_s": m.min_record_s}
-    if m.kind == "gyro":
-        d["swing_duration_s"] = math.pi / m.omega
-        d["amplitude_rad"] = math.hypot(m.coef[0], m.coef[1])
-    else:
-        d["amplitude_rad"] = m.amplitude
-    return d
+def _plan_block(scene_arg, overrides, models, skipped, sensor, name, value, si, floor):
+    """The plan of a block kind's target (``azimuth_*``): each kind's own :meth:`plan` over its models,
+    else the shortest T whose kind's ``bound`` meets it; the entry of the least T when several kinds
+    serve it."""
+    if not models:
+        return plan_azimuth(scene_arg, overrides, [], skipped, sensor, name, value, si, floor)
+    by_kind = {}
+    for m in models:
+        by_kind.setdefault(m.kind, []).append(m)
+    entries = []
+    for k, ms in by_kind.items():
+        entry = kind(k).plan(scene_arg, overrides, ms, skipped, sensor, name, value, si, floor)
+        entries.append(entry if entry is not None else _plan_by_bound(ms, skipped, sensor, name, value, si))
+    timed = [e for e in entries if e.get("observation_s") is not None]
+    return min(timed, key=lambda e: e["observation_s"]) if timed else entries[0]
 
 
-def _azimuth_dict(m):
-    d = {"kind": m.kind, "measures": "mount azimuth: the swing centre on the scale is true north",
-         "period_s": 2 * math.pi / m.omega, "amplitude_rad": m.amplitude, "damping_per_s": m.damping,
-         "min_record_s": m.min_record_s, "mount_azimuth_deg": math.degrees(m.mount_azimuth_rad),
-         "drift_fitted": m.drift}
-    if m.tape_ratio:
-        d.update({"tape_ratio_db_dk": m.tape_ratio, "rotor_off_period_s": 2 * math.pi / m.off[0],
-                  "rotor_off_instrument": m.rotor_off_name, "rotor_off_min_record_s": m.min_off_s})
-    return d
+def _plan_by_bound(models, skipped, sensor, name, value, si) -> dict:
+    """The generic plan of a block kind: per instrument the shortest T whose ``bound`` is ≤ the target."""
+    entry = {"target": name, "value": value, "quantity": TARGETS[name][0]}
+    solved = {}
+    for m in models:
+        k = kind(m.kind)
+        t_min = float(m.min_record_s)
+        if k.bound(m, t_min, sensor)[0] <= si:
+            solved[m.name] = (t_min, "the estimator's shortest record already meets the target")
+        else:
+            solved[m.name] = shortest_time(lambda T, m=m, k=k: k.bound(m, T, sensor)[0], t_min, si, 4.0, 1e-4)
+    ok = {n: v for n, v in solved.items() if v[0] is not None}
+    if not ok:
+        entry.update({"observation_s": None, "reason": "; ".join(f"{n}: {v[1]}" for n, v in solved.items())
+                      or "; ".join(f"{n}: {v}" for n, v in skipped.items())})
+        return entry
+    best = min(ok, key=lambda n: ok[n][0])
+    T, note = ok[best]
+    m = next(x for x in models if x.name == best)
+    sig, how = kind(m.kind).bound(m, T, sensor)
+    entry.update({"instrument": best, "observation_s": T, "samples_per_instrument": samples(T, sensor.rate_hz),
+                  "planned_sigma": sig / TARGETS[name][1], "note": note or None, "limited_by": how,
+                  "per_instrument_observation_s": {n: v[0] for n, v in solved.items()}})
+    return entry
 
 
 def _finite(x):
@@ -310,14 +331,14 @@ def _sensitivity(planner, quantity, si, T, noise_factors, rate_factors):
 
 def _counting(planner, quantity, si):
     """Quet's counting for the same target: gyroscopes only (a period count); σ ∝ 1/T."""
-    if not any(m.kind == "gyro" for m in planner.models):
+    if not any(kind(m.kind).CLASSIC == "gyro" for m in planner.models):
         return {"observation_s": None, "reason": "no gyroscope: counting whole swings times a period, and the "
                                                  "Foucault rate is not a period"}
     T, note = planner.solve(quantity, si, counting=True)
     d = {"observation_s": T, "reason": note or None,
          "law": "sigma(T_swing) = T_swing / (N sqrt 3), N = T / T_swing swings: sigma ~ 1/T",
-         "instruments": [m.name for m in planner.models if m.kind == "gyro"]}
-    if any(m.kind == "pendulum" for m in planner.models):
+         "instruments": [m.name for m in planner.models if kind(m.kind).CLASSIC == "gyro"]}
+    if any(kind(m.kind).CLASSIC == "pendulum" for m in planner.models):
         d["left_out"] = "the pendulum (its Foucault rate is not a period to count)"
     if T is not None:
         d["years"] = T / YEAR_S

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.instruments.channels import ANGLE
 
 TIME_COLUMN = "time_s"
 
@@ -30,9 +31,8 @@ def seconds_per_unit(time_unit) -> float:
     k = TIME_UNITS[time_unit]
     return float(k) if time_unit in MULTIPLIED_UNITS else 1.0 / k
 
-#: ``--angle-unit``: the channels read as angles (rad, or deg converted to rad). Not ``x_east`` /
-#: ``y_north`` (m) nor ``spin_rate`` (rad/s, a rate).
-ANGLE_CHANNELS = ("angle", "outer_angle", "inner_angle", "deflection_east", "deflection_north")
+#: ``--angle-unit``: the unit of the channels whose observation says they are angles
+#: (:func:`channel_meanings`; rad, or deg converted to rad). Not positions (m) nor rates (rad/s).
 ANGLE_UNITS = ("rad", "deg")
 
 #: ``--separator``: the CSV field separators; ``None`` sniffs it from the header line.
@@ -54,7 +54,7 @@ class TableOptions:
         Unit of a numeric time column (``--time-unit``, a key of :data:`TIME_UNITS`); None: seconds,
         or the unit a Parquet ``timestamp``/``duration`` column carries.
     angle_unit : str
-        ``rad`` or ``deg`` (``--angle-unit``): unit of the :data:`ANGLE_CHANNELS` columns.
+        ``rad`` or ``deg`` (``--angle-unit``): unit of the angle columns (:func:`channel_meanings`).
     columns : tuple of (str, str)
         ``(NAME, SOURCE)`` pairs (``--column NAME=SOURCE``): the table's column SOURCE is read as the
         channel column NAME.
@@ -308,16 +308,41 @@ def _read_parquet(path, field, time_source, time_unit):
     return names, arrays, notes
 
 
-def load_table(path, field="--data", options=None) -> tuple:
+def channel_meanings(insts=None) -> dict:
+    """{column: meaning} of a table's channel columns, as the observations declare them
+    (:meth:`~gyro_instrument.instruments.observation.Observation.table_channels`: ``angle``, ``rate``,
+    ``position``). ``insts`` (name -> instrument): the columns ``<name>.<channel>`` of the scene's
+    instruments; None: by bare channel name over every registered instrument type, a name that is an
+    angle for one type and something else for another left out (no scene says which)."""
+    if insts is not None:
+        return {f"{n}.{c.name}": c.meaning for n, i in insts.items()
+                for c in i.OBSERVATION.table_channels(type(i))}
+    from gyro_instrument.instruments import REGISTRY
+    seen = {}
+    for cls in REGISTRY.values():
+        for c in cls.OBSERVATION.table_channels(cls):
+            seen.setdefault(c.name, set()).add(c.meaning)
+    return {name: next(iter(m)) for name, m in seen.items() if len(m) == 1}
+
+
+def _meaning(meanings, column) -> str | None:
+    """The meaning of ``column`` (``<instrument>.<channel>``) in :func:`channel_meanings`' dict."""
+    if column in meanings:
+        return meanings[column]
+    return meanings.get(column.split(".", 1)[1]) if "." in column else None
+
+
+def load_table(path, field="--data", options=None, meanings=None) -> tuple:
     """A CSV or Parquet table read as ``options`` say (:class:`TableOptions`; default: ``time_s`` in
-    seconds, angles in radians, CSV separator sniffed).
+    seconds, angles in radians, CSV separator sniffed). ``meanings``: :func:`channel_meanings` of the
+    scene's instruments (default: of every registered type), which says which columns are angles.
 
     Returns
     -------
     cols : dict
         column name -> float ndarray (NaN for empty or ``nan`` cells), in file order, with the time
         column as ``time_s`` in seconds, ``--column`` sources under their channel names and the
-        :data:`ANGLE_CHANNELS` columns in radians.
+        angle columns (:func:`channel_meanings`) in radians.
     notes : list of str
         What was converted (separator, decimal commas, units, renamed columns, a timestamp's origin).
 
@@ -373,7 +398,8 @@ def load_table(path, field="--data", options=None) -> tuple:
         notes.append(f"{opts.time_column} in {opts.time_unit}: converted to s"
                      + (" from the earliest sample" if opts.time_unit == "day" else ""))
     if opts.angle_unit == "deg":
-        converted = [c for c in cols if "." in c and c.split(".", 1)[1] in ANGLE_CHANNELS]
+        meanings = channel_meanings() if meanings is None else meanings
+        converted = [c for c in cols if "." in c and _meaning(meanings, c) == ANGLE]
         for c in converted:
             cols[c] = np.radians(cols[c])
         notes.append("angles in degrees converted to rad: " + (", ".join(converted) or "no angle column"))

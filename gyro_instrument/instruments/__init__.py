@@ -2,9 +2,13 @@
 
 ``REGISTRY`` maps the ``type`` used in scene files to the instrument class; everything else the
 package needs to know about a type is a declared member of the class (the protocol in
-:mod:`.base`). A new instrument is one class and one :func:`register` call (docs/extending.md).
+:mod:`.base`). A new instrument is one class, found through an entry point of the group
+``gyro_instrument.instruments`` (:mod:`gyro_instrument.core.plugins`; the shipped ones are entry points
+of it too, setup.py) or registered with :func:`register` (docs/extending.md).
 """
 
+from gyro_instrument.core import plugins
+from gyro_instrument.instruments import measurement
 from gyro_instrument.instruments.base import DirectingModel, Instrument
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.gimbal import GimbalGyroscope
@@ -27,8 +31,9 @@ def register(cls) -> type:
         When ``cls`` is not an Instrument subclass, its ``type_name`` is empty or taken, or its
         protocol is incomplete: no ``SIMULATOR_NODE``, ``JOINTS`` that do not fit its observation's
         joint layout (:meth:`~.observation.Observation.layout_of`: the measured channels, the joints
-        derived from them, a rotor joint if it has one), or a measured channel whose true value is not a
-        column.
+        derived from them, a rotor joint if it has one), a measured channel whose true value is not a
+        column, or a measurement kind its observation names that is not registered or not complete
+        (:func:`.measurement.observation_problem`).
     """
     if not (isinstance(cls, type) and issubclass(cls, Instrument)):
         raise ValueError(f"register: {cls!r} is not an Instrument subclass")
@@ -48,6 +53,10 @@ def register(cls) -> type:
     if not set(obs.true_columns(cls)) <= columns:
         raise ValueError(f"register: {name} MEASURED_CHANNELS {cls.MEASURED_CHANNELS} are read from the columns "
                          f"{obs.true_columns(cls)} ({obs.__name__}), which must be columns ({', '.join(sorted(columns))})")
+    # the kinds' engines are in the estimator layer: checked here once loaded, else when they load
+    problem = measurement.observation_problem(obs) if measurement.loaded() else None
+    if problem:
+        raise ValueError(f"register: {name} {problem}")
     REGISTRY[name] = cls
     return cls
 
@@ -67,8 +76,10 @@ def simulator_kinds() -> dict:
     return out
 
 
-for _cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope):
-    register(_cls)
+#: The shipped instrument types, in registry order (also entry points of ``gyro_instrument.instruments``).
+SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope)
+plugins.discover("instruments", register, lambda c: REGISTRY.get(getattr(c, "type_name", None)) is c, SHIPPED,
+                 key="type_name")
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
            "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RotorObservation",

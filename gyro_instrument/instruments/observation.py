@@ -6,16 +6,20 @@ tables, the views, the bench) asks it and never asks whether the instrument is a
 directing model it has. An observation declares
 
 =============================  ====================================================================
-``channels``                   the measured channels (:class:`Channel`: name, unit)
+``channels``                   the measured channels (:class:`Channel`: name, unit, meaning: angle,
+                               rate or position); ``table_channels`` every channel a table may give
 ``layout``                     the ``sensor_msgs/JointState`` layout (:class:`JointLayout`), one
                                definition used to write rows (:meth:`Observation.joint_rows`) and to
                                read them back (:meth:`Observation.joint_record`)
 ``spin_channel``               the rotor's spin channel (rad/s), or None
 ``sensor_inputs``              the sensor draws: record key, true values, angle or rate
-``MEASUREMENT``                what a record gives: None (no Earth rate), :data:`SWING_RATE` (a swing
-                               about a directing line: y = n s(γ)) or :data:`PLANE_RATE` (a swing
-                               plane's precession: k = n sin γ); the estimator's and planner's
-                               engine for that kind does the fit, the observation supplies its laws
+``MEASUREMENT``,                the measurement kinds a record gives (names of registered kinds,
+``ALSO_MEASURES``              :mod:`.measurement`): None (no Earth rate), :data:`SWING_RATE` (a swing
+                               about a directing line: y = n s(γ)), :data:`PLANE_RATE` (a swing
+                               plane's precession: k = n sin γ), an azimuth beside a swing; the
+                               kind's engine, probe and bound do the fit, the observation supplies
+                               its laws
+``companions``                 {record key: instrument} of the other records its kinds read
 ``applicable_corrections``     which systematic corrections apply to its record
 =============================  ====================================================================
 
@@ -40,6 +44,7 @@ import numpy as np
 from gyro_instrument.core.effect import FRAME_RATE, RESTORING_LAW, SINE_LAW
 from gyro_instrument.effects import REGISTRY, FiniteAmplitude, SpinDecay
 from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
+from gyro_instrument.instruments.channels import ANGLE, POSITION, RATE, Channel, JointLayout  # noqa: F401
 
 #: Measurement kinds (the ``kind`` of the estimator's ``RateMeasurement``): a gyroscope's swing about
 #: a directing line, y = K / (gain ρ) = n s(γ) (Quet 1853 sec. 4 §1 eq. 9); a pendulum's swing-plane
@@ -65,53 +70,6 @@ FINITE_AMPLITUDE_CORRECTIONS = frozenset((AMPLITUDE_CORRECTION, ELLIPSE_CORRECTI
 
 #: The rotor's spin channel (rad/s) of the shipped rotor instruments.
 SPIN_RATE = "spin_rate"
-
-
-@dataclass(frozen=True)
-class Channel:
-    """One measured channel: its record key and unit (``rad`` for angles, ``rad/s`` for a spin)."""
-
-    name: str
-    unit: str
-
-
-@dataclass(frozen=True)
-class JointLayout:
-    """The ``sensor_msgs/JointState`` layout of an instrument: one definition to write and to read.
-
-    Attributes
-    ----------
-    names : tuple of str
-        Joint names in order (``Instrument.JOINTS``; prefixed ``<instrument>/`` on the wire).
-    measured : tuple of str
-        Record keys of the leading joints: position = the measured angle (rad), velocity = its
-        centred difference.
-    derived : tuple of str
-        Joints after those, computed by the observation from the measured angles
-        (:meth:`Observation.derived_positions`), velocity their centred difference.
-    rotor : str or None
-        The spin channel of a last, rotor joint (position = integrated true spin, rad; velocity =
-        the measured spin, rad/s), or None (no rotor: a pendulum, a torsion pendulum).
-    """
-
-    names: tuple
-    measured: tuple
-    derived: tuple = ()
-    rotor: str | None = None
-
-    def __post_init__(self):
-        need = len(self.measured) + len(self.derived) + (self.rotor is not None)
-        if len(self.names) != need:
-            parts = [f"{len(self.measured)} measured channels' joints"] + [", ".join(self.derived)] * bool(self.derived) \
-                + ["one rotor joint"] * (self.rotor is not None)
-            raise ValueError(f"JOINTS {self.names} must be {need}: the " + ", then ".join(parts))
-
-    def record(self, position, velocity) -> dict:
-        """The measured channels (and the spin) from joint arrays (m, len(names)): the reading half."""
-        rec = {key: position[:, j].copy() for j, key in enumerate(self.measured)}
-        if self.rotor is not None:
-            rec[self.rotor] = velocity[:, -1].copy()
-        return rec
 
 
 @dataclass(frozen=True)
@@ -166,8 +124,21 @@ class Observation:
         self.name = inst.name
         self.type_name = inst.type_name
         self.layout = self.layout_of(type(inst))
-        spin = () if self.layout.rotor is None else (Channel(self.layout.rotor, "rad/s"),)
-        self.channels = tuple(Channel(c, "rad") for c in self.layout.measured) + spin
+        self.channels = self.channels_of(type(inst))
+
+    @classmethod
+    def channels_of(cls, inst_cls) -> tuple:
+        """The measured channels (:class:`Channel`) of the instrument class ``inst_cls``: its angles,
+        then the spin (a rate) when it has a rotor."""
+        layout = cls.layout_of(inst_cls)
+        spin = () if layout.rotor is None else (Channel(layout.rotor, "rad/s", RATE),)
+        return tuple(Channel(c, "rad", ANGLE) for c in layout.measured) + spin
+
+    @classmethod
+    def table_channels(cls, inst_cls) -> tuple:
+        """Every channel a table may give the record in (:class:`Channel`): the measured ones and those
+        the observation reads beside them (a swing's ``angle``, a bob's positions)."""
+        return cls.channels_of(inst_cls)
 
     # ------------------------------------------------------------------ sensor draws
     @property
@@ -346,6 +317,11 @@ class SwingRate(RotorObservation):
         """The swinging channel's joint and the rotor."""
         return (self.layout.names[self.layout.measured.index(self.angle_channel)], self.layout.names[-1])
 
+    @classmethod
+    def table_channels(cls, inst_cls) -> tuple:
+        """The measured channels, ``angle`` (the swinging one) and ``spin_rate``."""
+        return super().table_channels(inst_cls) + (Channel("angle", "rad", ANGLE), Channel(SPIN_RATE, "rad/s", RATE))
+
     def table_columns(self) -> tuple:
         """The swing angle, with the spin unless the scene states a constant one."""
         if self.model.spin_rate_rad_s:        # spin_rate optional: the scene's constant spin without it
@@ -453,6 +429,11 @@ class PlanePrecession(Observation):
 
     def required_joints(self) -> tuple:
         return self.layout.names[:len(self.layout.measured)]
+
+    @classmethod
+    def table_channels(cls, inst_cls) -> tuple:
+        """The deflections (rad) and the bob's positions (m)."""
+        return super().table_channels(inst_cls) + tuple(Channel(c, "m", POSITION) for c in cls.POSITION_COLUMNS)
 
     def table_columns(self) -> tuple:
         """Positions (m) or deflections (rad)."""

@@ -98,7 +98,8 @@ class SphericalPendulum(SwingDynamics, Instrument):
     summary = "Foucault pendulum, point bob, any launch and amplitude (Quet sec. 2)"
     PARAMS = (
         Param("length_m", default=67.0, low=0.0, high=1.0e4, open_low=True, doc="rod length l, m"),
-        Param("initial_deflection_deg", default=2.0, low=0.0, high=180.0, doc="θ0 from the downward vertical"),
+        Param("initial_deflection_deg", default=2.0, low=0.0, high=180.0, open_high=True,
+              doc="θ0 from the downward vertical (180 is the inverted bob: no swing)"),
         Param("initial_azimuth_deg", default=90.0, low=-360.0, high=360.0,
               doc="compass azimuth of the release point (0 north, 90 east)"),
         Param("radial_speed_m_s", default=0.0, low=-1.0e3, high=1.0e3, doc="launch speed away from the vertical"),

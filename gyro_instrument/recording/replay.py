@@ -56,7 +56,7 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     if scene is not None or topics or overrides:
         from gyro_instrument.recording.foreign import replay_foreign
         return replay_foreign(path, scene, list(overrides), list(topics))
-    from gyro_instrument.estimators.pipeline import estimate_records, estimator_instruments
+    from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
     from gyro_instrument.recording.bag_samples import samples_from_bag
     from gyro_instrument.recording.joints import records_from_joints
     from gyro_instrument.scenes import build_instruments, scene_from_data
@@ -73,7 +73,7 @@ def replay_bag(path, scene=None, overrides=(), topics=()) -> dict:
     # swing), in the scene's instrument order, whatever order the bag's topics first appear in
     samples = {n: samples[n] for n in estimator_instruments(insts) if n in samples and len(samples[n][0]) >= 3}
     check_companions(insts, samples, path)
-    result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
+    result = estimate_records(scene, estimated_instruments(insts, samples), records_from_joints(insts, samples))
     result = to_jsonable(result)
     if damaged:
         result["damaged"] = to_jsonable(damaged)

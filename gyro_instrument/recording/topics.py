@@ -9,7 +9,6 @@ No rclpy here: the recorder, the player, replay, the bench and the views read th
 
 from dataclasses import dataclass
 
-from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 CLOCK = "clock"
 CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
@@ -154,15 +153,25 @@ def heading_frame(instrument) -> str:
     return f"{instrument}_scale"
 
 
+def live_kinds(inst) -> list:
+    """The measurement kinds of the instrument ``inst`` that the estimator publishes live (their
+    ``LIVE``: ``heading``), registered ones only; needs the instrument, not its class."""
+    from gyro_instrument.instruments.measurement import declared_kinds, kind
+    if isinstance(inst, type):
+        return []
+    found = [kind(k) for k in declared_kinds(inst.observation())]
+    return [k for k in found if k is not None and k.LIVE is not None]
+
+
 def measures_azimuth(inst) -> bool:
-    """True when the instrument's observation measures an azimuth (a horizontal gyroscope with its
-    rotor on: ``ALSO_MEASURES`` holds ``AZIMUTH``); needs the instrument, not its class."""
-    return not isinstance(inst, type) and AZIMUTH in inst.observation().ALSO_MEASURES
+    """True when the instrument's observation measures a heading the estimator publishes (a kind whose
+    ``LIVE`` is ``heading``: a horizontal gyroscope with its rotor on); needs the instrument, not its class."""
+    return any(k.LIVE == "heading" for k in live_kinds(inst))
 
 
 def estimator_topics(insts) -> dict:
     """The estimator's topics for these instruments, with their types: :data:`ESTIMATOR_TOPICS` and
-    the heading of every instrument that measures an azimuth (:func:`heading_topic`)."""
+    the heading of every instrument that measures one (:func:`heading_topic`)."""
     out = dict(ESTIMATOR_TOPICS)
     out.update({heading_topic(name): IMU_TYPE for name, inst in insts.items() if measures_azimuth(inst)})
     return out

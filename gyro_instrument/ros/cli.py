@@ -54,6 +54,7 @@ def _command(core_cli, argv):
         parser.error(f"--ros-args is only for 'run' (the ROS suite), not '{args.command}'")
     if args.command != "run":
         return core_cli.run_command(args)
+    core_cli.report_plugins()
     from gyro_instrument import api
     bag_format = None
     if args.namespace:

@@ -3,12 +3,14 @@
 (:class:`~gyro_instrument.recording.joint_buffer.JointBuffer`) and calls the core estimator; run
 alone it publishes once every expected sample has arrived.
 
-Heading (issue 24): for each horizontal gyroscope (and its rotor-off companion) a
-:class:`~gyro_instrument.estimators.north_live.NorthTracker` is given the tail of the record about
-four times per swing; at each new reversal point the live north (the Schuler mean so far) goes out
-as ``sensor_msgs/Imu`` on ``<gyro>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`)
-and, with parameter ``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's ``north`` block (the
-fit) replaces it. The work per joint message is bounded: a tail of 1.75 swings every quarter swing.
+Live values (issue 24, issue 35): each measurement kind that declares one (``LIVE``) gives a tracker
+per instrument (``tracker(observation, scene, companions)``,
+:class:`~gyro_instrument.instruments.measurement.LiveTracker`), which is given the tail of the
+records it reads when due. A ``heading`` (the azimuth kind: the Schuler mean at each new reversal
+point, :mod:`~gyro_instrument.estimators.north_live`) goes out as ``sensor_msgs/Imu`` on
+``<instrument>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`) and, with parameter
+``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's block (the fit) replaces it. The work per
+joint message is bounded: for the azimuth, a tail of 1.75 swings every quarter swing.
 """
 
 import math
@@ -20,13 +22,12 @@ from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.estimators.heading import imu_fields
-from gyro_instrument.estimators.north_live import NorthTracker, live_north
-from gyro_instrument.estimators.pipeline import estimate_records, estimator_instruments
+from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
 from gyro_instrument.recording.nmea import NmeaUdpSender
 from gyro_instrument.recording.topics import (CLOCK, DIAGNOSTICS, estimator_topics, heading_frame, heading_topic,
-                                              joint_names, joint_topic, measures_azimuth)
+                                              joint_names, joint_topic, live_kinds)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.ros.nodes.base import LATCHED, RELIABLE_ALL, STEADY, SceneNode
@@ -55,9 +56,9 @@ class EstimatorNode(SceneNode):
         self._last_input = None
         self.runs = 0
         self.sent = {}          # messages published per (resolved) topic
-        self.trackers = {}      # instrument -> NorthTracker (horizontal gyroscopes and their rotor-off swings)
-        self.tape_of = {}       # horizontal gyroscope -> its rotor-off companion
-        self._due = {}          # instrument -> samples at which its tracker is next given the tail
+        self.trackers = {}      # instrument -> its kind's LiveTracker (a horizontal gyroscope's north)
+        self.feeds = {}         # instrument whose record a tracker reads -> the instruments of those trackers
+        self._due = {}          # (tracker's instrument, record's) -> samples at which it is next given the tail
         self.nmea = None
         if self.load():
             self.prepare()
@@ -90,21 +91,21 @@ class EstimatorNode(SceneNode):
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
 
     def _prepare_heading(self) -> None:
-        """A tracker per horizontal gyroscope and per rotor-off companion, and the NMEA sender."""
-        sigma = self.scene.sensor.get("noise_rad") or None
+        """A live tracker per instrument whose kind publishes live (``LIVE``), and the NMEA sender."""
         for name, inst in self.insts.items():
-            if not measures_azimuth(inst) or name not in self.buffers:
+            if name not in self.buffers:
                 continue
-            swing = inst.predictions().get("swing_duration_small_s", math.inf)
-            if not (math.isfinite(swing) and swing > 0):
-                continue
-            self.trackers[name] = NorthTracker(swing, sigma)
-            other = inst.observation().companions().get("rotor_off")
-            if other in self.buffers:
-                self.tape_of[name] = other
-                self.trackers[other] = NorthTracker(inst.tape_predictions()["rotor_off_swing_duration_s"], sigma)
-        for name, tr in self.trackers.items():
-            self._due[name] = self._every(tr)
+            obs = inst.observation()
+            companions = {key: other for key, other in obs.companions().items() if other in self.buffers}
+            for k in live_kinds(inst):
+                tr = k.tracker(obs, self.scene, companions)
+                if tr is not None:
+                    self.trackers[name] = tr
+                    break
+        for owner, tr in self.trackers.items():
+            for read in tr.reads:
+                self.feeds.setdefault(read, []).append(owner)
+                self._due[(owner, read)] = self._every(tr, read)
         target = str(self.value("nmea_udp", "") or "")
         if target and self.trackers:
             try:
@@ -112,28 +113,25 @@ class EstimatorNode(SceneNode):
             except SceneError as exc:
                 self.get_logger().error(f"{exc}; no NMEA sentences are sent")
 
-    def _every(self, tracker) -> int:
-        """Samples between two looks at a tracker's tail: a quarter swing (at least 1)."""
-        return max(int(0.25 * tracker.swing_s * self.scene.sample_rate_hz), 1)
+    def _every(self, tracker, name) -> int:
+        """Samples between two looks at ``name``'s tail (at least 1)."""
+        return max(int(tracker.every_s_of(name) * self.scene.sample_rate_hz), 1)
 
     def _track(self, name) -> None:
-        """Give ``name``'s tracker the tail of its record when due; publish the live heading of the
-        horizontal gyroscope(s) it serves when it found a new reversal point."""
-        buf, tr = self.buffers[name], self.trackers[name]
-        if len(buf) < self._due[name]:
-            return
-        self._due[name] = len(buf) + self._every(tr)
-        t_ns, pos, vel = buf.arrays()
-        k = max(int(t_ns.size - tr.window_s() * self.scene.sample_rate_hz) - 1, 0)
-        rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
-        if not tr.update(rec["t"], -rec["angle"]):
-            return
-        for gyro in [g for g in self.trackers if g == name or self.tape_of.get(g) == name]:
-            if gyro in self.tape_of.values():
+        """Give the trackers reading ``name`` its tail when due; publish the live value of a tracker
+        that has a new one."""
+        buf = self.buffers[name]
+        for owner in self.feeds[name]:
+            tr = self.trackers[owner]
+            if len(buf) < self._due[(owner, name)]:
                 continue
-            est = live_north(self.trackers[gyro], self.trackers.get(self.tape_of.get(gyro)))
-            if est is not None:
-                self._publish_heading(gyro, int(t_ns[-1]), est.mount_azimuth_rad, est.sigma_rad)
+            self._due[(owner, name)] = len(buf) + self._every(tr, name)
+            t_ns, pos, vel = buf.arrays()
+            k = max(int(t_ns.size - tr.window_s_of(name) * self.scene.sample_rate_hz) - 1, 0)
+            rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+            value = tr.update(name, rec)
+            if value is not None:
+                self._publish_heading(owner, int(t_ns[-1]), *value)
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
         """One ``sensor_msgs/Imu`` on ``<name>/heading`` (and a ``$HEHDT`` for the first gyroscope)."""
@@ -152,15 +150,11 @@ class EstimatorNode(SceneNode):
         self.sent[pub.topic_name] = self.sent.get(pub.topic_name, 0) + 1
 
     def _final_headings(self, r, t) -> None:
-        """The final estimate's heading per horizontal gyroscope: its ``north`` block (the fit), or
-        not provided (Imu.msg: covariance element 0 = −1) when it has none."""
-        for name in self.trackers:
-            if name in self.tape_of.values():
-                continue
-            block = (r.get("instruments", {}).get(name) or {}).get("north") or {}
-            deg, sig = block.get("mount_azimuth_deg"), block.get("sigma_arcsec")
-            self._publish_heading(name, t, None if deg is None else math.radians(deg),
-                                  None if sig is None or deg is None else math.radians(sig / 3600.0))
+        """The final estimate's live values per tracker: from the instrument's entry (the azimuth: its
+        ``north`` block, the fit), or not provided (Imu.msg: covariance element 0 = −1) when it has none."""
+        for name, tr in self.trackers.items():
+            value = tr.final(r.get("instruments", {}).get(name)) or (None, None)
+            self._publish_heading(name, t, *value)
 
     def teardown(self) -> None:
         for t in self.timers_:
@@ -172,7 +166,7 @@ class EstimatorNode(SceneNode):
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
         self._last_input = None
-        self.trackers, self.tape_of, self._due = {}, {}, {}
+        self.trackers, self.feeds, self._due = {}, {}, {}
         if self.nmea is not None:
             self.nmea.close()
             self.nmea = None
@@ -190,9 +184,9 @@ class EstimatorNode(SceneNode):
         self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
         self.buffers = {name: new for name, (_, new) in split.items()}
         self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
-        for name, tr in self.trackers.items():
-            self.trackers[name] = NorthTracker(tr.swing_s, tr.noise_sigma_rad)
-            self._due[name] = len(self.buffers[name]) + self._every(tr)
+        self.trackers = {name: tr.restarted() for name, tr in self.trackers.items()}
+        for (owner, read) in self._due:
+            self._due[(owner, read)] = len(self.buffers[read]) + self._every(self.trackers[owner], read)
 
     def restart(self) -> None:
         super().restart()
@@ -294,7 +288,7 @@ class EstimatorNode(SceneNode):
         self._last_input = time.monotonic()
         if buf.layout.matches(data):
             buf.add_raw(data)
-            if name in self.trackers:
+            if name in self.feeds:
                 self._track(name)
             if self.standalone and len(buf) >= self.expected:
                 self._check_complete()
@@ -313,7 +307,7 @@ class EstimatorNode(SceneNode):
             self._reject(name, f"joints {list(names)} do not match {list(expected)}")
             return
         self.buffers[name].add(m.stamp_to_release_ns(msg.header.stamp), list(msg.position), list(msg.velocity))
-        if name in self.trackers:
+        if name in self.feeds:
             self._track(name)
         if self.standalone and len(self.buffers[name]) >= self.expected:
             self._check_complete()
@@ -324,7 +318,7 @@ class EstimatorNode(SceneNode):
             return None
         samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
-        return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
+        return estimate_records(self.scene, estimated_instruments(self.insts, samples), recs)
 
     def stamp_ns(self) -> int:
         """Stamp of an estimate: the last sample it used, else the last clock tick (sim time), else 0."""
