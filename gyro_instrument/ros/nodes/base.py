@@ -11,6 +11,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.recording.qos import profile, replay_offer
 from gyro_instrument.recording.topics import resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
@@ -30,6 +31,39 @@ STEADY = RclClock(clock_type=ClockType.STEADY_TIME)
 #: samples (or messages) a node run alone publishes per timer tick at real-time factor 0
 FLOW_BATCH = 200
 ACK_TIMEOUT = Duration(seconds=5)
+
+
+def qos_dict(qos) -> dict:
+    """An rclpy ``QoSProfile`` as :func:`gyro_instrument.recording.qos.profile` (what a bag records)."""
+    history = {HistoryPolicy.KEEP_LAST: "keep_last", HistoryPolicy.KEEP_ALL: "keep_all"}.get(qos.history, "unknown")
+    return profile(history=history, depth=qos.depth if history == "keep_last" else 0,
+                   reliability={ReliabilityPolicy.RELIABLE: "reliable", ReliabilityPolicy.BEST_EFFORT: "best_effort"}
+                   .get(qos.reliability, "unknown"),
+                   durability={DurabilityPolicy.TRANSIENT_LOCAL: "transient_local",
+                               DurabilityPolicy.VOLATILE: "volatile"}.get(qos.durability, "unknown"))
+
+
+def qos_text(qos) -> str:
+    """A QoS profile in a log line: ``RELIABLE KEEP_LAST 10 VOLATILE`` (``RELIABLE VOLATILE`` for an
+    endpoint seen in the graph: its history is not discovered)."""
+    d = qos_dict(qos)
+    hist = f"KEEP_LAST {d['depth']} " if d["history"] == "keep_last" else "KEEP_ALL " if d["history"] == "keep_all" \
+        else ""          # a discovered endpoint's history is not known (DDS does not send it)
+    return f"{d['reliability'].upper()} {hist}{d['durability'].upper()}"
+
+
+def replay_qos(profiles) -> QoSProfile:
+    """The QoS the player offers for a topic recorded with ``profiles`` (:func:`replay_offer`: the
+    recorded reliability and durability): a TRANSIENT_LOCAL topic KEEP_LAST with the recorded depth
+    (what a late subscriber gets; the player waits for each message's acknowledgement before the
+    next, so a reliable subscriber loses none), any other KEEP_ALL (flow control: a slow RELIABLE
+    subscriber makes the player wait, never drop)."""
+    offer = replay_offer(profiles)
+    rel = ReliabilityPolicy.RELIABLE if offer["reliability"] == "reliable" else ReliabilityPolicy.BEST_EFFORT
+    if offer["durability"] == "transient_local":
+        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=offer["depth"], reliability=rel,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=rel, durability=DurabilityPolicy.VOLATILE)
 
 
 def acked(node, pubs) -> None:
