@@ -90,6 +90,21 @@ def stop(p, sig=signal.SIGINT, timeout=30):
     return out
 
 
+def spin_until(node, cond, timeout):
+    from rclpy.executors import SingleThreadedExecutor
+    ex = SingleThreadedExecutor(context=node.context)
+    ex.add_node(node)
+    t0 = time.monotonic()
+    try:
+        while not cond():
+            ex.spin_once(timeout_sec=0.05)
+            if time.monotonic() - t0 > timeout:
+                return False
+        return True
+    finally:
+        ex.remove_node(node)
+
+
 def joint_bag(path, n):
     """A bag of ``n`` JointStates on /pendulum/joint_states at 20 Hz (no clock: the player adds it)."""
     from rclpy.serialization import serialize_message
@@ -145,3 +160,55 @@ def test_player_waits_for_a_sleeping_and_a_stopped_subscriber(tmp_path):
         assert f"/{name} on /pendulum/joint_states (RELIABLE VOLATILE) {N_BACKPRESSURE} of {N_BACKPRESSURE} sent " \
                f"while it was matched, all acknowledged" in out, out
     assert "a KEEP_LAST one only those it took before its queue overflowed" in out
+
+
+# ---- 3. bags keep their QoS ------------------------------------------------------------------------
+
+def _rosbags_qos(path):
+    """{topic: [(reliability, durability, history, depth)]} as rosbags reads a bag's QoS (a bag
+    directory: metadata.yaml; a bare .mcap: the channels' offered_qos_profiles)."""
+    from rosbags.highlevel import AnyReader
+    out = {}
+    with AnyReader([Path(path)]) as reader:
+        for c in reader.connections:
+            out[c.topic] = [(q.reliability.name, q.durability.name, q.history.name, q.depth)
+                            for q in c.ext.offered_qos_profiles]
+    return out
+
+
+def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp_path, ctx):
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import Imu
+    from std_msgs.msg import Float64
+    from gyro_instrument.ros.suite import run_suite
+    from gyro_instrument.recording.bag_layout import bag_files
+    from gyro_instrument.recording.mcap_io import read_messages
+    d = tmp_path / "q"
+    run_suite("quet_paris", ["seed=5"], 60.0, f"{d}/")
+    latched = [("RELIABLE", "TRANSIENT_LOCAL", "KEEP_LAST", 1)]       # the estimator's LATCHED profile
+    samples = [("RELIABLE", "VOLATILE", "KEEP_LAST", 1000)]           # the suite's RELIABLE_1000
+    for path in (d, d / "q_0.mcap"):           # metadata.yaml, and the file's channels
+        qos = _rosbags_qos(path)
+        assert qos["/estimator/latitude_rad"] == latched and qos["/gyro_horizontal/heading"] == latched, qos
+        assert qos["/diagnostics"] == latched and qos["/pendulum/joint_states"] == samples, qos
+        assert qos["/clock"] == samples, qos
+    last = {tp: data for f in bag_files(str(d))[0] for tp, _, _, data in read_messages(f)}
+    # played back: a TRANSIENT_LOCAL subscriber that starts after the estimate was played gets it
+    player = start("player", "-p", f"bag:={d}", "-p", "real_time_factor:=0", "-p", "min_subscribers:=0",
+                   "-p", "loop:=true")
+    try:
+        head = read_until(player, "looping", 60)
+        assert "looping" in head, head
+        node = Node("late_navigator", context=ctx)
+        tl = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        got = {}
+        node.create_subscription(Float64, "/estimator/latitude_rad", lambda msg: got.setdefault("lat", msg), tl)
+        node.create_subscription(Imu, "/gyro_horizontal/heading", lambda msg: got.setdefault("heading", msg), tl)
+        assert spin_until(node, lambda: len(got) == 2, 20), got
+    finally:
+        out = stop(player)
+    from rclpy.serialization import deserialize_message
+    assert got["lat"].data == deserialize_message(last["/estimator/latitude_rad"], Float64).data
+    assert got["heading"].orientation == deserialize_message(last["/gyro_horizontal/heading"], Imu).orientation
+    assert "incompatible" not in out.lower(), out

@@ -16,11 +16,13 @@ from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
-from gyro_instrument.recording.mcap_io import DiskFull, qos_yaml
+from gyro_instrument.recording.mcap_io import DiskFull
+from gyro_instrument.recording.qos import profiles_yaml
 from gyro_instrument.recording.topics import MARKER_TYPE, estimator_topics, scene_topics, sparse_topics, visual_every
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import RELIABLE_ALL, STEADY, SceneNode
+from gyro_instrument.ros.nodes.base import (LATCHED, PUBLISH_ALL, RELIABLE_1000, RELIABLE_ALL, STEADY, SceneNode,
+                                            qos_dict)
 
 
 class RecorderNode(SceneNode):
@@ -71,6 +73,7 @@ class RecorderNode(SceneNode):
         self._topic_run = {}         # topic -> run index its messages belong to
         self.run_index = 0
         self._old = {}               # run index -> (writer, counts) of a run closed by a restart
+        self._offered = {}           # topic -> offered_qos_profiles text recorded for it
         if self.load():
             self.prepare()
 
@@ -156,10 +159,13 @@ class RecorderNode(SceneNode):
         self.sample_topics = set()
         self.rank = {}
         self._topic_types = {}
+        self._known_qos = {}
         for topic in wanted:
             name = self.resolve_topic_name(topic)         # namespace and remapping applied
-            self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
             self._topic_types[name] = types[topic]
+            # what this package's publisher of the topic offers (history and depth are not discovered)
+            self._known_qos[name] = qos_dict(LATCHED if topic in estimates else
+                                             PUBLISH_ALL if self.reorder else RELIABLE_1000)
             self.counts[name] = 0
             self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
             if types[topic] == MARKER_TYPE:
@@ -222,9 +228,32 @@ class RecorderNode(SceneNode):
         if self._seq % 64 == 0 or topic not in self.sample_topics:
             self._flush(self._watermark())
 
+    def _offered_qos(self, topic) -> str:
+        """``offered_qos_profiles`` of ``topic`` as rosbag2 records them: one profile per publisher the
+        graph shows (reliability and durability as discovered; history and depth, which DDS does not
+        discover, from what this package's publisher of the topic offers), or that publisher's
+        profile when the graph shows none."""
+        known = self._known_qos[topic]
+        profiles = []
+        for info in self.get_publishers_info_by_topic(topic):
+            q = qos_dict(info.qos_profile)
+            if q["history"] == "unknown":
+                q["history"], q["depth"] = known["history"], known["depth"]
+            profiles.append(q)
+        return profiles_yaml(profiles or [known])
+
+    def _ensure_topic(self, topic) -> None:
+        """Register ``topic`` in the current file before its first message, with the publishers'
+        offered QoS (the first file's, seen then, in the files that follow)."""
+        if topic not in self.writer.counts:
+            if topic not in self._offered:
+                self._offered[topic] = self._offered_qos(topic)
+            self.writer.add_topic(topic, self._topic_types[topic], self._offered[topic])
+
     def _write(self, topic, st, data):
         if self.writer.closed:           # stopped by a full disk
             return
+        self._ensure_topic(topic)
         if st < self.last_ns:            # arrived after later stamps were written: still logged at its stamp
             self.late += 1
         self.last_ns = max(self.last_ns, st)
@@ -268,14 +297,17 @@ class RecorderNode(SceneNode):
         rec = self._scene_record()
         rec["continues"] = os.path.basename(old_path.rstrip("/"))
         self.writer.add_metadata("gyro_instrument", rec)
-        for name in self.counts:
-            self.writer.add_topic(name, self._topic_types[name], qos_yaml(reliable=True, keep_all=False, depth=1000))
+        for name in self._offered:          # the QoS seen in the first run's file
+            self._ensure_topic(name)
 
     def _write_old(self, run, topic, st, data):
         writer, counts, _ = self._old[run]
         counts[topic] = counts.get(topic, 0) + 1
         if not writer.closed:
             try:
+                if topic not in writer.counts:
+                    writer.add_topic(topic, self._topic_types[topic], self._offered.get(topic)
+                                     or self._offered_qos(topic))
                 writer.write(topic, st, data)
             except OSError as exc:
                 self._disk_full(exc)
@@ -357,6 +389,12 @@ class RecorderNode(SceneNode):
                 except OSError as exc:
                     self._disk_full(exc)
                     return
+            try:
+                for topic in self.counts:    # a topic with no message is listed too
+                    self._ensure_topic(topic)
+            except OSError as exc:
+                self._disk_full(exc)
+                return
             missing = self.missing()
             if state is None:
                 state = "incomplete" if missing else "complete"
