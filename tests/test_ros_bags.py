@@ -212,3 +212,183 @@ def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp
     assert got["lat"].data == deserialize_message(last["/estimator/latitude_rad"], Float64).data
     assert got["heading"].orientation == deserialize_message(last["/gyro_horizontal/heading"], Imu).orientation
     assert "incompatible" not in out.lower(), out
+
+
+# ---- 4. a full disk is a failure, said so ------------------------------------------------------------
+
+def _tmpfs_available():
+    import shutil
+    if os.geteuid() != 0 or shutil.which("unshare") is None:
+        return False
+    r = subprocess.run(["unshare", "-m", "sh", "-c", "d=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs $d "
+                        "&& umount $d && rmdir $d"], capture_output=True)
+    return r.returncode == 0
+
+
+@pytest.mark.skipif(not _tmpfs_available(), reason="needs root and unshare -m to mount a small tmpfs")
+def test_a_recorder_node_on_a_full_disk_fails_and_says_so(tmp_path):
+    # The recorder node alone in a private mount namespace whose output directory is a 512 KiB tmpfs;
+    # 300 s of foucault_pantheon (~1.2 MB) fill it. The bag directory is copied out before the
+    # namespace ends.
+    from tests.test_ros_day import check_disk_full_bag
+    disk, kept = tmp_path / "disk", tmp_path / "kept"
+    disk.mkdir()
+    common = ["-p", "scene:=foucault_pantheon", "-p", "duration_s:=300.0"]
+    rec_cmd = " ".join([str(BIN / "recorder"), "--ros-args", *common, "-p", f"output:={disk}/bag/",
+                        "-p", "stop_when_complete:=true"])
+    env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM="0")
+    rec = subprocess.Popen(["unshare", "-m", "sh", "-c", f"mount -t tmpfs -o size=512k tmpfs {disk} && {rec_cmd}; "
+                            f"rc=$?; cp -a {disk} {kept}; exit $rc"], stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True, start_new_session=True, env=env)
+    sim = start("pendulum_sim", *common, "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
+                "-p", "wait_for:=['recorder']")
+    try:
+        out, _ = rec.communicate(timeout=120)
+    finally:
+        sim_out = stop(sim)
+        if rec.poll() is None:
+            rec.kill()
+    assert rec.returncode == 1, out                     # a failure, not a normal end
+    assert "No space left on device" in out and "needs" in out, out
+    check_disk_full_bag(str(kept / "bag"))
+    assert "Traceback" not in out + sim_out, out + sim_out
+
+
+# ---- 2 and 7. parameters idempotent, a real change restarts the run together; controls, liveness --------
+
+def call(node, srv_type, name, request, timeout=20):
+    cli = node.create_client(srv_type, name)
+    assert spin_until(node, cli.service_is_ready, timeout), f"{name} not available"
+    fut = cli.call_async(request)
+    assert spin_until(node, fut.done, timeout), f"{name} did not answer"
+    node.destroy_client(cli)
+    return fut.result()
+
+
+def set_params(node, target, **values):
+    from rcl_interfaces.msg import Parameter as ParamMsg
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+    req = SetParameters.Request(parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()])
+    assert all(isinstance(p, ParamMsg) for p in req.parameters)
+    return [r.successful for r in call(node, SetParameters, f"/{target}/set_parameters", req).results]
+
+
+def test_a_service_call_while_not_recording_is_refused_and_logged(ctx):
+    # Bad input: the recorder has no output (refused at start-up): ~/pause and ~/split answer
+    # success = false with the reason, and the node keeps running.
+    from std_srvs.srv import Trigger
+    from gyro_instrument.ros.nodes import RecorderNode
+    rec = RecorderNode(context=ctx)
+    client = Node("operator", context=ctx)
+    from rclpy.executors import SingleThreadedExecutor
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(rec)
+    ex.add_node(client)
+    try:
+        for name in ("pause", "split", "resume"):
+            cli = client.create_client(Trigger, f"/recorder/{name}")
+            fut = cli.call_async(Trigger.Request())
+            t0 = time.monotonic()
+            while not fut.done() and time.monotonic() - t0 < 20:
+                ex.spin_once(timeout_sec=0.05)
+            res = fut.result()
+            assert res.success is False and res.message.startswith(f"{name} refused: not recording"), res
+        assert rec.context.ok() and rec.liveness()[1].startswith("not recording")
+    finally:
+        ex.shutdown()
+        rec.destroy_node()
+        client.destroy_node()
+
+
+def test_parameters_are_idempotent_a_change_restarts_the_run_together_and_the_recorder_is_controlled(
+        tmp_path, ctx):
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rosgraph_msgs.msg import Clock
+    from std_srvs.srv import Trigger
+    from gyro_instrument.recording.bag_layout import bag_files
+    from gyro_instrument.recording.bag_scan import scan_bag
+    from gyro_instrument.recording.mcap_io import read_messages
+    from gyro_instrument.ros.launch import write_params
+    from gyro_instrument.ros.nodes import RELIABLE_ALL
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    # TRANSIENT_LOCAL: each node's state when this subscription matches it (its first, "waiting")
+    LATCHED_1000 = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    bag = tmp_path / "bag"
+    params = tmp_path / "params.yaml"
+    # quet_paris, 60 s at real-time factor 10: two simulators (gyrocompass_sim owns the clock)
+    write_params(str(params), "quet_paris", f"{bag}/", duration_s=60.0, real_time_factor=10.0,
+                 sims=["gyrocompass_sim", "pendulum_sim"])
+    node = Node("operator", context=ctx)
+    ticks, diag = [], []
+    node.create_subscription(Clock, "/clock", lambda msg: ticks.append(msg.clock.sec * 10 ** 9 + msg.clock.nanosec),
+                             RELIABLE_ALL)
+    node.create_subscription(DiagnosticArray, "/diagnostics", lambda msg: diag.extend(
+        (time.monotonic(), st.name.split("/")[-1], st.level, st.message) for st in msg.status
+        if st.hardware_id == "gyro_instrument/node"), LATCHED_1000)
+    procs = {n: start(n, "--params-file", str(params)) for n in ("recorder", "estimator", "pendulum_sim",
+                                                                   "gyrocompass_sim")}
+    try:
+        assert spin_until(node, lambda: ticks and ticks[-1] > EPOCH_NS + 10 * 10 ** 9, 60), "run 1 did not start"
+        # the current values (a `ros2 param load` of an unchanged dump): nothing restarts; an unknown
+        # name is refused, logged with its value, and the node keeps running
+        assert set_params(node, "gyrocompass_sim", seed=-1) == [True]
+        assert set_params(node, "pendulum_sim", scene="quet_paris", duration_s=60.0, latitude_deg=48.0) == \
+            [True, True, False]
+        # a real change on a follower: the owner restarts the run and every simulator with it
+        assert set_params(node, "pendulum_sim", seed=7) == [True]
+        n_before = len(ticks)
+        assert spin_until(node, lambda: any(b < a for a, b in zip(ticks[n_before - 1:], ticks[n_before:])), 30)
+        assert spin_until(node, lambda: EPOCH_NS + 20 * 10 ** 9 < ticks[-1] < EPOCH_NS + 50 * 10 ** 9, 30)
+        assert call(node, Trigger, "/recorder/pause", Trigger.Request()).success
+        spin_until(node, lambda: False, 1.0)               # ~10 s of sim time not recorded
+        assert call(node, Trigger, "/recorder/resume", Trigger.Request()).success
+        res = call(node, Trigger, "/recorder/split", Trigger.Request())
+        assert res.success and res.message.startswith("recording continues in bag_run1_1.mcap"), res
+        # the run ends: the estimate of run 2 (the recorder, paused, does not complete: stopped below)
+        assert spin_until(node, lambda: any(d[1] == "estimator" and d[3] == "settled: estimate published"
+                                            and d[0] > time.monotonic() - 1 for d in diag[-20:]), 60)
+    finally:
+        outs = {n: stop(p) for n, p in procs.items()}
+    assert all(p.returncode == 0 for p in procs.values()), outs
+    # idempotent: the unchanged values restarted nothing and split nothing: run 1 and run 2 only
+    assert "parameters set to the values they had: seed; nothing changes" in outs["gyrocompass_sim"]
+    assert "latitude_deg" in outs["pendulum_sim"] and "48.0" in outs["pendulum_sim"]
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("bag")) == ["bag", "bag_run1"]
+    # run 1: one file, closed when the clock went back; run 2: both simulators from t = 0, split in two
+    st0 = scan_bag(str(bag / "bag_0.mcap")).metadata_record("gyro_instrument_status")
+    assert st0["state"] == "incomplete" and json.loads(st0["restarted"])["continues_in"] == "bag_run1", st0
+    files, _ = bag_files(str(tmp_path / "bag_run1"))
+    assert [os.path.basename(f) for f in files] == ["bag_run1_0.mcap", "bag_run1_1.mcap"]
+    first = {}
+    for f in files:
+        for tp, _, t, _ in read_messages(f):
+            first.setdefault(tp, t)
+    assert first["/pendulum/joint_states"] == first["/gyro_horizontal/joint_states"] == first["/clock"] == EPOCH_NS
+    st1 = scan_bag(files[-1]).metadata_record("gyro_instrument_status")
+    assert int(st1["not_recorded_paused"]) > 0, st1
+    # liveness: every node at >= 1 Hz (0.5 s period; the gap bound is loose for a loaded machine)
+    for name in ("gyrocompass_sim", "pendulum_sim", "estimator", "recorder"):
+        t = [d[0] for d in diag if d[1] == name]
+        assert len(t) >= (t[-1] - t[0]) and max(b - a for a, b in zip(t, t[1:])) < 2.0, (name, len(t))
+    said = {(d[1], d[3].split(":")[0]) for d in diag}
+    for want in [("gyrocompass_sim", "waiting for subscribers"), ("gyrocompass_sim", "publishing"),
+                 ("pendulum_sim", "publishing"), ("recorder", "recording"),
+                 ("recorder", "paused (~/resume to record again)"), ("estimator", "collecting samples"),
+                 ("estimator", "settled")]:
+        assert want in said, (want, sorted(said))
+
+
+def test_a_runs_last_line_names_the_node_and_the_reason(monkeypatch, capsys):
+    # An estimate that fails in the core (not the input): `run` used to end with "the scene could
+    # not be loaded by the nodes"; its last line now names the estimator and the error.
+    from gyro_instrument.ros.cli import main as ros_main
+    from gyro_instrument.ros.nodes import EstimatorNode
+
+    def fails(self):
+        raise RuntimeError("the fit's work array could not be allocated")
+    monkeypatch.setattr(EstimatorNode, "estimate", fails)
+    assert ros_main(["run", "foucault_pantheon", "--duration-s", "5", "--quiet"]) == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == ("gyro-instrument: estimator: estimation failed: RuntimeError: the fit's work array could not "
+                       "be allocated"), err

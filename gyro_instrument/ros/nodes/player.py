@@ -25,7 +25,8 @@ from gyro_instrument.recording.qos import parse_profiles
 from gyro_instrument.recording.topics import CLOCK, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import FLOW_BATCH, PUBLISH_ALL, STEADY, SceneNode, qos_text, replay_qos
+from gyro_instrument.ros.nodes.base import (ERROR, FLOW_BATCH, OK, PUBLISH_ALL, STEADY, WARN, SceneNode, qos_text,
+                                            replay_qos)
 
 #: how long a latched topic's publish waits for the previous message's acknowledgement before the
 #: tick gives up (and tries again at the next one)
@@ -242,11 +243,32 @@ class PlayerNode(SceneNode):
             + (f" and {', '.join(self.value('wait_for'))}" if self.value("wait_for") else "")
             + f", and every subscription seen matched for {self.SETTLE_S:g} s")
         self.state = "waiting"
+        self._missing = []
+        self.start_diagnostics()
         self._wait_t0 = time.monotonic()
         self._graph, self._graph_t = None, time.monotonic()
         for tp in self.clock_topics:
             self.watch_clock(tp)
         self.timer = self.create_timer(0.002, self._tick, clock=STEADY)
+
+    def liveness(self) -> tuple:
+        """The state on /diagnostics: waiting for subscribers, playing, waiting for a subscriber to take
+        messages, waiting for acknowledgements, done, refused, or not playing (a bad bag)."""
+        values = {"played": self.index, "messages": self.total, "sim_time_s": self.sim_time_ns() / 1e9}
+        if self.state == "idle":
+            return ERROR, "not playing: the bag is missing or unreadable (see the log)", values
+        if self.state == "waiting":
+            return OK, "waiting for subscribers: " + (", ".join(self._missing) or "the graph"), values
+        if self.state == "refused":
+            return ERROR, "not playing: another node publishes the clock", values
+        if self.blocked is not None:
+            return WARN, f"waiting for a subscriber to take messages on {self.blocked[0]} (nothing dropped)", values
+        if self.state == "draining":
+            return OK, "all played; waiting for every subscriber to acknowledge", values
+        return OK, self.state, values
+
+    def sim_time_ns(self) -> int:
+        return max(self._last_clock - m.EPOCH_NS, 0) if getattr(self, "_last_clock", None) else 0
 
     def wait_topics(self) -> list:
         """Resolved names of the topics that must each have a matched subscription before playing."""
@@ -285,7 +307,7 @@ class PlayerNode(SceneNode):
 
     def _tick(self):
         if self.state == "waiting":
-            missing = self._ready()
+            missing = self._missing = self._ready()
             if missing:
                 if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
                     return
@@ -328,25 +350,31 @@ class PlayerNode(SceneNode):
         if self.peek() is None:
             self.state = "draining"
             self._drain_t0 = self._drain_log = time.monotonic()
-            self._waited = set()
+            self._waited, self._unacked = set(), set()
 
     def _drain(self):
-        """After the last message: wait until every subscriber acknowledged everything (a stopped or
-        slow RELIABLE subscriber still gets the rest: exiting would drop the writer's history), logged
-        every 10 s; a subscriber that leaves stops counting. Then the summary, and exit or loop."""
+        """After the last message: wait until every subscriber acknowledged everything (a slow
+        RELIABLE subscriber still gets the rest: exiting would drop the writer's history), at most
+        ``wait_timeout_s`` (a subscriber that never takes, stopped or stuck, must not keep the player
+        forever: warned, and the summary says "not all acknowledged"), logged every 10 s; a subscriber
+        that leaves stops counting. Then the summary, and exit or loop."""
         waiting = [p for p in self.pubs.values() if p.get_subscription_count() and not p.wait_for_all_acked(
             LATCH_ACK_WAIT)]
         now = time.monotonic()
         self._waited |= {p.topic_name for p in waiting}
-        if waiting:
+        if waiting and now - self._drain_t0 >= self.value("wait_timeout_s"):
+            self.get_logger().warning(f"wait_timeout_s passed without every acknowledgement on "
+                                      f"{', '.join(p.topic_name for p in waiting)}: finishing anyway")
+            self._unacked = {p.topic_name for p in waiting}
+        elif waiting:
             if now - self._drain_log >= 10.0:
                 self._drain_log = now
                 self.get_logger().warning(f"all played; waiting {now - self._drain_t0:.0f} s for the subscribers of "
                                           f"{', '.join(p.topic_name for p in waiting)} to acknowledge")
             return
         # a subscriber that left while the player waited for it: not every message acknowledged
-        self._unacked = {p.topic_name for p in self.pubs.values() if p.topic_name in self._waited
-                         and not p.get_subscription_count()}
+        self._unacked |= {p.topic_name for p in self.pubs.values() if p.topic_name in self._waited
+                          and not p.get_subscription_count()}
         line = self.summary()
         if self.value("loop", False):
             self.get_logger().info(f"{line}; looping")

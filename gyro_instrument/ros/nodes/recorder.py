@@ -18,14 +18,16 @@ from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
 from gyro_instrument.recording.mcap_io import DiskFull
 from gyro_instrument.recording.qos import profiles_yaml
-from gyro_instrument.recording.topics import MARKER_TYPE, estimator_topics, scene_topics, sparse_topics, visual_every
+from gyro_instrument.recording.topics import (DIAGNOSTICS, MARKER_TYPE, estimator_topics, scene_topics, sparse_topics,
+                                              visual_every)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.ros.nodes.base import (LATCHED, PUBLISH_ALL, RELIABLE_1000, RELIABLE_ALL, STEADY, SceneNode,
                                             qos_dict)
+from gyro_instrument.ros.nodes.recorder_control import RecorderControl
 
 
-class RecorderNode(SceneNode):
+class RecorderNode(RecorderControl, SceneNode):
     """Records the scene's topics (raw CDR) to MCAP with sim-time log times, in log-time order, and
     marks the file ``complete`` or ``incomplete`` (per-topic counts against what the scene publishes).
 
@@ -74,12 +76,15 @@ class RecorderNode(SceneNode):
         self.run_index = 0
         self._old = {}               # run index -> (writer, counts) of a run closed by a restart
         self._offered = {}           # topic -> offered_qos_profiles text recorded for it
+        self._diagnostics = self.resolve_topic_name(DIAGNOSTICS)
+        self.init_control()
         if self.load():
             self.prepare()
 
     def _check_params(self, params):
-        if self.writer is not None and any(p.name in self.RETRY_ON for p in params):
-            names = ", ".join(p.name for p in params if p.name in self.RETRY_ON)
+        changing = [p for p in params if p.name in self.RETRY_ON and not self.unchanged(p)]
+        if self.writer is not None and changing:
+            names = ", ".join(p.name for p in changing)
             reason = f"{names} cannot change while recording to {self.writer.path}: a recording has one scene and " \
                      "one file (stop the recorder and start it again)"
             self.get_logger().error(f"parameter refused: {reason}")
@@ -88,7 +93,7 @@ class RecorderNode(SceneNode):
 
     def _after_set(self, params):
         super()._after_set(params)
-        if self.writer is None and any(p.name in self.RETRY_ON for p in params):
+        if self.writer is None and any(p.name in self.RETRY_ON and p.name in self._changing for p in params):
             # a value refused at start-up, corrected: start recording now
             if self.load():
                 self.prepare()
@@ -183,6 +188,7 @@ class RecorderNode(SceneNode):
 
     def start(self) -> None:
         self.standalone = True
+        self.start_diagnostics()
         if self.writer is not None:
             self.get_logger().info(
                 f"recording {', '.join(self.subs)} to {self.writer.path}; expects "
@@ -195,6 +201,8 @@ class RecorderNode(SceneNode):
         # Header-first types and Clock carry their sim time; Float64 takes the latest sim time
         # received (never wall time), so one bag has one time base.
         if self.writer is None or self.writer.closed:
+            return
+        if topic == self._diagnostics and self.is_liveness(data):
             return
         st = m.cdr_stamp_ns(data) if topic in self.stamped else \
             m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
@@ -212,6 +220,9 @@ class RecorderNode(SceneNode):
             elif run < self.run_index:      # the rest of a run closed by a restart: into its own file
                 self._write_old(run, topic, st, data)
                 return
+        if self.paused:
+            self.not_recorded += 1
+            return
         if st is None:
             st = self.max_ns
         self.counts[topic] += 1
@@ -403,6 +414,8 @@ class RecorderNode(SceneNode):
                         f"{tp} {k} of {n}" for tp, (k, n) in missing.items()))
             topics = {tp: [self.counts[tp], n] for tp, n in self.expected.items()}
             fields = {"topics": json.dumps(topics), "late": self.late}
+            if self.not_recorded:
+                fields["not_recorded_paused"] = self.not_recorded
             if self.run_index:
                 fields["restart"] = json.dumps({"run": self.run_index, "continues": os.path.basename(
                     self._old[self.run_index - 1][0].path.rstrip("/"))})
