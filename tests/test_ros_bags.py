@@ -128,6 +128,58 @@ def joint_bag(path, n):
 N_BACKPRESSURE = 6000
 
 
+def test_player_waits_when_a_write_is_refused_and_loses_nothing(tmp_path, ctx):
+    # The short version (the DDS refusal itself, 5000 unacknowledged samples to a stopped subscriber,
+    # is the slow test below): the player's publisher refuses 5 writes in a row mid-bag, as Fast DDS
+    # does when a RELIABLE / KEEP_ALL subscriber's queue is full; the player logs the wait, tries
+    # again at its next ticks, and a KEEP_ALL subscriber gets every message once, in order.
+    from rclpy._rclpy_pybind11 import RCLError
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+    from sensor_msgs.msg import JointState
+    from gyro_instrument.ros.nodes import RELIABLE_ALL, PlayerNode
+    n = 300
+    bag = joint_bag(tmp_path / "j.mcap", n)
+    player = PlayerNode(context=ctx, parameter_overrides=[Parameter("bag", value=bag),
+                                                          Parameter("real_time_factor", value=0.0)])
+    sub = Node("taker", context=ctx)
+    got = []
+    sub.create_subscription(JointState, "/pendulum/joint_states",
+                            lambda msg: got.append(msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec),
+                            RELIABLE_ALL)
+    pub = player.pubs["pendulum/joint_states"]
+    real, calls = pub.publish, [0]
+
+    def refusing(data):
+        calls[0] += 1
+        if 100 < calls[0] <= 105:
+            raise RCLError("Failed to publish: cannot publish data")
+        return real(data)
+    pub.publish = refusing
+    logs = []
+    player.get_logger().warning = lambda text, **kw: logs.append(text)
+    player.get_logger().info = lambda text, **kw: logs.append(text)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(player)
+    ex.add_node(sub)
+    try:
+        player.start()
+        t0 = time.monotonic()
+        while not (player.done and len(got) >= n) and time.monotonic() - t0 < 60:
+            ex.spin_once(timeout_sec=0.01)
+    finally:
+        ex.shutdown()
+        player.destroy_node()
+        sub.destroy_node()
+    assert player.done and calls[0] == n + 5, (calls, logs)
+    assert got == [EPOCH_NS + i * 50_000_000 for i in range(n)], len(got)
+    assert any(t.startswith("publishing /pendulum/joint_states waits") for t in logs), logs
+    assert any(t.startswith("publishing /pendulum/joint_states resumed after") for t in logs), logs
+    assert any(f"/taker on /pendulum/joint_states (RELIABLE VOLATILE) {n} of {n} sent while it was matched, " \
+               f"all acknowledged" in t for t in logs), logs
+
+
+@pytest.mark.slow
 def test_player_waits_for_a_sleeping_and_a_stopped_subscriber(tmp_path):
     bag = joint_bag(tmp_path / "j.mcap", N_BACKPRESSURE)
     subs = {name: subprocess.Popen([sys.executable, "-c", SUBSCRIBER, name, sleep, depth, str(N_BACKPRESSURE), "60"],
@@ -227,17 +279,17 @@ def _tmpfs_available():
 
 @pytest.mark.skipif(not _tmpfs_available(), reason="needs root and unshare -m to mount a small tmpfs")
 def test_a_recorder_node_on_a_full_disk_fails_and_says_so(tmp_path):
-    # The recorder node alone in a private mount namespace whose output directory is a 512 KiB tmpfs;
-    # 300 s of foucault_pantheon (~1.2 MB) fill it. The bag directory is copied out before the
+    # The recorder node alone in a private mount namespace whose output directory is a 256 KiB tmpfs;
+    # 150 s of foucault_pantheon (~0.6 MB) fill it. The bag directory is copied out before the
     # namespace ends.
     from tests.test_ros_day import check_disk_full_bag
     disk, kept = tmp_path / "disk", tmp_path / "kept"
     disk.mkdir()
-    common = ["-p", "scene:=foucault_pantheon", "-p", "duration_s:=300.0"]
+    common = ["-p", "scene:=foucault_pantheon", "-p", "duration_s:=150.0"]
     rec_cmd = " ".join([str(BIN / "recorder"), "--ros-args", *common, "-p", f"output:={disk}/bag/",
                         "-p", "stop_when_complete:=true"])
     env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM="0")
-    rec = subprocess.Popen(["unshare", "-m", "sh", "-c", f"mount -t tmpfs -o size=512k tmpfs {disk} && {rec_cmd}; "
+    rec = subprocess.Popen(["unshare", "-m", "sh", "-c", f"mount -t tmpfs -o size=256k tmpfs {disk} && {rec_cmd}; "
                             f"rc=$?; cp -a {disk} {kept}; exit $rc"], stdout=subprocess.PIPE,
                            stderr=subprocess.STDOUT, text=True, start_new_session=True, env=env)
     sim = start("pendulum_sim", *common, "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
