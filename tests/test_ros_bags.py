@@ -456,3 +456,35 @@ def test_a_runs_last_line_names_the_node_and_the_reason(monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == ("gyro-instrument: estimator: estimation failed: RuntimeError: the fit's work array could not "
                        "be allocated"), err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", range(5))
+def test_a_restarted_run_completes_its_new_file_and_the_recorder_finishes(tmp_path, ctx, k):
+    # Item 2 repeated, without the services: a real change on the clock owner mid-run (`ros2 param set
+    # /gyrocompass_sim seed 9`); the recorder closes run 1 and records run 2 to one new file, which is
+    # complete (every sample of every topic, from both simulators), and finishes by itself.
+    from rosgraph_msgs.msg import Clock
+    from gyro_instrument.recording.bag_scan import scan_bag
+    from gyro_instrument.ros.launch import write_params
+    from gyro_instrument.ros.nodes import RELIABLE_ALL
+    bag, params = tmp_path / "r.mcap", tmp_path / "params.yaml"
+    write_params(str(params), "quet_paris", str(bag), duration_s=60.0, real_time_factor=10.0,
+                 sims=["gyrocompass_sim", "pendulum_sim"])
+    node = Node("operator", context=ctx)
+    ticks = []
+    node.create_subscription(Clock, "/clock", lambda msg: ticks.append(msg.clock.sec * 10 ** 9 + msg.clock.nanosec),
+                             RELIABLE_ALL)
+    procs = {n: start(n, "--params-file", str(params)) for n in ("recorder", "estimator", "pendulum_sim",
+                                                                   "gyrocompass_sim")}
+    try:
+        assert spin_until(node, lambda: ticks and ticks[-1] > EPOCH_NS + 10 * 10 ** 9, 60), "run 1 did not start"
+        assert set_params(node, "gyrocompass_sim", seed=9) == [True]
+        procs["recorder"].wait(timeout=120)                 # stop_when_complete: run 2 complete
+    finally:
+        outs = {n: stop(p) for n, p in procs.items()}
+    assert procs["recorder"].returncode == 0, outs["recorder"]
+    st0 = scan_bag(str(bag)).metadata_record("gyro_instrument_status")
+    st1 = scan_bag(str(tmp_path / "r_run1.mcap")).metadata_record("gyro_instrument_status")
+    assert st0["state"] == "incomplete" and st1["state"] == "complete", (st0, st1, outs["recorder"])
+    assert not (tmp_path / "r_run2.mcap").exists()
