@@ -137,8 +137,9 @@ class SceneNode(Node):
             while True:
                 try:
                     self.publish_diagnostics()
-                except Exception:        # the context shut down under it: the node is going
-                    return
+                except Exception:        # the context shut down under it (the node is going), or a
+                    if not self.context.ok():    # state read while the node's thread changed it:
+                        return                   # the next period says it
                 if self._diag_stop.wait(DIAG_PERIOD_S):
                     return
         self._diag_thread = threading.Thread(target=loop, name=f"{self.get_name()}_diagnostics", daemon=True)
