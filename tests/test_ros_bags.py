@@ -228,6 +228,10 @@ def _rosbags_qos(path):
     return out
 
 
+#: a looping player's state: playing, or between two passes waiting for the acknowledgements
+PLAYING = ("playing", "all played; waiting for every subscriber to acknowledge")
+
+
 def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp_path, ctx):
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -260,9 +264,10 @@ def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp
         node.create_subscription(Float64, "/estimator/latitude_rad", lambda msg: got.setdefault("lat", msg), tl)
         node.create_subscription(Imu, "/gyro_horizontal/heading", lambda msg: got.setdefault("heading", msg), tl)
         # and the player's own state (its liveness status, beside the bag's /diagnostics)
+        # (the latest: the one latched when the subscription matched may be from before the play)
         node.create_subscription(DiagnosticArray, "/diagnostics", lambda msg: [
-            got.setdefault("player", st) for st in msg.status if st.name == "gyro_instrument: /player"], tl)
-        assert spin_until(node, lambda: len(got) == 3, 20), got
+            got.__setitem__("player", st) for st in msg.status if st.name == "gyro_instrument: /player"], tl)
+        assert spin_until(node, lambda: len(got) == 3 and got["player"].message in PLAYING, 20), got
     finally:
         out = stop(player)
     from rclpy.serialization import deserialize_message
@@ -273,9 +278,7 @@ def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp
     assert any(h.header.stamp == got["heading"].header.stamp and h.orientation == got["heading"].orientation
                for h in headings), got["heading"]
     assert "incompatible" not in out.lower(), out
-    # looping: playing, or between two passes waiting for the acknowledgements
-    assert got["player"].hardware_id == "gyro_instrument/node" and got["player"].message in (
-        "playing", "all played; waiting for every subscriber to acknowledge"), got["player"]
+    assert got["player"].hardware_id == "gyro_instrument/node", got["player"]
 
 
 # ---- 4. a full disk is a failure, said so ------------------------------------------------------------
@@ -436,7 +439,9 @@ def test_parameters_are_idempotent_a_change_restarts_the_run_together_and_the_re
         t = [d[0] for d in diag if d[1] == name]
         assert len(t) >= (t[-1] - t[0]) and max(b - a for a, b in zip(t, t[1:])) < 2.0, (name, len(t))
     said = {(d[1], d[3].split(":")[0]) for d in diag}
-    for want in [("gyrocompass_sim", "waiting for subscribers"), ("gyrocompass_sim", "publishing"),
+    # (each node's first state, "waiting for subscribers", is latched depth 1: this subscription sees it
+    # only when it matches before the wait ends, which discovery on a loaded machine does not promise)
+    for want in [("gyrocompass_sim", "publishing"),
                  ("pendulum_sim", "publishing"), ("recorder", "recording"),
                  ("recorder", "paused (~/resume to record again)"), ("estimator", "collecting samples"),
                  ("estimator", "settled")]:
