@@ -244,12 +244,37 @@ def test_disk_full_during_split_recording(tmp_path):
         from rosbags.highlevel import AnyReader
         with AnyReader([Path(f)]) as reader:
             assert sum(1 for _ in reader.messages()) > 0
+    check_disk_full_bag(bag)
     res = replay_bag(bag)
     assert res["observation_read_s"] if "observation_read_s" in res else True
     # recover uses it all
     fixed = str(tmp_path / "fixed.mcap")
     rr = subprocess.run(GI + ["recover", bag, "--out", fixed], capture_output=True, text=True, timeout=120)
     assert rr.returncode == 0, rr.stderr
+
+
+def check_disk_full_bag(bag):
+    """A bag directory a full disk stopped: metadata.yaml says what the files hold (per file, per
+    topic, as rosbags reads them), its last file's status is 'incomplete' with the reason."""
+    from rosbags.highlevel import AnyReader
+    info = yaml.safe_load(open(os.path.join(bag, "metadata.yaml")))["rosbag2_bagfile_information"]
+    per_topic, total = {}, 0
+    for f in info["files"]:
+        with AnyReader([Path(bag) / f["path"]]) as reader:
+            n = 0
+            for conn, _, _ in reader.messages():
+                per_topic[conn.topic] = per_topic.get(conn.topic, 0) + 1
+                n += 1
+        assert n == f["message_count"], (f, n)
+        total += n
+    assert info["message_count"] == total
+    assert {t["topic_metadata"]["name"]: t["message_count"] for t in info["topics_with_message_count"]
+            if t["message_count"]} == per_topic
+    with AnyReader([Path(bag)]) as reader:             # rosbags's own reading of the directory
+        assert reader.message_count == total == sum(1 for _ in reader.messages())
+    st = scan_bag(os.path.join(bag, info["files"][-1]["path"])).metadata_record("gyro_instrument_status")
+    assert st["state"] == "incomplete" and st["reason"].startswith("disk full: No space left on device"), st
+    assert int(st["messages"]) == info["files"][-1]["message_count"], st
 
 
 def test_disk_full_injected_at_the_writer_leaves_a_readable_file(tmp_path, monkeypatch):
@@ -277,7 +302,7 @@ def test_disk_full_injected_at_the_writer_leaves_a_readable_file(tmp_path, monke
     monkeypatch.setattr(mcap_io.os, "pwrite", real)
     scan = scan_bag(bag)
     assert scan.damaged == [] and scan.summary_ok and len(scan.messages) > 1000
-    assert scan.state == "recording"
+    assert scan.state == "incomplete"       # with the reason: the disk full (the status record fits where it was)
     from rosbags.highlevel import AnyReader
     with AnyReader([Path(bag)]) as reader:
         assert sum(1 for _ in reader.messages()) == len(scan.messages)

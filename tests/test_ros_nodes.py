@@ -204,7 +204,7 @@ def test_parameters_as_ros_users_set_them(ctx, tmp_path):
         out_sim, out_est = stop(sim), stop(est)
     assert "Traceback" not in out_sim + out_est, out_sim + out_est
     assert "seed = 7.5 is invalid: must be an integer in [-1, 2147483647]" in out_sim, out_sim
-    assert "latitude_deg is not a parameter of pendulum_sim" in out_sim and "overrides" in out_sim
+    assert "latitude_deg = 48 is not a parameter of pendulum_sim" in out_sim and "overrides" in out_sim
     assert "use_sim_time = true is invalid on the clock owner" in out_sim
     assert "real_time_factor = -1.0 is invalid" in out_sim and "publish_clock is read-only" in out_sim
     assert "not running: seed refused at start-up" in out_sim

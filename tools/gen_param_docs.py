@@ -27,12 +27,24 @@ How values are checked (at start-up from `-p`/`--params-file`, and on every `ros
   stays up. At start-up the default is kept and, when the value was needed to run (`scene`,
   `overrides`, `duration_s`, `seed`), the node waits idle until a valid value is set;
 * scene values (`site.latitude_deg`, …) go in `overrides`; an unknown parameter
-  (`-p latitude_deg:=48`) is reported as ignored, with the fix;
+  (`-p latitude_deg:=48`, or a name in a `ros2 param load` file) is reported as ignored, with its
+  value and the fix (`parameter latitude_deg = 48 is not a parameter of pendulum_sim and is ignored:
+  ...`), and the node keeps running;
+* a set that changes no value (`ros2 param set` of the current value, `ros2 param load` of an
+  unchanged dump) changes nothing: logged (`parameters set to the values they had: seed; nothing
+  changes`), no restart, no new file;
 * every parameter has a value, an empty list included, so `ros2 param dump` is complete;
 * a read-only parameter (its change cannot take effect after start-up) is refused by rclpy with
-  "Trying to set a read-only parameter" and logged; a change of `scene`, `overrides`,
-  `duration_s` (or a simulator's `seed`) is applied: the simulator restarts its run from t = 0
-  (its clock, if it owns it, starts again at the epoch), the estimator starts collecting again;
+  "Trying to set a read-only parameter" and logged; a real change of `scene`, `overrides`,
+  `duration_s` (or a simulator's `seed`) is applied and restarts the whole run together: on the
+  clock owner it rewinds to t = 0 (its clock goes back to the epoch) and every follower rewinds
+  when it sees the clock go back, each with its own current values; on a follower the change
+  asks the owner to restart (its service `~/restart`, `std_srvs/srv/Trigger`) and the follower
+  takes its new values when the clock goes back. The recorder starts one new file for the new
+  run (every topic's stamps go back together), the estimator a new estimate. (A node whose topics
+  change with the scene, or with no clock owner, tears down and waits for its subscribers again.)
+  On the recorder these parameters are fixed once it records: set them on the simulators and the
+  estimator;
 * `use_sim_time` is rclpy's; on a clock owner (a simulator with `publish_clock:=true`, the
   player) `true` is refused with a logged reason: the node would wait for its own clock.
 

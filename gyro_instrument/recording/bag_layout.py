@@ -18,6 +18,7 @@ Reading (:func:`bag_files`, :func:`scan_path`: a bare ``.mcap``, a bag directory
 is :mod:`.bag_input`'s, re-exported here.
 """
 
+import contextlib
 import os
 from typing import TYPE_CHECKING
 
@@ -210,6 +211,7 @@ class BagDirectoryWriter:
         else:
             os.mkdir(self.path)
         self._topics = {}             # topic -> (type, qos text)
+        self._closed_counts = {}      # topic -> messages in the files closed so far
         self._carried = []            # metadata records repeated in every new file
         self.counts = {}
         self.files = []               # per file: dict(path, start, end, count)
@@ -242,16 +244,43 @@ class BagDirectoryWriter:
             self.write_metadata()
 
     def _close_current(self, state, **fields):
-        self._cur.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(self.bag_information(),
-                                                                                 sort_keys=False),
-                                           "ros_distro": "jazzy"})
-        self.commits += self._cur.commits
-        self._cur.close(state=state, **fields)
+        with self._on_full_disk():
+            self._cur.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(self.bag_information(),
+                                                                                     sort_keys=False),
+                                               "ros_distro": "jazzy"})
+            self.commits += self._cur.commits
+            self._cur.close(state=state, **fields)
+        for topic, n in self._cur.counts.items():
+            self._closed_counts[topic] = self._closed_counts.get(topic, 0) + n
+
+    @contextlib.contextmanager
+    def _on_full_disk(self):
+        """A full disk while writing the current file: it holds what its last commit put there (its
+        status ``incomplete`` with the reason); the counts and times of ``metadata.yaml`` are made
+        those of the files as they are, and it is written (in place if need be); DiskFull raised."""
+        from gyro_instrument.recording.mcap_io import DiskFull
+        try:
+            yield
+        except DiskFull:
+            counts, start, end = self._cur.committed()
+            f = self.files[-1]
+            f["count"], f["start"], f["end"] = sum(counts.values()), start, end
+            self.counts = {tp: self._closed_counts.get(tp, 0) + counts.get(tp, 0) for tp in self.counts}
+            self.closed = True
+            try:
+                self.write_metadata(in_place=True)
+            except OSError:
+                pass
+            raise
 
     def split(self) -> None:
         """Close the current file (status ``split``) and continue in the next one."""
         self._close_current("split")
-        self._open_next()
+        try:
+            self._open_next()
+        except OSError:
+            self.write_metadata(in_place=True)     # the files as they are (the one not started removed)
+            raise
 
     # -------------------------------------------------------------- BagWriter interface
     def add_topic(self, topic, type_name, qos=None) -> int:
@@ -270,7 +299,8 @@ class BagDirectoryWriter:
                                and int(log_time_ns) - f["start"] >= self.max_bag_duration_ns)):
             self.split()
             f = self.files[-1]
-        self._cur.write(topic, log_time_ns, data, publish_time_ns)
+        with self._on_full_disk():
+            self._cur.write(topic, log_time_ns, data, publish_time_ns)
         t = int(log_time_ns)
         f["start"] = t if f["start"] is None else min(f["start"], t)
         f["end"] = t if f["end"] is None else max(f["end"], t)
@@ -282,7 +312,8 @@ class BagDirectoryWriter:
         scene) are repeated at the start of every later file."""
         if not any(f["count"] for f in self.files):
             self._carried.append((name, data))
-        self._cur.add_metadata(name, data)
+        with self._on_full_disk():
+            self._cur.add_metadata(name, data)
 
     def pending(self) -> bool:
         """True when the current file holds messages written since its last commit."""
@@ -293,7 +324,8 @@ class BagDirectoryWriter:
         return self._cur.since_commit_s()
 
     def commit(self) -> None:
-        self._cur.commit()
+        with self._on_full_disk():
+            self._cur.commit()
 
     def close(self, state="complete", **fields) -> None:
         """Finish the last file with status ``state`` (and the recorder's ``fields``: per-topic counts,
@@ -349,19 +381,24 @@ class BagDirectoryWriter:
             "ros_distro": "jazzy",
         }
 
-    def write_metadata(self) -> None:
+    def write_metadata(self, in_place=False) -> None:
         """Write ``metadata.yaml`` atomically (temporary file, then rename); on a full disk the
-        previous one stays (the temporary file is removed)."""
+        previous one stays (the temporary file is removed) unless ``in_place``: then it is rewritten
+        in place (its own blocks freed first), so that it says what the files hold."""
         target = os.path.join(self.path, METADATA)
         tmp = target + ".partial"
+        text = yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, sort_keys=False)
         try:
             with open(tmp, "w", encoding="utf-8") as fh:
-                yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, fh, sort_keys=False)
+                fh.write(text)
             os.replace(tmp, target)
         except OSError:
             if os.path.exists(tmp):
                 os.unlink(tmp)
-            raise
+            if not in_place:
+                raise
+            with open(target, "w", encoding="utf-8") as fh:
+                fh.write(text)
 
 
 def _type_hash(type_name):

@@ -30,6 +30,8 @@ from mcap.data_stream import RecordBuilder
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
+# the file under the writer (and its error) are mcap_file's, re-exported here
+from gyro_instrument.recording.mcap_file import DiskFull, _Sink, _TailKeepingFile  # noqa: F401
 from gyro_instrument.recording.bag_scan import DAMAGE_RECORD, STATUS_RECORD, scan_bag
 from gyro_instrument.recording.definitions import concatenated_definition, type_hash
 
@@ -44,87 +46,6 @@ def qos_yaml(reliable=True, keep_all=True, depth=0, transient_local=False) -> st
         h=2 if keep_all else 1, d=depth, r=1 if reliable else 2, du=1 if transient_local else 2,
         inf=_INF)
 
-
-
-class _TailKeepingFile:
-    """The writer's output stream: data records are buffered and reach the file in one ``pwrite``
-    together with a provisional end (summary, footer, magic) placed after them. The next commit
-    writes over that provisional end from its first byte, so the file on disk is a complete MCAP
-    after every commit, and a SIGKILL loses only what was not yet committed."""
-
-    def __init__(self, path):
-        self.path = path
-        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
-        self._pos = 0              # end of the committed data section
-        self._pending = bytearray()
-        self._end = 0              # end of what is on disk
-        self._tail = b""           # the provisional end on disk now
-
-    def write(self, data):
-        self._pending += data
-        return len(data)
-
-    def tell(self):
-        return self._pos + len(self._pending)
-
-    def flush(self):
-        pass
-
-    def commit(self, tail=b""):
-        """Write the pending records and then ``tail`` (not part of the data: overwritten next time).
-
-        When the write fails (ENOSPC: the disk is full, EDQUOT, EFBIG...) the file is put back as
-        the last commit left it (the extension cut off, the previous provisional end written back
-        into the space it already had), so it stays a complete, indexed MCAP; the error is raised
-        as :class:`DiskFull` with the bytes needed and free."""
-        buf = memoryview(bytes(self._pending) + tail)
-        need = len(buf)
-        at = self._pos
-        try:
-            while buf:             # one syscall in practice; loop for short writes
-                k = os.pwrite(self._fd, buf, at)
-                buf, at = buf[k:], at + k
-        except OSError as exc:
-            self._restore()
-            raise DiskFull(self.path, need, exc) from None
-        self._tail = bytes(tail)
-        self._pos += len(self._pending)
-        self._pending.clear()
-        if at < self._end:         # never happens with a growing summary; keep the file exact anyway
-            os.ftruncate(self._fd, at)
-        self._end = at
-
-    def _restore(self):
-        try:
-            os.ftruncate(self._fd, self._end)
-            tail, at = memoryview(self._tail), self._pos
-            while tail:
-                k = os.pwrite(self._fd, tail, at)
-                tail, at = tail[k:], at + k
-        except OSError:
-            pass                   # nothing better to do: the reader reads up to the last complete record
-
-    def close(self):
-        os.close(self._fd)
-
-
-class DiskFull(OSError):
-    """A bag write failed for lack of space; the file is left as its last commit made it.
-    ``needed``: bytes the failed write needed; ``free``: bytes free on that file system then."""
-
-    def __init__(self, path, needed, cause):
-        super().__init__(cause.errno, cause.strerror)
-        self.path, self.needed, self.cause = path, int(needed), cause
-        try:
-            st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")
-            self.free = st.f_bavail * st.f_frsize
-        except OSError:
-            self.free = None
-
-    def line(self, field="--bag") -> str:
-        free = "unknown" if self.free is None else f"{self.free}"
-        return (f"{field} {self.path}: {self.cause.strerror or 'write failed'} (errno {self.errno}): the next write "
-                f"needs {self.needed} bytes, {free} bytes free; the bag is closed readable up to its last commit")
 
 
 class BagWriter:
@@ -167,6 +88,7 @@ class BagWriter:
         self._chunk = []       # messages of the chunk in progress, added to the MCAP writer in log-time order
         self._last_commit = time.monotonic()
         self.commits = 0
+        self._last = None      # (writer snapshot, data end, counts) at the last commit that reached the disk
         self._commit()
 
     def add_topic(self, topic, type_name, qos=None) -> int:
@@ -234,27 +156,67 @@ class BagWriter:
 
     def _commit(self):
         self._write_out(self._provisional_end())
+        self._last = self._next_last          # what the file on disk holds now
         self._bytes = 0
         self._last_commit = time.monotonic()
         self.commits += 1
 
-    def _provisional_end(self):
-        """What ``Writer.finish`` would write now (status record, data end, summary, footer, magic),
-        computed on a copy of the writer so the real one carries on; a shallow copy is enough once
-        the lists and counters that ``add_metadata``/``finish`` change are copied."""
+    def _snapshot(self):
+        """A copy of the MCAP writer as it is now (right after a flush: no chunk open) that the real
+        one's later records do not reach: every list and mapping ``add_metadata``/``finish`` read or
+        change is copied, the chunk builder dropped."""
         w = copy.copy(self._w)
         stats = copy.copy(self._w._Writer__statistics)
         stats.channel_message_counts = dict(stats.channel_message_counts)
         w._Writer__statistics = stats
-        w._Writer__summary_offsets = list(self._w._Writer__summary_offsets)
-        w._Writer__metadata_indexes = list(self._w._Writer__metadata_indexes)
+        for name in ("summary_offsets", "metadata_indexes", "chunk_indices", "attachment_indexes"):
+            setattr(w, f"_Writer__{name}", list(getattr(self._w, f"_Writer__{name}")))
+        for name in ("schemas", "channels"):
+            setattr(w, f"_Writer__{name}", dict(getattr(self._w, f"_Writer__{name}")))
+        w._Writer__chunk_builder = None
         w._Writer__record_builder = RecordBuilder()
-        sink = _Sink(self._fh.tell())
-        w._Writer__stream = sink
         w._Writer__should_close = False
-        w.add_metadata(STATUS_RECORD, {"state": "recording", "messages": str(sum(self.counts.values()))})
+        return w
+
+    @staticmethod
+    def _end_of(w, at, status) -> bytes:
+        """What ``finish`` on the snapshot ``w`` writes at file offset ``at``, after ``status``."""
+        sink = _Sink(at)
+        w._Writer__stream = sink
+        w.add_metadata(STATUS_RECORD, status)
         w.finish()
         return bytes(sink.buf)
+
+    def _provisional_end(self):
+        """What ``Writer.finish`` would write now (status record ``recording``, data end, summary,
+        footer, magic), computed on a copy of the writer so the real one carries on. The status is
+        padded (``reserve``) so that the disk-full status that may replace it later
+        (:meth:`_failed_end`) fits in the bytes it has on disk."""
+        self._next_last = (self._snapshot(), self._fh.tell(), dict(self.counts))
+        return self._end_of(self._snapshot(), self._fh.tell(),
+                            {"state": "recording", "messages": str(sum(self.counts.values())),
+                             "reserve": " " * self.RESERVE})
+
+    #: spaces in the provisional status record: room for the disk-full status's reason
+    RESERVE = 320
+
+    def _failed_end(self, exc) -> bytes:
+        """The file's end as the last commit left it, with the status ``incomplete`` and the reason
+        (the disk full) instead of ``recording``: no longer than that commit's end."""
+        w, at, counts = self._last
+        reason = f"disk full: {exc.cause.strerror or 'write failed'} (errno {exc.errno}); the messages after the " \
+                 f"last commit are lost"
+        return self._end_of(w, at, {"state": "incomplete", "messages": str(sum(counts.values())),
+                                    "reason": reason[:self.RESERVE]})
+
+    def committed(self) -> tuple:
+        """(per-topic message counts, first and last log time ns or None) of what the file held at its
+        last commit (what it holds after a full disk)."""
+        w, _, counts = self._last
+        st = w._Writer__statistics
+        if not st.message_count:
+            return counts, None, None
+        return counts, st.message_start_time, st.message_end_time
 
     def close(self, state="complete", **fields) -> None:
         """Finish the file: final status record (``state``, ``messages`` and any ``fields``, e.g. the
@@ -277,25 +239,14 @@ class BagWriter:
         except DiskFull as exc:
             self.failed = exc
             self.closed = True
+            try:                   # the status says why the file ends here, where it fits
+                if self._last is not None:
+                    self.counts = dict(self._last[2])
+                    self._fh.rewrite_tail(self._failed_end(exc))
+            except OSError:
+                pass               # the last commit's end stays: status 'recording'
             self._fh.close()
             raise
-
-
-class _Sink:
-    """A byte sink that reports file offsets from ``start`` (for the provisional end)."""
-
-    def __init__(self, start):
-        self.start, self.buf = start, bytearray()
-
-    def write(self, data):
-        self.buf += data
-        return len(data)
-
-    def tell(self):
-        return self.start + len(self.buf)
-
-    def flush(self):
-        pass
 
 
 def recording_state(path, scan=None) -> str | None:

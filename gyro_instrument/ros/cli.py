@@ -68,16 +68,16 @@ def _command(core_cli, argv):
     if args.nmea_udp:
         from gyro_instrument.recording.nmea import resolve_udp_target
         resolve_udp_target(args.nmea_udp)
-    from gyro_instrument.ros.suite import run_suite
+    from gyro_instrument.ros.lockstep import DeliveryError
+    from gyro_instrument.ros.suite import NodeFailure, run_suite
     progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
-    result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                              command=" ".join(["gyro-instrument"] + full), progress=progress,
-                              overwrite=args.overwrite, bag_format=bag_format,
-                              max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
-                              namespace=args.namespace, ros_args=ros_args, window_s=args.window_s,
-                              nmea_udp=args.nmea_udp or "")
-    if result is None:
-        print("gyro-instrument: the scene could not be loaded by the nodes", file=sys.stderr)
+    try:
+        result, stats = _run_suite(run_suite, args, full, progress, bag_format, ros_args)
+    except NodeFailure as exc:       # the last line names the node and the reason
+        print(f"gyro-instrument: {exc}", file=sys.stderr)
+        return 3
+    except DeliveryError as exc:
+        print(f"gyro-instrument: the estimator or recorder did not receive every sample: {exc}", file=sys.stderr)
         return 3
     result = api.to_jsonable(result)
     if args.stats:
@@ -95,6 +95,15 @@ def _command(core_cli, argv):
                   f"({stats['real_time_factor_achieved']:.1f}x real time); recorded {sum(stats['recorded'].values())} "
                   f"messages" + (f" to {args.bag}" if args.bag else ""), file=sys.stderr)
     return 0
+
+
+def _run_suite(run_suite, args, full, progress, bag_format, ros_args):
+    return run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
+                     command=" ".join(["gyro-instrument"] + full), progress=progress,
+                     overwrite=args.overwrite, bag_format=bag_format,
+                     max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
+                     namespace=args.namespace, ros_args=ros_args, window_s=args.window_s,
+                     nmea_udp=args.nmea_udp or "")
 
 
 if __name__ == "__main__":

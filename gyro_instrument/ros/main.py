@@ -24,9 +24,12 @@ _TOPICS = {
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()]
                  + [f"{heading_topic('<gyro>')} ({IMU_TYPE}, {heading_frame('<gyro>')}): a horizontal gyroscope's heading, "
                     f"at each reversal point and with the estimate"],
-    "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
-    "player": ["the bag's topics (relative names), clock"],
+    "recorder": ["subscribes every topic of the scene (or the parameter topics)",
+                 "services ~/pause, ~/resume, ~/split (std_srvs/srv/Trigger)"],
+    "player": ["the bag's topics (relative names, each offered the QoS the bag recorded), clock"],
 }
+#: every node run alone publishes its state on /diagnostics (msg_docs/topics.md, "Services and liveness")
+LIVENESS_LINE = "diagnostics (diagnostic_msgs/msg/DiagnosticArray): this node's state every 0.5 s"
 _EXAMPLES = {
     "estimator": "estimator --ros-args -p scene:=quet_paris",
     "recorder": "recorder --ros-args -p scene:=quet_paris -p output:=out.mcap -p stop_when_complete:=true",
@@ -45,7 +48,8 @@ def simulator_topics(kinds) -> list:
             line = f"{p.topic} ({p.type_name}{frame}), {rate}"
             if line not in lines:
                 lines.append(line)
-    return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)"]
+    return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)",
+                    "service ~/restart (std_srvs/srv/Trigger): restart the run from t = 0, every simulator together"]
 
 
 def help_text(name) -> str:
@@ -54,9 +58,9 @@ def help_text(name) -> str:
     kinds = simulator_kinds().get(name)
     if kinds is not None:
         summary = f"Simulates the scene's instruments of types {', '.join(kinds)} and publishes what they show."
-        return P.help_text(name, summary, P.NODE_SPECS[name], simulator_topics(kinds),
+        return P.help_text(name, summary, P.NODE_SPECS[name], simulator_topics(kinds) + [LIVENESS_LINE],
                            f"{name} --ros-args -p scene:=SCENE -p publish_clock:=true -p real_time_factor:=0")
-    return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name], _EXAMPLES[name])
+    return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name] + [LIVENESS_LINE], _EXAMPLES[name])
 
 
 def _wants_help(name, args):
@@ -131,7 +135,7 @@ def _run(name, make, args=None, on_exit=None):
     node.stop_asked = lambda: _STOP.asked
     node.start()
     _spin(node, on_exit=(lambda: on_exit(node)) if on_exit else None)
-    return 0
+    return getattr(node, "exit_status", 0)
 
 
 def _simulator(name, args=None):

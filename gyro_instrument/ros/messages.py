@@ -92,10 +92,12 @@ def imu(t_ns, frame_id, fields) -> Imu:
     return msg
 
 
-def diagnostics(t_ns, name, level_ok, message, values) -> DiagnosticArray:
-    """diagnostic_msgs/DiagnosticArray with one status; values: mapping -> KeyValue strings."""
-    st = DiagnosticStatus(level=DiagnosticStatus.OK if level_ok else DiagnosticStatus.WARN, name=name,
-                          message=message, hardware_id="gyro_instrument")
+def diagnostics(t_ns, name, level_ok, message, values, level=None, hardware_id="gyro_instrument") -> DiagnosticArray:
+    """diagnostic_msgs/DiagnosticArray with one status; values: mapping -> KeyValue strings; ``level``
+    (a ``DiagnosticStatus`` level byte) overrides ``level_ok`` (OK or WARN)."""
+    if level is None:
+        level = DiagnosticStatus.OK if level_ok else DiagnosticStatus.WARN
+    st = DiagnosticStatus(level=level, name=name, message=message, hardware_id=hardware_id)
     st.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
     arr = DiagnosticArray(status=[st])
     arr.header.stamp = stamp(t_ns)

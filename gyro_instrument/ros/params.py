@@ -205,8 +205,8 @@ NODE_SPECS = _NodeSpecs({**{sim: SIMULATOR for sim in simulator_kinds()},
 BUILTIN = ("use_sim_time", "start_type_description_service")
 
 
-def unknown_parameter_message(name, specs, node_name) -> str:
-    """Log text for an override that names no parameter of this node."""
+def unknown_parameter_message(name, specs, node_name, value=None) -> str:
+    """Log text for an override (or a set) that names no parameter of this node, with its value."""
     names = [s.name for s in specs]
     hint = difflib.get_close_matches(name, names, n=1)
     if hint:
@@ -215,7 +215,8 @@ def unknown_parameter_message(name, specs, node_name) -> str:
         tip = f"scene values go in overrides, e.g. -p \"overrides:=['site.{name}=...']\""
     else:
         tip = f"valid: {', '.join(names)}"
-    return f"parameter {name} is not a parameter of {node_name} and is ignored: {tip}"
+    shown = f" = {value!r}" if value is not None else ""
+    return f"parameter {name}{shown} is not a parameter of {node_name} and is ignored: {tip}"
 
 
 def declare_all(node, specs) -> dict:
@@ -246,7 +247,7 @@ def declare_all(node, specs) -> dict:
     known = {s.name for s in specs}
     for name in overrides:
         if name not in known and name not in BUILTIN and not name.startswith("qos_overrides."):
-            node.get_logger().warning(unknown_parameter_message(name, specs, node.get_name()))
+            node.get_logger().warning(unknown_parameter_message(name, specs, node.get_name(), overrides[name].value))
     return refused
 
 
@@ -261,7 +262,7 @@ def pre_set_checker(node, specs) -> Callable:
             spec = by_name.get(p.name)
             if spec is None:
                 if p.name not in BUILTIN and not node.has_parameter(p.name):
-                    node.get_logger().error(unknown_parameter_message(p.name, specs, node.get_name()))
+                    node.get_logger().error(unknown_parameter_message(p.name, specs, node.get_name(), p.value))
                 out.append(p)
                 continue
             if spec.read_only:

@@ -52,6 +52,14 @@ class BagWriteError(SceneError):
         self.field, self.value, self.valid = "--bag", None, line
 
 
+class NodeFailure(RuntimeError):
+    """A node of the run failed (not the input): ``node`` and the reason, ``run``'s last line."""
+
+    def __init__(self, node, reason) -> None:
+        super().__init__(f"{node}: {reason}")
+        self.node, self.reason = node, reason
+
+
 def _params(scene, overrides, duration_s, **extra):
     ps = [Parameter("scene", value=scene), Parameter("duration_s", value=float(duration_s or 0.0))]
     if overrides:
@@ -142,7 +150,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         if rec is not None and rec.failed is not None:
             # the disk filled: the bag is left readable up to its last commit; one line, exit 2
             rec.close(state="disk full")
-            raise BagWriteError(rec.failed.line("--bag"))
+            raise BagWriteError("recorder: " + rec.failed.line("--bag"))
         # the process's peak so far: the streaming part of the run, before the estimate's work arrays
         peak_streaming_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         result = _finalize(est, rec, ex, timeout_s)
@@ -300,6 +308,11 @@ def _finalize(est, rec, ex, timeout_s):
         rec.close(meta, name="gyro_instrument_estimate")
     if est.refusal is not None:     # the data failed an adequacy check: exit 2 with its one line
         raise est.refusal
+    if result is None:
+        if est.scene is None:
+            raise NodeFailure("estimator", "the scene could not be loaded (see the log above)")
+        raise NodeFailure("estimator", est.failure or f"no estimate from the samples received "
+                                                      f"({est.received()} joint samples)")
     return result
 
 

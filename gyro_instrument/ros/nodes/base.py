@@ -2,6 +2,9 @@
 declared from a table with descriptors and checked on every change, the scene, one clock owner
 per namespace)."""
 
+import threading
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock as RclClock, ClockType
 from rclpy.duration import Duration
@@ -11,7 +14,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.recording.topics import resolve
+from gyro_instrument.recording.qos import profile, replay_offer
+from gyro_instrument.recording.topics import DIAGNOSTICS, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
 from gyro_instrument.scenes import build_instruments
@@ -30,6 +34,52 @@ STEADY = RclClock(clock_type=ClockType.STEADY_TIME)
 #: samples (or messages) a node run alone publishes per timer tick at real-time factor 0
 FLOW_BATCH = 200
 ACK_TIMEOUT = Duration(seconds=5)
+
+
+def qos_dict(qos) -> dict:
+    """An rclpy ``QoSProfile`` as :func:`gyro_instrument.recording.qos.profile` (what a bag records)."""
+    history = {HistoryPolicy.KEEP_LAST: "keep_last", HistoryPolicy.KEEP_ALL: "keep_all"}.get(qos.history, "unknown")
+    return profile(history=history, depth=qos.depth if history == "keep_last" else 0,
+                   reliability={ReliabilityPolicy.RELIABLE: "reliable", ReliabilityPolicy.BEST_EFFORT: "best_effort"}
+                   .get(qos.reliability, "unknown"),
+                   durability={DurabilityPolicy.TRANSIENT_LOCAL: "transient_local",
+                               DurabilityPolicy.VOLATILE: "volatile"}.get(qos.durability, "unknown"))
+
+
+def qos_text(qos) -> str:
+    """A QoS profile in a log line: ``RELIABLE KEEP_LAST 10 VOLATILE`` (``RELIABLE VOLATILE`` for an
+    endpoint seen in the graph: its history is not discovered)."""
+    d = qos_dict(qos)
+    hist = f"KEEP_LAST {d['depth']} " if d["history"] == "keep_last" else "KEEP_ALL " if d["history"] == "keep_all" \
+        else ""          # a discovered endpoint's history is not known (DDS does not send it)
+    return f"{d['reliability'].upper()} {hist}{d['durability'].upper()}"
+
+
+def replay_qos(profiles) -> QoSProfile:
+    """The QoS the player offers for a topic recorded with ``profiles`` (:func:`replay_offer`: the
+    recorded reliability and durability): a TRANSIENT_LOCAL topic KEEP_LAST with the recorded depth
+    (what a late subscriber gets; the player waits for each message's acknowledgement before the
+    next, so a reliable subscriber loses none), any other KEEP_ALL (flow control: a slow RELIABLE
+    subscriber makes the player wait, never drop)."""
+    offer = replay_offer(profiles)
+    rel = ReliabilityPolicy.RELIABLE if offer["reliability"] == "reliable" else ReliabilityPolicy.BEST_EFFORT
+    if offer["durability"] == "transient_local":
+        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=offer["depth"], reliability=rel,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    return QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=rel, durability=DurabilityPolicy.VOLATILE)
+
+
+#: a node's liveness status on /diagnostics: published every this many s of wall time
+DIAG_PERIOD_S = 0.5
+#: the ``hardware_id`` of the liveness statuses (the recorder does not record them: they describe the
+#: live nodes, and a played bag would bring back nodes that are not running)
+LIVENESS_ID = "gyro_instrument/node"
+OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+
+
+def list_or(value) -> object:
+    """An array parameter's value as a list (rclpy may hold an ``array.array``), others as they are."""
+    return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
 
 
 def acked(node, pubs) -> None:
@@ -73,6 +123,53 @@ class SceneNode(Node):
         v = self.get_parameter(name).value
         return default if v is None else v
 
+    # ---- liveness on /diagnostics ------------------------------------------------------------------
+
+    def start_diagnostics(self) -> None:
+        """Publish this node's state on ``diagnostics`` every :data:`DIAG_PERIOD_S` of wall time (a
+        node run alone; latched, so an aggregator started later gets every node's last state), from a
+        thread of its own: the state keeps coming while a callback integrates a block or waits for a
+        slow subscriber."""
+        self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, LATCHED)
+        self._diag_stop = threading.Event()
+
+        def loop():
+            while True:
+                try:
+                    self.publish_diagnostics()
+                except Exception:        # the context shut down under it (the node is going), or a
+                    if not self.context.ok():    # state read while the node's thread changed it:
+                        return                   # the next period says it
+                if self._diag_stop.wait(DIAG_PERIOD_S):
+                    return
+        self._diag_thread = threading.Thread(target=loop, name=f"{self.get_name()}_diagnostics", daemon=True)
+        self._diag_thread.start()
+
+    def destroy_node(self) -> None:
+        stop = getattr(self, "_diag_stop", None)
+        if stop is not None:
+            stop.set()
+            self._diag_thread.join(timeout=2.0)
+        return super().destroy_node()
+
+    def liveness(self) -> tuple:
+        """(level, message, {key: value}) of this node now; subclasses say more."""
+        return OK, getattr(self, "state", "idle"), {}
+
+    def sim_time_ns(self) -> int:
+        """This node's sim time (ns from the release, the epoch's t = 0) for the liveness stamp."""
+        return 0
+
+    def publish_diagnostics(self) -> None:
+        pub = getattr(self, "_diag_pub", None)
+        if pub is None or not self.context.ok():
+            return
+        level, message, values = self.liveness()
+        name = f"gyro_instrument: {resolve(self.get_namespace(), self.get_name())}"
+        pub.publish(m.diagnostics(self.sim_time_ns(), name, True, message,
+                                  {k: v for k, v in values.items() if v is not None}, level=level,
+                                  hardware_id=LIVENESS_ID))
+
     def refuse_sim_time_if_owner(self) -> None:
         """A clock owner started with ``use_sim_time:=true`` would wait for its own clock: refused."""
         if self.clock_owner and self.value("use_sim_time", False):
@@ -87,7 +184,19 @@ class SceneNode(Node):
                 vals[p.name] = p.value
         return vals["scene"], list(vals["overrides"] or []), (float(vals["duration_s"] or 0.0) or None)
 
+    def unchanged(self, param) -> bool:
+        """True when ``param`` (already converted by the pre-set check) holds the value the node has:
+        setting it changes nothing (``ros2 param set`` of the current value, ``ros2 param load`` of an
+        unchanged dump)."""
+        if not self.has_parameter(param.name) or param.name in self.refused:
+            return False                 # a start-up value refused: any value set now is a correction
+        old = self.get_parameter(param.name)
+        return old.type_ == param.type_ and list_or(old.value) == list_or(param.value)
+
     def _check_params(self, params):
+        # what this set really changes (the post-set callback acts on these only)
+        self._changing = {p.name for p in params if not self.unchanged(p)}
+        params = [p for p in params if p.name in self._changing]
         for p in params:
             if p.name == "use_sim_time" and p.value is True and self.clock_owner:
                 reason = ("use_sim_time = true is invalid on the clock owner: it publishes clock and would wait "
@@ -106,7 +215,13 @@ class SceneNode(Node):
     def _after_set(self, params):
         for p in params:
             self.refused.pop(p.name, None)
-        if any(p.name in self.RESTART_ON for p in params):
+        changed = [p for p in params if p.name in getattr(self, "_changing", ())]
+        if changed:
+            self.get_logger().info("parameters changed: " + ", ".join(f"{p.name} = {p.value!r}" for p in changed))
+        same = [p.name for p in params if p.name not in getattr(self, "_changing", ())]
+        if same:
+            self.get_logger().info(f"parameters set to the values they had: {', '.join(same)}; nothing changes")
+        if any(p.name in self.RESTART_ON for p in changed):
             self._restart = True
             if not self.standalone:
                 self.restart()

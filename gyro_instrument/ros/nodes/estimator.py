@@ -30,7 +30,7 @@ from gyro_instrument.recording.topics import (CLOCK, DIAGNOSTICS, estimator_topi
                                               joint_names, joint_topic, live_kinds)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import LATCHED, RELIABLE_ALL, STEADY, SceneNode
+from gyro_instrument.ros.nodes.base import ERROR, LATCHED, OK, RELIABLE_ALL, STEADY, WARN, SceneNode
 
 
 class EstimatorNode(SceneNode):
@@ -46,6 +46,7 @@ class EstimatorNode(SceneNode):
         self.wrong_types = {}
         self.result = None
         self.refusal = None     # the InadequateData of a refused estimate (estimators/adequacy.py)
+        self.failure = None     # why the last estimate failed (an error in the core), for run's last line
         self.pubs = {}
         self.timers_ = []
         self.clock_sub = None
@@ -184,6 +185,7 @@ class EstimatorNode(SceneNode):
         self.get_logger().info(f"{why}: run {self.runs + 1} begins, a new estimate starts")
         self.buffers = {name: new for name, (_, new) in split.items()}
         self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
+        self.failure = None
         self.trackers = {name: tr.restarted() for name, tr in self.trackers.items()}
         for (owner, read) in self._due:
             self._due[(owner, read)] = len(self.buffers[read]) + self._every(self.trackers[owner], read)
@@ -203,8 +205,27 @@ class EstimatorNode(SceneNode):
         (joint samples and clock) went silent; a new run (the clock going back) starts a new estimate."""
         self.standalone = True
         self.create_timer(0.5, self._control, clock=STEADY)
+        self.start_diagnostics()
         if self.scene is not None:
             self.get_logger().info(self.startup_line())
+
+    def liveness(self) -> tuple:
+        """The state on /diagnostics (beside the estimate's own status)."""
+        values = {"samples": self.received(), "expected_per_instrument": self.expected, "runs": self.runs}
+        if self.scene is None:
+            return ERROR, "not running: the scene did not load or a start-up value was refused (see the log)", values
+        if self.failure is not None:
+            return ERROR, f"settled: {self.failure}", values
+        if self.refusal is not None:
+            return WARN, f"settled: estimate refused: {self.refusal}", values
+        if self.final:
+            return OK, "settled: estimate published", values
+        if self._last_input is None:
+            return OK, "waiting for input (joint states and clock)", values
+        return OK, "collecting samples", values
+
+    def sim_time_ns(self) -> int:
+        return max(self.last_clock_ns or 0, 0)
 
     def startup_line(self) -> str:
         subs = ", ".join(self.subs) or "no joint states (nothing estimable in this scene)"
@@ -340,7 +361,8 @@ class EstimatorNode(SceneNode):
                 {"refused_by_check": exc.field, "rejected_messages": self.rejected}))
             return None
         except Exception as exc:  # the estimator must never take the node down
-            self.get_logger().error(f"estimation failed: {exc.__class__.__name__}: {exc}")
+            self.failure = f"estimation failed: {exc.__class__.__name__}: {exc}"
+            self.get_logger().error(self.failure)
             return None
         if self.result is None:
             return None

@@ -16,14 +16,18 @@ from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
-from gyro_instrument.recording.mcap_io import DiskFull, qos_yaml
-from gyro_instrument.recording.topics import MARKER_TYPE, estimator_topics, scene_topics, sparse_topics, visual_every
+from gyro_instrument.recording.mcap_io import DiskFull
+from gyro_instrument.recording.qos import profiles_yaml
+from gyro_instrument.recording.topics import (DIAGNOSTICS, MARKER_TYPE, estimator_topics, scene_topics, sparse_topics,
+                                              visual_every)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import RELIABLE_ALL, STEADY, SceneNode
+from gyro_instrument.ros.nodes.base import (LATCHED, PUBLISH_ALL, RELIABLE_1000, RELIABLE_ALL, STEADY, SceneNode,
+                                            qos_dict)
+from gyro_instrument.ros.nodes.recorder_control import RecorderControl
 
 
-class RecorderNode(SceneNode):
+class RecorderNode(RecorderControl, SceneNode):
     """Records the scene's topics (raw CDR) to MCAP with sim-time log times, in log-time order, and
     marks the file ``complete`` or ``incomplete`` (per-topic counts against what the scene publishes).
 
@@ -71,12 +75,16 @@ class RecorderNode(SceneNode):
         self._topic_run = {}         # topic -> run index its messages belong to
         self.run_index = 0
         self._old = {}               # run index -> (writer, counts) of a run closed by a restart
+        self._offered = {}           # topic -> offered_qos_profiles text recorded for it
+        self._diagnostics = self.resolve_topic_name(DIAGNOSTICS)
+        self.init_control()
         if self.load():
             self.prepare()
 
     def _check_params(self, params):
-        if self.writer is not None and any(p.name in self.RETRY_ON for p in params):
-            names = ", ".join(p.name for p in params if p.name in self.RETRY_ON)
+        changing = [p for p in params if p.name in self.RETRY_ON and not self.unchanged(p)]
+        if self.writer is not None and changing:
+            names = ", ".join(p.name for p in changing)
             reason = f"{names} cannot change while recording to {self.writer.path}: a recording has one scene and " \
                      "one file (stop the recorder and start it again)"
             self.get_logger().error(f"parameter refused: {reason}")
@@ -85,7 +93,7 @@ class RecorderNode(SceneNode):
 
     def _after_set(self, params):
         super()._after_set(params)
-        if self.writer is None and any(p.name in self.RETRY_ON for p in params):
+        if self.writer is None and any(p.name in self.RETRY_ON and p.name in self._changing for p in params):
             # a value refused at start-up, corrected: start recording now
             if self.load():
                 self.prepare()
@@ -156,10 +164,13 @@ class RecorderNode(SceneNode):
         self.sample_topics = set()
         self.rank = {}
         self._topic_types = {}
+        self._known_qos = {}
         for topic in wanted:
             name = self.resolve_topic_name(topic)         # namespace and remapping applied
-            self.writer.add_topic(name, types[topic], qos_yaml(reliable=True, keep_all=False, depth=1000))
             self._topic_types[name] = types[topic]
+            # what this package's publisher of the topic offers (history and depth are not discovered)
+            self._known_qos[name] = qos_dict(LATCHED if topic in estimates else
+                                             PUBLISH_ALL if self.reorder else RELIABLE_1000)
             self.counts[name] = 0
             self.rank[name] = list(types).index(topic)      # ties in stamp: clock first, then scene order
             if types[topic] == MARKER_TYPE:
@@ -177,6 +188,7 @@ class RecorderNode(SceneNode):
 
     def start(self) -> None:
         self.standalone = True
+        self.start_diagnostics()
         if self.writer is not None:
             self.get_logger().info(
                 f"recording {', '.join(self.subs)} to {self.writer.path}; expects "
@@ -189,6 +201,8 @@ class RecorderNode(SceneNode):
         # Header-first types and Clock carry their sim time; Float64 takes the latest sim time
         # received (never wall time), so one bag has one time base.
         if self.writer is None or self.writer.closed:
+            return
+        if topic == self._diagnostics and self.is_liveness(data):
             return
         st = m.cdr_stamp_ns(data) if topic in self.stamped else \
             m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
@@ -206,6 +220,9 @@ class RecorderNode(SceneNode):
             elif run < self.run_index:      # the rest of a run closed by a restart: into its own file
                 self._write_old(run, topic, st, data)
                 return
+        if self.paused:
+            self.not_recorded += 1
+            return
         if st is None:
             st = self.max_ns
         self.counts[topic] += 1
@@ -222,9 +239,32 @@ class RecorderNode(SceneNode):
         if self._seq % 64 == 0 or topic not in self.sample_topics:
             self._flush(self._watermark())
 
+    def _offered_qos(self, topic) -> str:
+        """``offered_qos_profiles`` of ``topic`` as rosbag2 records them: one profile per publisher the
+        graph shows (reliability and durability as discovered; history and depth, which DDS does not
+        discover, from what this package's publisher of the topic offers), or that publisher's
+        profile when the graph shows none."""
+        known = self._known_qos[topic]
+        profiles = []
+        for info in self.get_publishers_info_by_topic(topic):
+            q = qos_dict(info.qos_profile)
+            if q["history"] == "unknown":
+                q["history"], q["depth"] = known["history"], known["depth"]
+            profiles.append(q)
+        return profiles_yaml(profiles or [known])
+
+    def _ensure_topic(self, topic) -> None:
+        """Register ``topic`` in the current file before its first message, with the publishers'
+        offered QoS (the first file's, seen then, in the files that follow)."""
+        if topic not in self.writer.counts:
+            if topic not in self._offered:
+                self._offered[topic] = self._offered_qos(topic)
+            self.writer.add_topic(topic, self._topic_types[topic], self._offered[topic])
+
     def _write(self, topic, st, data):
         if self.writer.closed:           # stopped by a full disk
             return
+        self._ensure_topic(topic)
         if st < self.last_ns:            # arrived after later stamps were written: still logged at its stamp
             self.late += 1
         self.last_ns = max(self.last_ns, st)
@@ -268,14 +308,17 @@ class RecorderNode(SceneNode):
         rec = self._scene_record()
         rec["continues"] = os.path.basename(old_path.rstrip("/"))
         self.writer.add_metadata("gyro_instrument", rec)
-        for name in self.counts:
-            self.writer.add_topic(name, self._topic_types[name], qos_yaml(reliable=True, keep_all=False, depth=1000))
+        for name in self._offered:          # the QoS seen in the first run's file
+            self._ensure_topic(name)
 
     def _write_old(self, run, topic, st, data):
         writer, counts, _ = self._old[run]
         counts[topic] = counts.get(topic, 0) + 1
         if not writer.closed:
             try:
+                if topic not in writer.counts:
+                    writer.add_topic(topic, self._topic_types[topic], self._offered.get(topic)
+                                     or self._offered_qos(topic))
                 writer.write(topic, st, data)
             except OSError as exc:
                 self._disk_full(exc)
@@ -357,6 +400,12 @@ class RecorderNode(SceneNode):
                 except OSError as exc:
                     self._disk_full(exc)
                     return
+            try:
+                for topic in self.counts:    # a topic with no message is listed too
+                    self._ensure_topic(topic)
+            except OSError as exc:
+                self._disk_full(exc)
+                return
             missing = self.missing()
             if state is None:
                 state = "incomplete" if missing else "complete"
@@ -365,6 +414,8 @@ class RecorderNode(SceneNode):
                         f"{tp} {k} of {n}" for tp, (k, n) in missing.items()))
             topics = {tp: [self.counts[tp], n] for tp, n in self.expected.items()}
             fields = {"topics": json.dumps(topics), "late": self.late}
+            if self.not_recorded:
+                fields["not_recorded_paused"] = self.not_recorded
             if self.run_index:
                 fields["restart"] = json.dumps({"run": self.run_index, "continues": os.path.basename(
                     self._old[self.run_index - 1][0].path.rstrip("/"))})

@@ -13,15 +13,17 @@ import time
 
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.serialization import serialize_message
+from std_srvs.srv import Trigger
 
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.estimators.pipeline import estimator_instruments
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.sim_stream import SimulatorStream
-from gyro_instrument.recording.topics import CLOCK
+from gyro_instrument.recording.topics import CLOCK, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import FLOW_BATCH, PUBLISH_ALL, RELIABLE_ALL, STEADY, SceneNode, acked
+from gyro_instrument.ros.nodes.base import (ERROR, FLOW_BATCH, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY, WARN, SceneNode,
+                                            acked)
 
 
 class SimulatorNode(SceneNode):
@@ -44,15 +46,23 @@ class SimulatorNode(SceneNode):
         self.offsets = {}           # topic -> sample offsets of the last batch's sparse messages
         self._marker_msgs = {}      # instrument -> its last MarkerArray (updated in place)
         self.state = "idle"
+        self._clock_t = None        # the last clock tick a follower saw (ns from the epoch)
+        self._integrating = False   # inside a block's integration (liveness)
+        self._blocked_on = None     # topic a refused write waits on (liveness)
+        self._missing = []          # what the wait before sim time still misses (liveness)
+        self._restart_clients = {}
         if self.load():
             self.prepare()
+
+    def _new_stream(self) -> SimulatorStream:
+        seed = self.get_parameter("seed").value
+        return SimulatorStream(self.scene, self.insts, self.kinds, None if seed < 0 else seed,
+                               float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner)
 
     def prepare(self) -> None:
         """Create the core stream and the publishers its publications declare: nothing is integrated
         until the first publish, and then one window of ``window_s`` simulated seconds at a time."""
-        seed = self.get_parameter("seed").value
-        self.stream = SimulatorStream(self.scene, self.insts, self.kinds, None if seed < 0 else seed,
-                                      float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner)
+        self.stream = self._new_stream()
         if not self.stream.chosen:
             self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
         self.clock_pub = self.create_publisher(m.Clock, CLOCK, self.pub_qos) if self.clock_owner else None
@@ -109,6 +119,108 @@ class SimulatorNode(SceneNode):
         else:
             self.state = "idle"
 
+    def rewind(self) -> bool:
+        """Start the run again from t = 0 with the parameters as they are now, keeping the publishers
+        (so every subscriber stays matched and nothing published is lost): True when the reloaded
+        scene publishes the same topics with the same types; False (nothing changed) otherwise, or when
+        the scene does not load (logged)."""
+        old = {key: (pub.topic_name, pub.msg_type) for key, pub in self.pubs.items()}
+        if not self.load():
+            return False
+        stream = self._new_stream()
+        new = {(name, p.key): (self.resolve_topic_name(p.topic), m.message_class(p.type_name))
+               for name, pubs in stream.pubs.items() for p in pubs}
+        if new != old:
+            return False
+        self.stream, self._marker_msgs, self._clock_t = stream, {}, None
+        return True
+
+    def _restart_run(self) -> None:
+        """A real change of ``scene``, ``overrides``, ``duration_s`` or ``seed`` on a node run alone:
+        the whole run starts again together. The clock owner rewinds (its clock goes back to the epoch;
+        the followers rewind when they see it, :meth:`_on_clock`; the recorder starts one new file and
+        the estimator a new estimate); a follower asks the owner to restart (service ``restart``) and
+        rewinds with its new values when the clock goes back. Alone (no owner seen), or when the topics
+        change, the node tears down and starts again (:meth:`restart`)."""
+        self._restart = False
+        if self.clock_owner:
+            if self.state in ("running", "done") and self.rewind():
+                self.get_logger().info(f"scene {self.scene.name}: restarting the run from t = 0 (the clock goes "
+                                       f"back to the epoch; the followers restart with it)")
+                self.state, self._rtf = "running", None
+                self.timer.reset()
+                return
+        elif self.state in ("running", "done"):
+            owner = self.clock_owner_name()
+            if owner is not None:
+                self.get_logger().info(f"asking the clock owner {owner} to restart the run: this node restarts with "
+                                       f"its new values when the clock goes back")
+                self._ask_restart(owner)
+                return
+        self.restart()
+
+    def clock_owner_name(self) -> str | None:
+        """The fully qualified name of the node publishing this node's clock, or None."""
+        topic = self.resolve_topic_name(CLOCK)
+        me = resolve(self.get_namespace(), self.get_name())
+        owners = sorted({resolve(i.node_namespace, i.node_name) for i in self.get_publishers_info_by_topic(topic)}
+                        - {me})
+        return owners[0] if owners else None
+
+    def _ask_restart(self, owner) -> None:
+        cli = self._restart_clients.get(owner)
+        if cli is None:
+            cli = self._restart_clients[owner] = self.create_client(Trigger, f"{owner}/restart")
+        if not cli.service_is_ready():
+            self.get_logger().warning(f"{owner}/restart is not available: restarting this node alone")
+            self.restart()
+            return
+        cli.call_async(Trigger.Request()).add_done_callback(
+            lambda fut: self.get_logger().info(f"{owner}: {fut.result().message}") if fut.result() else None)
+
+    def _on_restart_request(self, request, response):
+        """Service ``restart`` (std_srvs/Trigger): the clock owner restarts the run from t = 0 with its
+        current parameters (every follower with it); a follower passes the request to the owner."""
+        if self.state not in ("running", "done"):
+            response.success = False
+            response.message = f"not restarted: {self.get_name()} is {self.state} (no run to restart)"
+            self.get_logger().error(f"restart refused: {response.message}")
+        elif self.clock_owner:
+            self._restart = True
+            response.success, response.message = True, "restarting the run from t = 0"
+        else:
+            owner = self.clock_owner_name()
+            if owner is None:
+                self._restart = True
+                response.success, response.message = True, "no clock owner seen: restarting this node alone"
+            else:
+                self._ask_restart(owner)
+                response.success, response.message = True, f"asked the clock owner {owner} to restart the run"
+        return response
+
+    def liveness(self) -> tuple:
+        """The state on /diagnostics: waiting for subscribers, integrating, publishing, waiting for a
+        subscriber to take messages, done (settled), refused or idle (not running, with why)."""
+        n = self.samples
+        values = {"samples_published": self.index, "samples": n, "sim_time_s": self.sim_time_ns() / 1e9,
+                  "owns_clock": self.clock_owner}
+        if self.state == "idle":
+            return (ERROR if self.scene is None else OK), ("not running: the scene did not load or a start-up "
+                                                          "value was refused (see the log)" if self.scene is None
+                                                          else "idle"), values
+        if self.state == "waiting":
+            return OK, "waiting for subscribers: " + (", ".join(self._missing) or "the graph"), values
+        if self.state == "refused":
+            return ERROR, "not running: publish_clock refused (another node publishes the clock)", values
+        if self.state == "done":
+            return OK, f"settled: published all {n} samples", values
+        if self._blocked_on:
+            return WARN, f"waiting for a subscriber to take messages on {self._blocked_on} (nothing dropped)", values
+        return OK, ("integrating" if self._integrating else "publishing"), values
+
+    def sim_time_ns(self) -> int:
+        return int(self.stream.index * self.stream.step_ns) if self.stream is not None else 0
+
     def publishers(self) -> list:
         """This node's publishers, the clock first."""
         return ([self.clock_pub] if self.clock_pub is not None else []) + list(self.pubs.values())
@@ -128,7 +240,9 @@ class SimulatorNode(SceneNode):
         core, when the samples asked for go past the current one."""
         if self.stream is None:
             return 0
+        self._integrating = not self.stream.block_ready(k)
         batch = self.stream.batch(k)
+        self._integrating = False
         self.offsets = {self.pubs[key].topic_name: offs for key, offs in batch.offsets.items()}
         for key, datas in batch.messages:
             pub = self.clock_pub if key == "clock" else self.pubs[key]
@@ -154,6 +268,7 @@ class SimulatorNode(SceneNode):
         wait by raising KeyboardInterrupt; a context shut down re-raises the error. Only for a node
         run alone: in ``run``'s lock-step suite the subscribers are served by the same thread."""
         t0 = last = time.monotonic()
+        self._blocked_on = topic
         self.get_logger().warn(f"publishing {topic} waits: a RELIABLE / KEEP_ALL subscriber is not "
                                f"taking messages (its queue is full); nothing is dropped")
         while True:
@@ -170,6 +285,7 @@ class SimulatorNode(SceneNode):
                 if now - last >= 10.0:
                     last = now
                     self.get_logger().warn(f"publishing {topic} has waited {now - t0:.0f} s for a subscriber")
+        self._blocked_on = None
         self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
 
     def _marker_array(self, name, t_ns, geom):
@@ -213,8 +329,10 @@ class SimulatorNode(SceneNode):
         owner's clock reaches each sample)."""
         self.standalone = True
         self._ctl = self.create_timer(0.05, self._control, clock=STEADY)
+        self._restart_srv = self.create_service(Trigger, "~/restart", self._on_restart_request)
         if self.samples:
             self._wait_begin()
+        self.start_diagnostics()
 
     def startup_line(self) -> str:
         pubs = ", ".join(f"{pub.topic_name} ({pub.msg_type.__module__.split('.')[0]}/msg/{pub.msg_type.__name__})"
@@ -238,11 +356,12 @@ class SimulatorNode(SceneNode):
 
     def _control(self):
         if self._restart:
-            self.restart()
+            self._restart_run()
         if self.state != "waiting":
             return
         missing = self._named_nodes_ready(self.expected_subscribers())
         unmatched = self._unmatched(self.publishers())
+        self._missing = missing + unmatched
         if missing or unmatched:
             if time.monotonic() - self._wait_t0 < self.value("wait_timeout_s"):
                 return
@@ -284,8 +403,18 @@ class SimulatorNode(SceneNode):
             self._finish()
 
     def _on_clock(self, data):
-        """Follower: publish every sample up to the owner's clock."""
+        """Follower: publish every sample up to the owner's clock; when the clock goes back (the owner
+        restarted its run) rewind first, with this node's current parameters."""
         t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        if self._clock_t is not None and t < self._clock_t:
+            if self.rewind():
+                self.state = "running"
+                self.get_logger().info(f"the clock went back to {t / 1e9:g} s: restarting the run from t = 0")
+            else:
+                self._clock_t = None
+                self.restart()
+                return
+        self._clock_t = t
         k = self.sample_index(t) - self.index
         if k > 0 and self.state == "running":
             self.publish_steps(k)
