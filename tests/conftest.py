@@ -37,6 +37,17 @@ def pytest_configure(config):
 from gyro_instrument.core.params import validate_params
 from gyro_instrument.effects import REGISTRY as EFFECTS
 
+# Property tests draw the same examples on every run and every machine (a failure is reproduced by
+# re-running, never lost to a random draw; no example database is written into the checkout). A
+# search with fresh random draws: HYPOTHESIS_PROFILE=explore.
+try:
+    from hypothesis import settings as _hsettings
+    _hsettings.register_profile("derandomized", derandomize=True, database=None, print_blob=True)
+    _hsettings.register_profile("explore", derandomize=False)
+    _hsettings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "derandomized"))
+except ImportError:                    # the test extra not installed: the property tests fail on import
+    pass
+
 
 def make(cls, site, effects=(), **params):
     """Build an instrument of class ``cls`` at ``site`` with the named effects (default params)."""
