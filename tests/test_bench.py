@@ -110,14 +110,30 @@ def test_targets_and_observation_time(bench):
         assert abs(float(r["earth_rate_bias_rad_s"])) > 10 * float(obs[float(r["minutes"])]["crlb_earth_rate_rad_s"]), r
 
 
+# The reported σ is the inverse Fisher information at the estimate, the Cramér–Rao bound the same at
+# the truth: they differ by how the information changes over the estimate's scatter (measured 2026-12-07:
+# 0.998, 1.012 on quet_paris at -33.9°, 48.85° and 1.011, 1.033 on quet_gyroscopes at 20°, 60°, spread
+# over seeds 1e-3); the band of the suite's other calibrations (test_north_exact, test_gyrotheodolite).
+SIGMA_OVER_BOUND = (0.95, 1.1)
+SITE_SWEEP_SEEDS = 4            # the quick bench's site sweep (studies.run_bench)
+
+
 def test_site_sweep(bench):
     # quet_paris moved to another site: the reported σ follows the Cramér–Rao bound (the fit is
-    # efficient, issue 3's calibration), and the rms error over 4 seeds is of that size (a χ² with
-    # 4 degrees of freedom lies within 0.1–2.2 of its mean 95 % of the time: rms/σ in 0.3–1.5)
+    # efficient, issue 3's calibration), and the rms error over the quick bench's 4 seeds is of that
+    # size. 4 seeds bound rms/σ only to [0.13, 2.24] (99.9 %): this catches a σ off by more than 2x,
+    # no finer; raising the seeds to 24 ([0.56, 1.49]) would cost the bench ~15 s, so the calibration
+    # proper is test_estimators' (60-200 seeds, on the same fit).
+    # n (rms/σ)² is χ² with n = 4 degrees of freedom (Gaussian errors, σ the same on every seed to 1e-3)
+    from scipy.stats import chi2
+    lo, hi = (math.sqrt(chi2.ppf(q, SITE_SWEEP_SEEDS) / SITE_SWEEP_SEEDS) for q in (5e-4, 1 - 5e-4))
     for r in rows(bench, "site_sweep.csv"):
         ratio = float(r["mean_sigma_deg"]) / float(r["crlb_deg"])
-        assert 0.8 < ratio < 1.25, r
-        assert 0.05 < float(r["rms_error_deg"]) / float(r["mean_sigma_deg"]) < 3.0, r
+        assert SIGMA_OVER_BOUND[0] < ratio < SIGMA_OVER_BOUND[1], r
+        assert lo < float(r["rms_error_deg"]) / float(r["mean_sigma_deg"]) < hi, r
+        # the Earth rate: against its bound, σ ≈ bound within the same band
+        assert lo * SIGMA_OVER_BOUND[0] < float(r["rms_earth_rate_error_rad_s"]) / float(r["crlb_earth_rate_rad_s"]) \
+            < hi * SIGMA_OVER_BOUND[1], r
 
 
 def test_bench_planner_accuracy(bench):
