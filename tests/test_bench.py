@@ -14,13 +14,38 @@ from gyro_instrument.cli import main
 
 @pytest.fixture(scope="module")
 def bench(tmp_path_factory):
+    """``gyro-instrument bench --quick --scheduler ADDRESS``: the whole quick bench, its seeded sweeps on a
+    LocalCluster of two worker processes on loopback (dashboard off), the CI machine's two cores as the
+    process pool of a plain ``bench --quick`` (the sweeps' rows are the same on either executor:
+    test_cluster.py). Returns the output directory; the task names the cluster's scheduler saw go to
+    :data:`RAN_ON_THE_CLUSTER`."""
+    import os
+
+    from dask.distributed import Client, LocalCluster
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")          # one BLAS thread per worker process, as the process pool
     out = tmp_path_factory.mktemp("bench")
-    assert main(["bench", "--quick", "--out", str(out)]) == 0
+    with LocalCluster(host="127.0.0.1", n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        assert main(["bench", "--quick", "--out", str(out), "--scheduler", cluster.scheduler_address]) == 0
+        with Client(cluster.scheduler_address, set_as_default=False) as client:
+            ran = client.run_on_scheduler(lambda dask_scheduler: sorted(dask_scheduler.task_prefixes))
+    RAN_ON_THE_CLUSTER[:] = ran
     return out
+
+
+RAN_ON_THE_CLUSTER = []      # the task names (function names) the cluster's scheduler saw
 
 
 def rows(out, name):
     return list(csv.DictReader(open(out / name)))
+
+
+def test_bench_scheduler_runs_the_sweeps_on_dask(bench):
+    # the quick bench's seeded studies ran their tasks on the cluster (none on a pool of its own): the
+    # seed sweeps (observation time, planner, north scene rows), the sweep runner's points (site sweep),
+    # the systematic floors and the effect cost, by the names of their task functions
+    assert RAN_ON_THE_CLUSTER == ["scene_effect_cost", "seed_sweep", "sweep_point", "systematic_floor_rows"]
 
 
 def test_bench_quick_writes_studies_and_plots(bench):
