@@ -188,5 +188,17 @@ def test_cost_studies(bench):
         assert new and min(new) < 1e-9, inst
     cr = rows(bench, "compiled_reference.csv")
     assert len(cr) == 2 and all(float(r["end_error_rad"]) <= 1e-6 for r in cr)
+    # sweep throughput (bench.sweep_bench.sweep_throughput_rows, quick): the quick grid on the process pool,
+    # then on a Dask LocalCluster; every row of the cluster's table equal to the pool's (same seeds)
+    from gyro_instrument.bench.sweep_bench import GRIDS
+    scene, overrides, specs, n_seeds = GRIDS[True]
     sw = rows(bench, "sweep_throughput.csv")
-    assert len(sw) == 2 and all(r["same_rows_as_process_pool"] == "True" and int(r["errors"]) == 0 for r in sw)
+    assert [r["scheduler"].split()[0] for r in sw] == ["process", "dask.distributed"]
+    for r in sw:
+        assert list(r) == ["scheduler", "scene", "overrides", "vary", "seeds", "points", "rows", "errors", "wall_s",
+                           "rows_per_s", "startup_s", "same_rows_as_process_pool"]
+        assert (r["scene"], r["overrides"], r["vary"], int(r["seeds"]), int(r["points"])) == \
+            (scene, " ".join(overrides), " ".join(specs), n_seeds, 2)
+        assert int(r["rows"]) == 2 * n_seeds and int(r["errors"]) == 0
+        assert float(r["wall_s"]) > 0 and float(r["rows_per_s"]) == pytest.approx(int(r["rows"]) / float(r["wall_s"]))
+        assert float(r["startup_s"]) >= 0 and r["same_rows_as_process_pool"] == "True"
