@@ -177,19 +177,3 @@ class _SerialExecutor:
 
     def map(self, fn, *iterables):
         return map(fn, *iterables)
-
-
-def test_site_sweep_gives_the_same_numbers_on_any_executor(pool):
-    # The sweep's only contract with its executor is concurrent.futures' ``map``: a thread pool (a
-    # stand-in for a Dask client's get_executor(), which is not installed here) and the default
-    # spawned process pool must give bit-identical rows, because every seed's noise comes from its
-    # own seeded generator (sensors.scene_rng), never from the worker it lands on.
-    from concurrent.futures import ThreadPoolExecutor
-
-    from gyro_instrument.bench.studies import site_sweep
-    sites = (-33.9, 48.8462)
-    with ThreadPoolExecutor(2) as ex:
-        threads = site_sweep(sites, 3, minutes=1.0, executor=ex)
-    procs = site_sweep(sites, 3, minutes=1.0, executor=pool)          # the session's spawned pool
-    assert threads == procs
-    assert [r[0] for r in threads] == list(sites)
