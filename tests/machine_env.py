@@ -40,3 +40,8 @@ def run_readonly(argv, readonly, env=None, timeout=120, **kwargs) -> subprocess.
 def cli(*args) -> list:
     """The command line of ``gyro-instrument ARGS`` in this interpreter."""
     return [sys.executable, "-m", "gyro_instrument.cli", *args]
+
+
+def ros_cli(*args) -> list:
+    """The command line of ``gyro-instrument ARGS`` with the ROS subcommand ``run`` (the console script's module)."""
+    return [sys.executable, "-m", "gyro_instrument.ros.cli", *args]

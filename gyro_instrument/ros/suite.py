@@ -32,6 +32,7 @@ from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
+from gyro_instrument.ros.log_dir import ensure_log_dir
 from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 
 
@@ -113,7 +114,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
     stop, handlers = _install_stop_handlers()
-    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else [])
+    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else []) + ensure_log_dir()
     rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     ns = {"namespace": namespace} if namespace else {}
     nodes = []
