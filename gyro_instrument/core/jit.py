@@ -21,10 +21,10 @@ compilation is off, so the pure-Python path is always there and tests hold the t
 
 import functools
 import os
-import stat
 import sys
-import tempfile
 from collections.abc import Callable
+
+from gyro_instrument.core.files import private_temp_dir
 
 #: Environment variable that turns compilation off when set to ``0``.
 JIT_ENV = "GYRO_INSTRUMENT_JIT"
@@ -57,22 +57,6 @@ def _cache_path(nb) -> str | None:
         return None
 
 
-def _private_dir() -> str | None:
-    """``<tmp>/gyro_instrument-numba-<uid>``, owned by this user and writable by no one else (numba's
-    index files are pickles: a directory another user can write is never used), else a fresh
-    ``mkdtemp``; None when the temporary directory is not writable either."""
-    uid = os.getuid() if hasattr(os, "getuid") else 0
-    try:
-        path = os.path.join(tempfile.gettempdir(), f"gyro_instrument-numba-{uid}")   # OSError: none usable
-        os.makedirs(path, mode=0o700, exist_ok=True)
-        st = os.lstat(path)
-        if stat.S_ISDIR(st.st_mode) and st.st_uid == uid and not st.st_mode & 0o022:
-            return path
-        return tempfile.mkdtemp(prefix="gyro_instrument-numba-")
-    except OSError:
-        return None
-
-
 @functools.cache
 def _cache() -> tuple[bool, str]:
     """(cached, how): numba's own cache location, else the private temporary one (exported as
@@ -80,7 +64,7 @@ def _cache() -> tuple[bool, str]:
     nb = _numba()
     if _cache_path(nb) is not None:
         return True, "cached"
-    path = _private_dir()
+    path = private_temp_dir("numba")
     if path is not None:
         nb.config.CACHE_DIR = path
         if _cache_path(nb) is not None:

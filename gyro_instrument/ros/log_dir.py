@@ -9,9 +9,9 @@ rcl's file logging off (``--disable-external-lib-logs``; console and ``/rosout``
 """
 
 import os
-import stat
 import sys
-import tempfile
+
+from gyro_instrument.core.files import private_temp_dir, writable_dir
 
 #: the extra ROS arguments that turn rcl's file logging off
 NO_FILE_LOGS = ["--ros-args", "--disable-external-lib-logs"]
@@ -32,31 +32,6 @@ def rcl_log_dir(environ=os.environ) -> str | None:
     return os.path.join(environ["HOME"], ".ros", "log") if environ.get("HOME") else None
 
 
-def writable(path) -> bool:
-    """True when ``path`` exists or can be made, and a file can be created in it."""
-    try:
-        os.makedirs(path, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
-        return True
-    except OSError:
-        return False
-
-
-def _private_log_dir() -> str | None:
-    """``<tmp>/gyro_instrument-ros-log-<uid>`` (this user's, writable by no one else), else a fresh
-    ``mkdtemp``; None when no temporary directory is writable."""
-    uid = os.getuid() if hasattr(os, "getuid") else 0
-    try:
-        path = os.path.join(tempfile.gettempdir(), f"gyro_instrument-ros-log-{uid}")
-        os.makedirs(path, mode=0o700, exist_ok=True)
-        st = os.lstat(path)
-        if not (stat.S_ISDIR(st.st_mode) and st.st_uid == uid and not st.st_mode & 0o022):
-            path = tempfile.mkdtemp(prefix="gyro_instrument-ros-log-")
-        return path if writable(path) else None
-    except OSError:
-        return None
-
-
 def ensure_log_dir(environ=os.environ, stream=None) -> list:
     """Make sure rcl can write its log file: nothing to do when its directory is writable; else
     ``ROS_LOG_DIR`` set in ``environ`` to a private temporary directory, or (none writable) the ROS
@@ -64,10 +39,10 @@ def ensure_log_dir(environ=os.environ, stream=None) -> list:
     (stderr) when anything changed. Returns the extra ROS arguments (empty or :data:`NO_FILE_LOGS`)."""
     stream = stream or sys.stderr
     current = rcl_log_dir(environ)
-    if current is not None and writable(current):
+    if current is not None and writable_dir(current):
         return []
     why = "HOME is not set" if current is None else f"{current} is not writable"
-    path = _private_log_dir()
+    path = private_temp_dir("ros-log")
     if path is not None:
         environ["ROS_LOG_DIR"] = path
         print(f"gyro-instrument: note: ROS log directory: {why}; logging to {path} (ROS_LOG_DIR)", file=stream)
