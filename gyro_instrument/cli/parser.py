@@ -322,8 +322,10 @@ def _add_sweep_command(sub):
                         "its workers need gyro_instrument installed) instead of a local process pool; needs the "
                         "'cluster' extra")
     p.add_argument("--timeout", type=float, default=10.0, metavar="S",
-                   help="with --scheduler: seconds to wait for the scheduler to answer and, when it has no "
-                        "workers, for one to join, before exit 2 (default 10)")
+                   help="with --scheduler: seconds to wait for the scheduler to answer, when it has no "
+                        "workers for one to join, and for the cluster's versions and every worker's import of "
+                        "gyro_instrument (another Dask, Python or gyro_instrument version, or a worker without "
+                        "it: exit 2 naming them), before exit 2 (default 10)")
 
 
 def _add_recover_command(sub):
