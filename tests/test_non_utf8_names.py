@@ -108,3 +108,17 @@ def test_run_bag_replay_and_recover(tmp_path):
     assert rec.stdout.startswith(b"recovered ") and b" from " + NAME + b".mcap into " + NAME + b"_copy.mcap" in rec.stdout
     from gyro_instrument.recording.mcap_io import read_messages
     assert len(list(read_messages(str(tmp_path / (NAME_STR + "_copy.mcap"))))) == int(rec.stdout.split()[1])
+
+
+def test_a_sidecar_that_cannot_be_written_leaves_no_table(tmp_path, monkeypatch):
+    # the report's half state: the table written, then the sidecar failed (no .scene.yaml, so the table
+    # could no longer be estimated alone). The sidecar is now written before the table is renamed in.
+    from gyro_instrument.cli import simulate
+    from gyro_instrument.scenes import load_scene
+
+    def fail(*args, **kwargs):
+        raise UnicodeEncodeError("utf-8", "\udce9", 0, 1, "surrogates not allowed")
+    monkeypatch.setattr(simulate, "write_scene_sidecar", fail)
+    with pytest.raises(UnicodeEncodeError):
+        simulate.simulate_to_file(load_scene("quet_paris", ["duration_s=5.0"]), str(tmp_path / "q.csv"))
+    assert list(tmp_path.iterdir()) == []          # neither the table nor its .partial

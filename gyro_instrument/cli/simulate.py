@@ -164,8 +164,8 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
                 first += t.size
                 nfev = sum(s.trajectory.nfev for s in sims.values())
                 wall = sum(s.trajectory.wall_time_s for s in sims.values())
-    if meta is None:
-        write_scene_sidecar(out, text, readings)
+        if meta is None:    # before the table is renamed into place: a sidecar that fails leaves no table
+            write_scene_sidecar(out, text, readings)
     return writer.rows, len(names) + 1, int(nfev), wall
 
 
