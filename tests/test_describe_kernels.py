@@ -39,8 +39,14 @@ def test_describe_names_the_path_a_run_takes(tmp_path):
     assert not got["missing"][1]
 
 
-def test_describe_prints_the_kernels_line():
-    env = dict(os.environ, GYRO_INSTRUMENT_JIT="0")
-    out = subprocess.run(cli("describe", "quet_paris"), env=env, capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert "  kernels: uncompiled: GYRO_INSTRUMENT_JIT=0" in out.stdout.splitlines()
+def test_describe_prints_the_kernels_line(monkeypatch, capsys):
+    from gyro_instrument.cli import main as core_main
+    from gyro_instrument.core import jit
+    monkeypatch.setenv("GYRO_INSTRUMENT_JIT", "0")
+    jit._numba.cache_clear()
+    try:
+        assert core_main(["describe", "quet_paris"]) == 0
+    finally:
+        monkeypatch.undo()
+        jit._numba.cache_clear()          # this process's kernels as before the test
+    assert "  kernels: uncompiled: GYRO_INSTRUMENT_JIT=0" in capsys.readouterr().out.splitlines()

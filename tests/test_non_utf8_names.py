@@ -6,13 +6,17 @@ metadata) shows the bytes as ``\\xNN`` (core/files.py ``shown``) and stdout/stde
 as given (``errors="surrogateescape"``). Before: UnicodeEncodeError tracebacks in the sidecar (no
 ``.scene.yaml``), ``plot``, ``run --bag`` and after ``estimate --data``'s answer under a UTF-8 locale."""
 
+import io
 import json
 import os
 import subprocess
+import sys
 
 import pytest
 
-from machine_env import cli, ros_cli
+from gyro_instrument.cli import main as core_main
+from gyro_instrument.ros.cli import main as ros_main
+from machine_env import cli
 
 NAME = b"caf\xe9"                      # Latin-1 'café': 0xE9 alone is not UTF-8
 #: the same bytes as Python's os.fsdecode holds them (a lone surrogate per undecodable byte)
@@ -23,6 +27,25 @@ def run(argv, cwd, env=None, timeout=120):
     out = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, timeout=timeout)
     assert b"Traceback" not in out.stderr and b"UnicodeEncodeError" not in out.stderr, out.stderr.decode(errors="replace")
     return out
+
+
+@pytest.fixture
+def streams():
+    """stdout and stderr of in-process commands as the process's own are under a UTF-8 locale with
+    surrogateescape (cli/commands.py ``names_as_given``): bytes in, bytes read back. Swapped in when
+    first read inside the test (pytest puts its own capture back between a fixture and the test)."""
+    made = {name: io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="surrogateescape", write_through=True)
+            for name in ("stdout", "stderr")}
+    saved = {}
+
+    def swap():
+        for name, stream in made.items():
+            saved[name] = getattr(sys, name)
+            setattr(sys, name, stream)
+        return lambda name: made[name].buffer.getvalue()
+    yield swap
+    for name, stream in saved.items():
+        setattr(sys, name, stream)
 
 
 def locale_env(lang):
@@ -67,47 +90,57 @@ def test_estimate_reads_the_table_and_its_scene_in_any_locale(table, lang):
     assert result["scene"] == "quet_paris" and result["truth"]["latitude_deg"] == 48.8462   # scenes/quet_paris.yaml
 
 
-def test_parquet_table_under_such_a_name(tmp_path):
-    out = run(cli("simulate", "quet_paris", "--duration-s", "20", "--out", NAME_STR + ".parquet", "--quiet"), tmp_path)
-    assert out.returncode == 0, out.stderr
-    est = run(cli("estimate", "--data", NAME_STR + ".parquet", "--json"), tmp_path)
-    assert est.returncode == 0, est.stderr
+def test_parquet_table_under_such_a_name(tmp_path, streams):
+    read = streams()
+    # in-process (the files and their reading are the point here; the streams are the tests above)
+    out = str(tmp_path / (NAME_STR + ".parquet"))
+    assert core_main(["simulate", "quet_paris", "--duration-s", "20", "--out", out, "--quiet"]) == 0
+    assert core_main(["estimate", "--data", out, "--json"]) == 0
     # the scene came from the Parquet file's own metadata (read through the open file)
-    assert b"from " + NAME + b".parquet's Parquet metadata" in est.stderr
-    assert json.loads(est.stdout)["observation_s"] > 0
+    assert b"from " + os.fsencode(out) + b"'s Parquet metadata" in read("stderr")
+    assert os.fsencode(json.loads(read("stdout"))["data"]) == NAME + b".parquet"     # the file's name, as --json gives it
 
 
-def test_plot_draws_a_table_into_a_directory_of_such_a_name(table):
+def test_plot_draws_a_table_into_a_directory_of_such_a_name(table, streams):
+    read = streams()
     d, _ = table
-    out = run(cli("plot", NAME_STR + ".csv", "--out", NAME_STR + "_views"), d)
-    assert out.returncode == 0, out.stderr
-    assert sorted(os.listdir(os.fsencode(d / (NAME_STR + "_views")))) == [b"angles.png", b"bob_path.png",
-                                                                           b"swing_azimuth.png"]
-    assert out.stdout.startswith(b"wrote 3 views") and NAME + b"_views/angles.png" in out.stdout
+    views = d / (NAME_STR + "_views")
+    assert core_main(["plot", str(d / (NAME_STR + ".csv")), "--out", str(views)]) == 0
+    assert sorted(os.listdir(os.fsencode(views))) == [b"angles.png", b"bob_path.png", b"swing_azimuth.png"]
+    assert read("stdout").startswith(b"wrote 3 views") and NAME + b"_views/angles.png" in read("stdout")
 
 
-def test_one_line_error_shows_the_bytes(tmp_path):
-    out = run(cli("estimate", "--data", NAME_STR + ".csv", "--scene", "quet_paris"), tmp_path)
-    assert out.returncode == 2
-    lines = out.stderr.decode("ascii").splitlines()      # the error line is ASCII: the byte shown as \xe9
-    assert len(lines) == 1 and lines[0].startswith("gyro-instrument: error: --data = 'caf\\xe9.csv'"), lines
+def test_one_line_error_shows_the_bytes(tmp_path, streams):
+    read = streams()
+    missing = str(tmp_path / (NAME_STR + ".csv"))
+    assert core_main(["estimate", "--data", missing, "--scene", "quet_paris"]) == 2
+    lines = read("stderr").decode("ascii").splitlines()    # ASCII: the byte shown as \xe9
+    assert len(lines) == 1 and lines[0].startswith(f"gyro-instrument: error: --data = '{tmp_path}/caf\\xe9.csv'"), lines
 
 
-def test_run_bag_replay_and_recover(tmp_path):
-    bag = NAME_STR + ".mcap"
-    out = run(ros_cli("run", "quet_paris", "--duration-s", "3", "--bag", bag, "--quiet", "--json"), tmp_path)
-    assert out.returncode == 0, out.stderr
-    live = json.loads(out.stdout)
-    rep = run(cli("replay", bag, "--json"), tmp_path)
-    assert rep.returncode == 0, rep.stderr
-    replayed = json.loads(rep.stdout)
+def test_run_bag_replay_and_recover(tmp_path, streams):
+    read = streams()
+    bag = str(tmp_path / (NAME_STR + ".mcap"))
+    assert ros_main(["run", "quet_paris", "--duration-s", "3", "--bag", bag, "--quiet", "--json"]) == 0
+    assert core_main(["replay", bag, "--json"]) == 0
+    live, replayed = _two_json(read("stdout"))
     # the bag holds the run: replay reads the same 3 s per instrument and gives the live estimate
     assert replayed["observation_s"] == live["observation_s"] and replayed["methods"] == live["methods"]
-    rec = run(cli("recover", bag, "--out", NAME_STR + "_copy.mcap"), tmp_path)
-    assert rec.returncode == 0, rec.stderr
-    assert rec.stdout.startswith(b"recovered ") and b" from " + NAME + b".mcap into " + NAME + b"_copy.mcap" in rec.stdout
+    copy = str(tmp_path / (NAME_STR + "_copy.mcap"))
+    n = len(read("stdout"))
+    assert core_main(["recover", bag, "--out", copy]) == 0
+    said = read("stdout")[n:]
+    assert said.startswith(b"recovered ") and b" from " + os.fsencode(bag) + b" into " + os.fsencode(copy) in said
     from gyro_instrument.recording.mcap_io import read_messages
-    assert len(list(read_messages(str(tmp_path / (NAME_STR + "_copy.mcap"))))) == int(rec.stdout.split()[1])
+    assert len(list(read_messages(copy))) == int(said.split()[1])
+
+
+def _two_json(data):
+    """The two JSON documents printed one after the other (``json.dumps(indent=2)`` + newline each)."""
+    text = data.decode("utf-8", "surrogateescape")
+    first, end = json.JSONDecoder().raw_decode(text)
+    second, _ = json.JSONDecoder().raw_decode(text[end:].lstrip())
+    return first, second
 
 
 def test_a_sidecar_that_cannot_be_written_leaves_no_table(tmp_path, monkeypatch):

@@ -68,13 +68,11 @@ def test_kernel_compiles_uncached_when_the_temporary_directory_is_read_only_too(
 
 
 def _main_commands(tmp_path, env):
-    """describe, simulate and estimate of quet_paris on a read-only install and HOME: exit 0, no
+    """simulate and estimate of quet_paris on a read-only install and HOME: exit 0, no
     traceback, the table and its scene written, the estimate read back from them."""
     out = tmp_path / "out"
     out.mkdir()
     ro = install_dirs()
-    d = run_readonly(cli("describe", "quet_paris", "--json"), ro, env, text=True)
-    assert d.returncode == 0 and "Traceback" not in d.stderr, d.stderr
     s = run_readonly(cli("simulate", "quet_paris", "--duration-s", "60", "--out", out / "q.csv", "--quiet"), ro, env,
                      text=True)
     assert s.returncode == 0 and "Traceback" not in s.stderr, s.stderr
@@ -83,7 +81,6 @@ def _main_commands(tmp_path, env):
     assert e.returncode == 0 and "Traceback" not in e.stderr, e.stderr
     # the scene quet_paris read back from the sidecar: the site's latitude (48.8462 deg, scenes/quet_paris.yaml)
     assert json.loads(e.stdout)["truth"]["latitude_deg"] == 48.8462
-    return json.loads(d.stdout)["kernels"]
 
 
 @needs_mount_ns
@@ -95,10 +92,13 @@ def test_main_commands_run_on_a_read_only_install_and_home(tmp_path):
     d = run_readonly(cli("describe", "quet_paris", "--json"), install_dirs(), env, text=True)
     kernels = json.loads(d.stdout)["kernels"]
     assert kernels.startswith("compiled, numba ") and "cached in" in kernels and "not writable" in kernels
-    assert _main_commands(tmp_path, env | {"GYRO_INSTRUMENT_JIT": "0"}) == "uncompiled: GYRO_INSTRUMENT_JIT=0"
+    assert d.returncode == 0 and "Traceback" not in d.stderr, d.stderr
+    _main_commands(tmp_path, env | {"GYRO_INSTRUMENT_JIT": "0"})
 
 
 @pytest.mark.slow
 @needs_mount_ns
 def test_main_commands_compiled_on_a_read_only_install_and_home(tmp_path):
-    assert "cached in" in _main_commands(tmp_path, _env(tmp_path / "tmp"))
+    env = _env(tmp_path / "tmp")
+    _main_commands(tmp_path, env)
+    assert any((tmp_path / "tmp" / f"gyro_instrument-numba-{os.getuid()}").rglob("*.nbc"))   # kernels cached there

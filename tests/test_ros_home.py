@@ -12,8 +12,8 @@ from machine_env import needs_mount_ns, ros_cli as cli, run_readonly
 from gyro_instrument.recording.mcap_io import read_messages
 from gyro_instrument.ros.log_dir import NO_FILE_LOGS, ensure_log_dir, rcl_log_dir
 
-#: 5 s at quet_paris's 20 Hz (scenes/quet_paris.yaml): samples per instrument, t = 0 included
-SAMPLES = 5 * 20 + 1
+#: 2 s at quet_paris's 20 Hz (scenes/quet_paris.yaml): samples per instrument, t = 0 included
+SAMPLES = 2 * 20 + 1
 
 
 def _notes(stderr):
@@ -27,7 +27,7 @@ def test_run_without_home_logs_to_a_temporary_directory_and_records(tmp_path):
     (tmp_path / "tmp").mkdir()
     bag = tmp_path / "q.mcap"
 
-    out = subprocess.run(cli("run", "quet_paris", "--duration-s", "5", "--bag", bag, "--quiet", "--json"),
+    out = subprocess.run(cli("run", "quet_paris", "--duration-s", "2", "--bag", bag, "--quiet", "--json"),
                          env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     private = tmp_path / "tmp" / f"gyro_instrument-ros-log-{os.getuid()}"
@@ -46,7 +46,7 @@ def test_run_with_read_only_home_and_temporary_directories_turns_file_logging_of
     (home / ".ros" / "log").mkdir(parents=True)
     env = {k: v for k, v in os.environ.items() if k not in ("ROS_HOME", "ROS_LOG_DIR", "TMPDIR")} | {"HOME": str(home)}
     temps = [d for d in ("/tmp", "/var/tmp", "/usr/tmp") if os.path.isdir(d)]   # tmp_path is under /tmp too
-    out = run_readonly(cli("run", "quet_paris", "--duration-s", "5", "--json"), [home, *temps], env, text=True,
+    out = run_readonly(cli("run", "quet_paris", "--duration-s", "2", "--json"), [home, *temps], env, text=True,
                        cwd=home)
     assert out.returncode == 0, out.stderr
     assert _notes(out.stderr) == [f"gyro-instrument: note: ROS log directory: {home}/.ros/log is not writable and no "

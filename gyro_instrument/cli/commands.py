@@ -74,8 +74,11 @@ def guarded(body, process=False) -> int:
 def names_as_given() -> None:
     """stdout and stderr write the bytes of a file name that is not UTF-8 as the name holds them
     (``errors="surrogateescape"``, what Python's C locale does; a UTF-8 locale's ``strict`` raised
-    UnicodeEncodeError after the work was done, e.g. ``estimate --data $'caf\\xe9.csv'``)."""
+    UnicodeEncodeError after the work was done, e.g. ``estimate --data $'caf\\xe9.csv'``). Only the
+    process's own streams: one a caller put in their place (pytest's capture) is left as it is."""
     for stream in (sys.stdout, sys.stderr):
+        if stream not in (sys.__stdout__, sys.__stderr__):    # a caller's own stream (a test's capture) is its own
+            continue
         if getattr(stream, "errors", None) in ("strict", "backslashreplace") and hasattr(stream, "reconfigure"):
             with contextlib.suppress(ValueError, OSError, AttributeError):
                 stream.reconfigure(errors="surrogateescape")
