@@ -110,4 +110,7 @@ def compiled(fn: Callable, **options) -> Callable:
     nb = _numba()
     if isinstance(nb, str):
         return fn
-    return nb.njit(cache=_cache()[0], **options)(fn)
+    try:
+        return nb.njit(cache=_cache()[0], **options)(fn)
+    except RuntimeError:   # no locator for this kernel's file alone (a directory read-only where core/ is not)
+        return nb.njit(**options)(fn)
