@@ -18,6 +18,10 @@ from gyro_instrument.scenes import build_instruments
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: a clock follower's subscription: only the latest tick matters (the follower publishes every sample
+#: up to it; the estimator notes sim time), so older ticks are replaced, never queued for Python to
+#: take one by one; RELIABLE, so the latest is never lost (issue 37 item 6)
+LATEST_CLOCK = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE)
 #: the estimator's results: latched (the last estimate kept for subscribers that ask for
 #: TRANSIENT_LOCAL; a VOLATILE subscriber, the recorder's, still matches and gets new ones)
 LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -30,6 +34,32 @@ STEADY = RclClock(clock_type=ClockType.STEADY_TIME)
 #: samples (or messages) a node run alone publishes per timer tick at real-time factor 0
 FLOW_BATCH = 200
 ACK_TIMEOUT = Duration(seconds=5)
+
+
+def drain(node, limit=20000) -> int:
+    """Take the messages waiting on ``node``'s raw subscriptions and run their callbacks, topic by
+    topic, without the executor: one wait of the executor then serves a whole queue, not one
+    message (rclpy's executor rebuilds its wait set per callback, the separate-node route's ceiling,
+    issue 37 item 6). Each topic's messages keep their order. Then the node's ``after_drain()``, if
+    it has one (a follower publishes once up to the last clock tick taken). Returns how many were
+    taken (at most ``limit``)."""
+    from rclpy.exceptions import InvalidHandle
+    n = 0
+    for sub in [s for s in node.subscriptions if s.raw]:
+        while n < limit:
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, True)
+            except InvalidHandle:           # destroyed by an earlier callback (a restart)
+                break
+            if taken is None:
+                break
+            sub.callback(taken[0])
+            n += 1
+    hook = getattr(node, "after_drain", None)
+    if hook is not None:
+        hook()
+    return n
 
 
 def acked(node, pubs) -> None:

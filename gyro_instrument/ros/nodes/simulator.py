@@ -21,7 +21,7 @@ from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import FLOW_BATCH, PUBLISH_ALL, RELIABLE_ALL, STEADY, SceneNode, acked
+from gyro_instrument.ros.nodes.base import FLOW_BATCH, LATEST_CLOCK, PUBLISH_ALL, RELIABLE_ALL, STEADY, SceneNode, acked
 
 
 class SimulatorNode(SceneNode):
@@ -96,6 +96,7 @@ class SimulatorNode(SceneNode):
         for pub in self.publishers():
             self.destroy_publisher(pub)
         self.pubs, self.clock_pub, self.stream, self._marker_msgs = {}, None, None, {}
+        self._clock_t = None
 
     def restart(self) -> None:
         """A scene (or seed) change: stop, reload, and run again from t = 0."""
@@ -261,11 +262,12 @@ class SimulatorNode(SceneNode):
                 self.state = "refused"
                 return
         self.state = "running"
+        self.get_logger().info("sim time starts" if self.clock_pub is not None else "following the clock")
         if self.clock_owner:
             self._rtf = None
             self.timer = self.create_timer(0.002, self._run, clock=STEADY)
         else:
-            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
+            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
 
     def _run(self):
         """Owner: publish what is due (paced) or the next flow-controlled batch (real_time_factor 0)."""
@@ -284,10 +286,17 @@ class SimulatorNode(SceneNode):
             self._finish()
 
     def _on_clock(self, data):
-        """Follower: publish every sample up to the owner's clock."""
-        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        """Follower: note the owner's clock; :meth:`after_drain` publishes every sample up to it
+        (once per queue of ticks taken, not once per tick)."""
+        self._clock_t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+
+    def after_drain(self):
+        """Follower: publish every sample up to the last clock tick taken."""
+        t = getattr(self, "_clock_t", None)
+        if t is None or self.state != "running" or self.stream is None:
+            return
         k = self.sample_index(t) - self.index
-        if k > 0 and self.state == "running":
+        if k > 0:
             self.publish_steps(k)
             if self.index >= self.samples:
                 self._finish()
