@@ -3,24 +3,34 @@
 (:class:`~gyro_instrument.recording.joint_buffer.JointBuffer`) and calls the core estimator; run
 alone it publishes once every expected sample has arrived.
 
-Heading (issue 24): for each horizontal gyroscope (and its rotor-off companion) a
-:class:`~gyro_instrument.estimators.north_live.NorthTracker` is given the tail of the record about
-four times per swing; at each new reversal point the live north (the Schuler mean so far) goes out
-as ``sensor_msgs/Imu`` on ``<gyro>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`)
-and, with parameter ``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's ``north`` block (the
-fit) replaces it. The work per joint message is bounded: a tail of 1.75 swings every quarter swing.
+Heading (issues 24, 37): for each horizontal gyroscope (and its rotor-off companion) a
+:class:`~gyro_instrument.estimators.north_live.SwingFit` fits the record so far (the predicted
+frequency as a prior) every half swing from the first swing on, and a
+:class:`~gyro_instrument.estimators.north_live.NorthTracker` finds its reversal points every quarter
+swing; the live north is whichever of the two (:func:`~.north_live.fit_north`, :func:`~.north_live.live_north`,
+tape-corrected where the scene has a rotor-off swing) has the smaller σ. It goes out as
+``sensor_msgs/Imu`` on ``<gyro>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`,
+pre-serialized) at :data:`~gyro_instrument.estimators.heading.HEADING_RATE_HZ` of sim time (every
+sample when the instrument samples slower), stamped with the sample, and, with parameter
+``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's ``north`` block (the fit) replaces it.
+The work per joint message is bounded: a tail of 1.75 swings every quarter swing, at most
+``FIT_SWINGS`` swings every half swing.
 """
 
 import math
 import time
+
+import numpy as np
 
 from rclpy.serialization import deserialize_message
 
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
-from gyro_instrument.estimators.heading import imu_fields
-from gyro_instrument.estimators.north_live import NorthTracker, live_north
+from gyro_instrument.estimators.heading import HEADING_RATE_HZ, imu_fields
+from gyro_instrument.estimators.north_live import NorthTracker, SwingFit, fit_north, live_north
+from gyro_instrument.recording.cdr import imu_layout
+from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.estimators.pipeline import estimate_records, estimator_instruments
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
@@ -58,6 +68,10 @@ class EstimatorNode(SceneNode):
         self.trackers = {}      # instrument -> NorthTracker (horizontal gyroscopes and their rotor-off swings)
         self.tape_of = {}       # horizontal gyroscope -> its rotor-off companion
         self._due = {}          # instrument -> samples at which its tracker is next given the tail
+        self.fits = {}          # instrument -> SwingFit (the same instruments as trackers)
+        self._fit_due = {}      # instrument -> samples at which its fit is next updated
+        self.live = {}          # horizontal gyroscope -> its live NorthEstimate (None before the first)
+        self._heading_t = {}    # horizontal gyroscope -> stamp (ns) of its last heading published
         self.nmea = None
         if self.load():
             self.prepare()
@@ -68,6 +82,7 @@ class EstimatorNode(SceneNode):
         return set(estimator_instruments(self.insts))
 
     def prepare(self) -> None:
+        self.frames_and_epoch()
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
         buffered = self._buffered()
@@ -99,12 +114,19 @@ class EstimatorNode(SceneNode):
             if not (math.isfinite(swing) and swing > 0):
                 continue
             self.trackers[name] = NorthTracker(swing, sigma)
+            self.fits[name] = SwingFit(swing, sigma)
             other = inst.observation().companions().get("rotor_off")
             if other in self.buffers:
                 self.tape_of[name] = other
-                self.trackers[other] = NorthTracker(inst.tape_predictions()["rotor_off_swing_duration_s"], sigma)
+                off_swing = inst.tape_predictions()["rotor_off_swing_duration_s"]
+                self.trackers[other] = NorthTracker(off_swing, sigma)
+                self.fits[other] = SwingFit(off_swing, sigma)
         for name, tr in self.trackers.items():
             self._due[name] = self._every(tr)
+            self._fit_due[name] = 2 * self._every(self.trackers[name])
+        self.heading_period_ns = round(1e9 * max(1.0 / HEADING_RATE_HZ, 1.0 / self.scene.sample_rate_hz)) - 1
+        self.imu_layouts = {name: imu_layout(self.frame_prefix + heading_frame(name)) for name in self.trackers}
+        self.publish_static_transforms(instrument_frames(self.insts, self.imu_layouts, self.frame_prefix))
         target = str(self.value("nmea_udp", "") or "")
         if target and self.trackers:
             try:
@@ -116,29 +138,58 @@ class EstimatorNode(SceneNode):
         """Samples between two looks at a tracker's tail: a quarter swing (at least 1)."""
         return max(int(0.25 * tracker.swing_s * self.scene.sample_rate_hz), 1)
 
+    def _gyros_of(self, name) -> list:
+        """The horizontal gyroscopes whose live north record ``name`` serves (itself or its tape's)."""
+        return [g for g in self.trackers if g not in self.tape_of.values() and (g == name or self.tape_of.get(g) == name)]
+
     def _track(self, name) -> None:
-        """Give ``name``'s tracker the tail of its record when due; publish the live heading of the
-        horizontal gyroscope(s) it serves when it found a new reversal point."""
-        buf, tr = self.buffers[name], self.trackers[name]
-        if len(buf) < self._due[name]:
-            return
-        self._due[name] = len(buf) + self._every(tr)
-        t_ns, pos, vel = buf.arrays()
-        k = max(int(t_ns.size - tr.window_s() * self.scene.sample_rate_hz) - 1, 0)
-        rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
-        if not tr.update(rec["t"], -rec["angle"]):
-            return
-        for gyro in [g for g in self.trackers if g == name or self.tape_of.get(g) == name]:
-            if gyro in self.tape_of.values():
-                continue
-            est = live_north(self.trackers[gyro], self.trackers.get(self.tape_of.get(gyro)))
-            if est is not None:
-                self._publish_heading(gyro, int(t_ns[-1]), est.mount_azimuth_rad, est.sigma_rad)
+        """Give ``name``'s tracker the tail of its record and its fit the record so far, each when
+        due; recompute the live north of the gyroscope(s) it serves when either found something new;
+        publish a gyroscope's heading when :attr:`heading_period_ns` of sim time has passed."""
+        buf, tr, fit = self.buffers[name], self.trackers[name], self.fits[name]
+        changed = False
+        if len(buf) >= self._due[name] or len(buf) >= self._fit_due[name]:
+            t_ns, pos, vel = buf.arrays()
+            t_ns = t_ns - (self.stamp_offset_ns or 0)       # sim time from release (stamp_epoch)
+            rate = self.scene.sample_rate_hz
+            if len(buf) >= self._fit_due[name]:
+                self._fit_due[name] = len(buf) + 2 * self._every(tr)
+                k = max(int(t_ns.size - fit.window_s() * rate) - 1, 0)
+                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+                gyro = next(iter(self._gyros_of(name)), name)
+                changed |= fit.update(rec["t"], -rec["angle"], min_span_s=self.fits[gyro].swing_s) is not None
+            if len(buf) >= self._due[name]:
+                self._due[name] = len(buf) + self._every(tr)
+                k = max(int(t_ns.size - tr.window_s() * rate) - 1, 0)
+                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+                changed |= bool(tr.update(rec["t"], -rec["angle"]))
+        for gyro in self._gyros_of(name):
+            if changed:
+                self.live[gyro] = self._live_north(gyro)
+            if gyro == name and self.live.get(gyro) is not None:
+                t = buf.last_stamp()
+                if t - self._heading_t.get(gyro, -10 ** 18) >= self.heading_period_ns:
+                    self._heading_t[gyro] = t
+                    est = self.live[gyro]
+                    self._publish_heading(gyro, t, est.mount_azimuth_rad, est.sigma_rad)
+
+    def _live_north(self, gyro):
+        """The better (smaller σ) of the fit's and the reversal points' live north, or None."""
+        other = self.tape_of.get(gyro)
+        off_fit = self.fits[other].summary if other else None
+        cands = [fit_north(self.fits[gyro].summary, off_fit, tape=other is not None),
+                 live_north(self.trackers[gyro], self.trackers.get(other))]
+        cands = [c for c in cands if c is not None and c.sigma_rad is not None and math.isfinite(c.sigma_rad)]
+        return min(cands, key=lambda c: c.sigma_rad, default=None)
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
-        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (and a ``$HEHDT`` for the first gyroscope)."""
-        fields = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
-        self._send(heading_topic(name), m.imu(t_ns, heading_frame(name), fields))
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized) and a ``$HEHDT`` for the
+        first gyroscope."""
+        f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
+        data = self.imu_layouts[name].encode([t_ns], *[np.array([v]) for v in (
+            f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
+            f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])[0]
+        self._send(heading_topic(name), data)
         if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
             try:
                 self.nmea.send_heading(math.degrees(azimuth_rad), int(self.value("nmea_decimals", 3)))
@@ -169,10 +220,12 @@ class EstimatorNode(SceneNode):
             self.destroy_subscription(sub)
         for pub in self.pubs.values():
             self.destroy_publisher(pub)
+        self.drop_static_transforms()
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
         self._last_input = None
         self.trackers, self.tape_of, self._due = {}, {}, {}
+        self.fits, self._fit_due, self.live, self._heading_t = {}, {}, {}, {}
         if self.nmea is not None:
             self.nmea.close()
             self.nmea = None
@@ -192,7 +245,10 @@ class EstimatorNode(SceneNode):
         self.rejected, self.result, self.refusal, self.final, self._clock_done_at = {}, None, None, False, None
         for name, tr in self.trackers.items():
             self.trackers[name] = NorthTracker(tr.swing_s, tr.noise_sigma_rad)
+            self.fits[name] = SwingFit(tr.swing_s, tr.noise_sigma_rad)
             self._due[name] = len(self.buffers[name]) + self._every(tr)
+            self._fit_due[name] = len(self.buffers[name]) + 2 * self._every(tr)
+        self.live, self._heading_t = {}, {}
 
     def restart(self) -> None:
         super().restart()
@@ -253,7 +309,8 @@ class EstimatorNode(SceneNode):
                 self._final()
 
     def _on_clock(self, data):
-        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        st = m.cdr_stamp_ns(data)
+        t = st - m.EPOCH_NS - (self.stamp_offset_ns if self.stamp_offset_ns is not None else self._learn(st))
         self._last_input = time.monotonic()
         if self.standalone and self.last_clock_ns is not None and t < self.last_clock_ns and self.scene is not None:
             self.new_run(f"the clock went back from {self.last_clock_ns / 1e9:g} s to {t / 1e9:g} s")
@@ -262,6 +319,13 @@ class EstimatorNode(SceneNode):
                 and self.last_clock_ns >= self.last_stamp_ns:
             self._clock_done_at = time.monotonic()
             self._check_complete()
+
+    def _learn(self, stamp_ns) -> int:
+        """``stamp_epoch`` = wall: the first stamp received (sim time 0) fixes the shift; the static
+        transforms go out then."""
+        off = self.learn_epoch(stamp_ns)
+        self.publish_static_transforms(instrument_frames(self.insts, self.imu_layouts, self.frame_prefix))
+        return off
 
     def received(self) -> int:
         return sum(len(b) for b in self.buffers.values())
@@ -292,6 +356,8 @@ class EstimatorNode(SceneNode):
         (the common case, no Python message object), otherwise decoded and checked as any other."""
         buf = self.buffers[name]
         self._last_input = time.monotonic()
+        if self.stamp_offset_ns is None:
+            self._learn(m.cdr_stamp_ns(data))
         if buf.layout.matches(data):
             buf.add_raw(data)
             if name in self.trackers:
@@ -322,7 +388,8 @@ class EstimatorNode(SceneNode):
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
-        samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
+        off = self.stamp_offset_ns or 0                  # stamps -> sim time from release (stamp_epoch)
+        samples = {n: (lambda t, p, v: (t - off, p, v))(*b.arrays()) for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, {n: self.insts[n] for n in samples}, recs)
 
@@ -354,7 +421,8 @@ class EstimatorNode(SceneNode):
         t = self.stamp_ns()
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
-        self._send("estimator/earth_rate_enu", m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        self._send("estimator/earth_rate_enu", m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat,
+                                                                   self.frame_prefix + m.SITE_FRAME))
         text = r.get("method") or r.get("reason", "")
         self._send(DIAGNOSTICS, m.diagnostics(
             t, "gyro_instrument/estimator", r.get("method") is not None and short is None,

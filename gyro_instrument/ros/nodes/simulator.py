@@ -17,6 +17,7 @@ from rclpy.serialization import serialize_message
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.estimators.pipeline import estimator_instruments
 from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK
 from gyro_instrument.ros import messages as m
@@ -51,14 +52,25 @@ class SimulatorNode(SceneNode):
         """Create the core stream and the publishers its publications declare: nothing is integrated
         until the first publish, and then one window of ``window_s`` simulated seconds at a time."""
         seed = self.get_parameter("seed").value
+        self.frames_and_epoch()
         self.stream = SimulatorStream(self.scene, self.insts, self.kinds, None if seed < 0 else seed,
-                                      float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner)
+                                      float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner,
+                                      self.frame_prefix)
+        self.stream.stamp_offset_ns = self.stamp_offset_ns
         if not self.stream.chosen:
             self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
         self.clock_pub = self.create_publisher(m.Clock, CLOCK, self.pub_qos) if self.clock_owner else None
         for name, pubs in self.stream.pubs.items():
             for p in pubs:
                 self.pubs[(name, p.key)] = self.create_publisher(m.message_class(p.type_name), p.topic, self.pub_qos)
+        self.publish_static_transforms(instrument_frames(self.insts, self.stream.chosen, self.frame_prefix))
+
+    def set_stamp_offset(self, offset_ns) -> None:
+        """Shift every stamp from now on by ``offset_ns`` (``stamp_epoch``: a ``wall`` epoch once known)."""
+        self.stamp_offset_ns = int(offset_ns)
+        if self.stream is not None:
+            self.stream.stamp_offset_ns = self.stamp_offset_ns
+            self.publish_static_transforms(instrument_frames(self.insts, self.stream.chosen, self.frame_prefix))
 
     @property
     def chosen(self) -> dict:
@@ -95,6 +107,7 @@ class SimulatorNode(SceneNode):
                 setattr(self, attr, None)
         for pub in self.publishers():
             self.destroy_publisher(pub)
+        self.drop_static_transforms()
         self.pubs, self.clock_pub, self.stream, self._marker_msgs = {}, None, None, {}
         self._clock_t = None
 
@@ -174,7 +187,7 @@ class SimulatorNode(SceneNode):
         self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
 
     def _marker_array(self, name, t_ns, geom):
-        msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name))
+        msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name), self.frame_prefix + m.SITE_FRAME)
         self._marker_msgs[name] = msg
         return msg
 
@@ -262,12 +275,26 @@ class SimulatorNode(SceneNode):
                 self.state = "refused"
                 return
         self.state = "running"
+        if self.clock_pub is not None and self.stamp_offset_ns is None:
+            self._wall_epoch()
         self.get_logger().info("sim time starts" if self.clock_pub is not None else "following the clock")
         if self.clock_owner:
             self._rtf = None
             self.timer = self.create_timer(0.002, self._run, clock=STEADY)
         else:
             self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
+
+    def _wall_epoch(self):
+        """The clock owner with ``stamp_epoch`` = wall: sim time 0 is now (real-time factor 1; at any
+        other factor the simulation epoch, logged)."""
+        rtf = float(self.value("real_time_factor", 1.0))
+        if rtf != 1.0:
+            self.get_logger().error(f"stamp_epoch = 'wall' is invalid: only at real_time_factor 1 (here {rtf:g}); "
+                                    f"the simulation epoch used")
+            self.set_stamp_offset(0)
+            return
+        self.set_stamp_offset(time.time_ns() - m.EPOCH_NS)
+        self.get_logger().info(f"stamp_epoch = wall: sim time 0 is stamped {time.time_ns() / 1e9:.3f} s")
 
     def _run(self):
         """Owner: publish what is due (paced) or the next flow-controlled batch (real_time_factor 0)."""
@@ -288,9 +315,12 @@ class SimulatorNode(SceneNode):
     def _on_clock(self, data):
         """Follower: note the owner's clock; :meth:`after_drain` publishes every sample up to it
         (once per queue of ticks taken, not once per tick)."""
-        self._clock_t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        st = m.cdr_stamp_ns(data)
+        if self.stamp_offset_ns is None:
+            self.set_stamp_offset(self.learn_epoch(st))
+        self._clock_t = st - m.EPOCH_NS - self.stamp_offset_ns
 
-    def after_drain(self):
+    def after_drain(self) -> None:
         """Follower: publish every sample up to the last clock tick taken."""
         t = getattr(self, "_clock_t", None)
         if t is None or self.state != "running" or self.stream is None:
