@@ -123,7 +123,7 @@ class EstimatorNode(SceneNode):
                 self.fits[other] = SwingFit(off_swing, sigma)
         for name, tr in self.trackers.items():
             self._due[name] = self._every(tr)
-            self._fit_due[name] = 2 * self._every(self.trackers[name])
+            self._fit_due[name] = self._fit_every(name)
         self.heading_period_ns = round(1e9 * max(1.0 / HEADING_RATE_HZ, 1.0 / self.scene.sample_rate_hz)) - 1
         self.imu_layouts = {name: imu_layout(self.frame_prefix + heading_frame(name)) for name in self.trackers}
         self.publish_static_transforms(instrument_frames(self.insts, self.imu_layouts, self.frame_prefix))
@@ -133,6 +133,12 @@ class EstimatorNode(SceneNode):
                 self.nmea = NmeaUdpSender(target, field="nmea_udp")
             except SceneError as exc:
                 self.get_logger().error(f"{exc}; no NMEA sentences are sent")
+
+    def _fit_every(self, name) -> int:
+        """Samples between two fits of ``name``'s record: half a swing of the gyroscope it serves (a
+        rotor-off swing is fitted as often as its rotor-on gyroscope's)."""
+        gyro = next(iter(self._gyros_of(name)), name)
+        return 2 * self._every(self.trackers[gyro])
 
     def _every(self, tracker) -> int:
         """Samples between two looks at a tracker's tail: a quarter swing (at least 1)."""
@@ -153,7 +159,7 @@ class EstimatorNode(SceneNode):
             t_ns = t_ns - (self.stamp_offset_ns or 0)       # sim time from release (stamp_epoch)
             rate = self.scene.sample_rate_hz
             if len(buf) >= self._fit_due[name]:
-                self._fit_due[name] = len(buf) + 2 * self._every(tr)
+                self._fit_due[name] = len(buf) + self._fit_every(name)
                 k = max(int(t_ns.size - fit.window_s() * rate) - 1, 0)
                 rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
                 gyro = next(iter(self._gyros_of(name)), name)
@@ -247,7 +253,7 @@ class EstimatorNode(SceneNode):
             self.trackers[name] = NorthTracker(tr.swing_s, tr.noise_sigma_rad)
             self.fits[name] = SwingFit(tr.swing_s, tr.noise_sigma_rad)
             self._due[name] = len(self.buffers[name]) + self._every(tr)
-            self._fit_due[name] = len(self.buffers[name]) + 2 * self._every(tr)
+            self._fit_due[name] = len(self.buffers[name]) + self._fit_every(name)
         self.live, self._heading_t = {}, {}
 
     def restart(self) -> None:

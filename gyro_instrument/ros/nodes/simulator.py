@@ -294,7 +294,8 @@ class SimulatorNode(SceneNode):
             self.set_stamp_offset(0)
             return
         self.set_stamp_offset(time.time_ns() - m.EPOCH_NS)
-        self.get_logger().info(f"stamp_epoch = wall: sim time 0 is stamped {time.time_ns() / 1e9:.3f} s")
+        self.get_logger().info(f"stamp_epoch = wall: sim time 0 is stamped "
+                               f"{(m.EPOCH_NS + self.stamp_offset_ns) / 1e9:.9f} s")
 
     def _run(self):
         """Owner: publish what is due (paced) or the next flow-controlled batch (real_time_factor 0)."""
