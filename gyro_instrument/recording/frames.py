@@ -29,7 +29,8 @@ from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.recording.sim_stream import SPACING_M
 from gyro_instrument.recording.topics import SITE_FRAME, heading_frame, measures_azimuth, publications
 
-TF_STATIC = "/tf_static"
+#: relative, as a namespaced robot's tf topics are (``/tf_static`` in the root namespace)
+TF_STATIC = "tf_static"
 TF_MESSAGE_TYPE = "tf2_msgs/msg/TFMessage"
 TRANSFORM_TYPE = "geometry_msgs/msg/TransformStamped"
 #: the relative topic on which every node publishes the static transforms of the frames it names
@@ -101,7 +102,7 @@ def _yaw_xyzw(azimuth_rad) -> tuple:
 
 def instrument_frames(insts, names=None, prefix="") -> list:
     """The static transforms of the frames the messages of instruments ``names`` (default all)
-    name (module docstring), ``prefix`` before every frame id; ``insts`` is every instrument of the
+    name (module docstring). ``prefix`` before every frame id; ``insts`` is every instrument of the
     scene, in scene order (it places them)."""
     order = list(insts)
     out = []

@@ -193,10 +193,11 @@ class RecorderNode(SceneNode):
         self._tf_static_pending = False
         tfs = instrument_frames(self.insts, None, self.frame_prefix)
         if tfs:
-            self.writer.add_topic(TF_STATIC, TF_MESSAGE_TYPE, qos_yaml(reliable=True, keep_all=False, depth=1,
-                                                                         transient_local=True))
+            topic = self.resolve_topic_name(TF_STATIC)       # /tf_static; /<ns>/tf_static in a namespace
+            self.writer.add_topic(topic, TF_MESSAGE_TYPE, qos_yaml(reliable=True, keep_all=False, depth=1,
+                                                                     transient_local=True))
             t0 = m.EPOCH_NS + self.stamp_offset_ns
-            self._write(TF_STATIC, t0, tf_message_cdr(tfs, t0))
+            self._write(topic, t0, tf_message_cdr(tfs, t0))
 
     def start(self) -> None:
         self.standalone = True
