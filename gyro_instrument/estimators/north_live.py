@@ -1,4 +1,5 @@
-"""North as the swing goes: the Schuler mean updated at each new reversal point, in bounded work.
+"""North as the swing goes: a fit of the record so far from the first swing, and the Schuler mean
+updated at each new reversal point, in bounded work.
 
 A surveyor reading a gyrotheodolite writes each turning point down as it comes and has a north
 reading from the third on (the Schuler mean of :func:`.north.schuler_mean`, Freiberger

@@ -106,3 +106,45 @@ def launch(scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, names
         out["logs"][node] = fh.read()
         fh.close()
     return out
+
+
+def _log_time(text, marker) -> float | None:
+    """The ROS log time (s) of the first line of ``text`` holding ``marker``."""
+    import re
+    for line in text.splitlines():
+        if marker in line:
+            found = re.search(r"\[(\d+\.\d+)\]", line)
+            return float(found.group(1)) if found else None
+    return None
+
+
+def timed_launch(scene="quet_paris", duration_s=600.0) -> dict:
+    """The separate-node route at real-time factor 0 with recording, timed (issue 37 item 6): the
+    wall time from the clock owner's first tick ("sim time starts" in its log) to the recorder's
+    "every expected message recorded" (the estimate's own computation included), the launch's whole
+    wall time (interpreters, imports and discovery too), the messages in the bag and its status.
+    Run on loopback (``tools/loopback``)."""
+    import tempfile
+    from gyro_instrument.recording.mcap_io import read_messages, recording_state
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = os.path.join(tmp, "route.mcap")
+        t0 = time.monotonic()
+        res = launch(scene, bag, duration_s=duration_s, real_time_factor=0.0, timeout_s=600, log_dir=tmp)
+        wall = time.monotonic() - t0
+        logs = res["logs"]
+        owner = next((n for n, text in logs.items() if "sim time starts" in text), None)
+        start = _log_time(logs[owner], "sim time starts") if owner else None
+        end = _log_time(logs.get("recorder", ""), "every expected message recorded")
+        messages = sum(1 for _ in read_messages(bag))
+        state = recording_state(bag)
+    streaming = (end - start) if start is not None and end is not None else None
+    return {"scene": scene, "simulated_s": float(duration_s), "streaming_s": streaming,
+            "real_time_factor": (duration_s / streaming) if streaming else None, "launch_wall_s": wall,
+            "messages": messages, "messages_per_s": (messages / streaming) if streaming else None,
+            "state": state, "returncodes": res["returncodes"]}
+
+
+if __name__ == "__main__":          # python -m gyro_instrument.ros.launch [SCENE [DURATION_S]]: one JSON line
+    import json
+    print(json.dumps(timed_launch(sys.argv[1] if len(sys.argv) > 1 else "quet_paris",
+                                  float(sys.argv[2]) if len(sys.argv) > 2 else 600.0)))

@@ -23,8 +23,10 @@ _SUMMARIES = {
 _TOPICS = {
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()]
                  + [f"{heading_topic('<gyro>')} ({IMU_TYPE}, {heading_frame('<gyro>')}): a horizontal gyroscope's heading, "
-                    f"at each reversal point and with the estimate"],
-    "recorder": ["subscribes every topic of the scene (or the parameter topics)"],
+                    f"from the first swing at 10 Hz of sim time (every sample when slower) and with the estimate",
+                    "static_transforms (geometry_msgs/msg/TransformStamped, latched): the frames it names"],
+    "recorder": ["subscribes every topic of the scene (or the parameter topics)",
+                 "writes tf_static (tf2_msgs/msg/TFMessage) to the bag: the scene's static frames"],
     "player": ["the bag's topics (relative names), clock"],
 }
 _EXAMPLES = {
@@ -45,7 +47,8 @@ def simulator_topics(kinds) -> list:
             line = f"{p.topic} ({p.type_name}{frame}), {rate}"
             if line not in lines:
                 lines.append(line)
-    return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)"]
+    return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)",
+                    "static_transforms (geometry_msgs/msg/TransformStamped, latched): the frames its messages name"]
 
 
 def help_text(name) -> str:
@@ -110,6 +113,12 @@ def _spin(node, on_exit=None):
                 if node.context.ok():
                     raise
                 break                      # SIGINT/SIGTERM shut the context down mid-wait
+        if getattr(node, "done", False) and node.context.ok():
+            # done (the recorder: every expected message recorded): what already arrived on the other
+            # topics (live headings published before the final estimate) is taken before the exit
+            for _ in range(100):
+                if not drain(node):
+                    break
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

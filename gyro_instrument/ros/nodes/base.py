@@ -42,11 +42,11 @@ def drain(node, limit=20000) -> int:
     message (rclpy's executor rebuilds its wait set per callback, the separate-node route's ceiling,
     issue 37 item 6). Each topic's messages keep their order. Then the node's ``after_drain()``, if
     it has one (a follower publishes once up to the last clock tick taken). Returns how many were
-    taken (at most ``limit``)."""
+    taken (at most ``limit`` per subscription, so that one long queue starves no other)."""
     from rclpy.exceptions import InvalidHandle
     n = 0
     for sub in [s for s in node.subscriptions if s.raw]:
-        while n < limit:
+        for _ in range(limit):
             try:
                 with sub.handle:
                     taken = sub.handle.take_message(sub.msg_type, True)

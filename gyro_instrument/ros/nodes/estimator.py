@@ -72,6 +72,7 @@ class EstimatorNode(SceneNode):
         self._fit_due = {}      # instrument -> samples at which its fit is next updated
         self.live = {}          # horizontal gyroscope -> its live NorthEstimate (None before the first)
         self._heading_t = {}    # horizontal gyroscope -> stamp (ns) of its last heading published
+        self._imu_cols = {}     # horizontal gyroscope -> (estimate, its Imu fields as encoder columns)
         self.nmea = None
         if self.load():
             self.prepare()
@@ -189,12 +190,15 @@ class EstimatorNode(SceneNode):
         return min(cands, key=lambda c: c.sigma_rad, default=None)
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
-        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized) and a ``$HEHDT`` for the
-        first gyroscope."""
-        f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
-        data = self.imu_layouts[name].encode([t_ns], *[np.array([v]) for v in (
-            f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
-            f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])[0]
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized; the fields computed once per
+        estimate, only the stamp changes between two) and a ``$HEHDT`` for the first gyroscope."""
+        key = (name, azimuth_rad, sigma_rad)
+        if self._imu_cols.get(name, (None,))[0] != key:
+            f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
+            self._imu_cols[name] = (key, [np.array([v]) for v in (
+                f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
+                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])
+        data = self.imu_layouts[name].encode([t_ns], *self._imu_cols[name][1])[0]
         self._send(heading_topic(name), data)
         if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
             try:
