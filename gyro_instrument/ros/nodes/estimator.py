@@ -157,18 +157,18 @@ class EstimatorNode(SceneNode):
         changed = False
         if len(buf) >= self._due[name] or len(buf) >= self._fit_due[name]:
             t_ns, pos, vel = buf.arrays()
-            t_ns = t_ns - (self.stamp_offset_ns or 0)       # sim time from release (stamp_epoch)
+            off = self.stamp_offset_ns or 0                 # stamps -> sim time from release (stamp_epoch)
             rate = self.scene.sample_rate_hz
             if len(buf) >= self._fit_due[name]:
                 self._fit_due[name] = len(buf) + self._fit_every(name)
                 k = max(int(t_ns.size - fit.window_s() * rate) - 1, 0)
-                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:] - off, pos[k:], vel[k:])})[name]
                 gyro = next(iter(self._gyros_of(name)), name)
                 changed |= fit.update(rec["t"], -rec["angle"], min_span_s=self.fits[gyro].swing_s) is not None
             if len(buf) >= self._due[name]:
                 self._due[name] = len(buf) + self._every(tr)
                 k = max(int(t_ns.size - tr.window_s() * rate) - 1, 0)
-                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
+                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:] - off, pos[k:], vel[k:])})[name]
                 changed |= bool(tr.update(rec["t"], -rec["angle"]))
         for gyro in self._gyros_of(name):
             if changed:
