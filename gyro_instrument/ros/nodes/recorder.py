@@ -197,6 +197,8 @@ class RecorderNode(SceneNode):
             self.writer.add_topic(topic, TF_MESSAGE_TYPE, qos_yaml(reliable=True, keep_all=False, depth=1,
                                                                      transient_local=True))
             t0 = m.EPOCH_NS + self.stamp_offset_ns
+            self._topic_types[topic] = TF_MESSAGE_TYPE
+            self.counts[topic], self.expected[topic] = 1, 1       # in the status counts as the file holds it
             self._write(topic, t0, tf_message_cdr(tfs, t0))
 
     def start(self) -> None:
@@ -294,8 +296,10 @@ class RecorderNode(SceneNode):
         rec = self._scene_record()
         rec["continues"] = os.path.basename(old_path.rstrip("/"))
         self.writer.add_metadata("gyro_instrument", rec)
-        for name in self.counts:
+        for name in self.subs:
             self.writer.add_topic(name, self._topic_types[name], qos_yaml(reliable=True, keep_all=False, depth=1000))
+        self._tf_static_pending = True           # the new file starts with the static frames too
+        self._write_tf_static()
 
     def _write_old(self, run, topic, st, data):
         writer, counts, _ = self._old[run]
