@@ -69,6 +69,10 @@ def ros_route_rows(duration_s=600.0, progress=print) -> list:
     extra = f"; launch to exit {sep['launch_wall_s']:.1f} s, {sep['messages']} messages" if ok else f" ({note})"
     rows.append((f"ROS separate nodes (ros2 run route), quet_paris {duration_s:g} s at 20 Hz, rtf 0, recording "
                  "complete: first tick to complete bag", rtf, "x real time" + extra, ">= 100", bool(ok) and rtf >= 100))
+    s_rtf = sep.get("samples_real_time_factor") if ok else None
+    rows.append(("ROS separate nodes: first tick to every sample at the estimator (the estimate's computation "
+                 "left out, as in the one-process figure)", s_rtf if s_rtf else float("nan"), "x real time", "",
+                 bool(s_rtf)))
     rows.append(("ROS separate nodes: messages recorded per second", rate, "messages/s", "", bool(ok)))
     progress("  rclpy's own publish-and-receive ceiling (two processes on loopback)")
     ceil, note = _json_child(["-m", "gyro_instrument.ros.ceiling", "60000"])
@@ -78,4 +82,8 @@ def ros_route_rows(duration_s=600.0, progress=print) -> list:
     ratio = c_rate / rate if ok and ceil else float("nan")
     rows.append(("rclpy's ceiling / separate nodes' messages per second", ratio, "x", "<= 2 (or the 100x above)",
                  bool(ok and ceil) and (ratio <= 2 or rtf >= 100)))
+    d_rate = sep.get("deliveries_per_s") if ok else None
+    d_ratio = c_rate / d_rate if d_rate and ceil else float("nan")
+    rows.append(("rclpy's ceiling / separate nodes' DDS deliveries per second (a clock tick to 3 subscribers, a "
+                 "joint state to 2)", d_ratio, "x", "", bool(d_rate and ceil)))
     return rows

@@ -316,6 +316,7 @@ class EstimatorNode(SceneNode):
     def _check_complete(self):
         if self.standalone and not self.final and all(len(b) >= self.expected for b in self.buffers.values()):
             if self.buffers or self._clock_done_at is not None:
+                self.get_logger().info(f"every expected sample received ({self.received()}): estimating")
                 self._final()
 
     def _on_clock(self, data):
