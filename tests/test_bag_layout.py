@@ -205,7 +205,8 @@ def test_run_records_a_split_rosbag2_directory_that_replays_to_the_live_estimate
     rclpy.init(context=ctx, args=[])
     try:
         node = PlayerNode(context=ctx, parameter_overrides=[Parameter("bag", value=str(d))])
-        assert node.total == len(theirs) and not node.damaged
+        # every message but /tf_static, which the player skips where tf2_msgs is not installed (the wheels)
+        assert node.total == len([m for m in theirs if m[0] != "/tf_static"]) and not node.damaged
         node.destroy_node()
     finally:
         rclpy.shutdown(context=ctx)

@@ -110,7 +110,7 @@ def test_angular_velocity_is_the_earth_rate_in_the_body_frame(latitude_deg, azim
     the inverse of the body→ENU rotation (scipy) applied to it; its norm is n."""
     site = Site.from_degrees(latitude_deg)
     a = math.radians(azimuth_deg)
-    fields = imu_fields(a, 1e-5, site)
+    fields = imu_fields(a, 1e-5, site, rate_measured=True)
     n = site.earth_rate_rad_s
     want = Rotation.from_quat(fields.orientation_xyzw).inv().apply(site.earth_rate_enu())
     assert np.allclose(fields.angular_velocity_xyz_rad_s, want, atol=TIGHT * n, rtol=0)
@@ -155,9 +155,19 @@ def test_covariances_follow_the_imu_message_convention():
     assert levelled.orientation_covariance[8] == sigma ** 2
 
 
+def test_the_rate_is_not_provided_unless_measured():
+    """Imu.msg: element 0 of a covariance = -1 means "no estimate of this data element"; the
+    gyrocompass measures no rate (issue 37: robot_localization would fuse a variance-0 rate)."""
+    site = Site.from_degrees(48.846)
+    for sigma in (1e-5, None):
+        f = imu_fields(math.radians(30.0), sigma, site)
+        assert f.angular_velocity_covariance == (NOT_PROVIDED,) + (0.0,) * 8
+        assert f.angular_velocity_xyz_rad_s == (0.0, 0.0, 0.0)
+
+
 def test_unknown_sigma_and_no_estimate():
     site = Site.from_degrees(-33.87)
-    f = imu_fields(1.0, None, site)                                   # value without σ: covariance unknown
+    f = imu_fields(1.0, None, site, rate_measured=True)               # value without σ: covariance unknown
     assert f.orientation_covariance == (0.0,) * 9 and f.angular_velocity_covariance == (0.0,) * 9
     g = imu_fields(None, None, site)                                  # no estimate: not provided
     assert g.orientation_covariance[0] == NOT_PROVIDED and g.angular_velocity_covariance[0] == NOT_PROVIDED
@@ -172,7 +182,7 @@ def test_rate_covariance_is_the_propagated_azimuth_variance(latitude_deg):
     σ_γ and σ_n. Its trace is σ_A² (n cos γ)²: the horizontal rate turns with the heading."""
     site, a, sigma, h = Site.from_degrees(latitude_deg), math.radians(200.0), 1e-4, 1e-6
     j = (earth_rate_body(a + h, site) - earth_rate_body(a - h, site)) / (2 * h)
-    cov = np.reshape(imu_fields(a, sigma, site).angular_velocity_covariance, (3, 3))
+    cov = np.reshape(imu_fields(a, sigma, site, rate_measured=True).angular_velocity_covariance, (3, 3))
     scale = site.earth_rate_rad_s ** 2 * sigma ** 2
     assert np.allclose(cov, sigma ** 2 * np.outer(j, j), atol=1e-7 * scale, rtol=0)
     assert abs(np.trace(cov) - sigma ** 2 * site.k_horizontal_rad_s ** 2) < 1e-12 * scale

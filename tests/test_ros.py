@@ -149,7 +149,8 @@ def test_batched_run_records_every_message_in_sample_order(tmp_path):
         seen = [(tp, t) for tp, t, _ in order if tp in visual]
         assert seen == sorted(seen, key=lambda x: x[1]) and {t for _, t in seen} == {
             EPOCH_NS + k * 1_000_000_000 for k in range(4)}
-        order = [r for r in order if r[0] not in visual]
+        assert order[0][:2] == ("/tf_static", EPOCH_NS)       # the static frames first, at sim time 0 (issue 37)
+        order = [r for r in order if r[0] not in visual and r[0] != "/tf_static"]
         per_sample = ["/clock", "/gyro_horizontal/joint_states", "/gyro_meridian/joint_states",
                       "/pendulum/joint_states", "/pendulum/bob_position"]
         assert [tp for tp, _, _ in order[:5 * 61]] == per_sample * 61

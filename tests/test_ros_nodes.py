@@ -306,7 +306,8 @@ def test_recorder_marks_missing_samples_incomplete(tmp_path):
         out_rec = stop(rec)
     state, counts = status(bag)
     assert state == "incomplete", (counts, out_rec, out_sim)
-    assert counts == {"/clock": [101, 201], "/pendulum/joint_states": [101, 201]}
+    assert counts == {"/clock": [101, 201], "/pendulum/joint_states": [101, 201],
+                      "/tf_static": [1, 1]}          # the static frames, written when the recording starts
     assert "recording incomplete: /clock 101 of 201" in out_rec
     assert any("recording incomplete" in n for n in replay_bag(bag).get("replay_notes", []))
 

@@ -249,6 +249,9 @@ def targets(wp_rows, quick=False, progress=print) -> list:
     rows.append(("ROS suite, quet_paris at 100 Hz, nothing lost" + (" (120 s)" if quick else ""),
                  rtf if rtf is not None else float("nan"), "x real time" + (f" ({note})" if note else ""),
                  ">= 50", rtf is not None and rtf >= 50))
+    if not quick:           # the route ROS users take, beside the one-process run (about a minute)
+        from gyro_instrument.bench.ros_route import ros_route_rows
+        rows += ros_route_rows(progress=progress)
     return rows
 
 

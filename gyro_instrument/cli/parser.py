@@ -378,9 +378,10 @@ def add_run_command(sub) -> None:
     p.add_argument("--nmea-udp", metavar="HOST:PORT", default=None,
                    help="send the heading of the scene's first horizontal gyroscope (its scale zero's azimuth) as "
                         "NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT ([IPV6]:PORT; IANA's "
-                        "NMEA port is 10110; a HOST that resolves to several addresses, as localhost to ::1 and "
-                        "127.0.0.1, gets each sentence at every one, noted once): at each reversal point as the estimate converges and with the final "
-                        "estimate (the estimator's parameter nmea_udp)")
+                         "NMEA port is 10110; a HOST that resolves to several addresses, as localhost to ::1 and "
+                         "127.0.0.1, gets each sentence at every one, noted once): from the first swing on at 10 Hz "
+                         "of sim time (every sample of a slower instrument) as the estimate converges, and with the "
+                         "final estimate (the estimator's parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

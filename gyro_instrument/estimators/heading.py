@@ -19,7 +19,11 @@ Frames (REP-103, REP-145)
   component order (geometry_msgs/Quaternion: x, y, z, w):
   ``q = (0, 0, sin(ψ/2), cos(ψ/2))``.
 - Angular velocity (REP-145: the rate of the sensor frame w.r.t. an inertial frame, in the sensor
-  frame): the instrument is at rest on the Earth, so it is the Earth-rate vector
+  frame): **not provided** by default (element 0 of its covariance −1, issue 37): the instrument
+  measures no rate, and the Earth-rate vector rotated by the estimate would be fused by a
+  navigation filter (robot_localization) as a gyro reading of variance 0. With ``rate_measured``
+  (a caller that does measure it, or to state what a rate gyro at rest would read) it is the
+  Earth-rate vector
   ``n (0, cos γ, sin γ)`` (ENU, REP-145; :meth:`Site.earth_rate_enu`) expressed in the body frame,
   ``ω_b = Rᵀ ω_enu = n (cos γ cos A, cos γ sin A, sin γ)``: pointing north (A = 0) the forward
   axis reads n cos γ, the left axis 0 and the up axis n sin γ; pointing east (A = π/2) the left
@@ -47,6 +51,7 @@ message definition's −1 is what consumers test, and it is used here.)
   full turn: the least informative statement a finite variance can make. Off-diagonal terms 0
   (yaw's error is the estimate's, the tilts' the levelling's: independent).
 - Orientation with A but no σ (an estimate that gives none): all zeros, "covariance unknown".
+- Angular velocity not measured (the default): vector zero, element 0 = −1.
 - No estimate (A is None): orientation not provided (element 0 = −1, quaternion the message's
   default identity); the angular velocity cannot be put in an unknown body frame either (−1).
 - Angular velocity: first-order propagation of σ_A (and of optional σ_γ, σ_n) through ω_b(A, γ, n):
@@ -64,6 +69,11 @@ import numpy as np
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.quaternion import quat_from_rotvec
 from gyro_instrument.core.site import Site
+
+#: Rate (Hz of the node's clock: sim time) of the live heading of an instrument sampled at least this
+#: fast; one sampled slower gets a heading with every sample (issue 37: a gyrocompass output is
+#: continuous, a navigation stack fuses it at 10 Hz or more)
+HEADING_RATE_HZ = 10.0
 
 #: Imu.msg: element 0 of a covariance set to this means "no estimate of this data element".
 NOT_PROVIDED = -1.0
@@ -164,7 +174,7 @@ def _checked(name: str, value, *, optional: bool, positive: bool | None) -> floa
 
 def imu_fields(azimuth_rad: float | None, sigma_rad: float | None, site: Site, *,
                level_sigma_rad: float | None = None, latitude_sigma_rad: float = 0.0,
-               earth_rate_sigma_rad_s: float = 0.0) -> ImuFields:
+               earth_rate_sigma_rad_s: float = 0.0, rate_measured: bool = False) -> ImuFields:
     """The ``sensor_msgs/Imu`` fields of a north estimate at a site (conventions: module docstring).
 
     Parameters
@@ -183,6 +193,10 @@ def imu_fields(azimuth_rad: float | None, sigma_rad: float | None, site: Site, *
     latitude_sigma_rad, earth_rate_sigma_rad_s : float
         Optional σ of γ (rad) and n (rad/s) propagated into the rate covariance (default 0: the
         site is given).
+    rate_measured : bool
+        False (default): the angular velocity is not provided (zero, covariance element 0 = −1):
+        nothing here measures it. True: the Earth's rate in the body frame with its propagated
+        covariance (module docstring).
 
     Returns
     -------
@@ -200,11 +214,13 @@ def imu_fields(azimuth_rad: float | None, sigma_rad: float | None, site: Site, *
     s_n = _checked("site.earth_rate_sigma_rad_s", earth_rate_sigma_rad_s, optional=False, positive=False)
     if a is None:
         return ImuFields((0.0, 0.0, 0.0, 1.0), _NOT_PROVIDED_COV, (0.0, 0.0, 0.0), _NOT_PROVIDED_COV)
-    rate = tuple(float(v) for v in earth_rate_body(a, site))
+    rate = tuple(float(v) for v in earth_rate_body(a, site)) if rate_measured else (0.0, 0.0, 0.0)
     if s is None:
-        return ImuFields(orientation_xyzw(a), _UNKNOWN, rate, _UNKNOWN)
+        return ImuFields(orientation_xyzw(a), _UNKNOWN, rate, _UNKNOWN if rate_measured else _NOT_PROVIDED_COV)
     tilt_var = UNMEASURED_TILT_VARIANCE_RAD2 if lev is None else lev ** 2
     orient_cov = (tilt_var, 0.0, 0.0, 0.0, tilt_var, 0.0, 0.0, 0.0, s ** 2)
+    if not rate_measured:
+        return ImuFields(orientation_xyzw(a), orient_cov, rate, _NOT_PROVIDED_COV)
     rate_cov = earth_rate_body_covariance(a, s, site, s_lat, s_n)
     return ImuFields(orientation_xyzw(a), orient_cov, rate, tuple(float(v) for v in rate_cov.ravel()))
 

@@ -130,31 +130,66 @@ class AzimuthKind(MeasurementKind):
 
 
 class NorthLive(LiveTracker):
-    """The live north of one horizontal gyroscope (and its rotor-off swing): :class:`.north_live.NorthTracker`
-    per record, the Schuler mean (tape-corrected, :func:`.north_live.live_north`) at each new reversal point."""
+    """The live north of one horizontal gyroscope (and its rotor-off swing), from the first swing on
+    (issue 37): per record a :class:`.north_live.SwingFit` of the record so far (the predicted
+    frequency as a prior) every half swing of the gyroscope, and a :class:`.north_live.NorthTracker`
+    of its reversal points every quarter swing of the record; the live north is whichever of
+    :func:`.north_live.fit_north` and :func:`.north_live.live_north` (both tape-corrected where
+    there is a rotor-off swing) has the smaller σ."""
 
     def __init__(self, name, swing_s, sigma, off_name=None, off_swing_s=None):
-        from gyro_instrument.estimators.north_live import NorthTracker
+        from gyro_instrument.estimators.north_live import NorthTracker, SwingFit
         self.name = name
         self.trackers = {name: NorthTracker(swing_s, sigma)}
+        self.fits = {name: SwingFit(swing_s, sigma)}
         if off_name is not None:
             self.trackers[off_name] = NorthTracker(off_swing_s, sigma)
+            self.fits[off_name] = SwingFit(off_swing_s, sigma)
         self.reads = tuple(self.trackers)
         self.off = off_name
+        # looks between two reversal-point searches / two fits of each record (a look every every_s_of)
+        self._period = {n: (max(round(0.25 * tr.swing_s / self.every_s_of(n)), 1),
+                            max(round(0.5 * swing_s / self.every_s_of(n)), 1)) for n, tr in self.trackers.items()}
+        self._looks = {n: 0 for n in self.trackers}
 
     def every_s_of(self, name) -> float:
-        """A quarter swing of ``name``'s record between two looks."""
-        return 0.25 * self.trackers[name].swing_s
+        """A quarter swing of ``name``'s record, at most half a swing of the gyroscope (a rotor-off
+        swing is fitted as often as its rotor-on gyroscope's)."""
+        return min(0.25 * self.trackers[name].swing_s, 0.5 * self.trackers[self.name].swing_s)
 
     def window_s_of(self, name) -> float:
-        return self.trackers[name].window_s()
+        """The fit's span (:data:`.north_live.FIT_SWINGS` swings); the reversal points are searched
+        in its last :meth:`.north_live.NorthTracker.window_s`."""
+        return max(self.fits[name].window_s(), self.trackers[name].window_s())
 
     def update(self, name, rec) -> tuple | None:
-        from gyro_instrument.estimators.north_live import live_north
-        if not self.trackers[name].update(rec["t"], -rec["angle"]):
+        import numpy as np
+        t, u = np.asarray(rec["t"], dtype=float), -np.asarray(rec["angle"], dtype=float)
+        if t.size == 0:
             return None
-        est = live_north(self.trackers[self.name], self.trackers.get(self.off))
+        every_tr, every_fit = self._period[name]
+        look = self._looks[name] = self._looks[name] + 1       # the first look is every_s_of in
+        changed = False
+        if look % every_fit == 0:          # the gyroscope's half swings: its first fit after one swing
+            fit = self.fits[name].update(t, u, min_span_s=self.fits[self.name].swing_s)
+            changed = fit is not None
+        if look % every_tr == 0:
+            k = max(int(np.searchsorted(t, t[-1] - self.trackers[name].window_s())) - 1, 0)
+            changed = bool(self.trackers[name].update(t[k:], u[k:])) or changed
+        if not changed:
+            return None
+        est = self.live()
         return None if est is None else (est.mount_azimuth_rad, est.sigma_rad)
+
+    def live(self) -> "object | None":
+        """The better (smaller σ) of the fit's and the reversal points' live north (a
+        :class:`.north.NorthEstimate`), or None."""
+        from gyro_instrument.estimators.north_live import fit_north, live_north
+        off_fit = self.fits[self.off].summary if self.off else None
+        cands = [fit_north(self.fits[self.name].summary, off_fit, tape=self.off is not None),
+                 live_north(self.trackers[self.name], self.trackers.get(self.off))]
+        cands = [c for c in cands if c is not None and c.sigma_rad is not None and math.isfinite(c.sigma_rad)]
+        return min(cands, key=lambda c: c.sigma_rad, default=None)
 
     def final(self, entry) -> tuple:
         block = (entry or {}).get("north") or {}

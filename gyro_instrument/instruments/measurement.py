@@ -77,7 +77,9 @@ class LiveTracker:
     def update(self, name, rec) -> tuple | None:
         """Take the tail ``rec`` (``t`` s and the record keys) of instrument ``name``; returns the
         live value when there is a new one (for ``LIVE = 'heading'``: ``(mount azimuth rad, σ rad)``),
-        else None."""
+        else None. The node keeps the last value and publishes it at
+        :data:`~gyro_instrument.estimators.heading.HEADING_RATE_HZ` of sim time (every sample when the
+        instrument samples slower), stamped with the instrument's latest sample."""
         return None
 
     def final(self, entry) -> tuple | None:

@@ -162,5 +162,14 @@ def point_stamped_layout(frame_id) -> CdrLayout:
     return w.layout([(w.doubles(3, False), 3)])
 
 
+def imu_layout(frame_id) -> CdrLayout:
+    """:class:`CdrLayout` of sensor_msgs/Imu: fields orientation (x, y, z, w), its covariance (9),
+    angular velocity (3), its covariance (9), linear acceleration (3), its covariance (9); the
+    covariances are fixed arrays (no length prefix)."""
+    w = _CdrTemplate()
+    w.string(frame_id)
+    return w.layout([(w.doubles(k, False), k) for k in (4, 9, 3, 9, 3, 9)])
+
+
 #: :class:`CdrLayout` of rosgraph_msgs/Clock (the stamp only)
 CLOCK_LAYOUT = _CdrTemplate().layout([])

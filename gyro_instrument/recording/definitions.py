@@ -34,11 +34,26 @@ def _find(pkg, name, ext):
                             f"(set AMENT_PREFIX_PATH to the prefix holding the ROS message packages)")
 
 
+#: types written to bags that the wheels do not install (tf2_msgs, issue 37): their ``.msg`` text
+#: (tf2_msgs jazzy ``msg/TFMessage.msg``) and, for the type hash, their one field as a type
+#: description (``type_description_interfaces/FieldType``: 145 = a nested type's unbounded sequence)
+EMBEDDED = {
+    "tf2_msgs/msg/TFMessage": ("geometry_msgs/TransformStamped[] transforms\n",
+                               [("transforms", 145, "geometry_msgs/msg/TransformStamped")]),
+}
+
+
 @lru_cache(maxsize=None)
 def msg_text(type_name) -> str:
-    """The ``.msg`` text of ``pkg/msg/Type``."""
+    """The ``.msg`` text of ``pkg/msg/Type`` (installed, or :data:`EMBEDDED`)."""
     pkg, _, name = type_name.split("/")
-    with open(_find(pkg, name, "msg"), encoding="utf-8") as fh:
+    try:
+        path = _find(pkg, name, "msg")
+    except FileNotFoundError:
+        if type_name in EMBEDDED:
+            return EMBEDDED[type_name][0]
+        raise
+    with open(path, encoding="utf-8") as fh:
         return fh.read()
 
 
@@ -87,10 +102,46 @@ def concatenated_definition(type_name) -> str:
     return rec(type_name, 50)
 
 
+def rihs01(description) -> str:
+    """The RIHS01 hash of a type description (REP-2011, as ``rosidl_generator_type_description``
+    computes it): SHA-256 of its JSON (``type_description`` and ``referenced_type_descriptions``,
+    default values left out, separators ``', '`` and ``': '``, keys in order)."""
+    import copy
+    import hashlib
+    h = copy.deepcopy(description)
+    for td in [h["type_description"]] + h["referenced_type_descriptions"]:
+        for f in td["fields"]:
+            f.pop("default_value", None)
+    text = json.dumps(h, ensure_ascii=True, allow_nan=False, indent=None, separators=(", ", ": "), sort_keys=False)
+    return "RIHS01_" + hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _embedded_description(type_name) -> dict:
+    """The type description of an :data:`EMBEDDED` type from its fields and the installed ``.json``
+    of the nested types (their own description and everything they reference, sorted by name)."""
+    fields, refs = [], {}
+    for name, type_id, nested in EMBEDDED[type_name][1]:
+        fields.append({"name": name, "type": {"type_id": type_id, "capacity": 0, "string_capacity": 0,
+                                              "nested_type_name": nested}, "default_value": ""})
+        pkg, _, n = nested.split("/")
+        with open(_find(pkg, n, "json"), encoding="utf-8") as fh:
+            d = json.load(fh)["type_description_msg"]
+        for td in [d["type_description"]] + d["referenced_type_descriptions"]:
+            refs[td["type_name"]] = td
+    return {"type_description": {"type_name": type_name, "fields": fields},
+            "referenced_type_descriptions": [refs[k] for k in sorted(refs)]}
+
+
 @lru_cache(maxsize=None)
 def type_hash(type_name) -> str:
-    """RIHS01 type hash from the installed ``.json`` type description."""
+    """RIHS01 type hash from the installed ``.json`` type description (for an :data:`EMBEDDED`
+    type, computed from its description, :func:`rihs01`)."""
     pkg, _, name = type_name.split("/")
+    if type_name in EMBEDDED:
+        try:
+            _find(pkg, name, "json")
+        except FileNotFoundError:
+            return rihs01(_embedded_description(type_name))
     with open(_find(pkg, name, "json"), encoding="utf-8") as fh:
         data = json.load(fh)
     for h in data.get("type_hashes", []):

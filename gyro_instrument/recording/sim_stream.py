@@ -57,15 +57,21 @@ class SimulatorStream:
         Simulated seconds integrated per block.
     clock : bool
         Publish the clock (one tick per sample).
+    frame_prefix : str
+        Put before every frame id (``frame_prefix`` parameter, checked by the caller).
+
+    Attribute ``stamp_offset_ns`` (default 0) shifts every stamp encoded (``stamp_epoch``).
     """
 
-    def __init__(self, scene, insts, kinds, seed, window_s, clock) -> None:
+    def __init__(self, scene, insts, kinds, seed, window_s, clock, frame_prefix="") -> None:
+        self.stamp_offset_ns = 0
+        self.frame_prefix = frame_prefix
         self.chosen = {n: inst for n, inst in insts.items() if inst.type_name in kinds}
         self.samples = sample_count(scene) if self.chosen else 0
         self.step_ns = 1e9 / scene.sample_rate_hz
         self.clock = bool(clock)
         self.pubs = {name: publications(name, inst) for name, inst in self.chosen.items()}
-        self.layouts = {(name, p.key): _layout(p) for name, ps in self.pubs.items() for p in ps}
+        self.layouts = {(name, p.key): _layout(p, frame_prefix) for name, ps in self.pubs.items() for p in ps}
         self.blocks = joint_blocks(scene, kinds, seed, float(window_s), insts) if self.chosen else None
         self.block = None
         self.blocks_pulled = 0
@@ -118,7 +124,8 @@ class SimulatorStream:
         """Samples a .. z - 1 (all in the current block) into ``out``."""
         b = self.block
         ja, jz = a - b.start, z - b.start
-        t = b.t_ns[ja:jz]
+        off = int(self.stamp_offset_ns or 0)
+        t = b.t_ns[ja:jz] + off if off else b.t_ns[ja:jz]
 
         def add(key, datas):
             out.messages.setdefault(key, []).extend(datas)
@@ -136,11 +143,11 @@ class SimulatorStream:
                     continue
                 out.offsets.setdefault(key, []).extend((marks - i0).tolist())
                 if p.type_name != MARKER_TYPE:
-                    add(key, self.layouts[key].encode(b.t_ns[local], *vis[p.key].rows(local)))
+                    add(key, self.layouts[key].encode(b.t_ns[local] + off, *vis[p.key].rows(local)))
                     continue
                 shown = vis.get("axis") or vis["plane"]
                 add(key, [shown.markers(int(i), int(j), s) for i, j in zip(marks, local)])
-                out.stamps.setdefault(key, []).extend(int(x) for x in b.t_ns[local])
+                out.stamps.setdefault(key, []).extend(int(x) + off for x in b.t_ns[local])
         self.index = z
 
 
@@ -153,12 +160,12 @@ def _dense_rows(key, s, ja, jz):
     return (s.extra["contact_point_m"][ja:jz],)
 
 
-def _layout(p):
+def _layout(p, prefix=""):
     if p.type_name == MARKER_TYPE:
         return None
     if p.type_name == JOINT_STATE_TYPE:
         return joint_state_layout(p.names)
-    return point_stamped_layout(p.frame_id)
+    return point_stamped_layout(prefix + p.frame_id)
 
 
 def _visuals(scene, insts, chosen, pubs, n, step_ns, every):

@@ -106,3 +106,62 @@ def launch(scene, bag, overrides=(), duration_s=0.0, real_time_factor=0.0, names
         out["logs"][node] = fh.read()
         fh.close()
     return out
+
+
+def _log_time(text, marker) -> float | None:
+    """The ROS log time (s) of the first line of ``text`` holding ``marker``."""
+    import re
+    for line in text.splitlines():
+        if marker in line:
+            found = re.search(r"\[(\d+\.\d+)\]", line)
+            return float(found.group(1)) if found else None
+    return None
+
+
+def timed_launch(scene="quet_paris", duration_s=600.0) -> dict:
+    """The separate-node route at real-time factor 0 with recording, timed (issue 37 item 6): the
+    wall time from the clock owner's first tick ("sim time starts" in its log) to the recorder's
+    "every expected message recorded" (the estimate's own computation included), to the estimator's
+    "every expected sample received" (``samples_s``: the streaming alone, as ``run``'s own figure
+    leaves the estimate out); the messages per second in the bag, and the DDS deliveries per second
+    (a clock tick goes to the recorder, the estimator and each following simulator, a joint state
+    to the recorder and the estimator); the launch's whole
+    wall time (interpreters, imports and discovery too), the messages in the bag and its status.
+    Run on loopback (``tools/loopback``)."""
+    import tempfile
+    from gyro_instrument.recording.mcap_io import read_messages, recording_state
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = os.path.join(tmp, "route.mcap")
+        t0 = time.monotonic()
+        res = launch(scene, bag, duration_s=duration_s, real_time_factor=0.0, timeout_s=600, log_dir=tmp)
+        wall = time.monotonic() - t0
+        logs = res["logs"]
+        owner = next((n for n, text in logs.items() if "sim time starts" in text), None)
+        start = _log_time(logs[owner], "sim time starts") if owner else None
+        end = _log_time(logs.get("recorder", ""), "every expected message recorded")
+        samples = _log_time(logs.get("estimator", ""), "every expected sample received")
+        counts = {}
+        for topic, _, _, _ in read_messages(bag):
+            counts[topic] = counts.get(topic, 0) + 1
+        messages = sum(counts.values())
+        state = recording_state(bag)
+    # DDS deliveries: every recorded message reached the recorder; the clock also each follower
+    # simulator and the estimator, a joint state also the estimator
+    sims = [n for n in res["returncodes"] if n not in ("recorder", "estimator")]
+    deliveries = sum(n * (1 + (len(sims) if topic.endswith("/clock") else 1 if topic.endswith("/joint_states") else 0))
+                     for topic, n in counts.items())
+    streaming = (end - start) if start is not None and end is not None else None
+    to_samples = (samples - start) if start is not None and samples is not None else None
+    return {"scene": scene, "simulated_s": float(duration_s), "streaming_s": streaming,
+            "samples_s": to_samples,
+            "samples_real_time_factor": (duration_s / to_samples) if to_samples else None,
+            "real_time_factor": (duration_s / streaming) if streaming else None, "launch_wall_s": wall,
+            "messages": messages, "messages_per_s": (messages / streaming) if streaming else None,
+            "deliveries_per_s": (deliveries / streaming) if streaming else None,
+            "state": state, "returncodes": res["returncodes"]}
+
+
+if __name__ == "__main__":          # python -m gyro_instrument.ros.launch [SCENE [DURATION_S]]: one JSON line
+    import json
+    print(json.dumps(timed_launch(sys.argv[1] if len(sys.argv) > 1 else "quet_paris",
+                                  float(sys.argv[2]) if len(sys.argv) > 2 else 600.0)))

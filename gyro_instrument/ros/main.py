@@ -24,9 +24,11 @@ _SUMMARIES = {
 _TOPICS = {
     "estimator": ["subscribes <instrument>/joint_states, clock"] + [f"{t} ({ty})" for t, ty in ESTIMATOR_TOPICS.items()]
                  + [f"{heading_topic('<gyro>')} ({IMU_TYPE}, {heading_frame('<gyro>')}): a horizontal gyroscope's heading, "
-                    f"at each reversal point and with the estimate"],
+                    f"from the first swing at 10 Hz of sim time (every sample when slower) and with the estimate",
+                    "static_transforms (geometry_msgs/msg/TransformStamped, latched): the frames it names"],
     "recorder": ["subscribes every topic of the scene (or the parameter topics)",
-                 "services ~/pause, ~/resume, ~/split (std_srvs/srv/Trigger)"],
+                 "services ~/pause, ~/resume, ~/split (std_srvs/srv/Trigger)",
+                 "writes tf_static (tf2_msgs/msg/TFMessage) to the bag: the scene's static frames"],
     "player": ["the bag's topics (relative names, each offered the QoS the bag recorded), clock"],
 }
 #: every node run alone publishes its state on /diagnostics (msg_docs/topics.md, "Services and liveness")
@@ -50,7 +52,8 @@ def simulator_topics(kinds) -> list:
             if line not in lines:
                 lines.append(line)
     return lines + [f"{CLOCK} ({CLOCK_TYPE}): published with publish_clock:=true, else subscribed (followed)",
-                    "service ~/restart (std_srvs/srv/Trigger): restart the run from t = 0, every simulator together"]
+                    "service ~/restart (std_srvs/srv/Trigger): restart the run from t = 0, every simulator together",
+                    "static_transforms (geometry_msgs/msg/TransformStamped, latched): the frames its messages name"]
 
 
 def help_text(name) -> str:
@@ -103,16 +106,24 @@ _STOP = _Stop()
 def _spin(node, on_exit=None):
     """Spin until SIGINT/SIGTERM (or an external shutdown) or until the node says it is ``done``;
     then the node's exit work, the node destroyed, and only then the context shut down."""
+    from gyro_instrument.ros.nodes.base import drain
     ex = SingleThreadedExecutor(context=node.context)
     ex.add_node(node)
     try:
         while node.context.ok() and not _STOP.asked and not getattr(node, "done", False):
             try:
                 ex.spin_once(timeout_sec=0.1)
+                drain(node)
             except RCLError:
                 if node.context.ok():
                     raise
                 break                      # SIGINT/SIGTERM shut the context down mid-wait
+        if getattr(node, "done", False) and node.context.ok():
+            # done (the recorder: every expected message recorded): what already arrived on the other
+            # topics (live headings published before the final estimate) is taken before the exit
+            for _ in range(100):
+                if not drain(node):
+                    break
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -60,11 +60,11 @@ def float64(value) -> Float64:
     return Float64(data=float("nan") if value is None else float(value))
 
 
-def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad) -> Vector3Stamped:
+def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad, frame_id=SITE_FRAME) -> Vector3Stamped:
     """The estimated Earth-rate vector in ENU, n (0, cos γ, sin γ) (REP-145)."""
     msg = Vector3Stamped()
     msg.header.stamp = stamp(t_ns)
-    msg.header.frame_id = SITE_FRAME
+    msg.header.frame_id = frame_id
     if earth_rate_rad_s is None or latitude_rad is None:
         msg.vector.x = msg.vector.y = msg.vector.z = float("nan")
     else:
@@ -140,7 +140,7 @@ def _set_points(mk, pts):
         p.x, p.y, p.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
 
 
-def pendulum_markers(t_ns, name, geom, reuse=None) -> "MarkerArray":
+def pendulum_markers(t_ns, name, geom, reuse=None, frame_id=SITE_FRAME) -> "MarkerArray":
     """visualization_msgs/MarkerArray of a pendulum (:class:`~gyro_instrument.recording.visual.PendulumMarkers`)
     in ``site_enu``: the bob (sphere), the wire, the bob's recent trail (a LINE_STRIP, left out while
     the trail has fewer than two points: a line strip of one point is invalid) and the swing plane
@@ -148,14 +148,14 @@ def pendulum_markers(t_ns, name, geom, reuse=None) -> "MarkerArray":
     from visualization_msgs.msg import Marker, MarkerArray
     size_m = geom.size_m
     arr = reuse or MarkerArray(markers=[
-        _marker(t_ns, name, 0, Marker.SPHERE, (0.9, 0.6, 0.1, 1.0), (size_m,) * 3),
-        _marker(t_ns, name, 1, Marker.LINE_LIST, (0.7, 0.7, 0.7, 1.0), (size_m / 10, 0, 0)),
-        _marker(t_ns, name, 3, Marker.LINE_LIST, (1.0, 0.2, 0.2, 1.0), (size_m / 5, 0, 0)),
+        _marker(t_ns, name, 0, Marker.SPHERE, (0.9, 0.6, 0.1, 1.0), (size_m,) * 3, frame_id=frame_id),
+        _marker(t_ns, name, 1, Marker.LINE_LIST, (0.7, 0.7, 0.7, 1.0), (size_m / 10, 0, 0), frame_id=frame_id),
+        _marker(t_ns, name, 3, Marker.LINE_LIST, (1.0, 0.2, 0.2, 1.0), (size_m / 5, 0, 0), frame_id=frame_id),
     ])
     trail = geom.trail
     strip = next((mk for mk in arr.markers if mk.id == 2), None)
     if trail.shape[0] >= 2 and strip is None:      # a line strip needs two points: left out until then
-        strip = _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0))
+        strip = _marker(t_ns, name, 2, Marker.LINE_STRIP, (0.2, 0.6, 1.0, 0.8), (size_m / 10, 0, 0), frame_id=frame_id)
         arr.markers.insert(2, strip)
     elif trail.shape[0] < 2 and strip is not None:
         arr.markers.remove(strip)
@@ -173,22 +173,22 @@ def pendulum_markers(t_ns, name, geom, reuse=None) -> "MarkerArray":
     return arr
 
 
-def axis_markers(t_ns, name, geom) -> "MarkerArray":
+def axis_markers(t_ns, name, geom, frame_id=SITE_FRAME) -> "MarkerArray":
     """visualization_msgs/MarkerArray of a gyroscope's rotor axis (an arrow,
     :class:`~gyro_instrument.recording.visual.AxisMarkers`) in ``site_enu``."""
     from visualization_msgs.msg import Marker, MarkerArray
     o, length_m = np.asarray(geom.origin, dtype=float), geom.length_m
     return MarkerArray(markers=[
         _marker(t_ns, name, 0, Marker.ARROW, (0.2, 0.8, 0.3, 1.0), (length_m / 20, length_m / 10, length_m / 6),
-                [o, o + length_m * np.asarray(geom.axis, dtype=float)]),
+                [o, o + length_m * np.asarray(geom.axis, dtype=float)], frame_id=frame_id),
     ])
 
 
-def marker_array(t_ns, name, geom, reuse=None) -> "MarkerArray":
+def marker_array(t_ns, name, geom, reuse=None, frame_id=SITE_FRAME) -> "MarkerArray":
     """The MarkerArray of a marker geometry of :mod:`gyro_instrument.recording.visual`."""
     if isinstance(geom, AxisMarkers):
-        return axis_markers(t_ns, name, geom)
-    return pendulum_markers(t_ns, name, geom, reuse)
+        return axis_markers(t_ns, name, geom, frame_id)
+    return pendulum_markers(t_ns, name, geom, reuse, frame_id)
 
 
 def message_class(type_name) -> type:

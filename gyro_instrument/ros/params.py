@@ -120,7 +120,17 @@ WAIT = [
                                            "before sim time starts; then it starts anyway with a warning", 0.0, 3600.0,
          read_only=True),
 ]
-SIMULATOR = SCENE + [
+#: frames and stamps (issue 37): every node that names a frame or stamps a message
+FRAMES = [
+    Spec("frame_prefix", "string", "", "put before every frame id this node publishes (robot_state_publisher's "
+                                       "convention, e.g. 'ship1/': two suites with the same frames side by side); "
+                                       "letters, digits, '_' and '/', not starting with '/'", read_only=True),
+    Spec("stamp_epoch", "string", "", "the stamp of sim time 0: an ISO 8601 date-time (no zone: UTC), 'wall' (the "
+                                      "clock owner's wall clock when sim time starts; real_time_factor 1 only; the "
+                                      "other nodes take it from the first stamp they receive), or '' for the "
+                                      "simulation epoch 2001-09-09T01:46:40Z", read_only=True),
+]
+SIMULATOR = SCENE + FRAMES + [
     Spec("real_time_factor", "double", 1.0, "1: paced to the wall clock, 0: as fast as possible (RELIABLE / "
                                             "KEEP_ALL: nothing dropped); applies at once", 0.0, 1000.0),
     Spec("publish_clock", "bool", False, "true: this node owns clock (/clock in the root namespace) and drives sim "
@@ -134,7 +144,7 @@ SIMULATOR = SCENE + [
          "nodes (same namespace) whose subscriptions to this node's topics must be matched before sim time starts; "
          "the clock owner also waits for the scene's other simulators", read_only=True),
 ] + WAIT
-ESTIMATOR = SCENE + [
+ESTIMATOR = SCENE + FRAMES + [
     Spec("input_timeout_s", "double", 5.0, "wall time (s) without a joint sample or clock tick after input began "
                                            "(or after the clock reached the run's end) before the estimator "
                                            "publishes an estimate from what it has, with a WARN and a WARN "
@@ -144,7 +154,8 @@ ESTIMATOR = SCENE + [
          0.0, 86400.0, read_only=True),
     Spec("nmea_udp", "string", "", "HOST:PORT ([IPV6]:PORT) to send NMEA 0183 $HEHDT true-heading sentences to, one "
                                    "UDP datagram per heading published (the first horizontal gyroscope's mount "
-                                   "azimuth: at each reversal point and with the final estimate); empty: none. "
+                                   "azimuth: at 10 Hz of sim time, every sample when slower, from the first swing, "
+                                   "and with the final estimate); empty: none. "
                                    "IANA's port for NMEA over UDP is 10110", read_only=True),
     Spec("nmea_decimals", "int", 3, "decimals of the $HEHDT heading in degrees (3: 0.001 deg = 3.6 arcsec)", 0, 6,
          read_only=True),
@@ -171,7 +182,7 @@ RECORDER = [Spec(s.name, s.type, s.default, s.description + RECORDING_FIXED, s.l
     Spec("command", "string", "recorder node", "command line stored in the bag's metadata", read_only=True),
     Spec("stop_when_complete", "bool", False, "finish the file and exit once every expected message is recorded "
                                               "(every sample of every topic, one estimate)", read_only=True),
-]
+] + FRAMES
 PLAYER = [
     Spec("bag", "string", "", ".mcap file or rosbag2 bag directory to play (every chunk's CRC checked)",
          read_only=True),

@@ -29,7 +29,7 @@ from gyro_instrument import api
 from gyro_instrument.api import check_run_memory, check_window  # noqa: F401  (re-exported)
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.files import shown
-from gyro_instrument.core.scene import DEFAULT_WINDOW_S
+from gyro_instrument.core.scene import DEFAULT_WINDOW_S, EPOCH_NS
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
@@ -129,6 +129,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     nodes = []
     try:
         sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s)
+        _wall_epoch(sims, real_time_factor)
         est = EstimatorNode(context=context, **ns, parameter_overrides=_params(
             scene, overrides, duration_s, **({"nmea_udp": str(nmea_udp)} if nmea_udp else {})))
         rec = RecorderNode(context=context, reorder=False, output_path=bag, **ns, parameter_overrides=_params(
@@ -180,6 +181,22 @@ def _install_stop_handlers():
         for sig in (signal.SIGINT, signal.SIGTERM):
             handlers[sig] = signal.signal(sig, lambda signum, frame: stop.append(signum))
     return stop, handlers
+
+
+def _wall_epoch(sims, real_time_factor) -> None:
+    """``stamp_epoch`` = wall (issue 37): sim time 0 is now, for every simulator of the suite (the
+    estimator and the recorder take it from the first stamp); at a real-time factor other than 1
+    the simulation epoch, with the error logged."""
+    if not sims or sims[0].scene is None or sims[0].stamp_offset_ns is not None:
+        return
+    if real_time_factor != 1.0:
+        sims[0].get_logger().error(f"stamp_epoch = 'wall' is invalid: only at real-time factor 1 (here "
+                                   f"{real_time_factor:g}); the simulation epoch used")
+        off = 0
+    else:
+        off = time.time_ns() - EPOCH_NS
+    for s in sims:
+        s.set_stamp_offset(off)
 
 
 def _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s):

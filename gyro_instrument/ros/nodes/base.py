@@ -22,6 +22,10 @@ from gyro_instrument.scenes import build_instruments
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: a clock follower's subscription: only the latest tick matters (the follower publishes every sample
+#: up to it; the estimator notes sim time), so older ticks are replaced, never queued for Python to
+#: take one by one; RELIABLE, so the latest is never lost (issue 37 item 6)
+LATEST_CLOCK = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE)
 #: the estimator's results: latched (the last estimate kept for subscribers that ask for
 #: TRANSIENT_LOCAL; a VOLATILE subscriber, the recorder's, still matches and gets new ones)
 LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -80,6 +84,30 @@ OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.E
 def list_or(value) -> object:
     """An array parameter's value as a list (rclpy may hold an ``array.array``), others as they are."""
     return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
+def drain(node, limit=20000) -> int:
+    """Take the messages waiting on ``node``'s raw subscriptions and run their callbacks, topic by
+    topic, without the executor: one wait of the executor then serves a whole queue, not one
+    message (rclpy's executor rebuilds its wait set per callback, the separate-node route's ceiling,
+    issue 37 item 6). Each topic's messages keep their order. Then the node's ``after_drain()``, if
+    it has one (a follower publishes once up to the last clock tick taken). Returns how many were
+    taken (at most ``limit`` per subscription, so that one long queue starves no other)."""
+    from rclpy.exceptions import InvalidHandle
+    n = 0
+    for sub in [s for s in node.subscriptions if s.raw]:
+        for _ in range(limit):
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, True)
+            except InvalidHandle:           # destroyed by an earlier callback (a restart)
+                break
+            if taken is None:
+                break
+            sub.callback(taken[0])
+            n += 1
+    hook = getattr(node, "after_drain", None)
+    if hook is not None:
+        hook()
+    return n
 
 
 def acked(node, pubs) -> None:
@@ -115,6 +143,89 @@ class SceneNode(Node):
         self.add_pre_set_parameters_callback(P.pre_set_checker(self, self.specs))
         self.add_on_set_parameters_callback(self._check_params)
         self.add_post_set_parameters_callback(self._after_set)
+
+    def frames_and_epoch(self, owner=False) -> None:
+        """Read ``frame_prefix`` and ``stamp_epoch`` (issue 37) into :attr:`frame_prefix` and
+        :attr:`stamp_offset_ns` (the shift of every stamp from the simulation epoch; None while a
+        ``wall`` epoch is not known yet: the clock owner takes it when sim time starts, another node
+        from the first stamp it receives, :meth:`learn_epoch`). A bad value is logged with the
+        reason and the default kept; the node runs on."""
+        from gyro_instrument.recording.frames import WALL, check_frame_prefix, parse_stamp_epoch
+        self.frame_prefix, self.stamp_offset_ns = "", 0
+        try:
+            self.frame_prefix = check_frame_prefix(self.value("frame_prefix", ""))
+        except SceneError as exc:
+            self.get_logger().error(f"{exc}; no prefix used")
+        try:
+            rtf = float(self.value("real_time_factor", 1.0)) if owner else None
+            epoch = parse_stamp_epoch(self.value("stamp_epoch", ""), rtf)
+            self.stamp_offset_ns = None if epoch == WALL else epoch - m.EPOCH_NS
+        except SceneError as exc:
+            self.get_logger().error(f"{exc}; the simulation epoch used")
+
+    def learn_epoch(self, stamp_ns) -> int:
+        """With ``stamp_epoch`` = wall on a node that does not own the clock: the first stamp
+        received (sim time 0 of the run: the first clock tick or a topic's first sample) fixes the
+        shift. Returns :attr:`stamp_offset_ns`."""
+        if self.stamp_offset_ns is None:
+            self.stamp_offset_ns = int(stamp_ns) - m.EPOCH_NS
+            self.get_logger().info(f"stamp_epoch = wall: sim time 0 is stamped {int(stamp_ns) / 1e9:.9f} s "
+                                   f"(the first stamp received)")
+        return self.stamp_offset_ns
+
+    def publish_static_transforms(self, tfs) -> None:
+        """Publish ``tfs`` (:class:`~gyro_instrument.recording.frames.StaticTransform`) once, latched,
+        on the relative topic ``static_transforms``: ``geometry_msgs/TransformStamped``, RELIABLE,
+        TRANSIENT_LOCAL, KEEP_LAST with a depth of the frame count (a late subscriber gets them all),
+        stamped at sim time 0; then watch the graph for another namespace publishing the same frames
+        (:meth:`_check_frame_clash`). Nothing while a ``wall`` epoch is not known (called again)."""
+        from gyro_instrument.recording.frames import STATIC_TRANSFORMS, transform_stamped_cdr
+        if not tfs or self.stamp_offset_ns is None or getattr(self, "_tf_pub", None) is not None:
+            return
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=len(tfs), reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self._tf_pub = self.create_publisher(m.message_class("geometry_msgs/msg/TransformStamped"),
+                                             STATIC_TRANSFORMS, qos)
+        for tf in tfs:
+            self._tf_pub.publish(transform_stamped_cdr(tf, m.EPOCH_NS + self.stamp_offset_ns))
+        self._tf_children = {tf.child for tf in tfs}
+        self._tf_watched, self._tf_warned = {}, set()
+        self._tf_timer = self.create_timer(1.0, self._check_frame_clash, clock=STEADY)
+
+    def drop_static_transforms(self) -> None:
+        """Undo :meth:`publish_static_transforms` (a restart)."""
+        for sub in getattr(self, "_tf_watched", {}).values():
+            self.destroy_subscription(sub)
+        if getattr(self, "_tf_timer", None) is not None:
+            self.destroy_timer(self._tf_timer)
+        if getattr(self, "_tf_pub", None) is not None:
+            self.destroy_publisher(self._tf_pub)
+        self._tf_pub, self._tf_timer, self._tf_watched = None, None, {}
+
+    def _check_frame_clash(self) -> None:
+        """Subscribe (latched, raw) to every ``static_transforms`` topic of another namespace; a
+        transform there whose child frame is one of this node's is warned about once, naming that
+        topic: two suites with the same frame names (set ``frame_prefix``)."""
+        from gyro_instrument.recording.frames import STATIC_TRANSFORMS
+        mine = self._tf_pub.topic_name
+        for topic, _ in self.get_topic_names_and_types():
+            if topic == mine or topic in self._tf_watched or not topic.endswith("/" + STATIC_TRANSFORMS):
+                continue
+            qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            self._tf_watched[topic] = self.create_subscription(
+                m.message_class("geometry_msgs/msg/TransformStamped"), topic,
+                lambda msg, tp=topic: self._on_foreign_transform(tp, msg), qos)
+
+    def _on_foreign_transform(self, topic, msg) -> None:
+        child = msg.child_frame_id
+        if child in self._tf_children and (topic, child) not in self._tf_warned:
+            self._tf_warned.add((topic, child))
+            ns = topic[: -len("/static_transforms")] or "/"
+            self.get_logger().warning(
+                f"frame {child!r} is also published on {topic} (another suite in namespace {ns} names the same "
+                f"frames; frame_prefix = {self.frame_prefix!r}): tf2 cannot tell them apart; give each suite its "
+                f"own frame_prefix (e.g. frame_prefix:=ship1/)")
 
     def value(self, name, default=None) -> object:
         """A parameter's value (``default`` if it is not declared)."""

@@ -3,26 +3,35 @@
 (:class:`~gyro_instrument.recording.joint_buffer.JointBuffer`) and calls the core estimator; run
 alone it publishes once every expected sample has arrived.
 
-Live values (issue 24, issue 35): each measurement kind that declares one (``LIVE``) gives a tracker
+Live values (issues 24, 35, 37): each measurement kind that declares one (``LIVE``) gives a tracker
 per instrument (``tracker(observation, scene, companions)``,
 :class:`~gyro_instrument.instruments.measurement.LiveTracker`), which is given the tail of the
-records it reads when due. A ``heading`` (the azimuth kind: the Schuler mean at each new reversal
-point, :mod:`~gyro_instrument.estimators.north_live`) goes out as ``sensor_msgs/Imu`` on
-``<instrument>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`) and, with parameter
-``nmea_udp``, as ``$HEHDT`` over UDP; the final estimate's block (the fit) replaces it. The work per
-joint message is bounded: for the azimuth, a tail of 1.75 swings every quarter swing.
+records it reads when due. A ``heading`` (the azimuth kind,
+:class:`~gyro_instrument.estimators.kinds.NorthLive`: from the first swing on, the better of a
+growing damped-sine fit with the predicted frequency as a prior and the Schuler mean of the
+reversal points, :mod:`~gyro_instrument.estimators.north_live`) goes out as ``sensor_msgs/Imu`` on
+``<instrument>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`, pre-serialized)
+at :data:`~gyro_instrument.estimators.heading.HEADING_RATE_HZ` of sim time (every sample when the
+instrument samples slower), stamped with the sample, and, with parameter ``nmea_udp``, as
+``$HEHDT`` over UDP; the final estimate's block (the fit) replaces it. The work per joint message
+is bounded: for the azimuth, a tail of 1.75 swings every quarter swing, at most ``FIT_SWINGS``
+swings every half swing.
 """
 
 import math
 import time
+
+import numpy as np
 
 from rclpy.serialization import deserialize_message
 
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
-from gyro_instrument.estimators.heading import imu_fields
+from gyro_instrument.estimators.heading import HEADING_RATE_HZ, imu_fields
 from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
+from gyro_instrument.recording.cdr import imu_layout
+from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
 from gyro_instrument.recording.nmea import NmeaUdpSender
@@ -30,7 +39,7 @@ from gyro_instrument.recording.topics import (CLOCK, DIAGNOSTICS, estimator_topi
                                               joint_names, joint_topic, live_kinds)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import ERROR, LATCHED, OK, RELIABLE_ALL, STEADY, WARN, SceneNode
+from gyro_instrument.ros.nodes.base import ERROR, LATCHED, LATEST_CLOCK, OK, RELIABLE_ALL, STEADY, WARN, SceneNode
 
 
 class EstimatorNode(SceneNode):
@@ -60,6 +69,9 @@ class EstimatorNode(SceneNode):
         self.trackers = {}      # instrument -> its kind's LiveTracker (a horizontal gyroscope's north)
         self.feeds = {}         # instrument whose record a tracker reads -> the instruments of those trackers
         self._due = {}          # (tracker's instrument, record's) -> samples at which it is next given the tail
+        self.live = {}          # tracker's instrument -> its last live value ((azimuth rad, σ rad) for a heading)
+        self._heading_t = {}    # tracker's instrument -> stamp (ns) of its last heading published
+        self._imu_cols = {}     # tracker's instrument -> (value, its Imu fields as encoder columns)
         self.nmea = None
         if self.load():
             self.prepare()
@@ -70,6 +82,7 @@ class EstimatorNode(SceneNode):
         return set(estimator_instruments(self.insts))
 
     def prepare(self) -> None:
+        self.frames_and_epoch()
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
         buffered = self._buffered()
@@ -83,7 +96,7 @@ class EstimatorNode(SceneNode):
                     RELIABLE_ALL, raw=True)
                 self.subs[sub.topic_name] = sub
         # sim time from the clock: the stamp of an estimate that used no sample
-        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
+        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
         for topic, type_name in estimator_topics(self.insts).items():
             self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, LATCHED)
         self._prepare_heading()
@@ -107,6 +120,9 @@ class EstimatorNode(SceneNode):
             for read in tr.reads:
                 self.feeds.setdefault(read, []).append(owner)
                 self._due[(owner, read)] = self._every(tr, read)
+        self.heading_period_ns = round(1e9 * max(1.0 / HEADING_RATE_HZ, 1.0 / self.scene.sample_rate_hz)) - 1
+        self.imu_layouts = {name: imu_layout(self.frame_prefix + heading_frame(name)) for name in self.trackers}
+        self.publish_static_transforms(instrument_frames(self.insts, self.imu_layouts, self.frame_prefix))
         target = str(self.value("nmea_udp", "") or "")
         if target and self.trackers:
             try:
@@ -121,25 +137,38 @@ class EstimatorNode(SceneNode):
         return max(int(tracker.every_s_of(name) * self.scene.sample_rate_hz), 1)
 
     def _track(self, name) -> None:
-        """Give the trackers reading ``name`` its tail when due; publish the live value of a tracker
-        that has a new one."""
+        """Give the trackers reading ``name`` its tail when due (stamps shifted back to sim time from
+        release, ``stamp_epoch``); keep the live value of a tracker that has a new one; publish the
+        heading of ``name``'s own tracker when :attr:`heading_period_ns` of sim time has passed."""
         buf = self.buffers[name]
         for owner in self.feeds[name]:
             tr = self.trackers[owner]
-            if len(buf) < self._due[(owner, name)]:
-                continue
-            self._due[(owner, name)] = len(buf) + self._every(tr, name)
-            t_ns, pos, vel = buf.arrays()
-            k = max(int(t_ns.size - tr.window_s_of(name) * self.scene.sample_rate_hz) - 1, 0)
-            rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:], pos[k:], vel[k:])})[name]
-            value = tr.update(name, rec)
-            if value is not None:
-                self._publish_heading(owner, int(t_ns[-1]), *value)
+            if len(buf) >= self._due[(owner, name)]:
+                self._due[(owner, name)] = len(buf) + self._every(tr, name)
+                t_ns, pos, vel = buf.arrays()
+                k = max(int(t_ns.size - tr.window_s_of(name) * self.scene.sample_rate_hz) - 1, 0)
+                off = self.stamp_offset_ns or 0
+                rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:] - off, pos[k:], vel[k:])})[name]
+                value = tr.update(name, rec)
+                if value is not None:
+                    self.live[owner] = value
+            if owner == name and self.live.get(owner) is not None:
+                t = buf.last_stamp()
+                if t - self._heading_t.get(owner, -10 ** 18) >= self.heading_period_ns:
+                    self._heading_t[owner] = t
+                    self._publish_heading(owner, t, *self.live[owner])
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
-        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (and a ``$HEHDT`` for the first gyroscope)."""
-        fields = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
-        self._send(heading_topic(name), m.imu(t_ns, heading_frame(name), fields))
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized; the fields computed once per
+        estimate, only the stamp changes between two) and a ``$HEHDT`` for the first gyroscope."""
+        key = (name, azimuth_rad, sigma_rad)
+        if self._imu_cols.get(name, (None,))[0] != key:
+            f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
+            self._imu_cols[name] = (key, [np.array([v]) for v in (
+                f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
+                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])
+        data = self.imu_layouts[name].encode([t_ns], *self._imu_cols[name][1])[0]
+        self._send(heading_topic(name), data)
         if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
             try:
                 self.nmea.send_heading(math.degrees(azimuth_rad), int(self.value("nmea_decimals", 3)))
@@ -166,10 +195,12 @@ class EstimatorNode(SceneNode):
             self.destroy_subscription(sub)
         for pub in self.pubs.values():
             self.destroy_publisher(pub)
+        self.drop_static_transforms()
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
         self._last_input = None
         self.trackers, self.feeds, self._due = {}, {}, {}
+        self.live, self._heading_t = {}, {}
         if self.nmea is not None:
             self.nmea.close()
             self.nmea = None
@@ -191,6 +222,7 @@ class EstimatorNode(SceneNode):
         self.trackers = {name: tr.restarted() for name, tr in self.trackers.items()}
         for (owner, read) in self._due:
             self._due[(owner, read)] = len(self.buffers[read]) + self._every(self.trackers[owner], read)
+        self.live, self._heading_t = {}, {}
 
     def restart(self) -> None:
         super().restart()
@@ -267,10 +299,12 @@ class EstimatorNode(SceneNode):
     def _check_complete(self):
         if self.standalone and not self.final and all(len(b) >= self.expected for b in self.buffers.values()):
             if self.buffers or self._clock_done_at is not None:
+                self.get_logger().info(f"every expected sample received ({self.received()}): estimating")
                 self._final()
 
     def _on_clock(self, data):
-        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        st = m.cdr_stamp_ns(data)
+        t = st - m.EPOCH_NS - (self.stamp_offset_ns if self.stamp_offset_ns is not None else self._learn(st))
         self._last_input = time.monotonic()
         if self.standalone and self.last_clock_ns is not None and t < self.last_clock_ns and self.scene is not None:
             self.new_run(f"the clock went back from {self.last_clock_ns / 1e9:g} s to {t / 1e9:g} s")
@@ -279,6 +313,13 @@ class EstimatorNode(SceneNode):
                 and self.last_clock_ns >= self.last_stamp_ns:
             self._clock_done_at = time.monotonic()
             self._check_complete()
+
+    def _learn(self, stamp_ns) -> int:
+        """``stamp_epoch`` = wall: the first stamp received (sim time 0) fixes the shift; the static
+        transforms go out then."""
+        off = self.learn_epoch(stamp_ns)
+        self.publish_static_transforms(instrument_frames(self.insts, self.imu_layouts, self.frame_prefix))
+        return off
 
     def received(self) -> int:
         return sum(len(b) for b in self.buffers.values())
@@ -309,6 +350,8 @@ class EstimatorNode(SceneNode):
         (the common case, no Python message object), otherwise decoded and checked as any other."""
         buf = self.buffers[name]
         self._last_input = time.monotonic()
+        if self.stamp_offset_ns is None:
+            self._learn(m.cdr_stamp_ns(data))
         if buf.layout.matches(data):
             buf.add_raw(data)
             if name in self.feeds:
@@ -339,7 +382,8 @@ class EstimatorNode(SceneNode):
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
-        samples = {n: b.arrays() for n, b in self.buffers.items() if len(b) >= 3}
+        off = self.stamp_offset_ns or 0                  # stamps -> sim time from release (stamp_epoch)
+        samples = {n: (lambda t, p, v: (t - off, p, v))(*b.arrays()) for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
         return estimate_records(self.scene, estimated_instruments(self.insts, samples), recs)
 
@@ -372,7 +416,8 @@ class EstimatorNode(SceneNode):
         t = self.stamp_ns()
         lat = None if r.get("latitude_deg") is None else math.radians(r["latitude_deg"])
         sig = None if r.get("latitude_sigma_deg") is None else math.radians(r["latitude_sigma_deg"])
-        self._send("estimator/earth_rate_enu", m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat))
+        self._send("estimator/earth_rate_enu", m.earth_rate_vector(t, r.get("earth_rate_rad_s"), lat,
+                                                                   self.frame_prefix + m.SITE_FRAME))
         text = r.get("method") or r.get("reason", "")
         self._send(DIAGNOSTICS, m.diagnostics(
             t, "gyro_instrument/estimator", r.get("method") is not None and short is None,

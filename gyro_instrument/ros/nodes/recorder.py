@@ -17,8 +17,9 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.files import shown
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
+from gyro_instrument.recording.frames import TF_MESSAGE_TYPE, TF_STATIC, instrument_frames, tf_message_cdr
 from gyro_instrument.recording.mcap_io import DiskFull
-from gyro_instrument.recording.qos import profiles_yaml
+from gyro_instrument.recording.qos import profile, profiles_yaml
 from gyro_instrument.recording.topics import (DIAGNOSTICS, MARKER_TYPE, estimator_topics, scene_topics, sparse_topics,
                                               visual_every)
 from gyro_instrument.ros import messages as m
@@ -74,6 +75,7 @@ class RecorderNode(RecorderControl, SceneNode):
         self.late = 0
         self.done = False
         self.failed = None           # the DiskFull that stopped the recording
+        self._tf_static_pending = False   # /tf_static not written yet (a wall stamp_epoch not known yet)
         self.runs = []               # [(path, state)] of recordings closed because the clock went back
         self._topic_last = {}        # topic -> last stamp seen (a stamp going back: the run restarted)
         self._topic_run = {}         # topic -> run index its messages belong to
@@ -122,6 +124,9 @@ class RecorderNode(RecorderControl, SceneNode):
         # the scene first, so that a recording cut short still says what it holds (replay needs it)
         self.writer.add_metadata("gyro_instrument", self._scene_record())
         self._record_topics(wanted, types)
+        self.frames_and_epoch()
+        self._tf_static_pending = True
+        self._write_tf_static()
         if self.reorder:
             self.create_timer(0.5, self._control, clock=STEADY)
 
@@ -192,6 +197,27 @@ class RecorderNode(RecorderControl, SceneNode):
                                                        lambda data, tp=name: self._on_raw(tp, data),
                                                        RELIABLE_ALL, raw=True)
 
+    def _write_tf_static(self, first_stamp_ns=None) -> None:
+        """``/tf_static``: one ``tf2_msgs/msg/TFMessage`` (the project's CDR codec, the type is not
+        installed) with the static transform of every frame the scene's messages name, stamped and
+        logged at sim time 0 (issue 37); with ``stamp_epoch`` = wall once the first stamp is known."""
+        if not getattr(self, "_tf_static_pending", False):
+            return
+        if self.stamp_offset_ns is None:
+            if first_stamp_ns is None:
+                return
+            self.learn_epoch(first_stamp_ns)
+        self._tf_static_pending = False
+        tfs = instrument_frames(self.insts, None, self.frame_prefix)
+        if tfs:
+            topic = self.resolve_topic_name(TF_STATIC)       # /tf_static; /<ns>/tf_static in a namespace
+            t0 = m.EPOCH_NS + self.stamp_offset_ns
+            self._topic_types[topic] = TF_MESSAGE_TYPE
+            # offered as a latched tf_static (no publisher in the graph: the recorder writes it)
+            self._offered[topic] = profiles_yaml([profile("keep_last", 1, "reliable", "transient_local")])
+            self.counts[topic], self.expected[topic] = 1, 1       # in the status counts as the file holds it
+            self._write(topic, t0, tf_message_cdr(tfs, t0))
+
     def start(self) -> None:
         self.standalone = True
         self.start_diagnostics()
@@ -212,6 +238,8 @@ class RecorderNode(RecorderControl, SceneNode):
             return
         st = m.cdr_stamp_ns(data) if topic in self.stamped else \
             m.marker_array_stamp_ns(data) if topic in self.marker_topics else None
+        if self._tf_static_pending and st is not None:
+            self._write_tf_static(st)
         if st is not None and topic in self.sample_topics:
             # each publisher sends its topic in stamp order: a stamp going back means its run
             # restarted (a scene change on the clock owner restarts sim time at 0)
@@ -316,6 +344,8 @@ class RecorderNode(RecorderControl, SceneNode):
         self.writer.add_metadata("gyro_instrument", rec)
         for name in self._offered:          # the QoS seen in the first run's file
             self._ensure_topic(name)
+        self._tf_static_pending = True      # the new file starts with the static frames too
+        self._write_tf_static()
 
     def _write_old(self, run, topic, st, data):
         writer, counts, _ = self._old[run]

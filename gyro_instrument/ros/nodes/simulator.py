@@ -18,12 +18,13 @@ from std_srvs.srv import Trigger
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.estimators.pipeline import estimator_instruments
 from gyro_instrument.instruments import simulator_kinds
+from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import (ERROR, FLOW_BATCH, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY, WARN, SceneNode,
-                                            acked)
+from gyro_instrument.ros.nodes.base import (ERROR, FLOW_BATCH, LATEST_CLOCK, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY,
+                                            WARN, SceneNode, acked)
 
 
 class SimulatorNode(SceneNode):
@@ -55,13 +56,19 @@ class SimulatorNode(SceneNode):
             self.prepare()
 
     def _new_stream(self) -> SimulatorStream:
+        """The core stream with this node's parameters, frame prefix and stamp shift
+        (:meth:`frames_and_epoch` read them; a rewind keeps them)."""
         seed = self.get_parameter("seed").value
-        return SimulatorStream(self.scene, self.insts, self.kinds, None if seed < 0 else seed,
-                               float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner)
+        stream = SimulatorStream(self.scene, self.insts, self.kinds, None if seed < 0 else seed,
+                                 float(self.value("window_s", DEFAULT_WINDOW_S)), self.clock_owner,
+                                 self.frame_prefix)
+        stream.stamp_offset_ns = self.stamp_offset_ns
+        return stream
 
     def prepare(self) -> None:
         """Create the core stream and the publishers its publications declare: nothing is integrated
         until the first publish, and then one window of ``window_s`` simulated seconds at a time."""
+        self.frames_and_epoch()
         self.stream = self._new_stream()
         if not self.stream.chosen:
             self.get_logger().warning(f"scene {self.scene.name} has no instrument of kinds {', '.join(self.kinds)}")
@@ -69,6 +76,14 @@ class SimulatorNode(SceneNode):
         for name, pubs in self.stream.pubs.items():
             for p in pubs:
                 self.pubs[(name, p.key)] = self.create_publisher(m.message_class(p.type_name), p.topic, self.pub_qos)
+        self.publish_static_transforms(instrument_frames(self.insts, self.stream.chosen, self.frame_prefix))
+
+    def set_stamp_offset(self, offset_ns) -> None:
+        """Shift every stamp from now on by ``offset_ns`` (``stamp_epoch``: a ``wall`` epoch once known)."""
+        self.stamp_offset_ns = int(offset_ns)
+        if self.stream is not None:
+            self.stream.stamp_offset_ns = self.stamp_offset_ns
+            self.publish_static_transforms(instrument_frames(self.insts, self.stream.chosen, self.frame_prefix))
 
     @property
     def chosen(self) -> dict:
@@ -105,7 +120,9 @@ class SimulatorNode(SceneNode):
                 setattr(self, attr, None)
         for pub in self.publishers():
             self.destroy_publisher(pub)
+        self.drop_static_transforms()
         self.pubs, self.clock_pub, self.stream, self._marker_msgs = {}, None, None, {}
+        self._clock_t = None
 
     def restart(self) -> None:
         """A scene (or seed) change: stop, reload, and run again from t = 0."""
@@ -289,7 +306,7 @@ class SimulatorNode(SceneNode):
         self.get_logger().info(f"publishing {topic} resumed after {time.monotonic() - t0:.1f} s")
 
     def _marker_array(self, name, t_ns, geom):
-        msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name))
+        msg = m.marker_array(t_ns, name, geom, self._marker_msgs.get(name), self.frame_prefix + m.SITE_FRAME)
         self._marker_msgs[name] = msg
         return msg
 
@@ -380,11 +397,27 @@ class SimulatorNode(SceneNode):
                 self.state = "refused"
                 return
         self.state = "running"
+        if self.clock_pub is not None and self.stamp_offset_ns is None:
+            self._wall_epoch()
+        self.get_logger().info("sim time starts" if self.clock_pub is not None else "following the clock")
         if self.clock_owner:
             self._rtf = None
             self.timer = self.create_timer(0.002, self._run, clock=STEADY)
         else:
-            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, RELIABLE_ALL, raw=True)
+            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
+
+    def _wall_epoch(self):
+        """The clock owner with ``stamp_epoch`` = wall: sim time 0 is now (real-time factor 1; at any
+        other factor the simulation epoch, logged)."""
+        rtf = float(self.value("real_time_factor", 1.0))
+        if rtf != 1.0:
+            self.get_logger().error(f"stamp_epoch = 'wall' is invalid: only at real_time_factor 1 (here {rtf:g}); "
+                                    f"the simulation epoch used")
+            self.set_stamp_offset(0)
+            return
+        self.set_stamp_offset(time.time_ns() - m.EPOCH_NS)
+        self.get_logger().info(f"stamp_epoch = wall: sim time 0 is stamped "
+                               f"{(m.EPOCH_NS + self.stamp_offset_ns) / 1e9:.9f} s")
 
     def _run(self):
         """Owner: publish what is due (paced) or the next flow-controlled batch (real_time_factor 0)."""
@@ -403,9 +436,13 @@ class SimulatorNode(SceneNode):
             self._finish()
 
     def _on_clock(self, data):
-        """Follower: publish every sample up to the owner's clock; when the clock goes back (the owner
-        restarted its run) rewind first, with this node's current parameters."""
-        t = m.cdr_stamp_ns(data) - m.EPOCH_NS
+        """Follower: note the owner's clock (:meth:`after_drain` publishes every sample up to it, once
+        per queue of ticks taken, not once per tick); when the clock goes back (the owner restarted its
+        run) rewind first, with this node's current parameters."""
+        st = m.cdr_stamp_ns(data)
+        if self.stamp_offset_ns is None:
+            self.set_stamp_offset(self.learn_epoch(st))
+        t = st - m.EPOCH_NS - self.stamp_offset_ns
         if self._clock_t is not None and t < self._clock_t:
             if self.rewind():
                 self.state = "running"
@@ -415,8 +452,14 @@ class SimulatorNode(SceneNode):
                 self.restart()
                 return
         self._clock_t = t
+
+    def after_drain(self) -> None:
+        """Follower: publish every sample up to the last clock tick taken."""
+        t = getattr(self, "_clock_t", None)
+        if t is None or self.state != "running" or self.stream is None:
+            return
         k = self.sample_index(t) - self.index
-        if k > 0 and self.state == "running":
+        if k > 0:
             self.publish_steps(k)
             if self.index >= self.samples:
                 self._finish()

@@ -1,0 +1,89 @@
+"""The route ROS users take, measured beside the one-process run (issue 37 item 6).
+
+Three children, each on loopback like :func:`.work_precision.suite_real_time_factor` (discovery range
+LOCALHOST and, as root, a loopback-only network namespace), one after the other:
+
+* ``gyro-instrument run quet_paris`` (600 s at 20 Hz, real-time factor 0, recording): every node in
+  one process, the lock-step suite; its real-time factor over its streaming loop (``--stats``);
+* the same scene as separate processes, one per node, as ``ros2 run`` starts them
+  (:func:`gyro_instrument.ros.launch.timed_launch`): the wall time from the clock owner's first tick
+  to the recorder's "every expected message recorded" (the estimate's own computation included,
+  which the one-process figure leaves out), the bag checked complete;
+* rclpy's own publish-and-receive ceiling on this machine (:mod:`gyro_instrument.ros.ceiling`): one
+  publisher process, one subscriber taking raw messages with the cheapest loop rclpy offers.
+
+The target is met when the separate nodes reach 100× real time, or, where rclpy is the ceiling, when
+their messages per second are within 2× of rclpy's own (the machine's load moves both alike: they are
+measured minutes apart in the same bench run). ``tools/profile_ros_route.py`` shows where the time
+goes in each node (docs/bench/ros_route_profile.md).
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+
+def _loopback_env(cmd):
+    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
+    if os.geteuid() == 0 and shutil.which("unshare") and shutil.which("ip") and not env.get("GYRO_IN_NETNS"):
+        env["GYRO_IN_NETNS"] = "1"
+        cmd = ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh"] + cmd
+    return cmd, env
+
+
+def _json_child(args, stream="stdout"):
+    """Run ``python args`` on loopback; its last JSON line (on ``stream``), or (None, reason)."""
+    cmd, env = _loopback_env([sys.executable] + list(args))
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    text = p.stdout if stream == "stdout" else p.stderr
+    if p.returncode != 0 or not text.strip():
+        last = p.stderr.strip().splitlines()[-1] if p.stderr.strip() else f"exit {p.returncode}"
+        return None, last
+    return json.loads(text.strip().splitlines()[-1]), ""
+
+
+def ros_route_rows(duration_s=600.0, progress=print) -> list:
+    """Rows (target, measured, unit, goal, met) of the separate-node route beside the one-process run
+    and rclpy's ceiling (module docstring)."""
+    import importlib.util
+    import tempfile
+    if importlib.util.find_spec("rclpy") is None:
+        return [("ROS separate nodes", float("nan"), "rclpy not installed", ">= 100", False)]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        progress("  one process: run quet_paris (subprocess on loopback)")
+        one, note = _json_child(["-m", "gyro_instrument.ros.cli", "run", "quet_paris", "--duration-s",
+                                 f"{duration_s:g}", "--bag", os.path.join(tmp, "one.mcap"), "--json", "--stats"],
+                                stream="stderr")
+    rtf_one = one["real_time_factor_achieved"] if one else float("nan")
+    rows.append((f"run quet_paris {duration_s:g} s at 20 Hz, rtf 0, recording: one process", rtf_one,
+                 "x real time" + (f" ({note})" if note else ""), "", one is not None))
+    progress("  separate nodes: one process per node (subprocesses on loopback)")
+    sep, note = _json_child(["-m", "gyro_instrument.ros.launch", "quet_paris", f"{duration_s:g}"])
+    ok = sep is not None and sep["state"] == "complete" and sep["real_time_factor"]
+    rtf = sep["real_time_factor"] if ok else float("nan")
+    rate = sep["messages_per_s"] if ok else float("nan")
+    extra = f"; launch to exit {sep['launch_wall_s']:.1f} s, {sep['messages']} messages" if ok else f" ({note})"
+    rows.append((f"ROS separate nodes (ros2 run route), quet_paris {duration_s:g} s at 20 Hz, rtf 0, recording "
+                 "complete: first tick to complete bag", rtf, "x real time" + extra, ">= 100", bool(ok) and rtf >= 100))
+    s_rtf = sep.get("samples_real_time_factor") if ok else None
+    rows.append(("ROS separate nodes: first tick to every sample at the estimator (the estimate's computation "
+                 "left out, as in the one-process figure)", s_rtf if s_rtf else float("nan"), "x real time", "",
+                 bool(s_rtf)))
+    rows.append(("ROS separate nodes: messages recorded per second", rate, "messages/s", "", bool(ok)))
+    progress("  rclpy's own publish-and-receive ceiling (two processes on loopback)")
+    ceil, note = _json_child(["-m", "gyro_instrument.ros.ceiling", "60000"])
+    c_rate = ceil["messages_per_s"] if ceil else float("nan")
+    rows.append(("rclpy's ceiling: one publisher process to one subscriber, raw JointStates", c_rate,
+                 "messages/s" + (f" ({note})" if note else ""), "", ceil is not None))
+    ratio = c_rate / rate if ok and ceil else float("nan")
+    rows.append(("rclpy's ceiling / separate nodes' messages per second", ratio, "x", "<= 2 (or the 100x above)",
+                 bool(ok and ceil) and (ratio <= 2 or rtf >= 100)))
+    d_rate = sep.get("deliveries_per_s") if ok else None
+    d_ratio = c_rate / d_rate if d_rate and ceil else float("nan")
+    rows.append(("rclpy's ceiling / separate nodes' DDS deliveries per second (a clock tick to 3 subscribers, a "
+                 "joint state to 2)", d_ratio, "x", "", bool(d_rate and ceil)))
+    return rows
