@@ -521,10 +521,10 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
                             "-p", "duration_s:=600.0", "-p", f"output:={bag}", "-p", "stop_when_complete:=true",
                             "-p", "topics:=['clock', 'pendulum/joint_states']"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    # the simulator starts once the recorder says it records (its subscriptions exist): a recorder slow
-    # to start on a loaded machine was otherwise missed and the run began without it (CI, 21:06).
-    # (its wait_for cannot say it: the recorder records a subset of the topics, which the wait never
-    # counts as ready, so it would time out whatever the recorder does)
+    # the simulator starts once the recorder says it records (its subscriptions exist) and waits for it
+    # in the graph (wait_for: a recorder of a subset of its topics counts once it subscribes to one; its
+    # process may see the recorder's subscriptions a second after its start — all 12 001 samples were
+    # published before that on a loaded machine, with wait_for:=[])
     head = []
     for line in rec.stdout:
         head.append(line)
@@ -532,7 +532,7 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
             break
     sim = subprocess.Popen([str(BIN / "pendulum_sim"), "--ros-args", "-p", "scene:=foucault_pantheon",
                             "-p", "duration_s:=600.0", "-p", "publish_clock:=true", "-p", "real_time_factor:=0.0",
-                            "-p", "wait_for:=[]"],
+                            "-p", "wait_for:=['recorder']", "-p", "wait_timeout_s:=60"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         t0 = time.monotonic()
@@ -553,6 +553,7 @@ def test_a_paused_recorder_makes_the_simulator_wait_and_lose_nothing(tmp_path):
                 p.kill()
                 p.wait()
     assert sim.returncode == 0 and "Traceback" not in sim_out, sim_out
+    assert "starting anyway" not in sim_out, sim_out     # the subset recorder was counted as there
     assert "waits: a RELIABLE / KEEP_ALL subscriber is not taking messages" in sim_out, sim_out
     assert "resumed after" in sim_out, sim_out
     state, counts, _ = status(bag)

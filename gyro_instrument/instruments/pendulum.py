@@ -31,6 +31,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import (CORIOLIS, DAMPING, GYROSCOPIC, POINT_MASS, RIGID_BODY, RESTORING_LAW, SINE_LAW,
                                          SPIN, Scales)
@@ -98,8 +99,8 @@ class SphericalPendulum(SwingDynamics, Instrument):
     summary = "Foucault pendulum, point bob, any launch and amplitude (Quet sec. 2)"
     PARAMS = (
         Param("length_m", default=67.0, low=0.0, high=1.0e4, open_low=True, doc="rod length l, m"),
-        Param("initial_deflection_deg", default=2.0, low=0.0, high=180.0, open_high=True,
-              doc="θ0 from the downward vertical (180 is the inverted bob: no swing)"),
+        Param("initial_deflection_deg", default=2.0, low=0.0, high=180.0,
+              doc="θ0 from the downward vertical (180 is the inverted bob: simulated, no swing to describe)"),
         Param("initial_azimuth_deg", default=90.0, low=-360.0, high=360.0,
               doc="compass azimuth of the release point (0 north, 90 east)"),
         Param("radial_speed_m_s", default=0.0, low=-1.0e3, high=1.0e3, doc="launch speed away from the vertical"),
@@ -243,6 +244,10 @@ class SphericalPendulum(SwingDynamics, Instrument):
         drops (:func:`min_deflection_with_horizontal_rate_rad`), ``min_deflection_quet_relative_error``
         is β/that − 1 (0 for an east–west release), and ``beyond_the_paper`` (str) says so in words.
         """
+        if self.p.initial_deflection_deg >= 180.0:
+            raise SceneError(f"instruments.{self.name}.initial_deflection_deg", self.p.initial_deflection_deg,
+                             "[0, 180) for the predictions of sec. 2: the inverted bob is an unstable equilibrium "
+                             "with no swing (it can be simulated: it tips under the centrifugal gradient)")
         k_site = self.site.k_vertical_rad_s
         rotating = self.has_term(CORIOLIS)
         k = k_site if rotating else 0.0

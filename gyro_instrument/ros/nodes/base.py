@@ -120,6 +120,10 @@ def acked(node, pubs) -> None:
                                           f"(slow or gone); publishing on")
 
 
+
+class AnyOf(tuple):
+    """Topics of which a waited-for node must subscribe to at least one (:meth:`SceneNode._named_nodes_ready`)."""
+
 class SceneNode(Node):
     """Parameters declared from a table with descriptors, checked on every change; the scene."""
 
@@ -359,15 +363,16 @@ class SceneNode(Node):
             return False
 
     def _named_nodes_ready(self, expected):
-        """expected: {node name: [resolved topics it must subscribe to]} -> names still missing."""
+        """expected: {node name: [resolved topics it must subscribe to]} -> names still missing. An
+        :class:`AnyOf` of topics is met by a subscription to any one of them (a recorder of a subset of
+        this node's topics; its other subscriptions are then waited for as unmatched ones)."""
         ns = self.get_namespace()
         missing = []
         for node_name, topics in expected.items():
-            for topic in topics:
-                infos = self.get_subscriptions_info_by_topic(topic)
-                if not any(i.node_name == node_name and i.node_namespace == ns for i in infos):
-                    missing.append(node_name)
-                    break
+            there = [any(i.node_name == node_name and i.node_namespace == ns
+                         for i in self.get_subscriptions_info_by_topic(topic)) for topic in topics]
+            if not (any(there) if isinstance(topics, AnyOf) else all(there)):
+                missing.append(node_name)
         return missing
 
     def _unmatched(self, pubs):

@@ -23,7 +23,7 @@ from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import (ERROR, FLOW_BATCH, LATEST_CLOCK, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY,
+from gyro_instrument.ros.nodes.base import (AnyOf, ERROR, FLOW_BATCH, LATEST_CLOCK, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY,
                                             WARN, SceneNode, acked)
 
 
@@ -318,14 +318,14 @@ class SimulatorNode(SceneNode):
 
     def expected_subscribers(self) -> dict:
         """{node name: [topics it must subscribe to]} from ``wait_for`` and the scene: the recorder
-        every topic, the estimator the joint states it reads (``estimator_instruments``), another name any of
+        any of them (then the publishers' unmatched subscriptions are waited for), the estimator the joint states it reads (``estimator_instruments``), another name any of
         this node's topics; the clock owner also waits for the scene's other simulators (they
         subscribe to clock once their own subscribers are matched)."""
         mine = self.topics()
         out = {}
         for name in self.value("wait_for", []):
-            if name == "recorder":
-                out[name] = mine
+            if name == "recorder":                   # it may record a subset of them (its topics parameter)
+                out[name] = AnyOf(mine)
             elif name == "estimator":
                 topics = [self.pubs[(n, "joints")].topic_name for n in estimator_instruments(self.insts)
                           if (n, "joints") in self.pubs]
