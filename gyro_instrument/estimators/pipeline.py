@@ -23,10 +23,12 @@ from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
 from gyro_instrument.estimators.north_estimate import best_block, north_entry
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
+from gyro_instrument.estimators import rate_gyro_north          # KINDS-REWIRE (issue 35): the rate gyro's engine
 from gyro_instrument.estimators.swing import swing_estimate
 from gyro_instrument.instruments.observation import (CORRECTIONS, ELLIPSE_CORRECTION, FINITE_AMPLITUDE_CORRECTIONS,
                                                      PLANE_RATE, SWING_RATE)
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
+from gyro_instrument.instruments.rate_gyro import RATE_AZIMUTH    # KINDS-REWIRE (issue 35)
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
@@ -37,9 +39,12 @@ __all__ = ["CORRECTIONS", "ENGINES", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStr
 
 def estimable(inst) -> bool:
     """True for instruments whose observation gives an Earth-rate measurement (``MEASUREMENT`` not
-    None): pendulums (k = n sin γ) and gyroscopes with a directing line (y = n s(γ)). Free
-    gyroscopes and Puiseux's body do not."""
-    return inst.observation().MEASUREMENT is not None
+    None): pendulums (k = n sin γ) and gyroscopes with a directing line (y = n s(γ)), or another
+    measurement beside none (``ALSO_MEASURES``: a rate gyro's azimuth). Free gyroscopes and Puiseux's
+    body do not."""
+    obs = inst.observation()
+    # KINDS-REWIRE (issue 35): a rate gyro measures an azimuth only (ALSO_MEASURES), no Earth rate
+    return obs.MEASUREMENT is not None or bool(obs.ALSO_MEASURES)
 
 
 def estimator_instruments(insts) -> list:
@@ -205,9 +210,12 @@ def known_earth_rate(scene, insts, meas) -> tuple:
 #: record, corrections, checks, sensor) -> (entry, RateMeasurement or None)``.
 #: An azimuth (:data:`~gyro_instrument.instruments.observation_azimuth.AZIMUTH`): the ``north`` block of a
 #: horizontal gyroscope (:func:`.north_estimate.north_entry`; its second item is always None).
-ENGINES = {SWING_RATE: swing_estimate, PLANE_RATE: _pendulum_estimate, AZIMUTH: north_entry}
+#: A rate gyro's azimuth (:data:`~gyro_instrument.instruments.rate_gyro.RATE_AZIMUTH`): its ``north`` block
+#: (:func:`.rate_gyro_north.north_entry`). KINDS-REWIRE (issue 35): these two entries move to the kind.
+ENGINES = {SWING_RATE: swing_estimate, PLANE_RATE: _pendulum_estimate, AZIMUTH: north_entry,
+           RATE_AZIMUTH: rate_gyro_north.north_entry}
 #: The key of the estimate entry each ``ALSO_MEASURES`` kind's result goes under.
-ALSO_KEYS = {AZIMUTH: "north"}
+ALSO_KEYS = {AZIMUTH: "north", RATE_AZIMUTH: "north"}
 
 
 def seed_sweep(job) -> list:

@@ -13,6 +13,7 @@ from gyro_instrument.instruments.observation import (JointLayout, Observation, P
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 from gyro_instrument.instruments.puiseux import PuiseuxBody
+from gyro_instrument.instruments.rate_gyro import RateGyro
 
 REGISTRY = {}
 
@@ -67,9 +68,10 @@ def simulator_kinds() -> dict:
     return out
 
 
-for _cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope):
+for _cls in (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope,
+             RateGyro):                # KINDS-REWIRE (issue 35): the rate gyro, to an entry point
     register(_cls)
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
-           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RotorObservation",
+           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RateGyro", "RotorObservation",
            "SphericalPendulum", "SwingRate", "register", "simulator_kinds", "unregister"]

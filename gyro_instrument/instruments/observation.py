@@ -192,6 +192,14 @@ class Observation:
             out.append((self.spin_channel, columns[self.spin_channel], "rate"))
         return out
 
+    def sensor_draws(self, sensor, rng):
+        """The observation's own sensor model, or None: the scene's ``sensor`` (:class:`~gyro_instrument.sensors.SensorModel`)
+        draws each channel (the default). Otherwise a callable ``(key, values, kind) -> measured array``
+        that draws from ``rng`` in call order, block after block (a rate gyro's bias instability and
+        angle random walk: :class:`~.rate_gyro.RateGyroObservation`). KINDS-REWIRE (issue 35): a
+        measurement kind's channel layout may own this."""
+        return None
+
     def complete(self, rec) -> dict:
         """``rec`` with what the estimator reads beside the measured channels (the default adds nothing)."""
         return rec
