@@ -166,3 +166,21 @@ def test_one_position_gives_a_null_block_with_its_reason():
     scene, truth, iname, inst = _one("rate_gyro_four_position", ("instruments.fog.positions=1",))
     b = R.north_block(inst.observation(), R.fit_record(inst.observation(), measure(scene, truth)[iname]))
     assert b["mount_azimuth_deg"] is None and "one position" in b["reason"]
+
+
+def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
+    """``plan --target azimuth_arcsec``: its bound for the scene's own record is the estimate's σ (2 %:
+    the planner bins more coarsely), and at the planned number of sequences the bound meets the target
+    while one sequence fewer does not (the search's 2 % tolerance aside)."""
+    from gyro_instrument.estimators.planner import parse_targets, plan
+    from gyro_instrument.estimators.rate_gyro_plan import sigma_mount_rad
+    scene, truth, iname, inst = _one("rate_gyro_four_position")
+    f = R.fit_record(inst.observation(), measure(scene, truth, 1)[iname])
+    assert sigma_mount_rad(inst, inst.p, scene.duration_s, scene.sample_rate_hz) == pytest.approx(f["sigma_rad"], rel=0.02)
+    d = plan("rate_gyro_four_position", [], parse_targets(["azimuth_arcsec=600"]))
+    e = d["targets"][0]
+    assert e["instrument"] == iname and e["planned_sigma"] <= 600.0
+    seq = inst.p.positions * (inst.p.dwell_s + inst.p.slew_s)
+    fewer = sigma_mount_rad(inst, inst.p, e["observation_s"] - seq, scene.sample_rate_hz) * R.ARCSEC_PER_RAD
+    assert fewer > 600.0
+    assert e["schedule"]["time_per_position_s"] == e["schedule"]["sequences"] * inst.p.dwell_s

@@ -372,6 +372,11 @@ def print_plan(d, stream=None) -> None:
     for name, why in d.get("not_used", {}).items():
         w(f"  {name}: not used ({why})\n")
     for e in d["targets"]:
+        if e.get("kind") == "rate_azimuth":          # KINDS-REWIRE (issue 35): the rate gyro's plan lines
+            from gyro_instrument.estimators.rate_gyro_plan import plan_lines
+            w("\n" + "\n".join(plan_lines(e)) + "\n")
+            _print_verify(e, w)
+            continue
         if e["quantity"] == "azimuth":
             _print_azimuth_target(e, w)
             continue
@@ -422,6 +427,15 @@ def print_plan(d, stream=None) -> None:
             w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
               f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
               + (f"; {v['null']} null" if v["null"] else "") + "\n")
+
+
+def _print_verify(e, w) -> None:
+    """The ``verify`` line of a target (``plan --verify``)."""
+    v = e.get("verify")
+    if v:
+        unit = e["target"].split("_", 1)[1].replace("_", "/")
+        w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
+          f"(target {v['target']:g}, achieved/planned {_fmt(v['achieved_over_planned'], '.3f')})\n")
 
 
 def time_up(s) -> str:

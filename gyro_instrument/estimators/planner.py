@@ -26,6 +26,7 @@ from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES
                                                instrument_sigma, samples, sine_fit_covariance)
 from gyro_instrument.estimators.bounds_azimuth import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
                                                        rotor_off_plan, solve_azimuth)
+from gyro_instrument.estimators import rate_gyro_plan               # KINDS-REWIRE (issue 35)
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
 
 ARCSEC_RAD = math.pi / (180.0 * 3600.0)
@@ -131,14 +132,17 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     models, skipped = instrument_models(scene)
     azimuth = any(TARGETS[name][0] == "azimuth" for name, _, _ in targets)
     az_models, az_skipped = instrument_models(scene, (AZIMUTH,)) if azimuth else ([], {})
-    if not models and not az_models:
+    # KINDS-REWIRE (issue 35): the rate gyro's planner probe (estimators/rate_gyro_plan.py)
+    gyros = rate_gyro_plan.rate_gyros(scene) if azimuth else {}
+    az_skipped = {k: v for k, v in az_skipped.items() if k not in gyros}
+    if not models and not az_models and not gyros:
         what = ("a horizontal gyroscope with earth_rotation (its swing centre is north)" if azimuth else
                 "an instrument that measures an Earth rate (a gyroscope with a directing line or a pendulum, with "
                 "earth_rotation)")
         why = az_skipped if azimuth else skipped
         raise SceneError("scene", scene_arg, f"has no {what}: nothing to plan"
                          + (f" ({'; '.join(f'{k}: {v}' for k, v in why.items())})" if why else ""))
-    if azimuth and not az_models:
+    if azimuth and not az_models and not gyros:
         name = next(n for n, _, _ in targets if TARGETS[n][0] == "azimuth")
         raise SceneError(f"--target {name}", scene_arg, "needs a horizontal gyroscope (plane_gyroscope, plane: horizontal, "
                          "the rotor spinning, earth_rotation on: its swing centre is north); the scene has none"
@@ -158,15 +162,19 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
                       "effective_noise_rad": sensor.sigma_rad, "spin_noise_rad_s": sensor.spin_noise_rad_s,
                       "dropout_fraction": sensor.dropout_fraction, "sample_rate_hz": sensor.rate_hz},
            "instruments": {m.name: _model_dict(m) for m in models},
-           "not_used": skipped, "min_record_s": planner.min_record_s() if planner else None, "targets": []}
+           "not_used": {k: v for k, v in skipped.items() if k not in gyros}, "min_record_s": planner.min_record_s() if planner else None, "targets": []}
     if azimuth:
         out["north_instruments"] = {m.name: _azimuth_dict(m) for m in az_models}
     for name, value, si in targets:
         if progress:
             progress(f"planning {name} = {value:g}")
-        if TARGETS[name][0] == "azimuth":
-            out["targets"].append(plan_azimuth(scene_arg, overrides, az_models, az_skipped, sensor, name, value, si,
-                                               floor))
+        if TARGETS[name][0] == "azimuth" and gyros and not az_models:        # KINDS-REWIRE (issue 35)
+            out["targets"].append(rate_gyro_plan.plan_target(scene, gyros, name, value, si, TARGETS[name][1]))
+        elif TARGETS[name][0] == "azimuth":
+            entry = plan_azimuth(scene_arg, overrides, az_models, az_skipped, sensor, name, value, si, floor)
+            if gyros:                                                           # KINDS-REWIRE (issue 35)
+                entry["rate_gyros"] = rate_gyro_plan.plan_target(scene, gyros, name, value, si, TARGETS[name][1])
+            out["targets"].append(entry)
         elif planner is None:
             out["targets"].append({"target": name, "value": value, "quantity": TARGETS[name][0],
                                    "observation_s": None, "reason": "no instrument of the scene measures an Earth rate"})
@@ -461,7 +469,7 @@ def verify_plan(result, n_seeds=100, executor=None, progress=None) -> dict:
                            "target": entry["value"], "planned_sigma": entry["planned_sigma"],
                            "achieved_over_target": None if v is None else v / entry["value"],
                            "achieved_over_planned": None if v is None else v / entry["planned_sigma"]}
-        if ref is not None:
+        if ref is not None and "methods" in entry:        # a rate gyro's entry has one method (KINDS-REWIRE)
             entry["verify"]["methods"] = {
                 k: {"achieved_rms": _quantity_value("azimuth", r, name), "used": u, "null": n0,
                     "planned_sigma": entry["methods"][k]["sigma_at_plan"],

@@ -73,14 +73,14 @@ def bins_of(k, phi, carousel, max_len) -> list:
     return out
 
 
-def design(k, phi, carousel, noise, dt_s, period_s=None) -> dict:
+def design(k, phi, carousel, noise, dt_s, period_s=None, max_bins=MAX_BINS) -> dict:
     """The bins, their mean regressors H (k, 3), counts, first sample indices and the exact covariance
-    of their means C (k, k) (module docstring)."""
+    of their means C (k, k) (module docstring); at most about ``max_bins`` bins."""
     tc_n = max(int(noise["correlation_time_s"] / (4.0 * dt_s)), 1)
     max_len = tc_n
     if carousel and period_s:
         max_len = min(max_len, max(int(period_s * CAROUSEL_BIN_RAD / (2 * math.pi) / dt_s), 1))
-    max_len = max(max_len, int(math.ceil(k.size / MAX_BINS)))
+    max_len = max(max_len, int(math.ceil(k.size / max_bins)))
     bins = bins_of(k, phi, carousel, max_len)
     if not bins:
         return {"bins": [], "H": np.zeros((0, 3)), "n": np.zeros(0), "C": np.zeros((0, 0))}
