@@ -32,6 +32,7 @@ the reader).
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -192,7 +193,7 @@ class Observation:
             out.append((self.spin_channel, columns[self.spin_channel], "rate"))
         return out
 
-    def sensor_draws(self, sensor, rng):
+    def sensor_draws(self, sensor, rng) -> Callable | None:
         """The observation's own sensor model, or None: the scene's ``sensor`` (:class:`~gyro_instrument.sensors.SensorModel`)
         draws each channel (the default). Otherwise a callable ``(key, values, kind) -> measured array``
         that draws from ``rng`` in call order, block after block (a rate gyro's bias instability and

@@ -25,6 +25,7 @@ true rate, rad, wrapped, as a rotor joint's).
 """
 
 import math
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
@@ -86,7 +87,7 @@ class RateGyroObservation(Observation):
         """The index (read exactly: an encoder far finer than the estimate needs) and the rate."""
         return [(INDEX, columns[INDEX], "encoder"), (RATE, columns[RATE], "gyro")]
 
-    def sensor_draws(self, sensor, rng):
+    def sensor_draws(self, sensor, rng) -> Callable | None:
         """The gyro's own error model (the scene's ``sensor`` block is not applied to it): a callable
         (key, values, kind) -> measured array, drawing from ``rng`` block after block."""
         p, dt = self.instrument.p, 1.0 / self.instrument.sample_rate_hz
@@ -177,7 +178,11 @@ class RateGyro(Instrument):
         return (1.0 + 1e-6 * self.p.scale_factor_ppm) * self.horizontal_rate_rad_s()
 
     def scales(self, duration_s) -> Scales:
-        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, duration_s=duration_s)
+        """The Earth rate is the measured signal itself: ``gyro_rate_rad_s`` carries n cos γ so that
+        ``earth_rotation`` reports a relative size of 1 (KINDS-REWIRE / issue 35 item 4: an open scale
+        for "the effect is the signal" replaces this; the Scales has no field for it today)."""
+        return Scales(earth_rate_rad_s=self.site.earth_rate_rad_s, duration_s=duration_s,
+                      gyro_rate_rad_s=abs(self.horizontal_rate_rad_s()) or None)
 
     def predictions(self) -> dict:
         """The rate amplitude, the rate at each position, the sequence's length and the noise figures."""
@@ -191,7 +196,7 @@ class RateGyro(Instrument):
         else:
             M = math.radians(p.mount_azimuth_deg)
             phis = [math.radians(p.first_index_deg) + 2 * math.pi * k / p.positions for k in range(p.positions)]
-            out["sequence_s"] = p.positions * (p.dwell_s + p.slew_s)
+            out["sequence_duration_s"] = p.positions * (p.dwell_s + p.slew_s)
             out["position_rates_rad_s"] = [A * math.cos(M + f) for f in phis[:16]]
         return with_notes(out, self.missing_effect_note("earth_rotation", "the gyro reads no Earth rate: no north"))
 

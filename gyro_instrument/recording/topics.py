@@ -10,6 +10,7 @@ No rclpy here: the recorder, the player, replay, the bench and the views read th
 from dataclasses import dataclass
 
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH
+from gyro_instrument.instruments.rate_gyro import RATE_AZIMUTH
 
 CLOCK = "clock"
 CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
@@ -156,8 +157,10 @@ def heading_frame(instrument) -> str:
 
 def measures_azimuth(inst) -> bool:
     """True when the instrument's observation measures an azimuth (a horizontal gyroscope with its
-    rotor on: ``ALSO_MEASURES`` holds ``AZIMUTH``); needs the instrument, not its class."""
-    return not isinstance(inst, type) and AZIMUTH in inst.observation().ALSO_MEASURES
+    rotor on: ``ALSO_MEASURES`` holds ``AZIMUTH``; a rate gyro on a turntable: ``RATE_AZIMUTH``); needs
+    the instrument, not its class."""
+    # KINDS-REWIRE (issue 35): "a kind whose result block is north"
+    return not isinstance(inst, type) and bool({AZIMUTH, RATE_AZIMUTH} & set(inst.observation().ALSO_MEASURES))
 
 
 def estimator_topics(insts) -> dict:

@@ -57,6 +57,7 @@ class EstimatorNode(SceneNode):
         self.sent = {}          # messages published per (resolved) topic
         self.trackers = {}      # instrument -> NorthTracker (horizontal gyroscopes and their rotor-off swings)
         self.tape_of = {}       # horizontal gyroscope -> its rotor-off companion
+        self.headings = []      # instruments whose north goes out on <name>/heading (final estimate)
         self._due = {}          # instrument -> samples at which its tracker is next given the tail
         self.nmea = None
         if self.load():
@@ -105,8 +106,10 @@ class EstimatorNode(SceneNode):
                 self.trackers[other] = NorthTracker(inst.tape_predictions()["rotor_off_swing_duration_s"], sigma)
         for name, tr in self.trackers.items():
             self._due[name] = self._every(tr)
+        # every instrument whose final estimate has a north block (a rate gyro has no live tracker)
+        self.headings = [n for n, inst in self.insts.items() if measures_azimuth(inst) and n in self.buffers]
         target = str(self.value("nmea_udp", "") or "")
-        if target and self.trackers:
+        if target and self.headings:
             try:
                 self.nmea = NmeaUdpSender(target, field="nmea_udp")
             except SceneError as exc:
@@ -139,7 +142,7 @@ class EstimatorNode(SceneNode):
         """One ``sensor_msgs/Imu`` on ``<name>/heading`` (and a ``$HEHDT`` for the first gyroscope)."""
         fields = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
         self._send(heading_topic(name), m.imu(t_ns, heading_frame(name), fields))
-        if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
+        if self.nmea is not None and azimuth_rad is not None and name == self.headings[0]:
             try:
                 self.nmea.send_heading(math.degrees(azimuth_rad), int(self.value("nmea_decimals", 3)))
             except OSError as exc:
@@ -154,9 +157,7 @@ class EstimatorNode(SceneNode):
     def _final_headings(self, r, t) -> None:
         """The final estimate's heading per horizontal gyroscope: its ``north`` block (the fit), or
         not provided (Imu.msg: covariance element 0 = −1) when it has none."""
-        for name in self.trackers:
-            if name in self.tape_of.values():
-                continue
+        for name in self.headings:
             block = (r.get("instruments", {}).get(name) or {}).get("north") or {}
             deg, sig = block.get("mount_azimuth_deg"), block.get("sigma_arcsec")
             self._publish_heading(name, t, None if deg is None else math.radians(deg),
@@ -172,7 +173,7 @@ class EstimatorNode(SceneNode):
         self.buffers, self.subs, self.pubs, self.timers_, self.clock_sub = {}, {}, {}, [], None
         self.rejected, self.result, self.final, self.last_clock_ns, self._clock_done_at = {}, None, False, None, None
         self._last_input = None
-        self.trackers, self.tape_of, self._due = {}, {}, {}
+        self.trackers, self.tape_of, self._due, self.headings = {}, {}, {}, []
         if self.nmea is not None:
             self.nmea.close()
             self.nmea = None
