@@ -140,10 +140,13 @@ def test_gauss_markov_matches_the_datasheet_allan_minimum():
 def test_streamed_draws_equal_the_one_shot_draws():
     """The estimator node and the recorder draw block by block (MeasureStream): the same doubles as
     ``measure`` (the Gauss–Markov state carried across blocks)."""
-    scene, truth, iname, inst = _one("rate_gyro_two_position")
+    from gyro_instrument.scenes import build_instruments
+    scene, truth, iname, _ = _one("rate_gyro_two_position")
     t = truth[0]
     whole = measure(scene, truth, 5)[iname]
+    inst = build_instruments(scene)[iname]         # a fresh one, as the recorder's: not yet simulated
     ms = MeasureStream(scene, inst, t.size, 5)
+    inst.simulate(t)
     cols = truth[2][iname].columns
     parts = [ms.block(t[i:j], {k: v[i:j] for k, v in cols.items()}) for i, j in ((0, 1000), (1000, 1001), (1001, t.size))]
     assert np.array_equal(np.concatenate([p["rate"] for p in parts]), whole["rate"])

@@ -122,8 +122,9 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     """(the instrument's entry of the estimate, its RateMeasurement or None); appends its checks."""
     engine = ENGINES.get(obs.MEASUREMENT)
     if engine is None or not obs.has_record(rec):
+        also = " beside its north (the north block)" if obs.ALSO_MEASURES else ""     # KINDS-REWIRE (issue 35)
         return {"type": obs.type_name, "reason": "not used by the estimator (no Earth-rate measurement from this "
-                                                 "instrument)"}, None
+                                                 f"instrument{also})"}, None
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)
     return engine(obs, rec, corrections, checks, sensor)

@@ -90,13 +90,18 @@ class RateGyroObservation(Observation):
     def sensor_draws(self, sensor, rng) -> Callable | None:
         """The gyro's own error model (the scene's ``sensor`` block is not applied to it): a callable
         (key, values, kind) -> measured array, drawing from ``rng`` block after block."""
-        p, dt = self.instrument.p, 1.0 / self.instrument.sample_rate_hz
-        errors = GyroErrors(p.arw_deg_rt_h * DEG_RT_H, p.bias_instability_deg_h * DEG_H / GM_ALLAN_PEAK,
-                            p.bias_correlation_time_s, p.turn_on_bias_deg_h * DEG_H, dt, rng)
+        inst, made = self.instrument, []
 
         def draw(key, values, kind):
             v = np.array(values, dtype=float)
-            return v + errors.draw(v.size) if kind == "gyro" else v
+            if kind != "gyro":
+                return v
+            if not made:            # at the first draw: the simulation before it has set the sample rate
+                p = inst.p
+                made.append(GyroErrors(p.arw_deg_rt_h * DEG_RT_H, p.bias_instability_deg_h * DEG_H / GM_ALLAN_PEAK,
+                                       p.bias_correlation_time_s, p.turn_on_bias_deg_h * DEG_H,
+                                       1.0 / inst.sample_rate_hz, rng))
+            return v + made[0].draw(v.size)
         return draw
 
     def has_record(self, rec) -> bool:
