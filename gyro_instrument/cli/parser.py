@@ -145,8 +145,8 @@ def _add_scene_commands(sub):
                         "the unit of a bare time column (also hms: clock times mm:ss or hh:mm:ss)")
     p.add_argument("--angle-unit", default=None, choices=list(ANGLE_UNITS),
                    help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
-                        "deflection_east, deflection_north (rad or deg; default rad; x_east/y_north stay m, "
-                        "spin_rate rad/s); with --reversal-points: the unit of a bare reading column, any unit a "
+                        "deflection_east, deflection_north, index (rad or deg; default rad; x_east/y_north stay m, "
+                        "spin_rate and rate rad/s); with --reversal-points: the unit of a bare reading column, any unit a "
                         "header takes (dms: 179°01'56\", 179.01.56, 179 01 56, 179-01-56; ddmmss: 179.0156; div: "
                         "scale divisions of --scale-division)")
     p.add_argument("--reversal-points", metavar="FILE.csv",

@@ -32,7 +32,8 @@ def seconds_per_unit(time_unit) -> float:
 
 #: ``--angle-unit``: the channels read as angles (rad, or deg converted to rad). Not ``x_east`` /
 #: ``y_north`` (m) nor ``spin_rate`` (rad/s, a rate).
-ANGLE_CHANNELS = ("angle", "outer_angle", "inner_angle", "deflection_east", "deflection_north")
+# KINDS-REWIRE (issue 35): "index" is a rate gyro turntable's index angle; channels will carry their unit
+ANGLE_CHANNELS = ("angle", "outer_angle", "inner_angle", "deflection_east", "deflection_north", "index")
 ANGLE_UNITS = ("rad", "deg")
 
 #: ``--separator``: the CSV field separators; ``None`` sniffs it from the header line.
