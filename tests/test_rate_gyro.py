@@ -200,3 +200,21 @@ def test_bench_rows_noise_free_exact_and_sigma_at_the_bound():
         assert abs(r["noise_free_error_arcsec"]) < 1e-6
         assert r["mean_sigma_arcsec"] == pytest.approx(r["crlb_arcsec"], rel=0.10)
     assert len(same_time_lines(rows, [])) == 5 + len(rows)
+
+
+def test_the_kind_adapter_gives_the_same_block_bound_and_a_live_heading():
+    """estimators/rate_gyro_kind.py, the kind as the kinds mechanism declares one (not wired yet): its
+    engine is the pipeline's, its bound the planner's, its live tracker's north from the first half of
+    the record is within 4 of its σ of the truth and its σ larger than the whole record's."""
+    from gyro_instrument.estimators.rate_gyro_kind import RateAzimuthKind
+    scene, truth, iname, inst = _one("rate_gyro_four_position")
+    obs, k = inst.observation(), RateAzimuthKind()
+    rec = measure(scene, truth, 2)[iname]
+    block, none = k.estimate(obs, rec, (), [], None)
+    assert none is None and block == R.north_block(obs, R.fit_record(obs, rec))
+    model, _ = k.probe(scene, obs)
+    assert k.bound(model, scene.duration_s, None)[0] == pytest.approx(block["sigma_arcsec"] / R.ARCSEC_PER_RAD, rel=0.02)
+    half = {key: v[: v.size // 2] for key, v in rec.items()}
+    m_half, s_half = k.tracker(obs, scene, {}).update(iname, half)
+    assert abs(R._wrap(m_half - math.radians(inst.p.mount_azimuth_deg))) < 4.0 * s_half
+    assert s_half > block["sigma_arcsec"] / R.ARCSEC_PER_RAD
