@@ -55,12 +55,11 @@ def _scene(itype, effects, extra=()):
 
 
 def _measured(scene, name):
-    """(instrument, measured angles, the measured rate column (the rotor's spin, a rate gyro's rate) or
-    None) of one simulation."""
+    """(instrument, measured angles, the spin rate column or the measured rate (a rate gyro's, its
+    observation's rate joint) or None) of one simulation."""
     inst = build_instruments(scene)[name]
     cols = inst.simulate(sample_times(scene)).columns
-    rate = inst.observation().spin_channel
-    return inst, inst.measured_angles(cols), None if rate is None else cols.get(rate)
+    return inst, inst.measured_angles(cols), cols.get(inst.observation().spin_channel or "spin_rate")
 
 
 PAIRS = [(t, e) for t in CASES for e in sorted(INSTRUMENTS[t].SUPPORTED_EFFECTS)]
