@@ -194,11 +194,8 @@ class Observation:
         return out
 
     def sensor_draws(self, sensor, rng) -> Callable | None:
-        """The observation's own sensor model, or None: the scene's ``sensor`` (:class:`~gyro_instrument.sensors.SensorModel`)
-        draws each channel (the default). Otherwise a callable ``(key, values, kind) -> measured array``
-        that draws from ``rng`` in call order, block after block (a rate gyro's bias instability and
-        angle random walk: :class:`~.rate_gyro.RateGyroObservation`). KINDS-REWIRE (issue 35): a
-        measurement kind's channel layout may own this."""
+        """None: the scene's ``sensor`` draws each channel; else the observation's own sensor, a callable
+        ``(key, values, kind) -> array`` drawing from ``rng`` block after block (a rate gyro). KINDS-REWIRE."""
         return None
 
     def complete(self, rec) -> dict:
