@@ -218,3 +218,16 @@ def test_the_kind_adapter_gives_the_same_block_bound_and_a_live_heading():
     m_half, s_half = k.tracker(obs, scene, {}).update(iname, half)
     assert abs(R._wrap(m_half - math.radians(inst.p.mount_azimuth_deg))) < 4.0 * s_half
     assert s_half > block["sigma_arcsec"] / R.ARCSEC_PER_RAD
+
+
+def test_an_index_logged_in_degrees_just_below_a_turn_is_the_same_heading():
+    """A table's index 359.9999999° (read with --angle-unit deg) is the heading 0°: the four positions
+    stay four, and the estimate is the one from the exact index to 1e-9 of σ."""
+    scene, truth, iname, inst = _one("rate_gyro_four_position", ("duration_s=1440",))
+    obs = inst.observation()
+    rec = measure(scene, truth, 4)[iname]
+    f = R.fit_record(obs, rec)
+    shifted = dict(rec, index=np.where(rec["index"] == 0.0, 2 * math.pi - 1e-12, rec["index"]))
+    g = R.fit_record(obs, shifted)
+    assert g["headings"] == 4 and g["closed_form"] is not None
+    assert abs(R._wrap(g["mount_rad"] - f["mount_rad"])) < 1e-9 * f["sigma_rad"] + 1e-11

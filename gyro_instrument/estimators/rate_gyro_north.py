@@ -100,9 +100,15 @@ def bin_means(y, bins) -> np.ndarray:
     return np.array([y[s:e].mean() for s, e in bins])
 
 
+def _offsets(phi, phi0) -> np.ndarray:
+    """φ − φ0 in [0, 2π), a value within 1e-9 rad below 2π read as 0 (an index logged as 359.9999999°)."""
+    off = np.mod(np.asarray(phi, dtype=float) - phi0, 2 * math.pi)
+    return np.where(off > 2 * math.pi - 1e-9, 0.0, off)
+
+
 def headings(d, phi0) -> dict:
     """The distinct held index angles (rad) of a design, relative to φ0: {'count', 'offsets'}."""
-    off = np.mod(np.round(np.mod(d["phi"] - phi0, 2 * math.pi), 9), 2 * math.pi)
+    off = _offsets(d["phi"], phi0)
     uniq = np.unique(np.round(off, 6))
     return {"count": int(uniq.size), "offsets": uniq}
 
@@ -164,8 +170,9 @@ def _two_fit(theta, cov, A0, phi0, prior_rad, tol_rad) -> dict:
 def closed_form(y, d, phi0) -> dict | None:
     """The four-position closed form (module docstring) with σ by propagating C; None unless the held
     headings are four at 90° steps from φ0."""
-    k = np.rint(np.mod(d["phi"] - phi0, 2 * math.pi) / (0.5 * math.pi)).astype(int) % 4
-    if not np.allclose(np.mod(d["phi"] - phi0, 2 * math.pi), k * 0.5 * math.pi, atol=1e-9) or set(k) != {0, 1, 2, 3}:
+    off = _offsets(d["phi"], phi0)
+    k = np.rint(off / (0.5 * math.pi)).astype(int) % 4
+    if not np.allclose(off, np.rint(off / (0.5 * math.pi)) * 0.5 * math.pi, atol=1e-9) or set(k) != {0, 1, 2, 3}:
         return None
     W = np.zeros((4, len(k)))
     for j in range(4):
