@@ -212,7 +212,8 @@ def north_lines(n, angle_format="deg") -> list:
                 f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
     fmt = angle_format
     what = n["instrument"] or f"the field book {n.get('field_book')}"
-    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    how = (f"{n.get('method') or 'fit'}; Cramer-Rao" if n.get("crlb_arcsec") is not None
+           else f"{n.get('method')}; no record, no bound")
     lines = [f"north: scale zero of {what} at azimuth {_angle(n['mount_azimuth_deg'], fmt)} +/- "
              f"{_sigma(n['sigma_arcsec'], fmt)} ({how}" + (f" {_sigma(n['crlb_arcsec'], fmt)})"
                                                             if n.get("crlb_arcsec") is not None else ")")]
