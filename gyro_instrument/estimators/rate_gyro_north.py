@@ -291,7 +291,8 @@ def north_block(obs, f) -> dict:
                                  "ppm": f["scale_factor_ppm"], "sigma_ppm": f["scale_factor_sigma_ppm"],
                                  "meaning": "A/(n cos latitude) - 1 at the site's stated latitude"}
     else:
-        undetermined.append("with two positions the rate amplitude: n cos(latitude) at the stated latitude and a scale "
+        undetermined.append("with two positions latitude and north are not separable (the data give d = (1 + s) n "
+                            "cos(latitude) cos(M + phi0) only): n cos(latitude) at the stated latitude and a scale "
                             "factor of 0 are assumed")
         block["scale_factor"] = {"assumed_ppm": 0.0, "mount_shift_arcsec_per_100ppm": _arcsec(100 * f["sf_shift_rad_per_ppm"])}
         if not f["resolved"]:
