@@ -6,7 +6,7 @@ The record (``index`` φ, rad; ``rate`` r, rad/s; instruments/rate_gyro.py) obey
 
 A = (1 + s) n cos γ, b the turn-on bias, g the Gauss–Markov bias instability (σ_g, τ_c), w white
 (σ_w per sample): linear in θ = (a, c, b). The samples are reduced to bin means: each held
-position's run (a carousel's turn in bins of 10°), split into bins no longer than τ_c/4, so the
+position's run (a carousel's turn in bins of 10°), split into bins no longer than τ_c/16, so the
 Gauss–Markov's shape inside a dwell is kept; the bin means' covariance is exact
 (:func:`~gyro_instrument.instruments.rate_gyro_sensor.block_sums`):
 
@@ -40,6 +40,9 @@ from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, block_sums
 ARCSEC_PER_RAD = 648000.0 / math.pi
 #: a carousel's bins: at most this turn of the table each (rad)
 CAROUSEL_BIN_RAD = math.radians(10.0)
+#: bins are at most τ_c / BIN_TC_FRACTION long: the Gauss–Markov's shape inside a dwell is kept (σ over
+#: the raw samples' bound: 1.027 at τ_c/4, 1.006 at τ_c/8, 1.0017 at τ_c/16 — a 90 s dwell, τ_c 60 s)
+BIN_TC_FRACTION = 16.0
 #: most bins one fit uses (dense covariance: the solve is O(k³)); bins are lengthened beyond it
 MAX_BINS = 2000
 
@@ -76,7 +79,7 @@ def bins_of(k, phi, carousel, max_len) -> list:
 def design(k, phi, carousel, noise, dt_s, period_s=None, max_bins=MAX_BINS) -> dict:
     """The bins, their mean regressors H (k, 3), counts, first sample indices and the exact covariance
     of their means C (k, k) (module docstring); at most about ``max_bins`` bins."""
-    tc_n = max(int(noise["correlation_time_s"] / (4.0 * dt_s)), 1)
+    tc_n = max(int(noise["correlation_time_s"] / (BIN_TC_FRACTION * dt_s)), 1)
     max_len = tc_n
     if carousel and period_s:
         max_len = min(max_len, max(int(period_s * CAROUSEL_BIN_RAD / (2 * math.pi) / dt_s), 1))

@@ -25,7 +25,6 @@ Cov(g_i + w_i, g_j + w_j) = σ_g² ρ^|i−j| + σ_w² δ_ij; b0 is a parameter,
 import math
 
 import numpy as np
-from scipy.signal import lfilter
 
 #: °/h -> rad/s
 DEG_H = math.pi / 180.0 / 3600.0
@@ -87,6 +86,7 @@ class GyroErrors:
             first = self.rng.standard_normal(2)
             self.b0 = self.turn_on * first[0]
             self.state = np.array([self.rho * self.sigma_g * first[1]])
+        from scipy.signal import lfilter       # here, not at import: scipy.signal costs every command ~1 s
         e = self.rng.standard_normal((int(n), 2))
         drive = math.sqrt(1.0 - self.rho ** 2) * self.sigma_g * e[:, 1]
         g, self.state = lfilter([1.0], [1.0, -self.rho], drive, zi=self.state)
