@@ -312,12 +312,17 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     finally:
         if own:
             executor.shutdown()
+    # north in the same time: the rate gyros' scenes beside the gyrotheodolite (bench/rate_gyro_study.py)
+    from gyro_instrument.bench.rate_gyro_study import rate_gyro_rows, same_time_lines, write_rate_gyro_csv
+    progress("north in the same time: the rate gyros beside the gyrotheodolite")
+    rg = rate_gyro_rows(quick)
+    write_rate_gyro_csv(os.path.join(out_dir, "north_rate_gyro.csv"), rg, _write)
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     from gyro_instrument.bench.north_study import north_lines
     lines = (_bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + cost_lines
-             + north_lines(*north))
+             + north_lines(*north) + same_time_lines(rg, north[1]))
     return _write_summary(out_dir, lines, pngs)
 
 
