@@ -202,13 +202,20 @@ def test_bench_rows_noise_free_exact_and_sigma_at_the_bound():
     assert len(same_time_lines(rows, [])) == 5 + len(rows)
 
 
-def test_the_kind_adapter_gives_the_same_block_bound_and_a_live_heading():
-    """estimators/rate_gyro_kind.py, the kind as the kinds mechanism declares one (not wired yet): its
-    engine is the pipeline's, its bound the planner's, its live tracker's north from the first half of
-    the record is within 4 of its σ of the truth and its σ larger than the whole record's."""
+def test_the_registered_kind_gives_the_same_block_bound_and_a_live_heading():
+    """The registered kind ``rate_azimuth`` (estimators/rate_gyro_kind.py, complete: nothing missing):
+    its engine's block is the estimate's, its bound the estimate's σ (to 2 %: the planner's binning), its
+    live tracker's north from the first half of the record within 4 of its σ of the truth and its σ
+    larger than the whole record's."""
     from gyro_instrument.estimators.rate_gyro_kind import RateAzimuthKind
+    from gyro_instrument.instruments.measurement import kind, measured
+    k = kind("rate_azimuth")
+    assert type(k) is RateAzimuthKind and RateAzimuthKind.missing() == []
     scene, truth, iname, inst = _one("rate_gyro_four_position")
-    obs, k = inst.observation(), RateAzimuthKind()
+    obs = inst.observation()
+    assert measured(inst)
+    assert estimate_records(scene, truth[1], measure(scene, truth, 2))["north"] == \
+        R.north_block(obs, R.fit_record(obs, measure(scene, truth, 2)[iname]))
     rec = measure(scene, truth, 2)[iname]
     block, none = k.estimate(obs, rec, (), [], None)
     assert none is None and block == R.north_block(obs, R.fit_record(obs, rec))

@@ -61,13 +61,27 @@ def test_the_measured_rate_is_the_sensitive_axis_joint_velocity(run):
     assert abs(np.std(resid) / 1.1708e-4 - 1.0) < 0.05
 
 
-def test_heading_imu_is_the_final_north(run):
-    result, bag, _, _ = run
-    imus = [deserialize_message(d, Imu) for topic, _, _, d in read_messages(bag) if topic == "/mems/heading"]
-    assert len(imus) == 1
-    q = imus[0].orientation
+def _azimuth_deg(imu) -> float:
+    """The mount azimuth an Imu's orientation carries (its body x axis, clockwise from north in ENU)."""
+    q = imu.orientation
     fwd = Rotation.from_quat([q.x, q.y, q.z, q.w]).apply([1.0, 0.0, 0.0])
-    az = math.degrees(math.atan2(fwd[0], fwd[1])) % 360.0
-    assert az == pytest.approx(result["north"]["mount_azimuth_deg"], abs=1e-9)
-    assert math.sqrt(imus[0].orientation_covariance[8]) == pytest.approx(
+    return math.degrees(math.atan2(fwd[0], fwd[1])) % 360.0
+
+
+def test_heading_imu_live_then_the_final_north(run):
+    """The kind's live tracker (RateNorthLive) publishes on /mems/heading once per sequence of positions
+    (2 x (140 + 10) s = 300 s: once, at the record's 6000th sample), then the final estimate's block."""
+    result, bag, _, truth = run
+    imus = [deserialize_message(d, Imu) for topic, _, _, d in read_messages(bag) if topic == "/mems/heading"]
+    assert len(imus) == 2
+    live, final = imus
+    assert _azimuth_deg(final) == pytest.approx(result["north"]["mount_azimuth_deg"], abs=1e-9)
+    assert math.sqrt(final.orientation_covariance[8]) == pytest.approx(
         math.radians(result["north"]["sigma_arcsec"] / 3600.0), rel=1e-9)
+    # the live value: the fit of all but the last sample, so the final's to well within its sigma (one
+    # sample of 6001 moves it by ~1/6000 of sigma); 0.1 sigma is far above that, far below a wrong fit
+    sigma_deg = result["north"]["sigma_arcsec"] / 3600.0
+    d = (_azimuth_deg(live) - _azimuth_deg(final) + 180.0) % 360.0 - 180.0
+    assert abs(d) < 0.1 * sigma_deg
+    stamp = lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec         # noqa: E731
+    assert stamp(live) <= stamp(final)

@@ -374,10 +374,11 @@ def add_run_command(sub) -> None:
                    help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
                         "NS/...; suites in different namespaces run side by side")
     p.add_argument("--nmea-udp", metavar="HOST:PORT", default=None,
-                   help="send the heading of the scene's first horizontal gyroscope or rate gyro (its scale zero's azimuth) as "
-                        "NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT ([IPV6]:PORT; IANA's "
-                        "NMEA port is 10110): at each reversal point as the estimate converges and with the final "
-                        "estimate (the estimator's parameter nmea_udp)")
+                   help="send the heading of the scene's first horizontal gyroscope or rate gyro (its scale "
+                        "zero's azimuth) as NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT "
+                        "([IPV6]:PORT; IANA's NMEA port is 10110): at each reversal point (a rate gyro: each "
+                        "sequence of positions) as the estimate converges and with the final estimate (the "
+                        "estimator's parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

@@ -144,7 +144,8 @@ ESTIMATOR = SCENE + [
          0.0, 86400.0, read_only=True),
     Spec("nmea_udp", "string", "", "HOST:PORT ([IPV6]:PORT) to send NMEA 0183 $HEHDT true-heading sentences to, one "
                                    "UDP datagram per heading published (the first horizontal gyroscope's or rate "
-                                   "gyro's mount azimuth: at each reversal point and with the final estimate); "
+                                   "gyro's mount azimuth: at each reversal point, a rate gyro's each sequence of "
+                                   "positions, and with the final estimate); "
                                    "empty: none. "
                                    "IANA's port for NMEA over UDP is 10110", read_only=True),
     Spec("nmea_decimals", "int", 3, "decimals of the $HEHDT heading in degrees (3: 0.001 deg = 3.6 arcsec)", 0, 6,
