@@ -133,8 +133,9 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     block_kinds = tuple(k for k, v in load_kinds().items() if v.TARGET == "azimuth")
     az_models, az_skipped = instrument_models(scene, block_kinds) if azimuth else ([], {})
     if not models and not az_models:
-        what = ("instrument that measures an azimuth with the Earth's rotation simulated (a measurement kind "
-                f"of {', '.join(block_kinds)})" if azimuth else
+        what = ("horizontal gyroscope with earth_rotation (its swing centre is north) nor another instrument "
+                f"measuring an azimuth with the Earth's rotation simulated (the kinds {', '.join(block_kinds)})"
+                if azimuth else
                 "an instrument that measures an Earth rate (a gyroscope with a directing line or a pendulum, with "
                 "earth_rotation)")
         why = az_skipped if azimuth else skipped
@@ -142,9 +143,9 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
                          + (f" ({'; '.join(f'{k}: {v}' for k, v in why.items())})" if why else ""))
     if azimuth and not az_models:
         name = next(n for n, _, _ in targets if TARGETS[n][0] == "azimuth")
-        serving = "; ".join(f"{k}: {load_kinds()[k].summary}" for k in block_kinds)
-        raise SceneError(f"--target {name}", scene_arg, f"needs an instrument whose measurement kind gives an azimuth "
-                         f"({serving}), with the Earth's rotation simulated; the scene has none"
+        raise SceneError(f"--target {name}", scene_arg, "needs a horizontal gyroscope (plane_gyroscope, plane: horizontal, "
+                         "the rotor spinning, earth_rotation on: its swing centre is north) or another instrument "
+                         f"measuring an azimuth (the kinds {', '.join(block_kinds)}); the scene has none"
                          + (f" ({'; '.join(f'{k}: {v}' for k, v in az_skipped.items())})" if az_skipped else ""))
     sensor = SensorSpec.from_scene(scene)
     hemi = scene.estimator.get("hemisphere")
