@@ -190,10 +190,10 @@ def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
 
 
 def test_bench_rows_noise_free_exact_and_sigma_at_the_bound():
-    """The bench's table (bench/rate_gyro_study.py) at 10 min: the noise-free record gives the mount
+    """The bench's table (estimators/rate_gyro_study.py, the kind's bench study) at 10 min: the noise-free record gives the mount
     azimuth exactly (the linear model is the simulated one: < 1e-6″), and the mean reported σ is the
     planner's bound to 10 % (the estimator's bins vs the planner's; a carousel's long bins lose most)."""
-    from gyro_instrument.bench.rate_gyro_study import rate_gyro_rows, same_time_lines
+    from gyro_instrument.estimators.rate_gyro_study import rate_gyro_rows, same_time_lines
     rows = rate_gyro_rows(quick=True, duration_s=600.0)
     assert {r["scene"] for r in rows} == {c[0] for c in CASES}
     for r in rows:

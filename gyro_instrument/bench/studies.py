@@ -312,17 +312,15 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     finally:
         if own:
             executor.shutdown()
-    # north in the same time: the rate gyros' scenes beside the gyrotheodolite (bench/rate_gyro_study.py)
-    from gyro_instrument.bench.rate_gyro_study import rate_gyro_rows, same_time_lines, write_rate_gyro_csv
-    progress("north in the same time: the rate gyros beside the gyrotheodolite")
-    rg = rate_gyro_rows(quick)
-    write_rate_gyro_csv(os.path.join(out_dir, "north_rate_gyro.csv"), rg, _write)
+    # each measurement kind's own study (its optional ``bench``: the rate gyro's north in the same time)
+    from gyro_instrument.instruments.measurement import load as load_kinds
+    kind_lines = [line for k in load_kinds().values() for line in k.bench(out_dir, quick, _write, progress, north[1])]
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     from gyro_instrument.bench.north_study import north_lines
     lines = (_bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + cost_lines
-             + north_lines(*north) + same_time_lines(rg, north[1]))
+             + north_lines(*north) + kind_lines)
     return _write_summary(out_dir, lines, pngs)
 
 

@@ -121,3 +121,8 @@ class RateAzimuthKind(MeasurementKind):
         """The plan text of its target (:func:`.rate_gyro_plan.plan_lines`)."""
         from gyro_instrument.estimators.rate_gyro_plan import plan_lines
         return plan_lines(entry)
+
+    def bench(self, out_dir, quick, write, progress, reference_rows) -> list:
+        """North in the same time beside the gyrotheodolite (:func:`.rate_gyro_study.bench`)."""
+        from gyro_instrument.estimators.rate_gyro_study import bench
+        return bench(out_dir, quick, write, progress, reference_rows)

@@ -1,5 +1,8 @@
 """North in the same time: the rate-gyro north finders beside the gyrotheodolite (issue 35 item 3).
 
+The study the rate gyro's kind runs for ``gyro-instrument bench`` (its optional ``bench`` member:
+:meth:`.rate_gyro_kind.RateAzimuthKind.bench`): the bench asks every registered kind, never this module.
+
 Each shipped rate-gyro scene is run for the gyrotheodolite's hour (``duration_s`` = 3600 s; the
 two-position and carousel scenes ship shorter records) and estimated over seeded sensor draws (the
 gyro's own error model: turn-on bias, bias instability, angle random walk): per scene the rms of the
@@ -10,6 +13,7 @@ gyrotheodolite's row is the bench's own scene row (:func:`.north_study.scene_nor
 """
 
 import math
+import os
 
 import numpy as np
 
@@ -68,3 +72,13 @@ def write_rate_gyro_csv(path, rows, write) -> None:
     h = ("scene", "instrument", "what", "duration_s", "rms_error_arcsec", "mean_sigma_arcsec", "crlb_arcsec",
          "noise_free_error_arcsec", "n_ok")
     write(path, h, [tuple(r[k] for k in h) for r in rows])
+
+
+def bench(out_dir, quick, write, progress, reference_rows) -> list:
+    """The bench's study (:meth:`~gyro_instrument.instruments.measurement.MeasurementKind.bench`):
+    ``north_rate_gyro.csv`` in ``out_dir`` through the bench's writer, and the summary's table beside
+    ``reference_rows`` (the bench's gyrotheodolite rows)."""
+    progress("north in the same time: the rate gyros beside the gyrotheodolite")
+    rows = rate_gyro_rows(quick)
+    write_rate_gyro_csv(os.path.join(out_dir, "north_rate_gyro.csv"), rows, write)
+    return same_time_lines(rows, reference_rows)
