@@ -40,13 +40,6 @@ PLAN_BINS = 400
 CAROUSEL_BINS = 1500
 
 
-def rate_gyros(scene) -> dict:
-    """name -> RateGyro of the scene's rate gyros whose observation measures :data:`RATE_AZIMUTH`."""
-    from gyro_instrument.scenes import build_instruments
-    return {n: i for n, i in build_instruments(scene).items()
-            if RATE_AZIMUTH in i.observation().ALSO_MEASURES and i.observation().unmeasured_reason() is None}
-
-
 def sigma_mount_rad(inst, p, duration_s, rate_hz) -> float:
     """σ of the mount azimuth (rad) at the Cramér–Rao bound for a record of ``duration_s`` with the
     parameters ``p`` (the instrument's, possibly replaced); inf when the schedule cannot give north."""
