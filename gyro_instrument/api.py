@@ -34,7 +34,10 @@ def load_scene(scene, overrides=(), duration_s=None) -> "Scene":  # noqa: F821
 
 
 def describe(scene) -> dict:
-    """Dict describing a scene: site, instruments, active effects, effect sizes, predictions."""
+    """Dict describing a scene: site, instruments, active effects, effect sizes, predictions, and
+    ``kernels``: whether a run under this process's environment takes the compiled kernels
+    (:func:`gyro_instrument.core.jit.status`: numba and where it caches, or why not)."""
+    from gyro_instrument.core import jit
     from gyro_instrument.effects import REGISTRY as EFFECTS
     from gyro_instrument.scenes import build_instruments, scene_notes
     insts = build_instruments(scene)
@@ -43,7 +46,8 @@ def describe(scene) -> dict:
            "site": {"latitude_deg": scene.site.latitude_deg, "earth_rate_rad_s": scene.site.earth_rate_rad_s,
                     "gravity_m_s2": scene.site.gravity_m_s2},
            "duration_s": scene.duration_s, "sample_rate_hz": scene.sample_rate_hz, "seed": scene.seed,
-           "scene_effects": list(scene.effects), "instruments": {}}
+           "scene_effects": list(scene.effects),
+           "kernels": f"compiled, {jit.status()}" if jit.enabled() else jit.status(), "instruments": {}}
     for name, inst in insts.items():
         context = inst.effect_context(scene.duration_s)
         effects = {}

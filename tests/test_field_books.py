@@ -243,16 +243,39 @@ def test_north_lines_render_bias_flags_and_pre_orientation_when_present():
     assert "50.55556 gon" in "\n".join(north_lines(block, "gon"))
 
 
-def test_plot_draws_a_field_book(tmp_path):
-    """plot of a book (a reading column): one view, field_book.png, with a missed point and a tape."""
+def test_plot_draws_a_field_book(tmp_path, monkeypatch):
+    """plot of a book (a reading column): one view, field_book.png, with a missed point and a tape. The
+    figure draws the book's values: the turning points at their times (minutes), as arcminutes from
+    north (so their differences are the readings' differences x 60), the tape's likewise, and the
+    missed point marked at its time (10 min)."""
     pytest.importorskip("matplotlib")
+    import matplotlib.image as mpimg
+    from matplotlib.figure import Figure
+    drawn, save = {}, Figure.savefig
+
+    def savefig(fig, path, *args, **kwargs):
+        drawn.update({ln.get_label(): (np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float))
+                      for ax in fig.axes for ln in ax.lines})
+        return save(fig, path, *args, **kwargs)
+    monkeypatch.setattr(Figure, "savefig", savefig)
     a = _turning(9)
     rows = [f"{150 * k},{'' if k == 4 else repr(float(x) / 3600)},{400 * k if k < 4 else ''},"
             f"{repr(180.5 + 0.1 * (-0.9) ** k) if k < 4 else ''}" for k, x in enumerate(a)]
     path = _book(tmp_path, "time_s,reading_deg,tape_time_s,tape_reading_deg\n" + "\n".join(rows) + "\n")
     out = tmp_path / "views"
     assert main(["plot", path, "--out", str(out)]) == 0
-    assert [p.name for p in out.iterdir()] == ["field_book.png"] and (out / "field_book.png").stat().st_size > 10000
+    assert [p.name for p in out.iterdir()] == ["field_book.png"]
+    h, w, _ = mpimg.imread(out / "field_book.png").shape
+    assert h > 200 and w >= 1600
+    k = np.array([0, 1, 2, 3, 5, 6, 7, 8])                                  # point 4 missed
+    t_min, y_arcmin = drawn["turning points (rotor on)"]
+    np.testing.assert_allclose(t_min, 150 * k / 60, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(y_arcmin - y_arcmin[0], (a[k] - a[0]) / 60, rtol=0, atol=1e-9)
+    t_min, y_arcmin = drawn["tape turning points (rotor off)"]
+    tape = 180.5 + 0.1 * (-0.9) ** np.arange(4)
+    np.testing.assert_allclose(t_min, 400 * np.arange(4) / 60, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(y_arcmin - y_arcmin[0], (tape - tape[0]) * 60, rtol=0, atol=1e-9)
+    assert any(np.array_equal(x, [10.0, 10.0]) for x, _ in drawn.values())  # the missed point's mark
     assert main(["plot", path, "--out", str(out)]) == 2                     # already there: --overwrite
 
 

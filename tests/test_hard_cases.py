@@ -251,7 +251,11 @@ def test_damaged_records_are_reported_not_fatal():
     assert r["instruments"]["gyro_horizontal"]["swing_duration_s"] > 0
     assert r["instruments"]["gyro_meridian"]["swing_duration_s"] is None
     assert r["instruments"]["gyro_meridian"]["reason"]
-    assert r["latitude_deg"] is not None            # horizontal gyroscope + pendulum still give it
+    # the horizontal gyroscope and the pendulum still give the latitude: quet_paris's, within 5 of its
+    # reported sigma (a Gaussian draw beyond 5 sigma: 6e-7), from the records that are left
+    assert abs(r["latitude_deg"] - 48.8462) < 5 * r["latitude_sigma_deg"], (r["latitude_deg"], r["latitude_sigma_deg"])
+    # ... and only they carry it (the meridian gyroscope's 3 s are out; measured weights 1 - 1.5e-8, 1.5e-8)
+    assert set(r["carried_by"]) == {"gyro_horizontal", "pendulum"}, r["carried_by"]
 
 
 def test_wrong_message_type_on_a_topic_is_reported():

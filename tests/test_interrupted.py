@@ -19,13 +19,32 @@ def start_run(bag, rtf="50"):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def wait_for_messages(bag, timeout=60):
+def wait_for_messages(bag, timeout=60, size=800_000):
+    """Until the recording holds ``size`` bytes: 800 kB is ~130 s of quet_paris (300 kB held 48-50 s,
+    under two swings of the horizontal gyroscope, 25.6 s each: its estimate then came and went)."""
     t0 = time.time()
     while time.time() - t0 < timeout:
-        if bag.exists() and bag.stat().st_size > 300_000:
+        if bag.exists() and bag.stat().st_size > size:
             return
         time.sleep(0.2)
     raise AssertionError("the run never wrote enough to interrupt it")
+
+
+def _check_estimate(result, bag):
+    """What a replay of a cut quet_paris recording must say: how much it read (the span of the joint
+    stamps in the file, the shortest over the instruments, under the scene's 600 s) and the latitude
+    from it, within 5 of its reported sigma of the scene's (a Gaussian draw beyond 5 sigma: 6e-7). The
+    interruption comes after 800 kB (:func:`wait_for_messages`), over 100 s of all three instruments:
+    four swings and more of each."""
+    spans = {}
+    for tp, _, t, _ in read_messages(str(bag)):
+        if tp.endswith("/joint_states"):
+            lo, hi = spans.get(tp, (t, t))
+            spans[tp] = (min(lo, t), max(hi, t))
+    read_s = min(hi - lo for lo, hi in spans.values()) / 1e9
+    assert result["observation_read_s"] == read_s and 0 < read_s < 600.0, (result.get("observation_read_s"), read_s)
+    assert result["latitude_deg"] is not None, result.get("reason")
+    assert abs(result["latitude_deg"] - 48.8462) < 5 * result["latitude_sigma_deg"], result   # quet_paris's site
 
 
 def test_sigint_finishes_a_complete_indexed_mcap(tmp_path):
@@ -47,7 +66,8 @@ def test_sigint_finishes_a_complete_indexed_mcap(tmp_path):
     assert recording_state(str(bag)) == "interrupted"             # the SIGINT landed between samples
     result = replay_bag(str(bag))                                  # estimates from what is there
     assert any("interrupted" in n for n in result.get("replay_notes", []))
-    assert result["latitude_deg"] is not None and result["observation_s"] == 600.0
+    assert result["observation_s"] == 600.0
+    _check_estimate(result, bag)
     json.dumps(result, allow_nan=False)
 
 
@@ -77,8 +97,7 @@ def test_sigkill_leaves_an_indexed_file_every_reader_opens_and_replay_says_what_
     assert recording_state(str(bag)) == "recording"  # the status record says it was cut short
     result = replay_bag(str(bag))
     assert any("interrupted" in n for n in result.get("replay_notes", []))
-    # a record of a few hundred seconds: the latitude is estimated, or null with a reason
-    assert result["latitude_deg"] is not None or result.get("reason")
+    _check_estimate(result, bag)
     json.dumps(result, allow_nan=False)
 
 
@@ -103,6 +122,7 @@ def test_a_file_truncated_elsewhere_is_recovered_complete_and_indexed(tmp_path):
     assert main(["recover", str(src), "--out", str(fixed)]) == 0
     with AnyReader([fixed]) as r:
         assert sum(1 for _ in r.messages()) == len(msgs)
+    _check_estimate(result, src)
     assert replay_bag(str(fixed))["latitude_deg"] == result["latitude_deg"]
     json.dumps(result, allow_nan=False)
 

@@ -52,11 +52,36 @@ def test_recorder_is_complete_at_full_speed(live_run):
 
 
 def test_live_bag_read_by_rosbags_message_by_message(live_run):
+    # An independent reader (rosbags, its own CDR deserializer) decodes every message, and the joint
+    # states to the samples the simulation measured (the same scene and seed through the core:
+    # measure(), as the estimate test below) and to what the project's reader decodes (samples_from_bag):
+    # JointState position[0] the gyroscope's angle, velocity[1] its spin rate; the pendulum's
+    # position[0:2] its deflections east and north (msg_docs/topics.md). Same code, same seed, same
+    # doubles: equal to the last bit.
+    from pathlib import Path
+
     from rosbags.highlevel import AnyReader
+
+    from gyro_instrument.recording.bag_samples import samples_from_bag
     bag = live_run[0]
-    with AnyReader([__import__("pathlib").Path(bag)]) as r:
-        msgs = [r.deserialize(raw, c.msgtype) for c, t, raw in r.messages()]
+    with AnyReader([Path(bag)]) as r:
+        msgs = [(c.topic, t, r.deserialize(raw, c.msgtype)) for c, t, raw in r.messages()]
     assert len(msgs) == sum(1 for _ in read_messages(bag))
+    scene = load_scene("quet_paris", ["seed=5", "duration_s=60.0"])
+    rec = measure(scene, simulate_truth(scene))
+    _, ours, _, _ = samples_from_bag(bag)
+    columns = {"gyro_horizontal": [("position", 0, "angle"), ("velocity", 1, "spin_rate")],
+               "gyro_meridian": [("position", 0, "angle"), ("velocity", 1, "spin_rate")],
+               "pendulum": [("position", 0, "deflection_east"), ("position", 1, "deflection_north")]}
+    for inst, cols in columns.items():
+        js = [msg for tp, _, msg in msgs if tp == f"/{inst}/joint_states"]
+        stamps = np.array([msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec for msg in js])
+        np.testing.assert_array_equal(stamps, EPOCH_NS + np.round(rec[inst]["t"] * 1e9).astype(np.int64))
+        np.testing.assert_array_equal(stamps - EPOCH_NS, ours[inst][0])       # ours: from the scene's start
+        for field, k, channel in cols:
+            theirs = np.array([getattr(msg, field)[k] for msg in js])
+            np.testing.assert_array_equal(theirs, rec[inst][channel], err_msg=f"{inst} {channel}")
+            np.testing.assert_array_equal(theirs, ours[inst][1 if field == "position" else 2][:, k])
 
 
 def test_player_republishes_a_bag_to_an_estimator(live_run, ctx):

@@ -240,17 +240,30 @@ def test_disk_full_during_split_recording(tmp_path):
     from gyro_instrument.recording.bag_layout import scan_path
     scan = scan_path(bag)
     assert scan.damaged == [] and len(scan.messages) > 1000
+    per_file = []
     for f in files:                        # every file opens in an independent reader
         from rosbags.highlevel import AnyReader
         with AnyReader([Path(f)]) as reader:
-            assert sum(1 for _ in reader.messages()) > 0
+            per_file.append(sum(1 for _ in reader.messages()))
+    assert all(k > 0 for k in per_file), per_file
+    # the replay says the recording was cut, and how much it read: the span of the joint stamps the
+    # splits hold (the shortest over the instruments, as replay.read_span_s), short of the 600 s asked
+    joints = {}
+    for f in files:
+        for tp, _, t, _ in read_messages(f):
+            if tp.endswith("/joint_states"):
+                joints.setdefault(tp, []).append(t)
+    span_s = min((max(t) - min(t)) / 1e9 for t in joints.values())
     check_disk_full_bag(bag)
     res = replay_bag(bag)
-    assert res["observation_read_s"] if "observation_read_s" in res else True
-    # recover uses it all
+    assert "observation_read_s" in res and "recording_cut" in res, sorted(res)
+    assert res["observation_read_s"] == pytest.approx(span_s, abs=1e-9) and 0 < span_s < 600, (res["observation_read_s"], span_s)
+    # recover uses it all: every message of every split, once (the count the independent reader found)
     fixed = str(tmp_path / "fixed.mcap")
     rr = subprocess.run(GI + ["recover", bag, "--out", fixed], capture_output=True, text=True, timeout=120)
     assert rr.returncode == 0, rr.stderr
+    assert rr.stdout.startswith(f"recovered {sum(per_file)} messages from "), (rr.stdout, per_file)
+    assert len(list(read_messages(fixed))) == sum(per_file)
 
 
 def check_disk_full_bag(bag):
@@ -323,10 +336,22 @@ def test_replay_and_recover_skip_an_empty_or_cut_split(tmp_path):
     res = replay_bag(bag)
     notes = " ".join(res.get("replay_notes", []))
     assert "b_4.mcap skipped: is empty" in notes and "b_1.mcap skipped" in notes, notes
+    # the intact splits' messages, counted by an independent reader: recover writes each of them once
+    from rosbags.highlevel import AnyReader
+    intact = []
+    for f in (files[0], files[2], files[3]):
+        with AnyReader([Path(f)]) as reader:
+            intact.append(sum(1 for _ in reader.messages()))
+    assert all(k > 0 for k in intact), intact
     out = str(tmp_path / "fixed.mcap")
     r = subprocess.run(GI + ["recover", bag, "--out", out], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
-    assert len(list(read_messages(out))) > 0
+    assert r.stdout.startswith(f"recovered {sum(intact)} messages from "), (r.stdout, intact)
+    got = list(read_messages(out))
+    assert len(got) == sum(intact)
+    # and they are the intact splits' own messages (0-10 s, 20-30 s): their log times, nothing of 10-20 s
+    want = sorted((tp, t, bytes(d)) for f in (files[0], files[2], files[3]) for tp, _, t, d in read_messages(f))
+    assert sorted((tp, t, bytes(d)) for tp, _, t, d in got) == want
 
 
 # ---- 8. split limits -----------------------------------------------------------------------------

@@ -85,18 +85,25 @@ def run_cli(*args):
     return subprocess.run([sys.executable, "-m", "gyro_instrument.cli", *args], capture_output=True, text=True)
 
 
-@pytest.mark.parametrize("args", [
-    ("simulate", "quet_paris", "--set", "site.latitude_deg=120", "--out", "/tmp/x.csv"),
-    ("simulate", "/nonexistent/scene.yaml", "--out", "/tmp/x.csv"),
-    ("simulate", "quet_paris", "--out", "/nonexistent-dir/x.csv"),
-    ("describe", "no_such_scene"),
+@pytest.mark.parametrize("args, field, value, valid", [
+    # the value the user gave, as written back (a float: 120.0), and the range it had to be in
+    (("simulate", "quet_paris", "--set", "site.latitude_deg=120", "--out", "/tmp/x.csv"),
+     "site.latitude_deg", "120.0", "[-90, 90]"),
+    (("simulate", "/nonexistent/scene.yaml", "--out", "/tmp/x.csv"),
+     "scene", "'/nonexistent/scene.yaml'", "give a shipped scene name or an existing YAML path"),
+    (("simulate", "quet_paris", "--out", "/nonexistent-dir/x.csv"),
+     "--out", "'/nonexistent-dir/x.csv'", "directory /nonexistent-dir does not exist"),
+    (("describe", "no_such_scene"), "scene", "'no_such_scene'", "shipped scenes: foucault_pantheon, "),
 ])
-def test_cli_bad_input_exit_2_one_line_no_traceback(args):
+def test_cli_bad_input_exit_2_one_line_no_traceback(args, field, value, valid):
+    # the one line is SceneError's: "gyro-instrument: error: FIELD = VALUE is invalid: WHAT IS VALID"
     r = run_cli(*args)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in r.stderr
-    assert "is invalid" in lines[0] or "error" in lines[0]
+    assert lines[0].startswith(f"gyro-instrument: error: {field} = {value} is invalid: "), lines[0]
+    assert valid in lines[0], lines[0]
+    assert r.stdout == ""                  # nothing else said, nothing half done
 
 
 def test_long_runs_report_progress():

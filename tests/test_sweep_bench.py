@@ -1,31 +1,14 @@
-"""Sweep throughput rows (issue 27, Bench) and the bench's site sweep through the sweep runner:
-the process pool and a two-worker Dask LocalCluster on loopback give the same rows for the same
-seeds; the site sweep of any scene recovers the latitude within its reported error. No timing is
-asserted (rates live in ``gyro-instrument bench``)."""
+"""The sweep runner without a file and the bench's site sweep through it: any points of any scene,
+the latitude recovered within its reported error. (The sweep-throughput rows of issue 27 — the process
+pool and a two-worker Dask LocalCluster giving the same rows for the same seeds — are checked on the
+quick bench's own sweep_throughput.csv in test_bench.py::test_cost_studies, not computed a second time
+here.) No timing is asserted."""
 
 import math
 
 import pytest
 
 from gyro_instrument.bench.sweep import run_grid
-from gyro_instrument.bench.sweep_bench import GRIDS, sweep_throughput_rows
-
-KEYS = {"scheduler", "scene", "overrides", "vary", "seeds", "points", "rows", "errors", "wall_s", "rows_per_s",
-        "startup_s", "same_rows_as_process_pool"}
-
-
-def test_quick_throughput_rows_pool_and_cluster_agree():
-    rows = sweep_throughput_rows(quick=True, progress=lambda m: None)
-    scene, overrides, specs, n_seeds = GRIDS[True]
-    assert [r["scheduler"].split()[0] for r in rows] == ["process", "dask.distributed"]
-    for r in rows:
-        assert set(r) == KEYS
-        assert (r["scene"], r["seeds"], r["points"]) == (scene, n_seeds, 2)
-        assert r["rows"] == r["points"] * r["seeds"] and r["errors"] == 0
-        assert r["wall_s"] > 0 and r["rows_per_s"] == pytest.approx(r["rows"] / r["wall_s"])
-        assert r["startup_s"] >= 0
-        # the same seeds give the same estimates on the pool and on the cluster, row for row
-        assert r["same_rows_as_process_pool"] is True
 
 
 def test_run_grid_any_points_latitude_recovered(pool):
@@ -41,14 +24,22 @@ def test_run_grid_any_points_latitude_recovered(pool):
 
 
 def test_site_sweep_of_another_scene(pool):
-    """bench.site_sweep is not tied to quet_paris: quet_gyroscopes at two latitudes, 4 seeds of 2 min:
-    the rms latitude error within 3x the mean reported σ, the σ within a factor 2 of the Cramér–Rao
-    bound, and the Earth rate's rms error within 5 of its bound."""
+    """bench.site_sweep is not tied to quet_paris: quet_gyroscopes at two latitudes, 4 seeds of 2 min.
+    The reported σ is the inverse Fisher information at the estimate, the Cramér–Rao bound the same at
+    the truth: within [0.95, 1.1] of each other (as test_north_exact's; measured 1.011 at 20°, 1.033 at
+    60°, spread over seeds 1e-3). The rms error over n seeds: n (rms/σ)² is χ² with n degrees of freedom,
+    so with 4 seeds rms/σ lies in [0.13, 2.24] (99.9 %) — it catches a σ off by more than 2x, no finer
+    (24 seeds, [0.56, 1.49], cost ~10 s more; the calibration proper is test_estimators'). The Earth rate
+    likewise against its bound (σ/bound in the same band)."""
+    from scipy.stats import chi2
+
     from gyro_instrument.bench.studies import site_sweep
-    rows = site_sweep((20.0, 60.0), 4, minutes=2.0, executor=pool, scene="quet_gyroscopes")
+    n = 4
+    lo, hi = (math.sqrt(chi2.ppf(q, n) / n) for q in (5e-4, 1 - 5e-4))
+    rows = site_sweep((20.0, 60.0), n, minutes=2.0, executor=pool, scene="quet_gyroscopes")
     assert [r[0] for r in rows] == [20.0, 60.0]
     for lat, rms, sigma, crlb, rms_n, crlb_n in rows:
         assert all(math.isfinite(x) for x in (rms, sigma, crlb, rms_n, crlb_n))
-        assert rms < 3 * sigma
-        assert 0.5 < sigma / crlb < 2.0
-        assert rms_n < 5 * crlb_n
+        assert 0.95 < sigma / crlb < 1.1, (lat, sigma / crlb)
+        assert lo < rms / sigma < hi, (lat, rms / sigma)
+        assert lo * 0.95 < rms_n / crlb_n < hi * 1.1, (lat, rms_n / crlb_n)

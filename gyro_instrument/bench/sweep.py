@@ -20,7 +20,7 @@ import os
 import time
 
 from gyro_instrument.core.errors import IntegrationError, SceneError
-from gyro_instrument.core.files import replaced_atomically
+from gyro_instrument.core.files import opened_unless_utf8, replaced_atomically
 from gyro_instrument.core.jsonable import to_jsonable
 from gyro_instrument.core.parallel import run_tasks
 from gyro_instrument.estimators.pipeline import seed_sweep
@@ -186,7 +186,8 @@ def write_rows(path, rows, metadata) -> int:
     table = pa.Table.from_arrays(arrays, names=names).replace_schema_metadata(metadata)
     with replaced_atomically(path) as tmp:
         import pyarrow.parquet as pq
-        pq.write_table(table, tmp)
+        with opened_unless_utf8(tmp, "wb") as sink:     # pyarrow takes only UTF-8 names
+            pq.write_table(table, sink)
     return len(names)
 
 

@@ -19,6 +19,7 @@ import tempfile
 import time
 
 from gyro_instrument.bench.sweep import run_sweep
+from gyro_instrument.core.files import opened_unless_utf8
 from gyro_instrument.core.parallel import dask_executor, process_executor
 
 #: Workers of each executor (the pool's processes, the cluster's worker processes).
@@ -33,7 +34,8 @@ GRIDS = {
 
 def _read_rows(path) -> list:
     import pyarrow.parquet as pq
-    return pq.read_table(path).to_pylist()
+    with opened_unless_utf8(path) as src:
+        return pq.read_table(src).to_pylist()
 
 
 def _row(scheduler, scene, overrides, specs, n_seeds, summary, startup_s, same) -> dict:

@@ -5,6 +5,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -43,6 +44,7 @@ def guarded(body, process=False) -> int:
     finalizer swallowed is raised again), SIGINT is ignored once the status is decided, and an
     interrupted process ends with 130 (:func:`~gyro_instrument.cli.interrupt.exit_interrupted`).
     """
+    names_as_given()
     watch = SigintWatch() if process else None
     try:
         try:
@@ -69,6 +71,19 @@ def guarded(body, process=False) -> int:
             _ignore_sigint()
 
 
+def names_as_given() -> None:
+    """stdout and stderr write the bytes of a file name that is not UTF-8 as the name holds them
+    (``errors="surrogateescape"``, what Python's C locale does; a UTF-8 locale's ``strict`` raised
+    UnicodeEncodeError after the work was done, e.g. ``estimate --data $'caf\\xe9.csv'``). Only the
+    process's own streams: one a caller put in their place (pytest's capture) is left as it is."""
+    for stream in (sys.stdout, sys.stderr):
+        if stream not in (sys.__stdout__, sys.__stderr__):    # a caller's own stream (a test's capture) is its own
+            continue
+        if getattr(stream, "errors", None) in ("strict", "backslashreplace") and hasattr(stream, "reconfigure"):
+            with contextlib.suppress(ValueError, OSError, AttributeError):
+                stream.reconfigure(errors="surrogateescape")
+
+
 def closed_pipe() -> int:
     """The reader of stdout went away (``describe SCENE | head -2``): stop quietly with 141 (128 +
     SIGPIPE, what a shell reports for a command its pipe closed), stdout pointed at /dev/null so
@@ -83,8 +98,11 @@ def closed_pipe() -> int:
 
 def one_line(exc) -> str:
     """The message of ``exc`` on one line: newlines and other control characters in quoted
-    values (a key or value given on the command line) shown escaped."""
-    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(exc))
+    values (a key or value given on the command line) shown escaped; a byte of a file name that is
+    not UTF-8 (a surrogate of ``os.fsdecode``) as ``\\xNN``."""
+    text = "".join(ch if ch.isprintable() else f"\\x{ord(ch) - 0xDC00:02x}" if "\udc80" <= ch <= "\udcff"
+                   else repr(ch)[1:-1] for ch in str(exc))
+    return re.sub(r"(?<!\\)\\udc([89a-f][0-9a-f])", r"\\x\1", text)     # the same byte inside a repr()
 
 
 def interrupted(process=False) -> int:

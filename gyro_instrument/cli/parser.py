@@ -322,8 +322,10 @@ def _add_sweep_command(sub):
                         "its workers need gyro_instrument installed) instead of a local process pool; needs the "
                         "'cluster' extra")
     p.add_argument("--timeout", type=float, default=10.0, metavar="S",
-                   help="with --scheduler: seconds to wait for the scheduler to answer and, when it has no "
-                        "workers, for one to join, before exit 2 (default 10)")
+                   help="with --scheduler: seconds to wait for the scheduler to answer, when it has no "
+                        "workers for one to join, and for the cluster's versions and every worker's import of "
+                        "gyro_instrument (another Dask, Python or gyro_instrument version, or a worker without "
+                        "it: exit 2 naming them), before exit 2 (default 10)")
 
 
 def _add_recover_command(sub):
@@ -376,9 +378,10 @@ def add_run_command(sub) -> None:
     p.add_argument("--nmea-udp", metavar="HOST:PORT", default=None,
                    help="send the heading of the scene's first horizontal gyroscope or rate gyro (its scale "
                         "zero's azimuth) as NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT "
-                        "([IPV6]:PORT; IANA's NMEA port is 10110): at each reversal point (a rate gyro: each "
-                        "sequence of positions) as the estimate converges and with the final estimate (the "
-                        "estimator's parameter nmea_udp)")
+                        "([IPV6]:PORT; IANA's NMEA port is 10110; a HOST that resolves to several addresses, as "
+                        "localhost to ::1 and 127.0.0.1, gets each sentence at every one, noted once): at each "
+                        "reversal point (a rate gyro: each sequence of positions) as the estimate converges and "
+                        "with the final estimate (the estimator's parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.files import replaced_atomically
+from gyro_instrument.core.files import replaced_atomically, shown
 from gyro_instrument.core.scene import sample_times
 
 def simulate_scene(scene, progress=None) -> tuple:
@@ -164,8 +164,8 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
                 first += t.size
                 nfev = sum(s.trajectory.nfev for s in sims.values())
                 wall = sum(s.trajectory.wall_time_s for s in sims.values())
-    if meta is None:
-        write_scene_sidecar(out, text, readings)
+        if meta is None:    # before the table is renamed into place: a sidecar that fails leaves no table
+            write_scene_sidecar(out, text, readings)
     return writer.rows, len(names) + 1, int(nfev), wall
 
 
@@ -176,7 +176,7 @@ def write_scene_sidecar(table, scene_yaml, readings=None) -> str:
     from gyro_instrument.estimators.data_io import SCALE_KEY, scale_readings_text, scene_sidecar_path
     path = scene_sidecar_path(table)
     with replaced_atomically(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(f"# the scene gyro-instrument simulate ran for {os.path.basename(table)} (seed and overrides "
+        fh.write(f"# the scene gyro-instrument simulate ran for {shown(os.path.basename(table))} (seed and overrides "
                  f"applied)\n")
         if readings:
             fh.write("# the columns read on a scale, u + M, with M (deg: mount_azimuth_deg wrapped to (-180, 180])\n"

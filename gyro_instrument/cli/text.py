@@ -128,6 +128,8 @@ def print_description(d, stream=None) -> None:
       f"({deg_h(s['earth_rate_rad_s'])}), "
       f"g = {s['gravity_m_s2']:.6f} m/s^2; {d['duration_s']:g} s at {d['sample_rate_hz']:g} Hz, seed {d['seed']}\n")
     w(f"  effects listed: {', '.join(d['scene_effects']) or 'none'}\n")
+    if "kernels" in d:
+        w(f"  kernels: {d['kernels']}\n")
     for note in d.get("scene_notes", []):
         w(f"  note: {note}\n")
     for name, inst in d["instruments"].items():

@@ -35,6 +35,68 @@ def replaced_atomically(path) -> Iterator:
         raise
 
 
+def shown(path) -> str:
+    """``path`` as text any writer takes (a file's contents, a plot title, a ROS message, MCAP
+    metadata): a name of bytes that are not UTF-8 (``$'caf\\xe9.csv'``, held by Python as the
+    surrogates of ``os.fsdecode``) shows them as ``\\xNN``; a UTF-8 name is returned as it is.
+    Open files with the path itself, never with this text."""
+    text = os.fsdecode(os.fspath(path))
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
+def is_utf8(path) -> bool:
+    """True when ``path`` is text a library taking UTF-8 path strings accepts (pyarrow: a name of
+    other bytes raised UnicodeEncodeError in its ``tobytes``)."""
+    try:
+        os.fsdecode(os.fspath(path)).encode("utf-8")
+        return True
+    except UnicodeEncodeError:
+        return False
+
+
+@contextlib.contextmanager
+def opened_unless_utf8(path, mode="rb") -> Iterator:
+    """Yield ``path`` itself when :func:`is_utf8`, else ``path`` opened in ``mode`` (closed after the
+    block): what pyarrow's readers and writers take for a file name of any bytes."""
+    if is_utf8(path):
+        yield path
+        return
+    with open(path, mode) as fh:
+        yield fh
+
+
+def writable_dir(path) -> bool:
+    """True when the directory ``path`` exists or can be made, and a file can be created in it (a
+    read-only mount or a missing HOME says no; ``os.access`` alone says yes to root)."""
+    import tempfile
+    try:
+        os.makedirs(path, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+        return True
+    except OSError:
+        return False
+
+
+def private_temp_dir(kind) -> str | None:
+    """``<tmp>/gyro_instrument-<kind>-<uid>``: a directory of this user's in the temporary directory,
+    kept between runs (a cache found again), used only when it is owned by the user and writable by
+    no one else (what is cached there may be loaded as code: numba's index files are pickles), else a
+    fresh ``mkdtemp``; None when no temporary directory is writable (``tempfile``'s candidates:
+    TMPDIR, /tmp, /var/tmp, /usr/tmp, the working directory)."""
+    import stat
+    import tempfile
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    try:
+        path = os.path.join(tempfile.gettempdir(), f"gyro_instrument-{kind}-{uid}")   # OSError: none usable
+        os.makedirs(path, mode=0o700, exist_ok=True)
+        st = os.lstat(path)
+        if not (stat.S_ISDIR(st.st_mode) and st.st_uid == uid and not st.st_mode & 0o022):
+            path = tempfile.mkdtemp(prefix=f"gyro_instrument-{kind}-")
+        return path if writable_dir(path) else None
+    except OSError:
+        return None
+
+
 def check_writable(path, field="--out") -> None:
     """Refuse an output path that cannot be written, before any simulation starts.
 
@@ -87,6 +149,26 @@ def check_output(path, field="--out", inputs=(), overwrite=False, also=()) -> No
 def scene_inputs(scene_arg) -> tuple:
     """The files a scene argument reads (a YAML path; none for a shipped scene name)."""
     return (scene_arg,) if os.path.isfile(scene_arg) else ()
+
+
+def check_dir_writable(path, field="--out") -> None:
+    """Refuse an output directory that could not be written (it, or the nearest existing directory
+    above it when it does not exist yet), before any work and without creating anything.
+
+    Raises
+    ------
+    SceneError
+        One line naming ``field``, the path and the directory that cannot be written.
+    """
+    probe = os.path.abspath(path)
+    while not os.path.lexists(probe) and os.path.dirname(probe) != probe:
+        probe = os.path.dirname(probe)
+    if not os.path.isdir(probe):
+        raise SceneError(field, path, f"{shown(probe)} is not a directory" if probe != os.path.abspath(path)
+                         else "is a file; give a directory")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        where = "" if probe == os.path.abspath(path) else f" (nor can it be created in {shown(probe)})"
+        raise SceneError(field, path, f"is not writable{where}")
 
 
 def check_output_dir(path, field="--out") -> None:

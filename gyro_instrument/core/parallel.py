@@ -128,17 +128,147 @@ def dask_executor(address, timeout_s=10.0, need_workers=False, progress=None) ->
     except ImportError:
         raise SceneError("--scheduler", address, "needs Dask: pip install 'gyro_instrument[cluster]' "
                                                  "(or: pip install 'dask[distributed]')") from None
+    import distributed
     try:
-        client = Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+        client = _within(timeout_s, lambda: Client(address, timeout=f"{timeout_s}s", set_as_default=False))
     except (OSError, TimeoutError, ValueError) as exc:
         raise SceneError("--scheduler", address, f"no Dask scheduler answered ({exc.__class__.__name__}): "
                                                  f"give tcp://HOST:PORT of a running scheduler") from None
+    except Exception as exc:   # noqa: BLE001 - another Dask's protocol fails in its own ways (TypeError, KeyError...)
+        raise SceneError("--scheduler", address, f"answered but could not be talked to ({exc.__class__.__name__}): "
+                                                 f"it may run another Dask version than this client's distributed "
+                                                 f"{distributed.__version__}") from None
     try:
         if need_workers:
             _wait_for_workers(client, address, timeout_s, progress)
+        check_cluster(client, address, timeout_s)
         yield client.get_executor()
     finally:
         client.close()
+
+
+#: the packages whose versions must agree between this client, the scheduler and the workers (the
+#: tasks and their results are pickled across; Dask's own check warns about the same list)
+SAME_VERSIONS = ("python", "dask", "distributed", "cloudpickle", "msgpack")
+
+
+def _within(timeout_s, call):
+    """``call()`` in a helper thread, waited for at most ``timeout_s`` (TimeoutError after it; the
+    thread is a daemon and is left behind): a scheduler of another Dask version can hang a handshake
+    or a request well past the client's own timeout (21.8 s under --timeout 10 in issue 38)."""
+    import concurrent.futures
+    import threading
+    box = concurrent.futures.Future()
+
+    def run():
+        try:
+            box.set_result(call())
+        except BaseException as exc:    # noqa: BLE001 - handed to the caller
+            box.set_exception(exc)
+    threading.Thread(target=run, name="dask-check", daemon=True).start()
+    try:
+        return box.result(timeout=timeout_s)
+    except concurrent.futures.TimeoutError:
+        raise TimeoutError(f"no answer within {timeout_s:g} s") from None
+
+
+def check_cluster(client, address, timeout_s) -> None:
+    """Refuse a cluster the sweeps cannot run on, in one line, within ``timeout_s``: versions of
+    :data:`SAME_VERSIONS` that differ between this client and the scheduler or a worker (named with
+    both versions), a worker where this package cannot be imported, or one with another version of
+    it (the tasks would fail to deserialize there: "failed twice: RuntimeError: Error during
+    deserialization" on every row, exit 0, before).
+
+    Raises
+    ------
+    SceneError
+        Naming ``--scheduler``, the address, the package, the versions and the worker.
+    """
+    from gyro_instrument.core.errors import SceneError
+    try:
+        v = _within(timeout_s, lambda: client.get_versions(check=False))
+        probes = _within(timeout_s, lambda: client.run(_import_probe(), on_error="return"))
+    except Exception as exc:  # noqa: BLE001 - another Dask's answer fails in its own ways
+        raise SceneError("--scheduler", address, f"did not report its versions within {timeout_s:g} s "
+                                                 f"({exc.__class__.__name__}): it may run another Dask version "
+                                                 f"than this client's") from None
+    mine = _packages(v["client"]) | {"gyro_instrument": _own_version()}
+    for who, info in [("the scheduler", v["scheduler"])] + [(f"worker {w}", i) for w, i in v["workers"].items()]:
+        theirs = _packages(info) | ({} if who == "the scheduler" else probe_result(probes.get(w_of(who))))
+        for name in SAME_VERSIONS:
+            if name in mine and name in theirs and _comparable(name, mine[name]) != _comparable(name, theirs[name]):
+                raise SceneError("--scheduler", address, f"{who} runs {name} {theirs[name]}, this client "
+                                                         f"{mine[name]}: use the same versions everywhere")
+        if who == "the scheduler":
+            continue
+        if theirs.get("gyro_instrument") is None:
+            raise SceneError("--scheduler", address, f"{who} cannot import gyro_instrument "
+                                                     f"({theirs.get('import_error')}): install it there "
+                                                     f"(pip install gyro_instrument=={mine['gyro_instrument']})")
+        if theirs["gyro_instrument"] != mine.get("gyro_instrument"):
+            raise SceneError("--scheduler", address, f"{who} runs gyro_instrument {theirs['gyro_instrument']}, this "
+                                                     f"client {mine.get('gyro_instrument')}: install the same version")
+
+
+#: the probe run on every worker (``Client.run``): defined from source in a module of its own so
+#: that cloudpickle sends it by value: a worker without this package cannot unpickle a function of it
+_PROBE_SOURCE = """
+def probe():
+    try:
+        import gyro_instrument
+    except Exception as exc:
+        return {"import_error": type(exc).__name__ + ": " + str(exc)}
+    from importlib import metadata
+    try:
+        return {"gyro_instrument": metadata.version("gyro_instrument")}
+    except Exception:
+        return {"gyro_instrument": getattr(gyro_instrument, "__version__", "unknown")}
+"""
+
+
+def _import_probe():
+    """The worker-side probe: imports gyro_instrument, returns its version or the import error."""
+    namespace = {"__name__": "gyro_instrument_worker_probe"}
+    exec(compile(_PROBE_SOURCE, "<gyro_instrument worker probe>", "exec"), namespace)   # noqa: S102
+    return namespace["probe"]
+
+
+def _own_version() -> str:
+    """This client's gyro_instrument version (the installed distribution's, as the probe reads it)."""
+    from importlib import metadata
+    try:
+        return metadata.version("gyro_instrument")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def probe_result(result) -> dict:
+    """A worker's probe answer as ``{"gyro_instrument": version}`` or ``{"import_error": why}``
+    (an exception the run returned instead, or no answer, is an import error too)."""
+    if isinstance(result, dict):
+        return result
+    why = "no answer" if result is None else f"{type(result).__name__}: {result}"
+    return {"import_error": why}
+
+
+def w_of(who) -> str:
+    """The worker address of a ``"worker ADDRESS"`` label."""
+    return who.split(" ", 1)[1]
+
+
+def _packages(info) -> dict:
+    """{package: version} of one entry of ``Client.get_versions`` (host's python included)."""
+    out = dict(info.get("packages", {}))
+    python = info.get("host", {}).get("python") or out.get("python")
+    if python:
+        out["python"] = python
+    return out
+
+
+def _comparable(name, version) -> str:
+    """The part of a version that must agree: Python's major.minor (pickles move between patch
+    releases), every other package's whole version."""
+    return ".".join(str(version).split(".")[:2]) if name == "python" else str(version)
 
 
 def _wait_for_workers(client, address, timeout_s, progress) -> None:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import opened_unless_utf8
 from gyro_instrument.instruments.channels import ANGLE
 
 TIME_COLUMN = "time_s"
@@ -279,12 +280,14 @@ def _read_parquet(path, field, time_source, time_unit):
     pa = _pyarrow()
     try:
         # the schema first: read_table fails on a name twice (ArrowInvalid of its dataset layer)
-        names = list(pa.parquet.ParquetFile(path).schema_arrow.names)
+        with opened_unless_utf8(path) as src:
+            names = list(pa.parquet.ParquetFile(src).schema_arrow.names)
     except Exception as exc:        # pyarrow raises its own error classes for a bad file
         raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
     _refuse_duplicates(names, path, field)
     try:
-        table = pa.parquet.read_table(path)
+        with opened_unless_utf8(path) as src:
+            table = pa.parquet.read_table(src)
     except Exception as exc:
         raise SceneError(field, path, f"cannot be read as Parquet ({exc.__class__.__name__})") from None
     arrays, notes = [], []

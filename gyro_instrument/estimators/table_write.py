@@ -12,6 +12,7 @@ import threading
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import opened_unless_utf8
 from gyro_instrument.estimators.table_read import TIME_COLUMN, _pyarrow, table_kind
 
 #: Estimated bytes per value written, by format, for the disk check before a run
@@ -69,7 +70,7 @@ class TableWriter:
         self._abort = threading.Event()
 
     def __enter__(self) -> "TableWriter":
-        from gyro_instrument.core.files import replaced_atomically
+        from gyro_instrument.core.files import is_utf8, replaced_atomically
         pa = _pyarrow()
         import pyarrow.csv  # noqa: F401
         self._pa = pa
@@ -81,7 +82,9 @@ class TableWriter:
             if self.kind == "parquet":
                 # no dictionary encoding: measured doubles hardly repeat, and trying it made writing
                 # 5.6x slower (3.7 s against 0.66 s for 1.7e6 rows x 7 columns) and the file 25 % larger
-                self._writer = pa.parquet.ParquetWriter(tmp, self._schema, use_dictionary=False)
+                if not is_utf8(tmp):            # pyarrow takes only UTF-8 names: give it the open file
+                    self._sink = open(tmp, "wb")
+                self._writer = pa.parquet.ParquetWriter(self._sink or tmp, self._schema, use_dictionary=False)
             else:
                 self._sink = open(tmp, "wb")
                 self._sink.write((",".join(self.names) + "\n").encode())
@@ -221,7 +224,8 @@ def table_scene(path) -> tuple | None:
     it carries none (or the file cannot be read: :func:`read_table` says why)."""
     if table_kind(path) == "parquet":
         try:
-            meta = _pyarrow().parquet.read_schema(path).metadata or {}
+            with opened_unless_utf8(path) as src:
+                meta = _pyarrow().parquet.read_schema(src).metadata or {}
         except Exception:               # noqa: BLE001 - read_table reports an unreadable file
             return None
         text = meta.get(SCENE_KEY.encode())

@@ -109,17 +109,45 @@ def parse_udp_target(text: str, field: str = "--nmea-udp") -> tuple:
 def resolve_udp_target(text: str, field: str = "--nmea-udp") -> tuple:
     """:func:`parse_udp_target`, then resolve the host for UDP: ``(family, sockaddr)`` of the
     first address ``socket.getaddrinfo`` gives; SceneError naming ``field`` when it gives none."""
+    return resolve_udp_targets(text, field)[0]
+
+
+def resolve_udp_targets(text: str, field: str = "--nmea-udp") -> list:
+    """Every address the host of ``text`` resolves to for UDP, ``[(family, sockaddr), ...]`` in
+    ``socket.getaddrinfo``'s order without repeats. ``localhost`` is ``::1`` and ``127.0.0.1`` on
+    many machines, in either order (``/etc/hosts``): a listener on one hears only what is sent to
+    it, so :class:`NmeaUdpSender` sends to all of them (issue 38; nodejs/node#40702).
+
+    Raises
+    ------
+    SceneError
+        Naming ``field``: not HOST:PORT (:func:`parse_udp_target`) or the host does not resolve.
+    """
     host, port = parse_udp_target(text, field)
     try:
         infos = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)
     except (socket.gaierror, UnicodeError) as err:
         raise SceneError(field, text, f"{_VALID_TARGET}; the HOST {host!r} does not resolve ({err})") from None
-    family, _, _, _, sockaddr = infos[0]
-    return family, sockaddr
+    out = []
+    for family, _, _, _, sockaddr in infos:
+        if family in (socket.AF_INET, socket.AF_INET6) and (family, sockaddr) not in out:
+            out.append((family, sockaddr))
+    if not out:
+        raise SceneError(field, text, f"{_VALID_TARGET}; the HOST {host!r} resolves to no IPv4 or IPv6 address")
+    return out
+
+
+def targets_note(text: str, targets: list) -> str | None:
+    """One line saying that ``text`` is sent to several addresses (None when it is one)."""
+    if len(targets) < 2:
+        return None
+    shown = ", ".join(f"[{a[0]}]:{a[1]}" if f == socket.AF_INET6 else f"{a[0]}:{a[1]}" for f, a in targets)
+    return f"{text} resolves to {len(targets)} addresses: each NMEA sentence goes to every one ({shown})"
 
 
 class NmeaUdpSender:
-    """Sends NMEA 0183 sentences as UDP datagrams to one HOST:PORT.
+    """Sends NMEA 0183 sentences as UDP datagrams to one HOST:PORT (to every address its host
+    resolves to: :func:`resolve_udp_targets`).
 
     Parameters
     ----------
@@ -132,15 +160,22 @@ class NmeaUdpSender:
     -----
     One sentence per datagram, ending in ``<CR><LF>``. The socket is unconnected (``sendto``), so
     nobody listening is not an error; IPv4 sockets may send to a broadcast address. Use as a
-    context manager or call :meth:`close`. Sending raises ``OSError`` if the network refuses it.
+    context manager or call :meth:`close`. Sending raises ``OSError`` if the network refuses it
+    at every address.
     """
 
     def __init__(self, target: str, field: str = "--nmea-udp") -> None:
         self.target = target
-        self.family, self.address = resolve_udp_target(target, field)
-        self._sock = socket.socket(self.family, socket.SOCK_DGRAM)
-        if self.family == socket.AF_INET:
-            self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+        #: every (family, sockaddr) the target resolves to (:func:`resolve_udp_targets`), and the
+        #: note saying so when there are several (None for one)
+        self.targets = resolve_udp_targets(target, field)
+        self.note = targets_note(target, self.targets)
+        self.family, self.address = self.targets[0]
+        self._socks = {}
+        for family in dict.fromkeys(f for f, _ in self.targets):
+            self._socks[family] = socket.socket(family, socket.SOCK_DGRAM)
+            if family == socket.AF_INET:
+                self._socks[family].setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
 
     def send(self, sentence: str) -> int:
         """Send one sentence (``<CR><LF>`` appended when missing); returns the bytes sent.
@@ -156,7 +191,16 @@ class NmeaUdpSender:
             raise SceneError("nmea.sentence", sentence,
                              f"must be one ASCII NMEA 0183 sentence starting with '$' or '!', "
                              f"at most {MAX_SENTENCE_CHARS} characters with <CR><LF>")
-        return self._sock.sendto(line.encode("ascii"), self.address)
+        data = line.encode("ascii")
+        sent, errors = 0, []
+        for family, address in self.targets:
+            try:
+                sent = self._socks[family].sendto(data, address)
+            except OSError as exc:       # e.g. no IPv6 on this machine: the other addresses still get it
+                errors.append(exc)
+        if len(errors) == len(self.targets):
+            raise errors[0]
+        return sent
 
     def send_heading(self, heading_deg: float, decimals: int = 1) -> str:
         """Send ``$HEHDT`` for ``heading_deg`` (:func:`hehdt_sentence`); returns the sentence."""
@@ -165,8 +209,9 @@ class NmeaUdpSender:
         return sentence
 
     def close(self) -> None:
-        """Close the socket (idempotent)."""
-        self._sock.close()
+        """Close the sockets (idempotent)."""
+        for sock in self._socks.values():
+            sock.close()
 
     def __enter__(self) -> "NmeaUdpSender":
         return self

@@ -66,8 +66,10 @@ def _command(core_cli, argv):
         raise SceneError("--bag", None, "is needed by --bag-format, --max-bag-size and --max-bag-duration")
     api.check_run_options(args.namespace, args.real_time_factor, args.window_s)
     if args.nmea_udp:
-        from gyro_instrument.recording.nmea import resolve_udp_target
-        resolve_udp_target(args.nmea_udp)
+        from gyro_instrument.recording.nmea import resolve_udp_targets, targets_note
+        note = targets_note(args.nmea_udp, resolve_udp_targets(args.nmea_udp))
+        if note:
+            print(f"gyro-instrument: note: --nmea-udp {note}", file=sys.stderr)
     from gyro_instrument.ros.lockstep import DeliveryError
     from gyro_instrument.ros.suite import NodeFailure, run_suite
     progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))

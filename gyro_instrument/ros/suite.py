@@ -28,10 +28,12 @@ from rclpy.parameter import Parameter
 from gyro_instrument import api
 from gyro_instrument.api import check_run_memory, check_window  # noqa: F401  (re-exported)
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import shown
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
+from gyro_instrument.ros.log_dir import ensure_log_dir
 from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
 
 
@@ -121,7 +123,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
     stop, handlers = _install_stop_handlers()
-    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else [])
+    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else []) + ensure_log_dir()
     rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     ns = {"namespace": namespace} if namespace else {}
     nodes = []
@@ -129,8 +131,8 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s)
         est = EstimatorNode(context=context, **ns, parameter_overrides=_params(
             scene, overrides, duration_s, **({"nmea_udp": str(nmea_udp)} if nmea_udp else {})))
-        rec = RecorderNode(context=context, reorder=False, **ns, parameter_overrides=_params(
-            scene, overrides, duration_s, output=bag, overwrite=bool(overwrite), command=command,
+        rec = RecorderNode(context=context, reorder=False, output_path=bag, **ns, parameter_overrides=_params(
+            scene, overrides, duration_s, output=shown(bag), overwrite=bool(overwrite), command=shown(command),
             format=bag_format or "", max_bag_size=int(max_bag_size or 0),
             max_bag_duration=float(max_bag_duration_s or 0.0))) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])

@@ -34,6 +34,7 @@ import os
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import check_dir_writable, private_temp_dir, shown, writable_dir
 from gyro_instrument.views.measure import SIDEREAL_RATE_RAD_S, oscillation_residuals, swing_azimuth  # noqa: F401
 from gyro_instrument.views.series import load_series, record_span  # noqa: F401
 
@@ -51,6 +52,7 @@ def pyplot() -> "object":
     SceneError
         matplotlib is not installed (says how to install it).
     """
+    matplotlib_config_dir()
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -59,6 +61,26 @@ def pyplot() -> "object":
         raise SceneError("plot", "matplotlib", "is not installed: pip install 'gyro_instrument[plot]' "
                                                "(or: pip install matplotlib)") from None
     return plt
+
+
+def matplotlib_config_dir(environ=os.environ, stream=None) -> None:
+    """Before matplotlib is first imported: when its configuration or cache directory under HOME
+    cannot be written (a read-only or missing HOME) and ``MPLCONFIGDIR`` is not set, point it at a
+    private temporary directory kept between runs (its font cache found again) with one note line;
+    matplotlib itself printed two lines and made a new directory, and its font cache, every run."""
+    import sys
+    if environ.get("MPLCONFIGDIR") or "matplotlib" in sys.modules:
+        return
+    home = os.path.expanduser("~")
+    dirs = [os.path.join(environ.get(xdg) or os.path.join(home, default), "matplotlib")
+            for xdg, default in (("XDG_CONFIG_HOME", ".config"), ("XDG_CACHE_HOME", ".cache"))]
+    if all(writable_dir(d) for d in dirs):
+        return
+    path = private_temp_dir("matplotlib")
+    if path is not None:
+        environ["MPLCONFIGDIR"] = path
+        print(f"gyro-instrument: note: matplotlib's directories under HOME are not writable: using {path} "
+              "(MPLCONFIGDIR)", file=stream or sys.stderr)
 
 
 def draw_views(series, scene, out_dir, title="", fmt="png", dpi=DPI, window=None) -> list:
@@ -132,13 +154,14 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
         already in ``out_dir`` without ``overwrite`` (nothing is written then); ``out_dir`` is a file;
         a table flag for a bag or a field book.
     """
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise SceneError("--out", out_dir, "is a file; give a directory for the views")
+    check_dir_writable(out_dir)                      # before anything is read or drawn
     pyplot()
     if fmt not in FORMATS:
         raise SceneError("--format", fmt, f"must be one of {', '.join(FORMATS)}")
     if not (isinstance(dpi, (int, float)) and 20 <= dpi <= 1200):
         raise SceneError("--dpi", dpi, "must be a number in [20, 1200]")
-    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
-        raise SceneError("--out", out_dir, "is a file; give a directory for the views")
     from gyro_instrument.views.field_book_view import is_field_book, plot_field_book
     bag = os.path.isdir(path) or str(path).lower().endswith(".mcap")
     if given and (bag or is_field_book(path)):
@@ -155,7 +178,7 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
             raise SceneError("--out", out_dir, f"already holds {', '.join(existing)}; pass "
                                                f"--overwrite to replace them, or give a new directory")
     series, scene, notes = load_series(path, scene_arg, overrides, topics, options=options)
-    title = f"({os.path.basename(str(path).rstrip('/'))})"
+    title = f"({shown(os.path.basename(os.fsdecode(path).rstrip('/')))})"
     written = draw_views(series, scene, out_dir, title, fmt, dpi, window)
     if animate:
         from gyro_instrument.views.animate import write_animation

@@ -17,6 +17,7 @@ import numpy as np
 
 from gyro_instrument.core.angle_formats import format_angle
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import shown
 
 VIEW = "field_book"
 
@@ -96,7 +97,7 @@ def field_book_figure(plt, path, scene=None, title="") -> "object":
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel(label)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9)     # outside: never over data
-    ax.set_title(f"field book {os.path.basename(str(path))}: mount azimuth {n['mount_azimuth_dms']} "
+    ax.set_title(f"field book {shown(os.path.basename(os.fsdecode(path)))}: mount azimuth {n['mount_azimuth_dms']} "
                  f"± {n['sigma_arcsec']:.3g}″ ({n['reduction'].split(':')[0].split(' (')[0]}) {title}")
     _means_axis(bx, book, n, x, nr, label)
     return fig

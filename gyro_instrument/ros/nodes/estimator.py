@@ -111,6 +111,8 @@ class EstimatorNode(SceneNode):
         if target and self.trackers:
             try:
                 self.nmea = NmeaUdpSender(target, field="nmea_udp")
+                if self.nmea.note and self.standalone:     # in 'run' the command said it once
+                    self.get_logger().info(f"nmea_udp: {self.nmea.note}")
             except SceneError as exc:
                 self.get_logger().error(f"{exc}; no NMEA sentences are sent")
 

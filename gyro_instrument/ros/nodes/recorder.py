@@ -14,6 +14,7 @@ from rcl_interfaces.msg import SetParametersResult
 
 from gyro_instrument import api
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.files import shown
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.recording.bag_layout import open_bag_writer, restart_path
 from gyro_instrument.recording.mcap_io import DiskFull
@@ -54,7 +55,10 @@ class RecorderNode(RecorderControl, SceneNode):
     #: messages held at most before they are written anyway (memory bound)
     HOLD_MAX_MESSAGES = 500_000
 
-    def __init__(self, name="recorder", reorder=True, **kwargs):
+    def __init__(self, name="recorder", reorder=True, output_path=None, **kwargs):
+        #: the bag path itself when given by ``run`` (a file name of any bytes); the ``output`` parameter,
+        #: a ROS string (UTF-8), then only shows it (:func:`~gyro_instrument.core.files.shown`)
+        self.output_path = output_path
         super().__init__(name, **kwargs)
         self.writer = None
         self.counts = {}
@@ -102,6 +106,8 @@ class RecorderNode(RecorderControl, SceneNode):
 
     def prepare(self) -> None:
         out = self.get_parameter("output").value
+        if self.output_path is not None and out == shown(self.output_path):
+            out = self.output_path
         if not out:
             self.get_logger().error("output = '' is invalid: give an .mcap path to record to")
             return
