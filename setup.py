@@ -44,6 +44,7 @@ setup(
             "free_gyroscope = gyro_instrument.instruments.free_gyroscope:FreeGyroscope",
             "puiseux_body = gyro_instrument.instruments.puiseux.instrument:PuiseuxBody",
             "gimbal_gyroscope = gyro_instrument.instruments.gimbal.instrument:GimbalGyroscope",
+            "rate_gyro = gyro_instrument.instruments.rate_gyro:RateGyro",
         ],
         "gyro_instrument.effects": [
             "earth_rotation = gyro_instrument.effects.earth_rotation:EarthRotation",
@@ -60,6 +61,7 @@ setup(
             "gyro = gyro_instrument.estimators.kinds:SwingKind",
             "pendulum = gyro_instrument.estimators.kinds:PlaneKind",
             "azimuth = gyro_instrument.estimators.kinds:AzimuthKind",
+            "rate_azimuth = gyro_instrument.estimators.rate_gyro_kind:RateAzimuthKind",
         ],
         "console_scripts": [
             "gyro-instrument = gyro_instrument.ros.cli:main",

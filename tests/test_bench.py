@@ -55,6 +55,9 @@ def test_bench_quick_writes_studies_and_plots(bench):
                  "work_precision.png", "observation_time.png", "effect_cost.png"):
         assert (bench / name).exists(), name
     assert "Regenerate: `gyro-instrument bench --quick" in (bench / "summary.md").read_text()
+    # a measurement kind's own study (the rate gyro's kind: north in the gyrotheodolite's hour)
+    assert (bench / "north_rate_gyro.csv").exists()
+    assert "## North in the same time" in (bench / "summary.md").read_text()
 
 
 def test_work_precision_tiers(bench):

@@ -45,6 +45,7 @@ CASES = {
     "free_gyroscope": ("free_gyroscope", ["duration_s=600", "instruments.free_gyro.model=numerical"], "free_gyro"),
     "gimbal_gyroscope": ("gimbal_paris", ["duration_s=30", "instruments.gimbal_outer_fixed=null"], "gimbal_locked"),
     "puiseux_body": ("puiseux_spheroid", ["duration_s=1"], "spheroid"),
+    "rate_gyro": ("rate_gyro_two_position", ["duration_s=300"], "mems"),
 }
 
 
@@ -54,10 +55,11 @@ def _scene(itype, effects, extra=()):
 
 
 def _measured(scene, name):
-    """(instrument, measured angles, spin rate column or None) of one simulation."""
+    """(instrument, measured angles, the spin rate column or the measured rate (a rate gyro's, its
+    observation's rate joint) or None) of one simulation."""
     inst = build_instruments(scene)[name]
     cols = inst.simulate(sample_times(scene)).columns
-    return inst, inst.measured_angles(cols), cols.get("spin_rate")
+    return inst, inst.measured_angles(cols), cols.get(inst.observation().spin_channel or "spin_rate")
 
 
 PAIRS = [(t, e) for t in CASES for e in sorted(INSTRUMENTS[t].SUPPORTED_EFFECTS)]

@@ -241,7 +241,8 @@ def test_the_groups_list_the_shipped_ones_and_the_plugins():
               for k, g in GROUPS.items()}
     assert listed["instruments"] == set(instruments.SHIPPED)
     assert listed["effects"] == set(effects.SHIPPED)
-    assert listed["measurements"] == {type(measurement.kind(k)) for k in ("gyro", "pendulum", "azimuth")}
+    assert listed["measurements"] == {type(measurement.kind(k)) for k in ("gyro", "pendulum", "azimuth",
+                                                                          "rate_azimuth")}
     assert set(GROUPS.values()) == {"gyro_instrument.instruments", "gyro_instrument.effects",
                                     "gyro_instrument.measurements"}
 

@@ -26,6 +26,12 @@ CASES = {
     "gimbal_paris": ["duration_s=30"],
     "free_gyroscope": ["duration_s=60"],
     "puiseux_spheroid": ["duration_s=1"],
+    # the rate gyro (tests/test_effect_sizes.py's 300 s: a whole sequence of its two positions, so the
+    # live tracker publishes once before the final estimate), a carousel of six turns, four positions
+    # of which three are reached (north needs three headings or two and a prior)
+    "rate_gyro_two_position": ["duration_s=300"],
+    "rate_gyro_carousel": ["duration_s=60"],
+    "rate_gyro_four_position": ["duration_s=400"],
 }
 #: The estimate's keys the four compare (the whole estimate but the run's own bookkeeping).
 KEYS = ("instruments", "latitude_deg", "latitude_sigma_deg", "earth_rate_rad_s", "earth_rate_sigma_rad_s", "crlb",

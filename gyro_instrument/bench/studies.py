@@ -312,12 +312,15 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     finally:
         if own:
             executor.shutdown()
+    # each measurement kind's own study (its optional ``bench``: the rate gyro's north in the same time)
+    from gyro_instrument.instruments.measurement import load as load_kinds
+    kind_lines = [line for k in load_kinds().values() for line in k.bench(out_dir, quick, _write, progress, north[1])]
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     from gyro_instrument.bench.north_study import north_lines
     lines = (_bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + cost_lines
-             + north_lines(*north))
+             + north_lines(*north) + kind_lines)
     return _write_summary(out_dir, lines, pngs)
 
 

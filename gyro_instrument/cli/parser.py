@@ -145,8 +145,8 @@ def _add_scene_commands(sub):
                         "the unit of a bare time column (also hms: clock times mm:ss or hh:mm:ss)")
     p.add_argument("--angle-unit", default=None, choices=list(ANGLE_UNITS),
                    help="with --data: unit of the angle channels angle, outer_angle, inner_angle, "
-                        "deflection_east, deflection_north (rad or deg; default rad; x_east/y_north stay m, "
-                        "spin_rate rad/s); with --reversal-points: the unit of a bare reading column, any unit a "
+                        "deflection_east, deflection_north, index (rad or deg; default rad; x_east/y_north stay m, "
+                        "spin_rate and rate rad/s); with --reversal-points: the unit of a bare reading column, any unit a "
                         "header takes (dms: 179°01'56\", 179.01.56, 179 01 56, 179-01-56; ddmmss: 179.0156; div: "
                         "scale divisions of --scale-division)")
     p.add_argument("--reversal-points", metavar="FILE.csv",
@@ -285,7 +285,7 @@ def _add_study_commands(sub):
                    help="a 1-sigma accuracy wanted (repeatable): latitude_arcsec, latitude_deg, latitude_rad, "
                         "earth_rate_rad_s, earth_rate_deg_h, or the mount azimuth of a horizontal gyroscope "
                         "(north): azimuth_arcsec, azimuth_mgon, azimuth_deg (the time per north method and for the "
-                        "fit), e.g. --target latitude_arcsec=1 --target earth_rate_rad_s=1e-10 --target "
+                        "fit; for a rate gyro the sequences of its positions and the fastest schedule), e.g. --target latitude_arcsec=1 --target earth_rate_rad_s=1e-10 --target "
                         "azimuth_arcsec=3")
     p.add_argument("--noise-factor", dest="noise_factors", action="append", type=float, default=None,
                    metavar="X", help="sensitivity: replan with the sensor noise times X (repeatable; default 0.1 and 10)")
@@ -376,12 +376,13 @@ def add_run_command(sub) -> None:
                    help="run every node in this ROS namespace (e.g. /ship1): topics and the clock become "
                         "NS/...; suites in different namespaces run side by side")
     p.add_argument("--nmea-udp", metavar="HOST:PORT", default=None,
-                   help="send the heading of the scene's first horizontal gyroscope (its scale zero's azimuth) as "
-                        "NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT ([IPV6]:PORT; IANA's "
-                         "NMEA port is 10110; a HOST that resolves to several addresses, as localhost to ::1 and "
-                         "127.0.0.1, gets each sentence at every one, noted once): from the first swing on at 10 Hz "
-                         "of sim time (every sample of a slower instrument) as the estimate converges, and with the "
-                         "final estimate (the estimator's parameter nmea_udp)")
+                   help="send the heading of the scene's first horizontal gyroscope or rate gyro (its scale "
+                        "zero's azimuth) as NMEA 0183 $HEHDT sentences, one UDP datagram each, to HOST:PORT "
+                        "([IPV6]:PORT; IANA's NMEA port is 10110; a HOST that resolves to several addresses, as "
+                        "localhost to ::1 and 127.0.0.1, gets each sentence at every one, noted once): from the "
+                        "first swing (a rate gyro: its first sequence of positions) on at 10 Hz of sim time (every "
+                        "sample of a slower instrument) as the estimate converges, and with the final estimate "
+                        "(the estimator's parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

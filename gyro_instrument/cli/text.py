@@ -214,7 +214,8 @@ def north_lines(n, angle_format="deg") -> list:
                 f"[{n['interval_deg'][0]:g}, {n['interval_deg'][1]:g}]°"]
     fmt = angle_format
     what = n["instrument"] or f"the field book {n.get('field_book')}"
-    how = "fit; Cramer-Rao" if n.get("crlb_arcsec") is not None else f"{n.get('method')}; no record, no bound"
+    how = (f"{n.get('method') or 'fit'}; Cramer-Rao" if n.get("crlb_arcsec") is not None
+           else f"{n.get('method')}; no record, no bound")
     lines = [f"north: scale zero of {what} at azimuth {_angle(n['mount_azimuth_deg'], fmt)} +/- "
              f"{_sigma(n['sigma_arcsec'], fmt)} ({how}" + (f" {_sigma(n['crlb_arcsec'], fmt)})"
                                                             if n.get("crlb_arcsec") is not None else ")")]
@@ -312,9 +313,11 @@ def _print_estimate_body(r, w):
                   f"without it (positions in pixels need --metres-per-pixel; check the length)\n")
         elif e.get("reason") is not None or len(e) <= 1:
             w(f"  {name}: null: {e.get('reason')}\n")
-        else:                       # another kind's entry (a plug-in's): its numbers as they are
-            w(f"  {name}: " + ", ".join(f"{k} = {_fmt(v, '.6g')}" for k, v in e.items()
-                                          if isinstance(v, (int, float)) and not isinstance(v, bool)) + "\n")
+        else:                       # another kind's entry (a plug-in's): its numbers as they are, its blocks
+            nums = [f"{k} = {_fmt(v, '.6g')}" for k, v in e.items() if isinstance(v, (int, float))
+                    and not isinstance(v, bool)]
+            blocks = [f"its {k} block (above)" for k, v in e.items() if isinstance(v, dict)]
+            w(f"  {name}: " + ", ".join(nums + blocks) + "\n")
     for mname, m in r["methods"].items():
         lat = m.get("latitude_deg")
         w(f"  method {mname}:" + (f" latitude {_fmt(lat, '.7f')}" if "latitude_deg" in m else "")
@@ -379,6 +382,11 @@ def print_plan(d, stream=None) -> None:
     for name, why in d.get("not_used", {}).items():
         w(f"  {name}: not used ({why})\n")
     for e in d["targets"]:
+        lines = _kind_plan_lines(e)
+        if lines is not None:                         # a kind that words its own plan (plan_lines)
+            w("\n" + "\n".join(lines) + "\n")
+            _print_verify(e, w)
+            continue
         if e["quantity"] == "azimuth":
             _print_azimuth_target(e, w)
             continue
@@ -429,6 +437,23 @@ def print_plan(d, stream=None) -> None:
             w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
               f"(target {v['target']:g}, achieved/target {_fmt(v['achieved_over_target'], '.3f')})"
               + (f"; {v['null']} null" if v["null"] else "") + "\n")
+
+
+def _kind_plan_lines(e) -> list | None:
+    """The plan text of a target entry made by a kind's own ``plan`` (its ``kind``): the kind's
+    :meth:`~gyro_instrument.instruments.measurement.MeasurementKind.plan_lines`, or None (printed here)."""
+    from gyro_instrument.instruments.measurement import kind
+    found = kind(e["kind"]) if isinstance(e.get("kind"), str) else None
+    return None if found is None else found.plan_lines(e)
+
+
+def _print_verify(e, w) -> None:
+    """The ``verify`` line of a target (``plan --verify``)."""
+    v = e.get("verify")
+    if v:
+        unit = e["target"].split("_", 1)[1].replace("_", "/")
+        w(f"  verify: {v['used']} seeds at the planned T: achieved rms {_fmt(v['achieved_rms'], '.4g')} {unit} "
+          f"(target {v['target']:g}, achieved/planned {_fmt(v['achieved_over_planned'], '.3f')})\n")
 
 
 def time_up(s) -> str:

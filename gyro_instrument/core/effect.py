@@ -198,7 +198,8 @@ class Scales(Mapping):
         The release amplitude, rad.
 
     Scales of one instrument kind are its own: the gimbal fills ``ring_inertia_ratio`` ((C1 + A2)/A
-    of its rings), the plane gyroscope ``torsion_share`` (D_B / (D_K + D_B) of a torsion tape); the
+    of its rings), the plane gyroscope ``torsion_share`` (D_B / (D_K + D_B) of a torsion tape), the rate
+    gyro ``sensed_rate_rad_s`` (n cos γ, the Earth rate its sensitive axis reads at most); the
     effects that need them read them with ``get`` and a default.
     """
 

@@ -36,6 +36,8 @@ class EarthRotation(Effect):
     UNSUPPORTED_MEANS = "ignores the Earth's rotation by design"
 
     def relative_size(self, ctx) -> tuple:
+        if ctx.scales.get("sensed_rate_rad_s"):
+            return 1.0, "the Earth rate about the rate gyro's sensitive axis is its measured signal itself"
         if ctx.scales.gyro_rate_rad_s:
             return 1.0, "the Earth-rate torque is the gyroscope's restoring torque itself"
         if ctx.scales.get("torsion_share", 0.0) >= 1.0:

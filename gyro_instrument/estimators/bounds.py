@@ -125,6 +125,11 @@ def plane_model(scene, obs) -> tuple:
                            amplitude=obs.release_amplitude(), label="pendulum", observation=obs), None
 
 
+#: The most samples a swing's noise-free probe simulates (8 MB a channel): a swing longer than
+#: PROBE_MAX_SAMPLES / (8.8 f) s (a rotor all but stopped) gets no model, with the reason.
+PROBE_MAX_SAMPLES = 1_000_000
+
+
 def swing_model(scene, obs) -> tuple:
     """A swing's model from a noise-free simulation of four periods (amplitudes and frequency as the
     fit sees them); (None, reason) without a swing to time."""
@@ -133,6 +138,10 @@ def swing_model(scene, obs) -> tuple:
     if T0 is None or not math.isfinite(T0) or T0 <= 0:
         return None, f"no swing to time: {obs.null_reason}"
     rate = scene.sample_rate_hz
+    n = math.ceil(8.0 * T0 * 1.1 * rate)
+    if n > PROBE_MAX_SAMPLES:
+        return None, (f"a swing of {T0:.6g} s: the noise-free probe of four periods would take {n:.3g} samples at "
+                      f"{rate:g} Hz (more than {PROBE_MAX_SAMPLES:g}); no model to plan with")
     t = np.arange(0.0, 8.0 * T0 * 1.1, 1.0 / rate)
     y = inst.simulate(t).columns[obs.angle_channel]
     try:

@@ -30,7 +30,11 @@ def measure(scene, truth, seed=None) -> dict:
         rng = scene_rng(seed, name)
         obs = inst.observation()
         rec = {"t": t.copy()}
+        own = obs.sensor_draws(sensor, rng)          # the observation's own sensor, or None: the scene's
         for key, values, kind in obs.sensor_inputs(sims[name].columns):
+            if own is not None:
+                rec[key] = own(key, values, kind)
+                continue
             rec[key] = sensor.measure_angle(values, rng) if kind == "angle" else sensor.measure_rate(values, rng)
         records[name] = obs.complete(rec)
     return records
@@ -73,6 +77,7 @@ class MeasureStream:
         self.sensor = SensorModel.from_scene(scene)
         self.rng = scene_rng(scene.seed if seed is None else seed, inst.name)
         self.gens = None
+        self.own = self.obs.sensor_draws(self.sensor, self.rng)   # as in measure
 
     def _plan(self, columns):
         """The draws ``measure`` makes, in its order: (channel, 'normal' | 'uniform')."""
@@ -113,6 +118,10 @@ class MeasureStream:
 
     def block(self, t, columns) -> dict:
         """The measured record of one block (as one instrument's entry of :func:`measure`)."""
+        if self.own is not None:                 # draws in call order: the blocks concatenate to measure's
+            rec = {"t": np.array(t, dtype=float)}
+            rec.update({key: self.own(key, values, kind) for key, values, kind in self.obs.sensor_inputs(columns)})
+            return self.obs.complete(rec)
         if self.gens is None:
             self._position(columns)
         rec = {"t": np.array(t, dtype=float)}

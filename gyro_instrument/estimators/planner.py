@@ -133,7 +133,9 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     block_kinds = tuple(k for k, v in load_kinds().items() if v.TARGET == "azimuth")
     az_models, az_skipped = instrument_models(scene, block_kinds) if azimuth else ([], {})
     if not models and not az_models:
-        what = ("a horizontal gyroscope with earth_rotation (its swing centre is north)" if azimuth else
+        what = ("horizontal gyroscope with earth_rotation (its swing centre is north) nor another instrument "
+                f"measuring an azimuth with the Earth's rotation simulated (the kinds {', '.join(block_kinds)})"
+                if azimuth else
                 "an instrument that measures an Earth rate (a gyroscope with a directing line or a pendulum, with "
                 "earth_rotation)")
         why = az_skipped if azimuth else skipped
@@ -142,7 +144,8 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
     if azimuth and not az_models:
         name = next(n for n, _, _ in targets if TARGETS[n][0] == "azimuth")
         raise SceneError(f"--target {name}", scene_arg, "needs a horizontal gyroscope (plane_gyroscope, plane: horizontal, "
-                         "the rotor spinning, earth_rotation on: its swing centre is north); the scene has none"
+                         "the rotor spinning, earth_rotation on: its swing centre is north) or another instrument "
+                         f"measuring an azimuth (the kinds {', '.join(block_kinds)}); the scene has none"
                          + (f" ({'; '.join(f'{k}: {v}' for k, v in az_skipped.items())})" if az_skipped else ""))
     sensor = SensorSpec.from_scene(scene)
     hemi = scene.estimator.get("hemisphere")
@@ -159,7 +162,8 @@ def plan(scene_arg, overrides=(), targets=(), noise_factors=NOISE_FACTORS, rate_
                       "effective_noise_rad": sensor.sigma_rad, "spin_noise_rad_s": sensor.spin_noise_rad_s,
                       "dropout_fraction": sensor.dropout_fraction, "sample_rate_hz": sensor.rate_hz},
            "instruments": {m.name: kind(m.kind).plan_entry(m) for m in models},
-           "not_used": skipped, "min_record_s": planner.min_record_s() if planner else None, "targets": []}
+           "not_used": {n: why for n, why in skipped.items() if n not in {m.name for m in az_models}},
+           "min_record_s": planner.min_record_s() if planner else None, "targets": []}
     if azimuth:
         out["north_instruments"] = {m.name: kind(m.kind).plan_entry(m) for m in az_models}
     for name, value, si in targets:
@@ -482,7 +486,7 @@ def verify_plan(result, n_seeds=100, executor=None, progress=None) -> dict:
                            "target": entry["value"], "planned_sigma": entry["planned_sigma"],
                            "achieved_over_target": None if v is None else v / entry["value"],
                            "achieved_over_planned": None if v is None else v / entry["planned_sigma"]}
-        if ref is not None:
+        if ref is not None and "methods" in entry:        # a kind's plan with north methods (the swing's)
             entry["verify"]["methods"] = {
                 k: {"achieved_rms": _quantity_value("azimuth", r, name), "used": u, "null": n0,
                     "planned_sigma": entry["methods"][k]["sigma_at_plan"],

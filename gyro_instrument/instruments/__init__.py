@@ -17,6 +17,7 @@ from gyro_instrument.instruments.observation import (JointLayout, Observation, P
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 from gyro_instrument.instruments.puiseux import PuiseuxBody
+from gyro_instrument.instruments.rate_gyro import RateGyro
 
 REGISTRY = {}
 
@@ -77,10 +78,10 @@ def simulator_kinds() -> dict:
 
 
 #: The shipped instrument types, in registry order (also entry points of ``gyro_instrument.instruments``).
-SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope)
+SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope, RateGyro)
 plugins.discover("instruments", register, lambda c: REGISTRY.get(getattr(c, "type_name", None)) is c, SHIPPED,
                  key="type_name")
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
-           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RotorObservation",
-           "SphericalPendulum", "SwingRate", "register", "simulator_kinds", "unregister"]
+           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RateGyro",
+           "RotorObservation", "SphericalPendulum", "SwingRate", "register", "simulator_kinds", "unregister"]

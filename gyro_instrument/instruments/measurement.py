@@ -29,7 +29,9 @@ it from the same record, each under its own key of the entry). A kind is one
 ==================  ==================================================================================
 
 Optional: ``TARGET`` and :meth:`~MeasurementKind.plan` (a block kind's ``plan --target``: by default
-the shortest T whose ``bound`` meets it), :meth:`~MeasurementKind.plan_entry` (its entry in the plan).
+the shortest T whose ``bound`` meets it), :meth:`~MeasurementKind.plan_entry` (its entry in the plan),
+:meth:`~MeasurementKind.plan_lines` (the text of a target its own ``plan`` made, with its ``kind``),
+:meth:`~MeasurementKind.bench` (its own study in ``gyro-instrument bench``).
 
 :func:`register_kind` refuses a kind that leaves any of them out (one line naming what is missing);
 registering an instrument (:func:`gyro_instrument.instruments.register`) refuses one whose
@@ -48,7 +50,7 @@ from gyro_instrument.core import plugins
 
 #: The shipped kinds, in order (also entry points of ``gyro_instrument.measurements``, setup.py).
 SHIPPED = ("gyro_instrument.estimators.kinds:SwingKind", "gyro_instrument.estimators.kinds:PlaneKind",
-           "gyro_instrument.estimators.kinds:AzimuthKind")
+           "gyro_instrument.estimators.kinds:AzimuthKind", "gyro_instrument.estimators.rate_gyro_kind:RateAzimuthKind")
 
 #: name -> the kind (an instance of its class), in registration order.
 KINDS = {}
@@ -71,7 +73,7 @@ class LiveTracker:
         return 1.0
 
     def window_s_of(self, name) -> float:
-        """The tail of ``name``'s record it wants (s)."""
+        """The tail of ``name``'s record it wants (s; ``math.inf``: the whole record so far)."""
         return 1.0
 
     def update(self, name, rec) -> tuple | None:
@@ -142,6 +144,18 @@ class MeasurementKind:
         """The plan of a ``TARGET`` quantity from this kind's models (None: the planner's generic plan,
         the shortest T whose :meth:`bound` meets the target)."""
         return None
+
+    def plan_lines(self, entry) -> list | None:
+        """The ``plan`` text of a target entry this kind's :meth:`plan` made (the entry's ``kind`` is
+        this kind's name): lines without newlines, or None: the command's own printing."""
+        return None
+
+    def bench(self, out_dir, quick, write, progress, reference_rows) -> list:
+        """Its own study for ``gyro-instrument bench``: CSVs written into ``out_dir`` through the bench's
+        atomic ``write(path, header, rows)``, ``progress(text)`` as it goes, fewer seeds with ``quick``;
+        returns the summary's lines (``reference_rows``: the bench's north rows of the gyrotheodolite,
+        to compare with). [] by default: no study of its own."""
+        return []
 
     @classmethod
     def missing(cls) -> list:

@@ -13,6 +13,7 @@ directing model it has. An observation declares
                                read them back (:meth:`Observation.joint_record`)
 ``spin_channel``               the rotor's spin channel (rad/s), or None
 ``sensor_inputs``              the sensor draws: record key, true values, angle or rate
+``sensor_draws``               the observation's own sensor (None: the scene's ``sensor`` draws)
 ``MEASUREMENT``,                the measurement kinds a record gives (names of registered kinds,
 ``ALSO_MEASURES``              :mod:`.measurement`): None (no Earth rate), :data:`SWING_RATE` (a swing
                                about a directing line: y = n s(γ)), :data:`PLANE_RATE` (a swing
@@ -36,6 +37,7 @@ the reader).
 """
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -162,6 +164,17 @@ class Observation:
         if self.spin_channel is not None and self.spin_channel in columns:
             out.append((self.spin_channel, columns[self.spin_channel], "rate"))
         return out
+
+    def sensor_draws(self, sensor, rng) -> Callable | None:
+        """The observation's own sensor, or None (the default): the scene's ``sensor`` (``SensorModel``)
+        draws each channel of :meth:`sensor_inputs` as an angle or a rate.
+
+        An instrument whose readings follow their own error model (a rate gyro's angle random walk,
+        bias instability and turn-on bias, :class:`~.rate_gyro.RateGyroObservation`) returns a callable
+        ``(record key, true values, kind of sensor_inputs) -> measured array`` drawing from ``rng``; it is
+        called block after block in time order (``measure`` once, ``MeasureStream`` per block), and the
+        blocks concatenate to the one-shot draw."""
+        return None
 
     def complete(self, rec) -> dict:
         """``rec`` with what the estimator reads beside the measured channels (the default adds nothing)."""

@@ -153,9 +153,9 @@ ESTIMATOR = SCENE + FRAMES + [
                                             "when every expected sample (or the last clock tick) has arrived",
          0.0, 86400.0, read_only=True),
     Spec("nmea_udp", "string", "", "HOST:PORT ([IPV6]:PORT) to send NMEA 0183 $HEHDT true-heading sentences to, one "
-                                   "UDP datagram per heading published (the first horizontal gyroscope's mount "
-                                   "azimuth: at 10 Hz of sim time, every sample when slower, from the first swing, "
-                                   "and with the final estimate); empty: none. "
+                                   "UDP datagram per heading published (the first horizontal gyroscope's or rate "
+                                   "gyro's mount azimuth: at 10 Hz of sim time, every sample when slower, from the "
+                                   "first swing or sequence of positions, and with the final estimate); empty: none. "
                                    "IANA's port for NMEA over UDP is 10110", read_only=True),
     Spec("nmea_decimals", "int", 3, "decimals of the $HEHDT heading in degrees (3: 0.001 deg = 3.6 arcsec)", 0, 6,
          read_only=True),

@@ -146,7 +146,8 @@ class EstimatorNode(SceneNode):
             if len(buf) >= self._due[(owner, name)]:
                 self._due[(owner, name)] = len(buf) + self._every(tr, name)
                 t_ns, pos, vel = buf.arrays()
-                k = max(int(t_ns.size - tr.window_s_of(name) * self.scene.sample_rate_hz) - 1, 0)
+                window_s = tr.window_s_of(name)          # inf: the whole record so far
+                k = max(int(t_ns.size - window_s * self.scene.sample_rate_hz) - 1, 0) if math.isfinite(window_s) else 0
                 off = self.stamp_offset_ns or 0
                 rec = records_from_joints({name: self.insts[name]}, {name: (t_ns[k:] - off, pos[k:], vel[k:])})[name]
                 value = tr.update(name, rec)
