@@ -21,7 +21,7 @@ demo: $(STAMP)
 	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(VENV)/bin/gyro-instrument run quet_paris --bag out/quet_paris.mcap --overwrite
 
 test: $(STAMP)
-	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra --durations=25
+	AMENT_PREFIX_PATH=$(abspath $(VENV)) tools/loopback $(PY) -m pytest -ra --durations=25 -n 2 --dist loadfile
 
 # the tests against shipped files under both OpenBLAS kernel choices of x86-64 machines of this kind
 # (AVX-512 where the CPU has it, Haswell's otherwise): their tolerances must hold on either

@@ -24,7 +24,7 @@ setup(
     install_requires=["numpy>=1.24", "scipy>=1.10", "numba>=0.60", "pyyaml>=6", "pyarrow>=12"],
     extras_require={
         "ros": ROS,
-        "test": ROS + ["pytest>=7", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
+        "test": ROS + ["pytest>=7", "pytest-xdist>=3.5", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
                        "dask[distributed]>=2023.1", "pynmea2==1.19.0"],
         "plot": ["matplotlib>=3.6"],
         "cluster": ["dask[distributed]>=2023.1"],

@@ -12,6 +12,11 @@ import sys
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", str(os.getpid() % 100 + 1))
+_WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
+if _WORKER.startswith("gw"):
+    # each pytest-xdist worker (and every node it starts) in a DDS domain of its own (0-101 are valid
+    # with Fast DDS' default ports): their graphs, /clock and /diagnostics never meet
+    os.environ["ROS_DOMAIN_ID"] = str((int(os.environ["ROS_DOMAIN_ID"]) + 1 + int(_WORKER[2:])) % 101)
 os.environ.setdefault("AMENT_PREFIX_PATH", sys.prefix)
 # child processes (the node executables, gyro-instrument) import the package from this checkout,
 # not from wherever the venv's editable install points (a git worktree tests its own code)
@@ -87,6 +92,7 @@ def ctx():
 _POOL = []
 _DECLARED = []         # (scene, overrides, n) of every declared sweep of the session, in test order
 _PREFETCHED = {}       # (scene, overrides, n) -> [future of each chunk]
+_FILE_SWEEPS = {}      # test file -> the sweeps its tests declare
 
 
 def _pool():
@@ -111,19 +117,25 @@ def _key(mark):
 
 
 def pytest_collection_finish(session):
-    """Note every declared seed sweep of the selected tests, in test order."""
+    """Note every declared seed sweep of the selected tests, in test order (and per file)."""
     for item in session.items:
         for mark in item.iter_markers("seed_sweep"):
+            _FILE_SWEEPS.setdefault(item.path, []).append(_key(mark))
             if _key(mark) not in _DECLARED:
                 _DECLARED.append(_key(mark))
 
 
 def pytest_runtest_setup(item):
-    """At the first test that declares a sweep, submit every declared sweep of the session."""
+    """At the first test that declares a sweep, submit every declared sweep of the session — under
+    pytest-xdist (``--dist loadfile``: a worker runs whole files) those of the test's own file, as each
+    worker collects every file but runs only some."""
     if _DECLARED and item.get_closest_marker("seed_sweep") is not None:
-        for key in _DECLARED:
-            _PREFETCHED[key] = _submit(*key)
-        _DECLARED.clear()
+        keys = list(_DECLARED)
+        if _WORKER:
+            keys = [k for k in keys if k in _FILE_SWEEPS.get(item.path, ())]
+        for key in keys:
+            _PREFETCHED.setdefault(key, _submit(*key))
+            _DECLARED.remove(key)
 
 
 def pytest_sessionfinish(session):
