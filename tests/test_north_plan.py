@@ -102,3 +102,16 @@ def test_cli_plan_azimuth_json_and_bad_input(capsys):
     assert "horizontal gyroscope" in err and "foucault_pantheon" in err
     with pytest.raises(SceneError, match="azimuth_arcsec"):
         parse_targets(["azimuth_arcsec=-1"])
+
+
+def test_a_horizontal_gyroscope_without_a_stated_mount_is_planned_at_mount_0(capsys):
+    """quet_paris states no mount_azimuth_deg (the estimate then reads the scale from north: mount 0); its
+    azimuth plan ended in a TypeError traceback (the unset mount converted to radians). The plan is the
+    one of the same scene with the mount stated as 0 (the model is the same)."""
+    assert cli_main(["plan", "quet_paris", "--target", "azimuth_arcsec=10", "--json"]) == 0
+    unset = json.loads(capsys.readouterr().out)
+    assert cli_main(["plan", "quet_paris", "--target", "azimuth_arcsec=10", "--json",
+                     "--set", "instruments.gyro_horizontal.mount_azimuth_deg=0"]) == 0
+    stated = json.loads(capsys.readouterr().out)
+    assert stated.pop("overrides") == ["instruments.gyro_horizontal.mount_azimuth_deg=0"] and unset.pop("overrides") == []
+    assert stated == unset

@@ -175,7 +175,7 @@ def azimuth_model(scene, obs) -> tuple:
         return None, f"{shape}: {obs.null_reason}"
     w, A, d, ph, c = shape
     model = AzimuthModel(obs.name, w, A, d, ph, c, drift=obs.centre_drifts(),
-                         mount_azimuth_rad=float(inst.p.mount_azimuth_rad),
+                         mount_azimuth_rad=math.radians(inst.p.mount_azimuth_deg or 0.0),   # unset: 0 (the estimate's convention)
                          check_period_s=2.0 * inst.predictions()["swing_duration_small_s"],
                          rate_hz=float(scene.sample_rate_hz))
     off_inst = None
