@@ -38,7 +38,8 @@ MOUNTS_DEG = (0.0, 90.0, 180.0, 301.7)
 #: Short records the physics allows: gyrotheodolite's rotor-off swing lasts 796 s and its reduction
 #: needs 3 reversal points of it (1800 s holds 2: refused), so its shipped hour (3600 samples at 1 Hz);
 #: Quet's gyroscopes swing in 12.8 s (120 s at 20 Hz: nine swings).
-DURATION_S = {"gyrotheodolite": 3600.0}
+DURATION_S = {"gyrotheodolite": 3600.0, "rate_gyro_two_position": 300.0, "rate_gyro_four_position": 400.0,
+              "rate_gyro_carousel": 120.0}    # a rate gyro: its schedule's whole sequence of positions
 DEFAULT_DURATION_S = 120.0
 
 
@@ -59,12 +60,20 @@ NORTH_SCENES = _north_scenes()
 def test_the_scenes_with_north_are_the_three_expected():
     # the equalities below run over NORTH_SCENES: it must not silently lose a scene
     assert NORTH_SCENES == {"gyrotheodolite": ["gak1"], "quet_gyroscopes": ["gyro_horizontal"],
-                            "quet_paris": ["gyro_horizontal"]}
+                            "quet_paris": ["gyro_horizontal"], "rate_gyro_carousel": ["carousel"],
+                            "rate_gyro_four_position": ["fog"], "rate_gyro_two_position": ["mems"]}
+
+
+#: the rate gyros carry their own error model (ARW, bias instability, turn-on bias), which the scene's
+#: sensor.noise_rad does not switch off: ``estimate`` draws it, ``simulate`` writes the true rate
+RATE_GYRO_SCENES = {s for s in NORTH_SCENES if s.startswith("rate_gyro")}
 
 
 def _sets(scene, mount_deg) -> list:
     sets = ["sensor.noise_rad=0", f"duration_s={DURATION_S.get(scene, DEFAULT_DURATION_S)}"]
     sets += [f"instruments.{n}.mount_azimuth_deg={mount_deg}" for n in NORTH_SCENES[scene]]
+    if scene.startswith("rate_gyro"):      # two positions: the coarse prior that picks north, not its mirror
+        sets += [f"instruments.{n}.mount_azimuth_prior_deg={mount_deg}" for n in NORTH_SCENES[scene]]
     return [x for s in sets for x in ("--set", s)]
 
 
@@ -123,6 +132,18 @@ def test_simulate_then_estimate_data_gives_the_estimate(tmp_path, capsys, live, 
     capsys.readouterr()
     got = _json(capsys, ["estimate", "--data", str(out), "--json"])     # the scene the table carries
     assert got.pop("data") == out.name and "data_notes" not in got
+    if scene == "rate_gyro_two_position" and mount_deg % 180.0 == 0.0:
+        # two positions along the meridian: the rate difference 2 n cos γ cos M is at its extremum, its
+        # slope in M zero — north and its mirror coincide and σ is unbounded: null, said so
+        assert got["north"]["mount_azimuth_deg"] is None and "ambiguous" in got["north"]["sign"]["detail"]
+        assert got["north"]["sigma_arcsec"] > 1e9
+        return
+    if scene in RATE_GYRO_SCENES:
+        # the table holds the true rate: its north is the mount exactly (1e-9 deg: the least squares'
+        # round-off on rates of 1e-5 rad/s, far below the instrument's σ of 100-10 000")
+        miss = (got["north"]["mount_azimuth_deg"] - mount_deg + 180.0) % 360.0 - 180.0
+        assert abs(miss) < 1e-9, (scene, mount_deg, got["north"])
+        return
     want = live(scene, mount_deg)
     assert_same_estimate(got, want)
     north = got["north"]
