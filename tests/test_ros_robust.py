@@ -31,7 +31,7 @@ from rclpy.node import Node
 from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.ros.params import NODE_SPECS
 from gyro_instrument.ros.suite import run_suite
-from tests.test_ros_bags import read_until
+from tests.test_ros_bags import read_until, spin_until, stop  # the ROS tests' process helpers
 
 BIN = Path(sys.executable).parent
 ROSOUT_DEAD = "publisher's context is invalid"
@@ -48,28 +48,6 @@ def start_unbuffered(exe, *ros_args):
     env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM="0", PYTHONUNBUFFERED="1")
     return subprocess.Popen([str(BIN / exe), "--ros-args", *ros_args], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, start_new_session=True, env=env)
-
-
-def stop(p, sig=signal.SIGINT, timeout=30):
-    if p.poll() is None:
-        p.send_signal(sig)
-    out, _ = p.communicate(timeout=timeout)
-    return out
-
-
-def spin_until(node, cond, timeout):
-    from rclpy.executors import SingleThreadedExecutor
-    ex = SingleThreadedExecutor(context=node.context)
-    ex.add_node(node)
-    t0 = time.monotonic()
-    try:
-        while not cond():
-            ex.spin_once(timeout_sec=0.05)
-            if time.monotonic() - t0 > timeout:
-                return False
-        return True
-    finally:
-        ex.remove_node(node)
 
 
 def call(node, srv_type, name, request, timeout=20):

@@ -20,23 +20,15 @@ goes in each node (docs/bench/ros_route_profile.md).
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 
-
-def _loopback_env(cmd):
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
-    if os.geteuid() == 0 and shutil.which("unshare") and shutil.which("ip") and not env.get("GYRO_IN_NETNS"):
-        env["GYRO_IN_NETNS"] = "1"
-        cmd = ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh"] + cmd
-    return cmd, env
+from gyro_instrument.bench.live import _loopback
 
 
 def _json_child(args, stream="stdout"):
     """Run ``python args`` on loopback; its last JSON line (on ``stream``), or (None, reason)."""
-    cmd, env = _loopback_env([sys.executable] + list(args))
+    cmd, env = _loopback([sys.executable] + list(args))
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     text = p.stdout if stream == "stdout" else p.stderr
     if p.returncode != 0 or not text.strip():
