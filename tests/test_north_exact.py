@@ -240,11 +240,9 @@ def test_short_records_give_north_from_the_fit(duration):
         assert name in n["methods"] or "reversal points" in n["refused"][name], name
 
 
-def test_a_fit_that_does_not_converge_is_refused_not_reported():
-    """Found on a 48 h record (quet_gyroscopes at 1 Hz, 6750 swings): started 25 rad of phase off, the
-    least squares stopped at its evaluation limit with residuals 670× the noise and reported
-    −14″ ± 0.05″. A fit that does not converge is refused (north null with the reason); joint_fit then
-    tries the long record again through growing windows (next test)."""
+def _records_45():
+    """(instrument, swing equation, [rotor-on, rotor-off] records) of the noise-free mount-45° set-up at
+    51.5° (issue 33's table)."""
     scene = _scene(45.0, 51.5, noise=False)
     truth = simulate_truth(scene)
     inst = truth[1]["gak1"]
@@ -252,6 +250,15 @@ def test_a_fit_that_does_not_converge_is_refused_not_reported():
     recs = measure(scene, truth, 1)
     eq = swing_equation(inst, float(np.mean(t)))
     R = [exact.Record(t, unwrap(-recs[n]["angle"]), k) for n, k in (("gak1", "on"), ("gak1_rotor_off", "off"))]
+    return inst, eq, R
+
+
+def test_a_fit_that_does_not_converge_is_refused_not_reported():
+    """Found on a 48 h record (quet_gyroscopes at 1 Hz, 6750 swings): started 25 rad of phase off, the
+    least squares stopped at its evaluation limit with residuals 670× the noise and reported
+    −14″ ± 0.05″. A fit that does not converge is refused (north null with the reason); joint_fit then
+    tries the long record again through growing windows (next test)."""
+    _, eq, R = _records_45()
     start = joint.start_values(eq, R)
     start["directing"] *= 1.2                    # far off: the phase is lost within the record
     with pytest.raises(SceneError, match="did not converge"):
@@ -263,13 +270,7 @@ def test_a_long_record_lost_by_its_start_is_reached_through_growing_windows(monk
     frequency: about a radian of phase per 6 swings, the record holds ~10) does not converge within 3
     evaluations; the windows of 2, 4, … swings (WINDOW_SWINGS lowered from 32 to make this record
     "long") reach the optimum, which is the noise-free truth within the 0.05″ of the exact-fit tests."""
-    scene = _scene(45.0, 51.5, noise=False)
-    truth = simulate_truth(scene)
-    inst = truth[1]["gak1"]
-    t = truth[0]
-    recs = measure(scene, truth, 1)
-    eq = swing_equation(inst, float(np.mean(t)))
-    R = [exact.Record(t, unwrap(-recs[n]["angle"]), k) for n, k in (("gak1", "on"), ("gak1_rotor_off", "off"))]
+    inst, eq, R = _records_45()
     start = joint.start_values(eq, R)
     start["directing"] *= 1.05
     fit = exact.fit

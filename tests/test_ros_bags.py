@@ -24,6 +24,7 @@ from rclpy.node import Node
 
 from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.recording.mcap_io import BagWriter
+from tests.test_ros_day import _tmpfs_available  # noqa: E402  (a small tmpfs in a mount namespace)
 
 pytestmark = pytest.mark.ros
 BIN = Path(sys.executable).parent
@@ -282,15 +283,6 @@ def test_bags_keep_their_qos_and_the_player_offers_the_latched_estimate_back(tmp
 
 
 # ---- 4. a full disk is a failure, said so ------------------------------------------------------------
-
-def _tmpfs_available():
-    import shutil
-    if os.geteuid() != 0 or shutil.which("unshare") is None:
-        return False
-    r = subprocess.run(["unshare", "-m", "sh", "-c", "d=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs $d "
-                        "&& umount $d && rmdir $d"], capture_output=True)
-    return r.returncode == 0
-
 
 @pytest.mark.skipif(not _tmpfs_available(), reason="needs root and unshare -m to mount a small tmpfs")
 def test_a_recorder_node_on_a_full_disk_fails_and_says_so(tmp_path):

@@ -31,7 +31,7 @@ from rclpy.node import Node
 from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.ros.params import NODE_SPECS
 from gyro_instrument.ros.suite import run_suite
-from tests.test_ros_bags import read_until, spin_until, stop  # the ROS tests' process helpers
+from tests.test_ros_bags import call, read_until, spin_until, stop  # the ROS tests' process helpers
 
 BIN = Path(sys.executable).parent
 ROSOUT_DEAD = "publisher's context is invalid"
@@ -48,15 +48,6 @@ def start_unbuffered(exe, *ros_args):
     env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM="0", PYTHONUNBUFFERED="1")
     return subprocess.Popen([str(BIN / exe), "--ros-args", *ros_args], stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, start_new_session=True, env=env)
-
-
-def call(node, srv_type, name, request, timeout=20):
-    cli = node.create_client(srv_type, name)
-    assert spin_until(node, cli.service_is_ready, timeout), f"{name} not available"
-    fut = cli.call_async(request)
-    assert spin_until(node, fut.done, timeout), f"{name} did not answer"
-    node.destroy_client(cli)
-    return fut.result()
 
 
 @pytest.fixture(scope="module")
