@@ -110,8 +110,9 @@ def _commands(page):
     words stop at a comment, a pipe or ``--ros-args`` (what follows goes to the nodes)."""
     out = []
     for line in _code_lines(page.read_text()):
+        line = re.split(r"(?:^|\s)#\s", line)[0]  # a shell comment is prose
         for m in re.finditer(r"gyro-instrument\s+([a-z]+)(.*)", line):
-            rest = re.split(r"\s#\s|\s\|\s|--ros-args|gyro-instrument\s", m.group(2))[0]
+            rest = re.split(r"\s\|\s|--ros-args|gyro-instrument\s", m.group(2))[0]
             out.append((m.group(1), rest))
     return out
 
