@@ -229,6 +229,18 @@ def test_the_demo_prints_the_shipped_recordings_estimate():
         assert line in printed, line
 
 
+def test_the_guides_worked_plan_example_prints_what_it_shows(capsys):
+    # docs/cli.md's worked example (the issue's gyrocompass): its command prints its output block
+    # exactly, every number in it included (a plan is deterministic: no seeds without --verify).
+    import shlex
+    from gyro_instrument.cli.commands import main
+    guide = (ROOT / "docs" / "cli.md").read_text()
+    m = re.search(r"```sh\n(gyro-instrument plan quet_gyroscopes .*?)```\n\n```\n(plan for .*?)```", guide, re.S)
+    argv = shlex.split(m.group(1).replace("\\\n", " "))[1:]
+    assert main(argv) == 0
+    assert capsys.readouterr().out == m.group(2)
+
+
 def _numbers(text):
     """Every number written in a text (1.85e6, 2.5e-6, 0.12, 102, 1e-10; a thousands space not)."""
     return re.findall(r"(?<![\w.])(\d+(?:\.\d+)?(?:e[-+]?\d+)?)(?![\w.]*\d)", text.replace("e+", "e"))
