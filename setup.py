@@ -19,6 +19,7 @@ setup(
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/scenes", glob("gyro_instrument/scenes/*.yaml")),
         (f"share/{PACKAGE}/msg_docs", glob("msg_docs/*.md")),
+        (f"share/{PACKAGE}/docs/formats", glob("docs/formats/*.md")),
     ],
     python_requires=">=3.10",
     install_requires=["numpy>=1.24", "scipy>=1.10", "numba>=0.60", "pyyaml>=6", "pyarrow>=12"],

@@ -18,5 +18,5 @@ sensor: {noise_rad: 1.0e-5}
 instruments:
   pendulum: {type: spherical_pendulum, length_m: 19.9, initial_deflection_deg: 4.0, initial_azimuth_deg: 90.0}
 """
-#: the table options that read a HEIG-VD file as published (msg_docs/csv.md)
+#: the table options that read a HEIG-VD file as published (docs/formats/csv.md)
 HEIGVD_OPTIONS = ["--no-header", "--names", "pendulum.x_east,pendulum.y_north,time_s", "--metres-per-pixel", "0.001"]

@@ -1,7 +1,7 @@
 """Hard cases stay numerically stable (issue 6). Each case says why it is hard and asserts finite
 results, invariants within a stated bound, agreement with the analytic prediction where one
-exists, or a clear, documented refusal. Cases covered elsewhere are listed in the README's
-reliability table (179.9° and inverted launches: test_pendulum; free axis 1e-6 rad from Earth's
+exists, or a clear, documented refusal. Cases covered elsewhere are listed in the reliability
+table of docs/reliability.md (179.9° and inverted launches: test_pendulum; free axis 1e-6 rad from Earth's
 axis: test_free_gyroscope; gimbal near lock: test_gimbal)."""
 
 import json

@@ -41,6 +41,9 @@ def ros2_run(prefixes, package, executable):
 def test_colcon_layout(colcon_install):
     assert (colcon_install / "share/ament_index/resource_index/packages/gyro_instrument").exists()
     assert (colcon_install / "share/gyro_instrument/package.xml").exists()
+    # the formats --help points to (docs/formats/, moved out of msg_docs/ in issue 36) ship beside msg_docs
+    for doc in ("msg_docs/topics.md", "msg_docs/parameters.md", "docs/formats/scene.md", "docs/formats/csv.md"):
+        assert (colcon_install / "share/gyro_instrument" / doc).exists(), doc
     for exe in EXECUTABLES:
         assert os.access(colcon_install / "lib/gyro_instrument" / exe, os.X_OK), exe
 

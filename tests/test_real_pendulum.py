@@ -192,7 +192,7 @@ def test_heigvd_against_the_site_with_the_record_sigma(tmp_path, capsys):
 @pytest.mark.parametrize("name,independent", HEIGVD[:1])
 def test_heigvd_raw_file_read_with_the_documented_options(tmp_path, capsys, name, independent):
     # item 7: the file as published (no header, mm, date-time text) with the table options
-    # (msg_docs/csv.md): the same estimate as the converted table of the test above
+    # (docs/formats/csv.md): the same estimate as the converted table of the test above
     scene = tmp_path / "heigvd.yaml"
     scene.write_text(SCENE_HEIGVD)
     args = ["estimate", "--data", str(REALDATA / name), "--scene", str(scene)]

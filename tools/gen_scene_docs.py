@@ -1,4 +1,4 @@
-"""Write msg_docs/scene.md, the scene file format, from the parameter specifications (kept true by
+"""Write docs/formats/scene.md, the scene file format, from the parameter specifications (kept true by
 tests/test_docs.py: run `python tools/gen_scene_docs.py` after changing a Param of the scene, its
 site, sensor or estimator sections or an effect)."""
 
@@ -104,7 +104,7 @@ def render():
             "A non-empty mapping `name: {type: TYPE, parameters...}`; names are letters, digits and",
             "underscores. `type` is one of " + ", ".join(f"`{t}`" for t in sorted(INSTRUMENTS)) + ";",
             "each type's parameters, defaults, ranges and output channels are in",
-            "[instruments.md](instruments.md).", "",
+            "[instruments.md](../../msg_docs/instruments.md).", "",
             "An instrument may carry its own `effects:` list, a subset of the scene's effects that its type",
             "supports. Without it the instrument gets every scene effect its type supports; with it, only",
             "those listed (`effects: []`: none).", "",
@@ -137,4 +137,4 @@ def render():
 
 
 if __name__ == "__main__":
-    (Path(__file__).resolve().parents[1] / "msg_docs" / "scene.md").write_text(render())
+    (Path(__file__).resolve().parents[1] / "docs" / "formats" / "scene.md").write_text(render())

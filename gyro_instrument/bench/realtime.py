@@ -248,7 +248,7 @@ def _fmt(x, spec):
 
 
 def summary_lines(rt, wp) -> list:
-    """Markdown for ``summary.md`` (and the README's table)."""
+    """Markdown for ``summary.md`` (and the table of docs/bench/README.md)."""
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     below = [r for r in rt if r[11] is False]
     lines = [f"## Real-time factor of every instrument configuration (simulated s per CPU s; goal >= {GOAL:g})", "",

@@ -38,7 +38,7 @@ def add_scene_arguments(parser, positional=True) -> None:
                              "(not the last one); on any other key null restores its default (refused "
                              "if it has none). A new instrument needs its type: --set "
                              "instruments.p2.type=spherical_pendulum --set instruments.p2.length_m=10. "
-                             "Unknown names get the closest match. Scene format: msg_docs/scene.md")
+                             "Unknown names get the closest match. Scene format: docs/formats/scene.md")
     parser.add_argument("--duration-s", type=float, default=None,
                         help="simulated time per instrument, s (default: the scene's duration_s)")
 
@@ -107,7 +107,7 @@ def _add_scene_commands(sub):
     p = sub.add_parser("simulate", help="simulate a scene and write every instrument channel to CSV or Parquet")
     add_scene_arguments(p)
     p.add_argument("--out", required=True, metavar="FILE.csv|FILE.parquet",
-                   help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see msg_docs/csv.md); "
+                   help="output table: time_s, then <instrument>.<channel> in rad, rad/s or m (see docs/formats/csv.md); "
                         "Parquet (float64 columns, pyarrow) for a name ending in .parquet, else CSV (full precision); "
                         "written block by block as the run streams to FILE.partial, renamed when complete (a Ctrl-C "
                         "leaves no partial file); refused before the run when it would not fit on the disk; "
@@ -127,7 +127,7 @@ def _add_scene_commands(sub):
     add_scene_arguments(p, positional="optional")
     p.add_argument("--data", metavar="FILE.csv|FILE.parquet",
                    help="estimate from this table of measured channels instead of simulating: time_s and "
-                        "<instrument>.<channel> columns as in msg_docs/csv.md (pendulums: x_east, y_north in m or "
+                        "<instrument>.<channel> columns as in docs/formats/csv.md (pendulums: x_east, y_north in m or "
                         "deflection_east, deflection_north in rad; gyroscopes: their angle and spin_rate); the scene "
                         "gives the instruments (types, lengths, inertia ratios) and the site's nominal values "
                         "(without --scene: the scene the table carries, written by simulate, noted on stderr). "
@@ -175,7 +175,7 @@ def _add_scene_commands(sub):
 
 
 def add_camera_arguments(p, when="with --data: ") -> None:
-    """A camera track's table options (estimators/table_camera.py; msg_docs/csv.md); ``when`` starts
+    """A camera track's table options (estimators/table_camera.py; docs/formats/csv.md); ``when`` starts
     each help ("with --data: " for estimate, "" for plot, whose FILE is the table)."""
     p.add_argument("--metres-per-pixel", type=float, default=None, metavar="S",
                    help=f"{when}the track's x_east, y_north are pixels of S metres each (the ellipse correction "
@@ -229,7 +229,7 @@ def _add_bag_commands(sub):
                                     "deg/h, full turn in hours), the rosette (the bob seen from above, coloured by "
                                     "time), the fit residuals; --animate adds animation.gif (needs matplotlib: pip "
                                     "install 'gyro_instrument[plot]')")
-    p.add_argument("file", help="a CSV or Parquet table (msg_docs/csv.md), an .mcap or a rosbag2 bag directory, or "
+    p.add_argument("file", help="a CSV or Parquet table (docs/formats/csv.md), an .mcap or a rosbag2 bag directory, or "
                                 "a field book (a CSV with a reading_<unit> column, as for estimate --reversal-points: "
                                 "one view, field_book: readings, turning points, centre, north)")
     p.add_argument("--out", default=None, metavar="DIR",
@@ -297,7 +297,7 @@ def _add_study_commands(sub):
                    help="run a seeded Monte Carlo at each planned time (process pool, progress on stderr) and "
                         "print the achieved rms next to the target")
     p.add_argument("--seeds", type=int, default=100, help="seeds for --verify (default 100)")
-    p.add_argument("--json", action="store_true", help="print one JSON object (documented in msg_docs/plan.md)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (documented in docs/formats/plan.md)")
 
 
 def _add_sweep_command(sub):

@@ -18,7 +18,7 @@ Layout::
       gyro_h: {type: plane_gyroscope, plane: horizontal, ...}
 
 An instrument may carry its own ``effects:`` list of names, a subset of the scene's. The full
-format, generated from the parameter specifications, is msg_docs/scene.md.
+format, generated from the parameter specifications, is docs/formats/scene.md.
 """
 
 import math

@@ -1,4 +1,4 @@
-"""Measured data in and out: CSV and Parquet tables of instrument channels (msg_docs/csv.md).
+"""Measured data in and out: CSV and Parquet tables of instrument channels (docs/formats/csv.md).
 
 ``gyro-instrument estimate --data FILE --scene SCENE`` reads a table whose first column (or any
 column) is ``time_s`` and whose other columns are ``<instrument>.<channel>``, matches them to the
@@ -24,7 +24,7 @@ times is refused.
 
 :class:`TableOptions` says how to read a table as users have it (``--time-column``,
 ``--time-unit``, ``--angle-unit``, ``--column NAME=SOURCE``, ``--separator``): see
-:func:`load_table` and msg_docs/csv.md.
+:func:`load_table` and docs/formats/csv.md.
 """
 
 import math

@@ -1,4 +1,4 @@
-"""Camera tracks as tables (msg_docs/csv.md): positions in pixels, an image y axis pointing down, a
+"""Camera tracks as tables (docs/formats/csv.md): positions in pixels, an image y axis pointing down, a
 camera turned from east, time as frame numbers at a frame rate or as date-time text.
 
 :class:`CameraOptions` (``--metres-per-pixel``, ``--y-down``, ``--rotation-deg``, ``--frame-column``,

@@ -1,4 +1,4 @@
-"""Reading CSV and Parquet tables of instrument channels as users have them (msg_docs/csv.md).
+"""Reading CSV and Parquet tables of instrument channels as users have them (docs/formats/csv.md).
 
 :func:`load_table` reads ``time_s`` and the ``<instrument>.<channel>`` columns, as
 :class:`TableOptions` says (``--time-column``, ``--time-unit``, ``--angle-unit``, ``--column
@@ -373,7 +373,7 @@ def load_table(path, field="--data", options=None, meanings=None) -> tuple:
         hint = ("pass --time-column NAME (frame numbers: --frame-column NAME --frame-rate HZ) or "
                 if opts.time_column == TIME_COLUMN else "")
         raise SceneError(field, path, f"has no time column '{opts.time_column}' (columns: {shown(raw)}); "
-                                      f"{hint}see msg_docs/csv.md")
+                                      f"{hint}see docs/formats/csv.md")
     sources = {src for _, src in opts.columns} | {opts.time_column}
     for name, src in opts.columns:
         if src not in raw:

@@ -194,7 +194,7 @@ def scene_sidecar_path(path) -> str:
 
 #: The key (Parquet metadata; a comment line of the CSV's sidecar) of the columns a table holds as scale
 #: readings: JSON ``{"<instrument>.<channel>": M}``, the column reading u + M, M (deg) the instrument's
-#: ``mount_azimuth_deg`` wrapped to (-180, 180] (msg_docs/csv.md).
+#: ``mount_azimuth_deg`` wrapped to (-180, 180] (docs/formats/csv.md).
 SCALE_KEY = "gyro_instrument.scale_readings"
 
 
@@ -211,7 +211,7 @@ def table_metadata(scene_yaml, scene_name, seed, scale_readings=None) -> dict:
     (:data:`SCALE_KEY`)."""
     from gyro_instrument import __version__
     meta = {SCENE_KEY: scene_yaml, "gyro_instrument.scene_name": scene_name, "gyro_instrument.scene_seed": seed,
-            "gyro_instrument.units": "time_s in s; angles in rad, rates in rad/s, lengths in m (msg_docs/csv.md)",
+            "gyro_instrument.units": "time_s in s; angles in rad, rates in rad/s, lengths in m (docs/formats/csv.md)",
             "gyro_instrument.version": __version__}
     if scale_readings:
         meta[SCALE_KEY] = scale_readings_text(scale_readings)

@@ -223,7 +223,7 @@ class Instrument(EffectTerms):
     summary : str
         One line for ``describe`` and msg_docs/instruments.md.
     PARAMS : tuple of Param
-        Parameter specifications (validated by scene loading; msg_docs/scene.md).
+        Parameter specifications (validated by scene loading; docs/formats/scene.md).
     MECHANICS : frozenset of str
         The kinds of mechanics whose effect terms the right-hand side sums
         (:data:`gyro_instrument.core.effect.MECHANICS`).

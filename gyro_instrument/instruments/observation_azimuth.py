@@ -33,7 +33,7 @@ def read_on_scale(obs, columns) -> dict:
 
 
 def unwrapped_reading(angle, what, notes) -> np.ndarray:
-    """A scale reading logged wrapped to (−π, π] (msg_docs/csv.md) unwrapped along the record (rad).
+    """A scale reading logged wrapped to (−π, π] (docs/formats/csv.md) unwrapped along the record (rad).
 
     The finite samples, in time order, are unwrapped where consecutive ones jump by more than π (a
     whole turn taken off: ``numpy.unwrap``). Only a record entirely inside [−π, π] with such a jump

@@ -1,6 +1,6 @@
 """``gyro-instrument plot FILE``: the standard views of a run or a measurement (PNG, SVG or PDF).
 
-FILE is a CSV or Parquet table (msg_docs/csv.md) or a bag (an ``.mcap`` or a rosbag2 directory;
+FILE is a CSV or Parquet table (docs/formats/csv.md) or a bag (an ``.mcap`` or a rosbag2 directory;
 a bag recorded by another tool needs ``--scene``). A table written by ``simulate`` carries its
 scene (Parquet metadata, ``<name>.scene.yaml`` beside a CSV), used when ``--scene`` is absent.
 Views, one file each in the output directory:

@@ -39,7 +39,7 @@ def load_series(path, scene_arg=None, overrides=(), topics=(), field="FILE", opt
     else:
         series, scene, notes = _bag_series(path, scene, topics)
     if not series:
-        raise SceneError(field, path, "holds no angle or pendulum channel to draw (columns as in msg_docs/csv.md)")
+        raise SceneError(field, path, "holds no angle or pendulum channel to draw (columns as in docs/formats/csv.md)")
     return series, scene, notes
 
 
