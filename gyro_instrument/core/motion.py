@@ -240,7 +240,8 @@ def _pieces(changes, p, lat0) -> tuple:
                 speed += delta
             else:
                 delta = (math.radians(v["turn_deg"]) if v["turn_deg"] is not None
-                         else (math.radians(new) - course + math.pi) % (2 * math.pi) - math.pi)
+                         else (math.radians(new) - course) % (2 * math.pi))
+                delta = delta - 2 * math.pi if v["turn_deg"] is None and delta > math.pi else delta
                 rate = math.radians(v["turn_rate_deg_s"])
                 course += delta
             end = t + abs(delta) / rate

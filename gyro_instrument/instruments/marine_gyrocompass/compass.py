@@ -11,8 +11,8 @@ taken from the track, as from a GNSS input)::
     heading = ψ − α + δ_s(V_f, ψ_r, φ_set) + δ_d(φ_set)
 
 δ_s = atan2(−V_f cos ψ_r, R Ω cos φ_set + V_f sin ψ_r) the speed error the equations settle to
-(:func:`.theory.speed_error_rad`; ψ_r = ψ − α, the compass's own uncorrected reading, as a compass
-knows no other heading), with ``speed_correction``; δ_d = asin((P_d/P_c) tan φ_set) the damping
+(:func:`.theory.speed_error_rad`; ψ_r the compass's own corrected reading, as a compass knows no
+other heading: three fixed-point steps from ψ − α), with ``speed_correction``; δ_d = asin((P_d/P_c) tan φ_set) the damping
 (latitude) error, with damping in tilt (the Sperry latitude correction: ``latitude_setting_deg``). A
 latitude set wrong by Δφ leaves both corrections' change with latitude as an error
 (:meth:`MarineGyrocompass.predictions` reports it for the site).
@@ -192,7 +192,11 @@ class MarineGyrocompass(Instrument):
         lat = latitude if p.latitude_setting_deg == TRACK else np.full_like(latitude, math.radians(p.latitude_setting_deg))
         corr = np.zeros_like(latitude)
         if p.speed_correction:
-            corr = corr + th.speed_error_rad(log_speed * np.sin(reading_raw), log_speed * np.cos(reading_raw), Om, lat)
+            speed = np.zeros_like(latitude)
+            for _ in range(3):          # at its own corrected heading: a fixed point, dδ/dψ ≤ V/(R Ω cos φ) ≪ 1
+                psi = reading_raw + speed
+                speed = th.speed_error_rad(log_speed * np.sin(psi), log_speed * np.cos(psi), Om, lat)
+            corr = corr + speed
         if p.damping == "tilt":
             corr = corr + np.arcsin(np.clip(p.damping_torque_ratio * np.tan(lat), -1.0, 1.0))
         return corr

@@ -19,7 +19,8 @@ Tech. Rep. 100, 1983, §4.2; the term Ω cos φ θ is the one the usual form dro
   ballistic deflection) while the settle point moves by −ΔV_N/(R Ω cos φ) (the speed error's change);
   they are equal, and the change dead-beat, when P_c/H = g/(R Ω cos φ_d) at the design latitude
   φ_d (Chalmers, *The gyroscopic compass*, ch. X "The ballistic deflection": classically 40°), where
-  T = 2π/√(g/R + Ω² cos² φ_d), 2π √(R/g) = 84.4 min to 7e-4: :func:`control_ratio_per_s`;
+  T = 2π/√(g/R + Ω² cos² φ_d), shorter than 2π √(R/g) = 84.4 min by Ω² cos² φ_d R/(2g)
+  (1.0e-3, 5.6 s at 40°): :func:`control_ratio_per_s`;
 - damping in tilt settles east of north (north latitudes) by sin δ_d = (P_d/P_c) tan φ, P_d/P_c =
   1/40 on a Sperry compass ("Gyro Numerical Solved", scribd 598664583; sailorsknowit.com "damping in
   tilt, damping in azimuth"): :func:`damping_error_rad`; damping in azimuth (Anschütz) leaves none;
