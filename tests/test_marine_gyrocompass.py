@@ -70,6 +70,17 @@ def test_the_speed_correction_removes_the_speed_error():
     tol = 2 * _second_order_rad(gc, lat, v * math.cos(math.radians(20)), v * math.sin(math.radians(20)))
     assert abs(cols["heading_error"][-1]) < tol + math.radians(2e-3)
     assert abs(cols["correction"][-1]) > 50 * tol          # there was an error to correct (2.5 deg)
+    # a latitude input set 10 deg wrong (-40 for -50): the reported error of the setting is what the reading keeps
+    gw, _, wrong = _run(-50, {"damping": "azimuth", "initial_azimuth_deg": 3.0, "latitude_setting_deg": -40.0},
+                        {"speed_kn": 30, "course_deg": 20}, hours=0.5)
+    start = gw.predictions()["latitude_setting_error_rad"]
+    assert abs(start) > 0.1 * abs(cols["correction"][-1])
+    gw, t, wrong = _run(-50, {"damping": "azimuth", "initial_azimuth_deg": 3.0, "latitude_setting_deg": -40.0},
+                        {"speed_kn": 30, "course_deg": 20}, hours=10.0)
+    lat_end = gw.motion.track(t)["latitude"][-1]
+    vE, vN = v * math.sin(math.radians(20)), v * math.cos(math.radians(20))
+    kept = th.speed_error_rad(vE, vN, OMEGA, math.radians(-40)) - th.speed_error_rad(vE, vN, OMEGA, lat_end)
+    assert wrong["heading_error"][-1] == pytest.approx(kept, abs=tol + math.radians(2e-3))
 
 
 def _upward_crossings(t, x):
@@ -133,10 +144,11 @@ def test_damping_in_tilt_leaves_the_latitude_error_and_the_correction_removes_it
     residual = abs(law) * 2 * (1 - k / (k + OMEGA * math.cos(lat))) + math.radians(0.005)
     assert abs(cols["azimuth"][-1] - law) < residual
     assert abs(cols["heading_error"][-1]) < residual
-    _, _, wrong = _run(lat_deg, {"damping": "tilt", "initial_azimuth_deg": 2.0,
-                                 "latitude_setting_deg": lat_deg - 5.0}, hours=12.0)
+    gw, _, wrong = _run(lat_deg, {"damping": "tilt", "initial_azimuth_deg": 2.0,
+                                  "latitude_setting_deg": lat_deg - 5.0}, hours=12.0)
     left = law - th.damping_error_rad(0.025, math.radians(lat_deg - 5.0))
     assert wrong["heading_error"][-1] == pytest.approx(-left, abs=residual)
+    assert gw.predictions()["latitude_setting_error_rad"] == pytest.approx(-left, rel=1e-12)   # as reported
 
 
 @pytest.mark.parametrize("lat_deg", [60.0, -60.0])

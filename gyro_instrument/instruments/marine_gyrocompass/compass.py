@@ -109,7 +109,7 @@ class MarineGyrocompass(Instrument):
     MECHANICS = frozenset({FRAME_RATE})
     COLUMNS = (
         Column("heading", "rad", "the compass's heading reading (corrections applied), wrapped to [0, 2 pi)"),
-        Column("heading_error", "rad", "heading - the ship's true heading, wrapped to (-pi, pi]"),
+        Column("heading_error", "rad", "heading - the ship's true heading, wrapped to [-pi, pi)"),
         Column("azimuth", "rad", "alpha: the north end's azimuth east of true north (true, not read)"),
         Column("tilt", "rad", "theta: the north end's tilt above the horizontal"),
         Column("element_roll", "rad", "beta: the element's pendulum swing about its spin axis"),
@@ -180,10 +180,16 @@ class MarineGyrocompass(Instrument):
             p0 = self.motion.pieces[0]
             out["speed_error_rad"] = float(th.speed_error_rad(p0.v0 * math.sin(p0.c0), p0.v0 * math.cos(p0.c0), Om, lat))
             out["start_speed_kn"] = p0.v0 / KNOT_M_S
-        if p.latitude_setting_deg != TRACK and p.damping == "tilt":
-            out["latitude_setting_error_rad"] = (th.damping_error_rad(p.damping_torque_ratio, lat)
-                                                 - th.damping_error_rad(p.damping_torque_ratio,
-                                                                        math.radians(p.latitude_setting_deg)))
+        if p.latitude_setting_deg != TRACK:         # the reading's error from the setting, at the start
+            lat_set = math.radians(p.latitude_setting_deg)
+            err = 0.0
+            if p.damping == "tilt":
+                err += th.damping_error_rad(p.damping_torque_ratio, lat) - th.damping_error_rad(p.damping_torque_ratio,
+                                                                                                lat_set)
+            if self.motion is not None and p.speed_correction:
+                vE, vN = p0.v0 * math.sin(p0.c0), p0.v0 * math.cos(p0.c0)
+                err += float(th.speed_error_rad(vE, vN, Om, lat) - th.speed_error_rad(vE, vN, Om, lat_set))
+            out["latitude_setting_error_rad"] = -err
         return with_notes(out, self.missing_term_note(FRAME_RATE, "the gyroscope feels no Earth rate: it seeks no north"))
 
     def corrections_rad(self, reading_raw, latitude, log_speed) -> np.ndarray:
