@@ -63,9 +63,12 @@ class CompassObservation(Observation):
     run) is step 3 of issue 39 and not yet available: ``estimate`` lists the instrument with the
     reason, as it lists every instrument it does not measure."""
 
+    PENDING_ESTIMATOR = ("the marine gyrocompass's estimator (settle-point error, damping and period from a "
+                         "sailing record) is issue 39 step 3, not yet available; its reading's error is the "
+                         "simulated column heading_error")
+
     def unmeasured_reason(self) -> str:
-        return ("marine_gyrocompass: no estimator yet (issue 39 step 3: settle-point error, damping and period "
-                "from a sailing record)")
+        return self.PENDING_ESTIMATOR
 
 
 class MarineGyrocompass(Instrument):
