@@ -46,6 +46,7 @@ setup(
             "puiseux_body = gyro_instrument.instruments.puiseux.instrument:PuiseuxBody",
             "gimbal_gyroscope = gyro_instrument.instruments.gimbal.instrument:GimbalGyroscope",
             "rate_gyro = gyro_instrument.instruments.rate_gyro:RateGyro",
+            "marine_gyrocompass = gyro_instrument.instruments.marine_gyrocompass:MarineGyrocompass",
         ],
         "gyro_instrument.effects": [
             "earth_rotation = gyro_instrument.effects.earth_rotation:EarthRotation",

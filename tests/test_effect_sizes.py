@@ -46,6 +46,9 @@ CASES = {
     "gimbal_gyroscope": ("gimbal_paris", ["duration_s=30", "instruments.gimbal_outer_fixed=null"], "gimbal_locked"),
     "puiseux_body": ("puiseux_spheroid", ["duration_s=1"], "spheroid"),
     "rate_gyro": ("rate_gyro_two_position", ["duration_s=300"], "mems"),
+    # two hours (2.7 swings of the 88-min compass at 45 deg), at rest heading 090 (its reading away from the wrap)
+    "marine_gyrocompass": ("marine_gyrocompass", ["duration_s=7200", "instruments.anschutz=null",
+                                                  "motion={speed_kn: 0, course_deg: 90}"], "sperry"),
 }
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from gyro_instrument.core.params import REQUIRED, alias_note  # noqa: E402
+from gyro_instrument.core.motion import CHANGE_PARAMS, MOTION_PARAMS  # noqa: E402
 from gyro_instrument.core.scene import SECTIONS, SITE_PARAMS, TOP_PARAMS  # noqa: E402
 from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
@@ -19,6 +20,7 @@ SECTION_DOCS = {
     "sensor": "measurement model applied to every angle channel (optional; below)",
     "estimator": "how `estimate` measures periods and which hemisphere it may assume (optional; below)",
     "instruments": "name: {type: ..., parameters...}; at least one (below)",
+    "motion": "the ship carrying the instruments (optional: without it, a fixed pier; below)",
 }
 
 
@@ -100,6 +102,13 @@ def render():
     out += param_table(SENSOR_PARAMS, "sensor.")
     out += ["", "## `estimator`", "", _optional(ESTIMATOR_PARAMS), ""]
     out += param_table(ESTIMATOR_PARAMS, "estimator.")
+    out += ["", "## `motion`", "", "Optional. Without it every instrument is on a fixed pier; with it the",
+            "instruments that sail (`marine_gyrocompass`) are carried by a ship starting at the site's latitude",
+            "(dead reckoning on a sphere; core/motion.py). `--set 'motion={speed_kn: 20, course_deg: 0}'`",
+            "replaces the whole block; `--set motion=null` removes it. An instrument that cannot sail is refused.", ""]
+    out += param_table(MOTION_PARAMS, "motion.")
+    out += ["", "`motion.schedule`: a list of changes, each a ramp at a constant rate:", ""]
+    out += param_table(CHANGE_PARAMS, "motion.schedule[i].")
     out += ["", "## `instruments`", "",
             "A non-empty mapping `name: {type: TYPE, parameters...}`; names are letters, digits and",
             "underscores. `type` is one of " + ", ".join(f"`{t}`" for t in sorted(INSTRUMENTS)) + ";",

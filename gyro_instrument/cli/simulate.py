@@ -10,6 +10,7 @@ from contextlib import contextmanager
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.files import replaced_atomically, shown
+from gyro_instrument.core.motion import ship_columns
 from gyro_instrument.core.scene import sample_times
 
 def simulate_scene(scene, progress=None) -> tuple:
@@ -33,6 +34,7 @@ def simulate_scene(scene, progress=None) -> tuple:
             sim = inst.simulate(t)
         sims[name] = sim
         columns.update(table_columns(name, inst, sim.columns))
+    columns.update(ship_columns(scene.motion, t))
     return t, columns, sims
 
 
@@ -135,6 +137,7 @@ def stream_scene(scene, block_samples=SIMULATE_BLOCK_SAMPLES, progress=None) -> 
             sim = next(streams[name])
             sims[name] = sim
             columns.update(table_columns(name, inst, sim.columns))
+        columns.update(ship_columns(scene.motion, t))
         report(t[-1] / span)
         yield t, columns, sims
 
@@ -149,6 +152,7 @@ def simulate_to_file(scene, out, output_rate_hz=None, progress=None) -> tuple:
     k = output_step(scene, output_rate_hz)
     insts = build_instruments(scene)
     names = [f"{n}.{c.name}" for n, i in insts.items() for c in i.COLUMNS]
+    names += list(ship_columns(scene.motion, [0.0]))
     n = sample_count(scene)
     check_disk(out, (n - 1) // k + 1, len(names) + 1)
     first = 0                                  # index of the block's first sample in the run

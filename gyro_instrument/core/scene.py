@@ -30,6 +30,7 @@ import numpy as np
 import yaml
 
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.motion import SHIP_COLUMNS, check_sailing, parse_motion
 from gyro_instrument.core.params import Param, unknown_key_hint, validate_params
 from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S, Site
 
@@ -54,7 +55,7 @@ TOP_PARAMS = (
     Param("seed", kind="int", default=0, low=0, high=2 ** 63 - 1, doc="random seed (sensor noise)"),
 )
 
-SECTIONS = ("site", "effects", "instruments", "sensor", "estimator")
+SECTIONS = ("site", "effects", "instruments", "sensor", "estimator", "motion")
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,8 @@ class Scene:
     #: output channels per sample: ``time`` plus every instrument's ``COLUMNS`` (read from each
     #: instrument class when the scene is built; the memory and disk checks use it)
     output_channels: int = 0
+    #: the ship carrying the instruments (:class:`~gyro_instrument.core.motion.Motion`), None on a fixed pier
+    motion: object = None
 
 
 def read_yaml(path) -> dict:
@@ -284,12 +287,15 @@ def build_scene(data, instrument_registry, effect_registry, sensor_params=(), es
     sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
     estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
                  if estimator_params or data.get("estimator") else {})
+    motion = parse_motion(data.get("motion"), site.latitude_rad, top["duration_s"])
+    check_sailing(motion, instruments, instrument_registry)
     return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
                  sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
                  effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
                  sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
                  source=source, raw=MappingProxyType(data),
-                 output_channels=1 + sum(len(instrument_registry[spec[0]].COLUMNS) for spec in instruments.values()))
+                 output_channels=1 + sum(len(instrument_registry[spec[0]].COLUMNS) for spec in instruments.values())
+                 + (len(SHIP_COLUMNS) if motion else 0), motion=motion)
 
 
 def _build_effects(effects_raw, effect_registry):

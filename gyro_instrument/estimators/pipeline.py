@@ -127,7 +127,8 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     if engine is None or not engine.RATE or not obs.has_record(rec):
         entry = {"type": obs.type_name}
         if not _block_kinds(obs) or not obs.has_record(rec):
-            entry["reason"] = "not used by the estimator (no Earth-rate measurement from this instrument)"
+            entry["reason"] = (f"not used by the estimator ({obs.PENDING_ESTIMATOR})" if obs.PENDING_ESTIMATOR else
+                               "not used by the estimator (no Earth-rate measurement from this instrument)")
         return entry, None
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)

@@ -12,6 +12,7 @@ from gyro_instrument.instruments import measurement
 from gyro_instrument.instruments.base import DirectingModel, Instrument
 from gyro_instrument.instruments.free_gyroscope import FreeGyroscope
 from gyro_instrument.instruments.gimbal import GimbalGyroscope
+from gyro_instrument.instruments.marine_gyrocompass import MarineGyrocompass
 from gyro_instrument.instruments.observation import (JointLayout, Observation, PlanePrecession, RotorObservation,
                                                      SwingRate)
 from gyro_instrument.instruments.pendulum import CompoundPendulum, SphericalPendulum
@@ -78,10 +79,11 @@ def simulator_kinds() -> dict:
 
 
 #: The shipped instrument types, in registry order (also entry points of ``gyro_instrument.instruments``).
-SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope, RateGyro)
+SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope, RateGyro,
+           MarineGyrocompass)
 plugins.discover("instruments", register, lambda c: REGISTRY.get(getattr(c, "type_name", None)) is c, SHIPPED,
                  key="type_name")
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
-           "JointLayout", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RateGyro",
+           "JointLayout", "MarineGyrocompass", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RateGyro",
            "RotorObservation", "SphericalPendulum", "SwingRate", "register", "simulator_kinds", "unregister"]

@@ -103,6 +103,8 @@ class Observation:
     HAS_ROTOR: ClassVar[bool] = False
     #: True when :meth:`bob_enu_m` gives a bob's position (published as ``<name>/bob``).
     SHOWS_BOB_POSITION: ClassVar[bool] = False
+    #: An instrument measured by no kind yet whose estimator is planned: the estimate says so (text), or None.
+    PENDING_ESTIMATOR: ClassVar[str | None] = None
 
     @classmethod
     def layout_of(cls, inst_cls) -> JointLayout:

@@ -83,6 +83,8 @@ def build_instruments(scene) -> dict:
     for name, (itype, params, effect_names) in scene.instruments.items():
         cls = INSTRUMENTS[itype]
         out[name] = cls(name, scene.site, params, {e: scene.effects[e] for e in effect_names})
+        if getattr(scene, "motion", None) is not None:
+            out[name].motion = scene.motion         # the ship (core/motion.py): only FEELS_MOTION types sail
     return out
 
 

@@ -1,0 +1,88 @@
+"""The marine gyrocompass's closed forms: tuning, period, settle points (issue 39 item 1).
+
+The linearised equations of :mod:`.dynamics` for a compass at rest on a pier (α the north end's
+azimuth east of true north, θ its tilt, north end up, both small; Ω the Earth rate, φ the latitude;
+P_c/H the control torque per unit tilt over the rotor's angular momentum)::
+
+    dα/dt = Ω sin φ − (P_c/H + Ω cos φ) θ            (drift; control torque)
+    dθ/dt = Ω cos φ · α − (P_d/H) θ                   (tilting; damping in tilt, Sperry)
+
+(derived here from H ds/dt = τ⊥ − H (Ω + ρ) × s, :mod:`.dynamics`; the structure of the pendulous
+and damped models in Christou, *Evaluation of mathematical models for gyrocompass behaviour*, UNB
+Tech. Rep. 100, 1983, §4.2; the term Ω cos φ θ is the one the usual form drops: its relative size
+Ω cos φ H/P_c is Ω² cos² φ R/g ≈ 3.5e-3). Hence:
+
+- the undamped period T(φ) = 2π / √((P_c/H + Ω cos φ) Ω cos φ): :func:`undamped_period_s`; the
+  common form 2π √(H/(P_c Ω cos φ)) is its first order (physics_notes.md, "A pendulous
+  (Schuler-tuned) gyrocompass"); T ∝ 1/√(cos φ): longer toward the poles, ≈ 84.4 min √(cos φ_d/cos φ);
+- Schuler tuning: a north–south speed change ΔV_N deflects the axis by −(P_c/(g H)) ΔV_N (the
+  ballistic deflection) while the settle point moves by −ΔV_N/(R Ω cos φ) (the speed error's change);
+  they are equal, and the change dead-beat, when P_c/H = g/(R Ω cos φ_d) at the design latitude
+  φ_d (Chalmers, *The gyroscopic compass*, ch. X "The ballistic deflection": classically 40°), where
+  T = 2π/√(g/R + Ω² cos² φ_d), shorter than 2π √(R/g) = 84.4 min by Ω² cos² φ_d R/(2g)
+  (1.0e-3, 5.6 s at 40°): :func:`control_ratio_per_s`;
+- damping in tilt settles east of north (north latitudes) by sin δ_d = (P_d/P_c) tan φ, P_d/P_c =
+  1/40 on a Sperry compass ("Gyro Numerical Solved", scribd 598664583; sailorsknowit.com "damping in
+  tilt, damping in azimuth"): :func:`damping_error_rad`; damping in azimuth (Anschütz) leaves none;
+- on a ship of velocity (V_E, V_N), the frame turns at Ω + ρ, ρ = (−V_N, V_E, V_E tan φ)/R: the
+  tilting equation settles when the axis lies in the plane of the vertical and the horizontal part of
+  Ω + ρ, tan δ = −V_N / (R Ω cos φ + V_E): the north end west of north when steaming north, the
+  compass reading high. δ = atan(V cos C / (R Ω cos φ + V sin C)) is the form the equations give
+  exactly (for damping in azimuth; with damping in tilt its latitude error adds): :func:`speed_error_rad`.
+  Teaching uses δ ≈ V cos C / (R Ω cos φ) (R Ω ≈ 900 kn); manufacturers' tables follow sin δ = V cos C /
+  (R Ω cos φ) (gyrocompass_sources.md, NAVIGAT X MK 1 table).
+
+All functions take SI units and radians.
+"""
+
+import math
+
+import numpy as np
+
+from gyro_instrument.core.motion import EARTH_RADIUS_M
+
+
+def control_ratio_per_s(gravity_m_s2, earth_rate_rad_s, design_latitude_rad, factor=1.0) -> float:
+    """P_c/H (1/s) of a compass Schuler-tuned at ``design_latitude_rad``: ``factor`` · g / (R Ω cos φ_d)
+    (factor 1: tuned; Chalmers ch. X)."""
+    return factor * gravity_m_s2 / (EARTH_RADIUS_M * earth_rate_rad_s * math.cos(design_latitude_rad))
+
+
+def undamped_period_s(control_per_s, earth_rate_rad_s, latitude_rad) -> float:
+    """T = 2π / √((P_c/H + Ω cos φ) Ω cos φ), s (module docstring); inf at a pole or without Earth rate."""
+    h = earth_rate_rad_s * math.cos(latitude_rad)
+    k = (control_per_s + h) * h
+    return 2.0 * math.pi / math.sqrt(k) if k > 0 else math.inf
+
+
+def schuler_period_s(gravity_m_s2) -> float:
+    """2π √(R/g), s: 84.4 min (5064 s at g = 9.806 m/s²)."""
+    return 2.0 * math.pi * math.sqrt(EARTH_RADIUS_M / gravity_m_s2)
+
+
+def damping_error_rad(damping_ratio, latitude_rad) -> float:
+    """δ_d = asin((P_d/P_c) tan φ), rad: the settle point of damping in tilt, east of north for φ > 0."""
+    x = damping_ratio * math.tan(latitude_rad)
+    return math.asin(max(-1.0, min(1.0, x)))
+
+
+def speed_error_rad(v_east_m_s, v_north_m_s, earth_rate_rad_s, latitude_rad) -> "float | np.ndarray":
+    """The north end's settled azimuth on a moving ship, rad (negative: west of north):
+    atan2(−V_N, R Ω cos φ + V_E) (module docstring). Works on floats or arrays."""
+    import numpy as np
+    return np.arctan2(-np.asarray(v_north_m_s), EARTH_RADIUS_M * earth_rate_rad_s * np.cos(latitude_rad)
+                      + np.asarray(v_east_m_s))
+
+
+def settled_tilt_rad(control_per_s, earth_rate_rad_s, latitude_rad) -> float:
+    """The settled tilt of the north end, θ = Ω sin φ / (P_c/H + Ω cos φ), rad (up in north
+    latitudes): the tilt at which the control torque's precession follows the vertical component
+    of the Earth rate (the drift)."""
+    return earth_rate_rad_s * math.sin(latitude_rad) / (control_per_s + earth_rate_rad_s * math.cos(latitude_rad))
+
+
+def damping_ratio_tilt(damping_ratio, control_per_s, earth_rate_rad_s, latitude_rad) -> float:
+    """ζ of damping in tilt: the characteristic equation s² + (P_d/H) s + (P_c/H + Ω cos φ) Ω cos φ = 0
+    gives ζ = (P_d/H) / (2 ω0)."""
+    w0 = 2.0 * math.pi / undamped_period_s(control_per_s, earth_rate_rad_s, latitude_rad)
+    return damping_ratio * control_per_s / (2.0 * w0)
