@@ -279,4 +279,4 @@ def test_estimate_says_the_sailing_estimator_is_not_yet_there():
     est = estimate_records(scene, truth[1], measure(scene, truth))
     for name in ("sperry", "anschutz"):
         reason = est["instruments"][name]["reason"]
-        assert reason.startswith("not used by the estimator") and "issue 39 step 3" in reason
+        assert reason.startswith("not used by the estimator") and "not implemented yet" in reason

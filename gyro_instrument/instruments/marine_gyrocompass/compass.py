@@ -64,7 +64,7 @@ class CompassObservation(Observation):
     reason, as it lists every instrument it does not measure."""
 
     PENDING_ESTIMATOR = ("the marine gyrocompass's estimator (settle-point error, damping and period from a "
-                         "sailing record) is issue 39 step 3, not yet available; its reading's error is the "
+                         "sailing record) is not implemented yet; its reading's error is the "
                          "simulated column heading_error")
 
     def unmeasured_reason(self) -> str:
