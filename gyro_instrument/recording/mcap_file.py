@@ -1,11 +1,11 @@
 """The file under :class:`~gyro_instrument.recording.mcap_io.BagWriter`: records buffered and written
 in one ``pwrite`` with a provisional end after them, so the file on disk is a complete MCAP after
-every commit (:class:`_TailKeepingFile`); :class:`DiskFull`, the error a full disk raises."""
+every commit (:class:`TailKeepingFile`); :class:`DiskFull`, the error a full disk raises."""
 
 import os
 
 
-class _TailKeepingFile:
+class TailKeepingFile:
     """The writer's output stream: data records are buffered and reach the file in one ``pwrite``
     together with a provisional end (summary, footer, magic) placed after them. The next commit
     writes over that provisional end from its first byte, so the file on disk is a complete MCAP
@@ -98,7 +98,7 @@ class DiskFull(OSError):
                 f"needs {self.needed} bytes, {free} bytes free; the bag is closed readable up to its last commit")
 
 
-class _Sink:
+class Sink:
     """A byte sink that reports file offsets from ``start`` (for the provisional end)."""
 
     def __init__(self, start):
