@@ -31,7 +31,7 @@ LONG_S = 48 * 3600.0
 SHORT_S = 3600.0
 
 
-def loopback(cmd):
+def loopback(cmd) -> tuple:
     """(command, environment) kept on loopback (as :func:`.work_precision.suite_real_time_factor`)."""
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)

@@ -24,7 +24,7 @@ def _cpu(f):
     return out, time.process_time() - c0
 
 
-def wrapped(d, period=math.pi):
+def wrapped(d, period=math.pi) -> float:
     """``d`` folded into (−period/2, period/2]: a swing plane is defined modulo π."""
     return (d + period / 2) % period - period / 2
 

@@ -19,17 +19,17 @@ class TailKeepingFile:
         self._end = 0              # end of what is on disk
         self._tail = b""           # the provisional end on disk now
 
-    def write(self, data):
+    def write(self, data) -> int:
         self._pending += data
         return len(data)
 
-    def tell(self):
+    def tell(self) -> int:
         return self._pos + len(self._pending)
 
-    def flush(self):
+    def flush(self) -> None:
         pass
 
-    def commit(self, tail=b""):
+    def commit(self, tail=b"") -> None:
         """Write the pending records and then ``tail`` (not part of the data: overwritten next time).
 
         When the write fails (ENOSPC: the disk is full, EDQUOT, EFBIG...) the file is put back as
@@ -63,7 +63,7 @@ class TailKeepingFile:
         except OSError:
             pass                   # nothing better to do: the reader reads up to the last complete record
 
-    def rewrite_tail(self, tail):
+    def rewrite_tail(self, tail) -> None:
         """Replace the provisional end on disk by ``tail`` (no longer than it: the space it takes is
         already the file's), the file cut after it."""
         if len(tail) > len(self._tail):
@@ -75,7 +75,7 @@ class TailKeepingFile:
         os.ftruncate(self._fd, at)
         self._tail, self._end = bytes(tail), at
 
-    def close(self):
+    def close(self) -> None:
         os.close(self._fd)
 
 
@@ -104,12 +104,12 @@ class Sink:
     def __init__(self, start):
         self.start, self.buf = start, bytearray()
 
-    def write(self, data):
+    def write(self, data) -> int:
         self.buf += data
         return len(data)
 
-    def tell(self):
+    def tell(self) -> int:
         return self.start + len(self.buf)
 
-    def flush(self):
+    def flush(self) -> None:
         pass

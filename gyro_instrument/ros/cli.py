@@ -99,7 +99,7 @@ def _command(core_cli, argv):
     return 0
 
 
-def run_options(args, full, bag_format, ros_args):
+def run_options(args, full, bag_format, ros_args) -> "RunOptions":  # noqa: F821
     """The :class:`~gyro_instrument.ros.suite.RunOptions` of ``run``'s parsed ``args`` (``full``: the
     whole command line, recorded in the bag; ``bag_format`` as checked; ``ros_args``: after
     ``--ros-args``)."""
