@@ -6,7 +6,7 @@ import pytest
 
 from gyro_instrument.core import scene as stages
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.params import Param
+from gyro_instrument.core.params import Param, validate_params
 from gyro_instrument.core.scene import Block
 from gyro_instrument.scenes import FORMAT, build_instruments, load_scene, scene_from_data, scene_path
 
@@ -61,22 +61,43 @@ def test_scene_from_data_without_overrides_validates_the_mapping_as_given():
     assert scene.raw == data and scene.source == "recorded"
 
 
-def _motion_block():
-    # a stand-in for the marine helper's block: a flat block with two keys and its own check
-    params = (Param("speed_kn", default=0.0, low=0.0, high=100.0, doc="ship's speed, knots"),
-              Param("course_deg", default=0.0, low=0.0, high=360.0, open_high=True, doc="course, degrees"))
-    return Block("motion", params, doc="the ship's motion (optional)")
+MOTION_PARAMS = (Param("speed_kn", default=0.0, low=0.0, high=100.0, doc="ship's speed, knots"),
+                 Param("course_deg", default=0.0, low=0.0, high=360.0, open_high=True, doc="course, degrees"))
+
+
+def _check_motion(raw, parts):
+    # a stand-in for the marine helper's block: absent is a fixed pier (None); present, it needs what
+    # was validated before it (the site's latitude, the duration), as a ship's track does
+    if raw is None:
+        return None
+    return dict(validate_params("motion", MOTION_PARAMS, raw), start_latitude_rad=parts.site.latitude_rad,
+                duration_s=parts.top["duration_s"])
+
+
+def _attach(instrument, motion):
+    if motion is not None:
+        instrument.motion = motion
+
+
+MOTION = Block("motion", check_value=_check_motion, channels=lambda m: 2 if m else 0, attach=_attach,
+               doc="the ship carrying the instruments (optional)")
 
 
 def test_a_new_block_is_one_registration():
-    fmt = FORMAT.with_block(_motion_block())
+    fmt = FORMAT.with_block(MOTION)
     path = scene_path("quet_paris")
-    absent = stages.load(path, [], fmt)
-    assert absent.blocks["motion"] == {"speed_kn": 0.0, "course_deg": 0.0}       # the Params' defaults
+    pier = stages.load(path, [], fmt)
+    base = load_scene("quet_paris")
+    assert pier.motion is None and pier.output_channels == base.output_channels
+    assert getattr(base, "motion", None) is None                    # the shipped format has no such block
     given = stages.load(path, ["motion={speed_kn: 20, course_deg: 90}"], fmt)   # replaces the whole block
-    assert given.blocks["motion"] == {"speed_kn": 20.0, "course_deg": 90.0}
-    reset = stages.load(path, ["motion.speed_kn=12", "motion.speed_kn=null"], fmt)
-    assert reset.blocks["motion"]["speed_kn"] == 0.0
+    assert given.motion == {"speed_kn": 20.0, "course_deg": 90.0, "start_latitude_rad": given.site.latitude_rad,
+                            "duration_s": given.duration_s}
+    assert given.output_channels == base.output_channels + 2        # the block's own columns
+    built = stages.build_instruments(given, fmt)
+    assert all(inst.motion is given.motion for inst in built.values())
+    assert stages.load(path, ["motion.speed_kn=12", "motion=null"], fmt).motion is None
+    assert stages.load(path, ["motion.speed_kn=12", "motion.speed_kn=null"], fmt).motion["speed_kn"] == 0.0
     with pytest.raises(SceneError) as err:
         stages.load(path, ["motion.course_deg=360"], fmt)
     assert err.value.field == "motion.course_deg" and err.value.value == 360.0
@@ -84,8 +105,6 @@ def test_a_new_block_is_one_registration():
     with pytest.raises(SceneError) as err:
         load_scene("quet_paris", ["motion.speed_kn=20"])
     assert err.value.field == "motion" and "unknown key" in str(err.value)
-    # and `motion=null` is known to the override stage once registered, unknown before
-    assert stages.load(path, ["motion=null"], fmt).blocks["motion"] == absent.blocks["motion"]
     with pytest.raises(SceneError) as err:
         load_scene("quet_paris", ["motion=null"])
     assert err.value.field == "motion"

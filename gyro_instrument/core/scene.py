@@ -38,47 +38,28 @@ validation stage checks it after the instruments and the scene carries its value
 import copy
 import math
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import yaml
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.params import Param, other_rate_spellings, unknown_key_hint, validate_params
+from gyro_instrument.core.params import other_rate_spellings, unknown_key_hint, validate_params
 from gyro_instrument.core.sampling import (DEFAULT_WINDOW_S, EPOCH_NS, SampleBlocks,  # noqa: F401 (re-exported:
                                            sample_blocks, sample_blocks_ns, sample_times,  # the stamps were
                                            sample_times_ns)                                # defined here first)
-from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S, Site
-
-SITE_PARAMS = (
-    Param("latitude_deg", low=-90.0, high=90.0, doc="geodetic latitude, degrees (north positive)"),
-    Param("earth_rate_rad_s", default=SIDEREAL_RATE_RAD_S, low=0.0, high=1.0,
-          doc="Earth rotation rate n, rad/s (sidereal 7.2921150e-5)"),
-    Param("gravity_m_s2", default=None, low=0.0, high=1000.0, open_low=True,
-          doc="local gravity, m/s^2 (default: WGS-84 normal gravity at the latitude)"),
-    Param("latitude_known", kind="bool", default=True,
-          doc="false: the site's latitude is a placeholder (a record from an unknown place): estimates are not "
-              "compared with it (no site check)"),
-)
-
-TOP_PARAMS = (
-    Param("name", kind="str", default="scene", doc="scene name"),
-    Param("description", kind="str", default="", doc="free text"),
-    Param("duration_s", default=600.0, low=0.0, high=1.0e7, open_low=True,
-          doc="simulated time per instrument, s"),
-    Param("sample_rate_hz", default=20.0, low=0.0, high=1.0e4, open_low=True,
-          doc="output sample rate, Hz"),
-    Param("seed", kind="int", default=0, low=0, high=2 ** 63 - 1, doc="random seed (sensor noise)"),
-)
-
-#: The sections every scene has, whatever its format (site, effects, instruments); the optional
-#: blocks (``sensor``, ``estimator``, ...) are the format's (:attr:`SceneFormat.sections`).
-CORE_SECTIONS = ("site", "effects", "instruments")
+from gyro_instrument.core.scene_format import (CORE_SECTIONS, SITE_PARAMS, TOP_PARAMS, Block,  # noqa: F401
+                                               SceneFormat, SceneParts)                         # (re-exported)
+from gyro_instrument.core.site import Site
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable."""
+    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable.
+
+    A block the format registers beyond ``sensor`` and ``estimator`` is read as an attribute too
+    (``scene.motion`` is ``scene.blocks["motion"]``); ``getattr(scene, name, None)`` is None for a
+    block the format does not have."""
 
     name: str
     description: str
@@ -99,70 +80,11 @@ class Scene:
     #: name: its validated value (:meth:`Block.check`)
     blocks: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
-
-@dataclass(frozen=True)
-class Block:
-    """An optional top-level block of a scene (``sensor:``, ``estimator:``, a ship's ``motion:``).
-
-    Attributes
-    ----------
-    name : str
-        The top-level key.
-    params : tuple of Param
-        Its keys, checked by :func:`~gyro_instrument.core.params.validate_params` (an absent block
-        takes every default).
-    check_value : callable or None
-        Instead of ``params``, for a block that is not flat: ``check_value(raw)`` returns the
-        validated value (``raw`` is None when the scene has no such block) or raises
-        :class:`SceneError` naming the field.
-    doc : str
-        One line for the scene format's documentation.
-    """
-
-    name: str
-    params: tuple = ()
-    check_value: object = None
-    doc: str = ""
-
-    def check(self, raw) -> object:
-        """The block's validated value from its ``raw`` document value (None: absent). Raises SceneError."""
-        if self.check_value is not None:
-            return self.check_value(raw)
-        return validate_params(self.name, self.params, raw) if self.params or raw else {}
-
-
-@dataclass(frozen=True)
-class SceneFormat:
-    """What a scene may hold: the instrument types, the effects and the optional blocks.
-
-    Attributes
-    ----------
-    instruments : mapping
-        type name -> instrument class with ``PARAMS``, ``SUPPORTED_EFFECTS``, ``COLUMNS`` and the
-        classmethods ``check_params(prefix, params)`` and ``check_effects(prefix, params,
-        effect_names)`` (the instrument protocol, ``gyro_instrument.instruments.base``).
-    effects : mapping
-        effect name -> :class:`~gyro_instrument.core.effect.Effect` subclass.
-    blocks : tuple of Block
-        The optional top-level blocks, validated in this order after the instruments.
-    """
-
-    instruments: object
-    effects: object
-    blocks: tuple = ()
-
-    @property
-    def sections(self) -> tuple:
-        """The top-level mappings: :data:`CORE_SECTIONS` then the blocks' names."""
-        return CORE_SECTIONS + tuple(b.name for b in self.blocks)
-
-    def known_keys(self) -> set:
-        """Every top-level key a scene of this format may have."""
-        return {p.name for p in TOP_PARAMS} | set(self.sections)
-
-    def with_block(self, block) -> "SceneFormat":
-        """This format with ``block`` added (validated after the ones it has)."""
-        return replace(self, blocks=self.blocks + (block,))
+    def __getattr__(self, name) -> object:
+        blocks = self.__dict__.get("blocks")      # (only reached for a name that is not a field)
+        if blocks is not None and name in blocks:
+            return blocks[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 # ----------------------------------------------------------------------------- 1. parse
@@ -371,14 +293,18 @@ def validate_scene(data, fmt, source="") -> Scene:
     effects_raw, effects = _build_effects(data.get("effects"), fmt.effects)
     instruments = _build_instruments(data.get("instruments"), fmt.instruments, fmt.effects, effects)
     _check_effects_used(effects_raw, effects, instruments, fmt.instruments)
-    blocks = {b.name: b.check(data.get(b.name)) for b in fmt.blocks}
+    blocks = {}
+    parts = SceneParts(top, site, effects, instruments, fmt)
+    for block in fmt.blocks:
+        blocks[block.name] = block.check(data.get(block.name), parts)
     return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
                  sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
                  effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
                  sensor=MappingProxyType(blocks.get("sensor", {})),
                  estimator=MappingProxyType(blocks.get("estimator", {})),
                  source=source, raw=MappingProxyType(data),
-                 output_channels=1 + sum(len(fmt.instruments[spec[0]].COLUMNS) for spec in instruments.values()),
+                 output_channels=1 + sum(len(fmt.instruments[spec[0]].COLUMNS) for spec in instruments.values())
+                 + sum(b.channels(blocks[b.name]) for b in fmt.blocks if b.channels is not None),
                  blocks=MappingProxyType(blocks))
 
 
@@ -465,11 +391,15 @@ def _check_effects_used(effects_raw, effects, instruments, instrument_registry):
 # ----------------------------------------------------------------------------- 4. build
 def build_instruments(scene, fmt) -> dict:
     """Instrument objects of a validated scene: name -> instrument of ``fmt``'s type, each given
-    the scene's site, its validated parameters and only the effects the scene lists for it."""
+    the scene's site, its validated parameters and only the effects the scene lists for it; then
+    each block with an ``attach`` hook is attached to every instrument (:class:`Block`)."""
     out = {}
     for name, (itype, params, effect_names) in scene.instruments.items():
         cls = fmt.instruments[itype]
         out[name] = cls(name, scene.site, params, {e: scene.effects[e] for e in effect_names})
+        for block in fmt.blocks:
+            if block.attach is not None:
+                block.attach(out[name], scene.blocks.get(block.name))
     return out
 
 
