@@ -13,10 +13,10 @@ top-level block is one more :class:`~gyro_instrument.core.scene.Block` in it).
 import os
 from importlib import resources
 
+from gyro_instrument.core import scene as stages
 from gyro_instrument.core.effect import DEFAULT_ON
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.params import Param
-from gyro_instrument.core import scene as stages
 from gyro_instrument.core.scene import Block, Scene, SceneFormat
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS
