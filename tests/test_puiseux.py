@@ -1,8 +1,8 @@
 """Acceptance tests for Puiseux's heavy body on a smooth horizontal plane.
 
 Source: V. Puiseux, "Solution de quelques questions relatives au mouvement d'un corps solide
-pesant posé sur un plan horizontal", J. math. pures appl. (1) 17 (1852) 1-30
-(/work/shared/seeds/puiseux_1852_heavy_solid_on_plane.txt), and /work/shared/physics_notes.md.
+pesant posé sur un plan horizontal", J. math. pures appl. (1) 17 (1852) 1-30 (read in a transcription
+of the printed text).
 """
 
 import math

@@ -2,8 +2,8 @@
 roots of his equation for omega, the lambda algebra and the vertical component of gravity along the
 normal (sec. II). Split from tests/test_puiseux_general.py (the simulation side stays there).
 
-Source: V. Puiseux, J. math. pures appl. (1) 17 (1852) 1-30, sec. II-III; /work/shared/seeds/
-puiseux_1852_heavy_solid_on_plane.txt; gyro_instrument/instruments/puiseux/general.py derives the
+Source: V. Puiseux, J. math. pures appl. (1) 17 (1852) 1-30, sec. II-III (read in a transcription of
+the printed text); gyro_instrument/instruments/puiseux/general.py derives the
 first-order theory in vector form.
 """
 

@@ -1,10 +1,9 @@
 """Puiseux's general body (sec. III) and the contact-point path (sec. I and III).
 
 Source: V. Puiseux, J. math. pures appl. (1) 17 (1852) 1-30, sec. III (pp. 22-30) and the end of
-sec. I (the contact point, "stations et rétrogradations"); /work/shared/seeds/
-puiseux_1852_heavy_solid_on_plane.txt. The module docstring of
-gyro_instrument/instruments/puiseux/general.py derives the first-order theory in vector form; here
-it is held to Puiseux's printed equations and to the exact simulation.
+sec. I (the contact point, "stations et rétrogradations"), read in a transcription of the printed
+text. The module docstring of gyro_instrument/instruments/puiseux/general.py derives the first-order
+theory in vector form; here it is held to Puiseux's printed equations and to the exact simulation.
 
 Small-amplitude tolerances. The simulation is the exact nonlinear body (DOP853, rtol 1e-10). At
 tilt amplitude θ0 the first-order theory errs by O(θ0²) in the frequencies (nonlinear frequency

@@ -19,7 +19,7 @@ from gyro_instrument.estimators.pipeline import estimate_records, measure, simul
 from gyro_instrument.recording.mcap_io import read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros.nodes import EstimatorNode, SimulatorNode
-from gyro_instrument.ros.suite import run_suite
+from gyro_instrument.ros.suite import RunOptions, run_suite
 from gyro_instrument.scenes import load_scene
 
 
@@ -126,7 +126,7 @@ def test_batched_run_records_every_message_in_sample_order(tmp_path):
     runs = {}
     for batch in (7, 1):
         bag = str(tmp_path / f"b{batch}.mcap")
-        result, stats = run_suite("quet_paris", ["seed=5"], 3.0, bag, batch=batch)
+        result, stats = run_suite("quet_paris", ["seed=5"], 3.0, bag, RunOptions(batch=batch))
         assert stats["batch"] == batch and stats["samples"] == 61
         visual = {"/gyro_horizontal/axis_direction", "/gyro_horizontal/markers", "/gyro_meridian/axis_direction",
                   "/gyro_meridian/markers", "/pendulum/swing_plane", "/pendulum/markers"}

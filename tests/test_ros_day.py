@@ -32,7 +32,7 @@ from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import read_messages
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros.launch import _command, launch
-from gyro_instrument.ros.suite import run_suite
+from gyro_instrument.ros.suite import RunOptions, run_suite
 
 pytestmark = pytest.mark.ros
 BIN = Path(sys.executable).parent
@@ -323,7 +323,7 @@ def test_disk_full_injected_at_the_writer_leaves_a_readable_file(tmp_path, monke
 
 def test_replay_and_recover_skip_an_empty_or_cut_split(tmp_path):
     bag = str(tmp_path / "b")
-    run_suite("foucault_pantheon", [], 30.0, bag + "/", max_bag_duration_s=10.0)
+    run_suite("foucault_pantheon", [], 30.0, bag + "/", RunOptions(max_bag_duration_s=10.0))
     files, _ = bag_files(bag)
     assert len(files) == 4                      # 0-10, 10-20, 20-30 s and the sample at 30 s
     with open(os.path.join(bag, "b_4.mcap"), "wb"):
@@ -471,7 +471,7 @@ def test_empty_joint_state_definition_named_as_the_cause(tmp_path, recorded):
 
 def test_storage_identifier_empty_and_numeric_split_order(tmp_path):
     bag = str(tmp_path / "h")
-    run_suite("foucault_pantheon", [], 24.0, bag + "/", max_bag_duration_s=2.0)
+    run_suite("foucault_pantheon", [], 24.0, bag + "/", RunOptions(max_bag_duration_s=2.0))
     files, _ = bag_files(bag)
     assert len(files) == 13                     # 2 s each and the sample at 24 s
     meta_path = os.path.join(bag, "metadata.yaml")

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.recording.frames import check_frame_prefix, parse_stamp_epoch
-from gyro_instrument.ros.suite import run_suite
+from gyro_instrument.ros.suite import RunOptions, run_suite
 
 pytestmark = pytest.mark.ros
 
@@ -60,8 +60,8 @@ def gyro_run(tmp_path_factory):
     spinner.start()
     bag = str(tmp_path_factory.mktemp("frames") / "g.mcap")
     try:
-        result, stats = run_suite("gyrotheodolite", [], DURATION_S, bag,
-                                  ros_args=["-p", f"frame_prefix:={PREFIX}", "-p", f"stamp_epoch:={EPOCH_TEXT}"])
+        result, stats = run_suite("gyrotheodolite", [], DURATION_S, bag, RunOptions(
+            ros_args=["-p", f"frame_prefix:={PREFIX}", "-p", f"stamp_epoch:={EPOCH_TEXT}"]))
         t0 = time.monotonic()
         while len(live) < 1 and time.monotonic() - t0 < 10:
             time.sleep(0.05)
@@ -237,7 +237,7 @@ def test_wall_stamp_epoch_at_real_time_factor_1(tmp_path):
     bag = str(tmp_path / "w.mcap")
     before = time.time()
     run_suite("quet_paris", ["instruments.gyro_meridian=null", "instruments.pendulum=null"], 2.0, bag,
-              real_time_factor=1.0, ros_args=["-p", "stamp_epoch:=wall"])
+              RunOptions(real_time_factor=1.0, ros_args=["-p", "stamp_epoch:=wall"]))
     after = time.time()
     with AnyReader([Path(bag)], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
         got = [(c.topic, log, reader.deserialize(raw, c.msgtype)) for c, log, raw in reader.messages()]

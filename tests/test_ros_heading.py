@@ -33,7 +33,7 @@ from sensor_msgs.msg import Imu
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.recording.mcap_io import read_messages
-from gyro_instrument.ros.suite import run_suite
+from gyro_instrument.ros.suite import RunOptions, run_suite
 
 pytestmark = pytest.mark.ros
 
@@ -85,7 +85,8 @@ def heading_run(tmp_path_factory):
     reader.start()
     bag = str(tmp_path_factory.mktemp("heading") / "h.mcap")
     try:
-        result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag, nmea_udp=f"127.0.0.1:{udp.getsockname()[1]}")
+        result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag,
+                                  RunOptions(nmea_udp=f"127.0.0.1:{udp.getsockname()[1]}"))
         udp_done.set()
         reader.join()
         t0 = time.monotonic()
@@ -177,4 +178,4 @@ def test_an_independent_subscriber_gets_the_same_messages(heading_run):
 
 def test_a_bad_nmea_target_is_refused_before_any_node_starts():
     with pytest.raises(SceneError, match="--nmea-udp"):
-        run_suite("quet_paris", SCENE, 10.0, nmea_udp="127.0.0.1:70000")
+        run_suite("quet_paris", SCENE, 10.0, options=RunOptions(nmea_udp="127.0.0.1:70000"))

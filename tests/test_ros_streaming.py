@@ -106,7 +106,7 @@ def test_run_publishes_and_commits_each_block_before_integrating_the_next(analyt
     from gyro_instrument.cli import to_jsonable
     from gyro_instrument.estimators.pipeline import estimable, estimate_records, measure, simulate_truth
     from gyro_instrument.recording.mcap_io import read_messages
-    from gyro_instrument.ros.suite import BATCH, run_suite
+    from gyro_instrument.ros.suite import BATCH, RunOptions, run_suite
     path = tmp_path / "streaming.yaml"
     path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=60.0, block_cost_s=0.3)))
     bag = tmp_path / "s.mcap"
@@ -115,7 +115,7 @@ def test_run_publishes_and_commits_each_block_before_integrating_the_next(analyt
     def probe(i):
         on_disk[i] = sum(1 for m in read_messages(str(bag)) if m[0] == "/clock") if bag.exists() else 0
     analytic.ON_BLOCK = probe
-    result, stats = run_suite(str(path), bag=str(bag), window_s=10.0)
+    result, stats = run_suite(str(path), bag=str(bag), options=RunOptions(window_s=10.0))
     # 60 s at 20 Hz: 1201 samples in blocks of 200 (the last one 1): 7 integrations, one per block;
     # published as 8 joint blocks (each one sample short, the held last sample alone at the end)
     assert [e[1] for e in analytic.EVENTS] == list(range(7)) and stats["blocks"] == {"gyrocompass_sim": 8}
@@ -134,10 +134,10 @@ def test_run_publishes_and_commits_each_block_before_integrating_the_next(analyt
 def test_estimator_keeps_8_bytes_per_kept_value_and_nothing_per_message(analytic, tmp_path):
     """What grows with the run in the estimator: t (int64), the measured channels and the spin
     (float64) per sample, in arrays that at most double — no list of messages."""
-    from gyro_instrument.ros.suite import run_suite
+    from gyro_instrument.ros.suite import RunOptions, run_suite
     path = tmp_path / "streaming.yaml"
     path.write_text(yaml.safe_dump(streaming_instrument.scene(duration_s=600.0)))
-    _, stats = run_suite(str(path), window_s=100.0)
+    _, stats = run_suite(str(path), options=RunOptions(window_s=100.0))
     n = 12001                                       # 600 s at 20 Hz
     per_sample = 8 * (1 + 1 + 1)                    # t, angle, spin
     assert n * per_sample <= stats["estimator_bytes"] <= 2 * n * per_sample

@@ -9,18 +9,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from gyro_instrument.core.params import REQUIRED, alias_note  # noqa: E402
 from gyro_instrument.core.motion import CHANGE_PARAMS, MOTION_PARAMS  # noqa: E402
-from gyro_instrument.core.scene import SECTIONS, SITE_PARAMS, TOP_PARAMS  # noqa: E402
+from gyro_instrument.core.scene import SITE_PARAMS, TOP_PARAMS  # noqa: E402
 from gyro_instrument.effects import REGISTRY as EFFECTS  # noqa: E402
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS  # noqa: E402
-from gyro_instrument.scenes import ESTIMATOR_PARAMS, NO_EARTH_ROTATION, SENSOR_PARAMS  # noqa: E402
+from gyro_instrument.scenes import ESTIMATOR_PARAMS, FORMAT, NO_EARTH_ROTATION, SENSOR_PARAMS  # noqa: E402
 
+#: The core sections' lines; an optional block's line is its Block.doc (the scene format's blocks).
 SECTION_DOCS = {
     "site": "where the instruments stand (below)",
     "effects": "the physical effects simulated; nothing else is (below)",
-    "sensor": "measurement model applied to every angle channel (optional; below)",
-    "estimator": "how `estimate` measures periods and which hemisphere it may assume (optional; below)",
     "instruments": "name: {type: ..., parameters...}; at least one (below)",
-    "motion": "the ship carrying the instruments (optional: without it, a fixed pier; below)",
 }
 
 
@@ -79,7 +77,8 @@ def render():
            "```", "",
            "## Top-level keys", ""]
     out += param_table(TOP_PARAMS, "")
-    out += [f"| `{s}` | section | mapping | {SECTION_DOCS.get(s, '')} |" for s in SECTIONS]
+    docs = dict(SECTION_DOCS, **{b.name: b.doc for b in FORMAT.blocks})
+    out += [f"| `{s}` | section | mapping | {docs.get(s, '')} |" for s in FORMAT.sections]
     out += ["", "## `site`", "", "Required, with at least `latitude_deg`.", ""]
     out += param_table(SITE_PARAMS, "site.")
     out += ["", "## `effects`", "",

@@ -149,7 +149,7 @@ def compiled_reference_rows(quick=False, progress=print) -> list[dict]:
     and the numba status line (:func:`gyro_instrument.core.jit.status`). Keys: ``case``, ``method``,
     ``simulated_s``, ``cpu_s`` (median of :data:`REPEATS`), ``cpu_system_s`` (its system part),
     ``cpu_ratio``, ``goal``, ``met``, ``end_error_rad``, ``numba``."""
-    from gyro_instrument.bench.work_precision import _wrapped
+    from gyro_instrument.bench.work_precision import wrapped
     duration = 3600.0 if quick else 86164.0989          # a sidereal day (2π / n)
     p, t = _scene(duration)
     if quick:               # one hour is shorter than the compiled path's minimum run: asked for here
@@ -167,8 +167,8 @@ def compiled_reference_rows(quick=False, progress=print) -> list[dict]:
     rc, fc = statistics.median(ref_cpu), statistics.median(fast_cpu)
     progress(f"  compiled reference {rc:.3f} s CPU, fast path {fc:.3f} s CPU over {duration:g} s")
     tight = _tight_reference(duration, progress)
-    ref_err = abs(_wrapped(_end_azimuth(p, y) - tight))
-    fast_err = abs(_wrapped(float(sim.columns["swing_azimuth"][-1]) - tight))
+    ref_err = abs(wrapped(_end_azimuth(p, y) - tight))
+    fast_err = abs(wrapped(float(sim.columns["swing_azimuth"][-1]) - tight))
     case = f"Foucault pendulum 67 m, {duration:g} s at 20 Hz"
     common = {"case": case, "simulated_s": float(t[-1]), "numba": jit.status()}
     return [{**common, "method": f"compiled reference: serial fixed-step RK8 (DOP853 tableau), "

@@ -44,7 +44,7 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import apply_overrides, read_yaml
 from gyro_instrument.estimators.pipeline import estimable, estimate_records, measure, simulate_truth
-from gyro_instrument.scenes import scene_from_data, scene_path, shipped_scene_names
+from gyro_instrument.scenes import FORMAT, scene_from_data, scene_path, shipped_scene_names
 
 HEADER = ("scene", "effect", "cpu_with_s", "cpu_without_s", "instrument", "column", "max_abs_diff_rad",
           "dlatitude_deg", "dearth_rate_rad_s", "note")
@@ -115,7 +115,7 @@ def scene_effect_cost(job) -> list:
     label = str(name)
     try:
         path = scene_path(name)
-        data = apply_overrides(read_yaml(path), list(overrides) + list(NOISE_FREE))
+        data = apply_overrides(read_yaml(path), list(overrides) + list(NOISE_FREE), FORMAT)
         base = scene_from_data(data, source=path)
         label = base.name
     except Exception as exc:  # noqa: BLE001 - SceneError by contract; report anything, never crash
@@ -151,7 +151,7 @@ def scene_effect_cost(job) -> list:
 
 def _without(data, effect):
     """Raw scene mapping with ``effect`` removed from the scene and from every instrument's list."""
-    out = apply_overrides(data, ())  # deep copy
+    out = apply_overrides(data, (), FORMAT)  # deep copy
     eff = out.get("effects") or {}
     if isinstance(eff, list):
         out["effects"] = [e for e in eff if e != effect]

@@ -31,7 +31,7 @@ LONG_S = 48 * 3600.0
 SHORT_S = 3600.0
 
 
-def _loopback(cmd):
+def loopback(cmd) -> tuple:
     """(command, environment) kept on loopback (as :func:`.work_precision.suite_real_time_factor`)."""
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("AMENT_PREFIX_PATH", sys.prefix)
@@ -46,7 +46,7 @@ def _run_command(scene, duration_s, bag, overrides=(), extra=()):
            "--bag", bag, *extra]
     for o in overrides:
         cmd += ["--set", o]
-    return _loopback(cmd)
+    return loopback(cmd)
 
 
 def _committed_messages(path):
@@ -130,7 +130,7 @@ def _peak_rss_of(cmd, env, tmp):
 
 def import_time() -> float:
     """Seconds to start the interpreter and import the suite (rclpy included), in a child."""
-    cmd, env = _loopback([sys.executable, "-c", "import gyro_instrument.ros.suite"])
+    cmd, env = loopback([sys.executable, "-c", "import gyro_instrument.ros.suite"])
     t0 = time.monotonic()
     subprocess.run(cmd, env=env, check=True, capture_output=True)
     return time.monotonic() - t0

@@ -23,12 +23,12 @@ import os
 import subprocess
 import sys
 
-from gyro_instrument.bench.live import _loopback
+from gyro_instrument.bench.live import loopback
 
 
 def _json_child(args, stream="stdout"):
     """Run ``python args`` on loopback; its last JSON line (on ``stream``), or (None, reason)."""
-    cmd, env = _loopback([sys.executable] + list(args))
+    cmd, env = loopback([sys.executable] + list(args))
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     text = p.stdout if stream == "stdout" else p.stderr
     if p.returncode != 0 or not text.strip():

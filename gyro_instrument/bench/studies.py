@@ -439,7 +439,7 @@ def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:
     import tempfile
     from gyro_instrument.core.errors import SceneError
     from gyro_instrument.estimators.data_io import write_table
-    from gyro_instrument.views import plot_file
+    from gyro_instrument.views import PlotOptions, plot_file
     scene = load_scene("foucault_pantheon", [f"duration_s={hours * 3600.0}", f"sample_rate_hz={rate_hz}"])
     p = build_instruments(scene)["pendulum"]
     t = sample_times(scene)
@@ -450,7 +450,7 @@ def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:
         try:
             write_table(data, t, {"pendulum.x_east": x, "pendulum.y_north": y})
             t0 = time.perf_counter()
-            plot_file(data, os.path.join(out_dir, "plot_day"), "foucault_pantheon", overwrite=True)
+            plot_file(data, os.path.join(out_dir, "plot_day"), PlotOptions(scene="foucault_pantheon", overwrite=True))
         except SceneError:
             return None, t.size
         return time.perf_counter() - t0, t.size

@@ -24,7 +24,7 @@ def _cpu(f):
     return out, time.process_time() - c0
 
 
-def _wrapped(d, period=math.pi):
+def wrapped(d, period=math.pi) -> float:
     """``d`` folded into (−period/2, period/2]: a swing plane is defined modulo π."""
     return (d + period / 2) % period - period / 2
 
@@ -70,7 +70,7 @@ def foucault_work_precision(duration_s, rtols, parareal_settings, rate_hz=20.0, 
     rows = []
 
     def add(tier, setting, sim, cpu, nfev):
-        rows.append((name, tier, setting, cpu, nfev, abs(_wrapped(_end_swing_azimuth(sim) - ref))))
+        rows.append((name, tier, setting, cpu, nfev, abs(wrapped(_end_swing_azimuth(sim) - ref))))
 
     for rtol in rtols:
         p, t, _ = _pendulum(duration_s, rate_hz, rtol=rtol, integrator="adaptive")

@@ -370,15 +370,15 @@ def recover_command(args) -> int:
 def plot_command(args) -> int:
     """``gyro-instrument plot``: the standard views of a table or a bag to PNG."""
     import time
-    from gyro_instrument.views import plot_file
+    from gyro_instrument.views import PlotOptions, plot_file
     from gyro_instrument.views.rosette import parse_window
     out = args.out or f"{os.path.basename(os.path.normpath(args.file)).rsplit('.', 1)[0]}_plots"
     t0 = time.perf_counter()
     window = parse_window(args.window)
-    options = table_options(args)
-    pngs, notes = plot_file(args.file, out, args.scene_option, args.overrides, args.topics, args.overwrite,
-                            fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate, options=options,
-                            given=given_table_flags(args))
+    options = PlotOptions(scene=args.scene_option, overrides=args.overrides, topics=args.topics,
+                          overwrite=args.overwrite, fmt=args.fmt, dpi=args.dpi, window=window, animate=args.animate,
+                          table=table_options(args), given=given_table_flags(args))
+    pngs, notes = plot_file(args.file, out, options)
     for note in notes:
         print(f"gyro-instrument: note: {note}", file=sys.stderr)
     views = [p for p in pngs if not p.endswith(".gif")]

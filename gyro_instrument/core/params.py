@@ -110,6 +110,14 @@ def _fmt(x):
 RATE_ALIASES = (("_turn_s", 2.0 * math.pi), ("_rpm", 2.0 * math.pi / 60.0), ("_deg_h", math.pi / 180.0 / 3600.0))
 
 
+def other_rate_spellings(key) -> list:
+    """The other spellings of the rate ``key`` names (``spin_rate_turn_s`` -> ``spin_rate_rad_s``,
+    ``spin_rate_rpm``, ``spin_rate_deg_h``; :data:`RATE_ALIASES`); [] when ``key`` is not a rate."""
+    suffixes = ("_rad_s",) + tuple(s for s, _ in RATE_ALIASES)
+    stem = next((key[:-len(s)] for s in suffixes if key.endswith(s)), None)
+    return [stem + s for s in suffixes if stem + s != key] if stem else []
+
+
 def unit_aliases(param, known=()) -> list:
     """The accepted other spellings of ``param`` (a :class:`Param`): ``["spin_rate_turn_s", ...]``
     for a float named ``*_rad_s``, leaving out names in ``known`` (parameters of their own)."""

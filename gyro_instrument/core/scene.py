@@ -1,8 +1,9 @@
 """Frozen, validated scenes loaded from YAML, with ``--set key.path=value`` overrides.
 
 A scene names the site, the instruments and the list of effects; nothing else is simulated.
-The core knows no instrument: the caller passes the instrument and effect registries (the
-``scenes`` package does, in :func:`gyro_instrument.scenes.load_scene`).
+The core knows no instrument: the caller describes what a scene may hold in a
+:class:`SceneFormat` (the instrument and effect registries and the optional blocks; the
+``scenes`` package builds the shipped one, :data:`gyro_instrument.scenes.FORMAT`).
 
 Layout::
 
@@ -19,48 +20,46 @@ Layout::
 
 An instrument may carry its own ``effects:`` list of names, a subset of the scene's. The full
 format, generated from the parameter specifications, is docs/formats/scene.md.
+
+Loading is one pass of four stages, each a public function called once, each taking what the
+one before returned (:func:`load` composes the first three)::
+
+    read_yaml(path)                       -> document   (a dict, as written)
+    apply_overrides(document, sets, fmt)  -> document   (a new dict, --set applied)
+    validate_scene(document, fmt, source) -> Scene      (frozen, every value checked)
+    build_instruments(scene, fmt)         -> {name: instrument}
+
+A new top-level block (a ship's ``motion:``) is one :class:`Block` added to the format's
+``blocks``: the override stage then accepts ``--set motion...`` (and ``motion=null``), the
+validation stage checks it after the instruments and the scene carries its value in
+``Scene.blocks``.
 """
 
+import copy
 import math
 import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-import numpy as np
 import yaml
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.core.motion import SHIP_COLUMNS, check_sailing, parse_motion
-from gyro_instrument.core.params import Param, unknown_key_hint, validate_params
-from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S, Site
-
-SITE_PARAMS = (
-    Param("latitude_deg", low=-90.0, high=90.0, doc="geodetic latitude, degrees (north positive)"),
-    Param("earth_rate_rad_s", default=SIDEREAL_RATE_RAD_S, low=0.0, high=1.0,
-          doc="Earth rotation rate n, rad/s (sidereal 7.2921150e-5)"),
-    Param("gravity_m_s2", default=None, low=0.0, high=1000.0, open_low=True,
-          doc="local gravity, m/s^2 (default: WGS-84 normal gravity at the latitude)"),
-    Param("latitude_known", kind="bool", default=True,
-          doc="false: the site's latitude is a placeholder (a record from an unknown place): estimates are not "
-              "compared with it (no site check)"),
-)
-
-TOP_PARAMS = (
-    Param("name", kind="str", default="scene", doc="scene name"),
-    Param("description", kind="str", default="", doc="free text"),
-    Param("duration_s", default=600.0, low=0.0, high=1.0e7, open_low=True,
-          doc="simulated time per instrument, s"),
-    Param("sample_rate_hz", default=20.0, low=0.0, high=1.0e4, open_low=True,
-          doc="output sample rate, Hz"),
-    Param("seed", kind="int", default=0, low=0, high=2 ** 63 - 1, doc="random seed (sensor noise)"),
-)
-
-SECTIONS = ("site", "effects", "instruments", "sensor", "estimator", "motion")
+from gyro_instrument.core.params import other_rate_spellings, unknown_key_hint, validate_params
+from gyro_instrument.core.sampling import (DEFAULT_WINDOW_S, EPOCH_NS, SampleBlocks,  # noqa: F401 (re-exported:
+                                           sample_blocks, sample_blocks_ns, sample_times,  # the stamps were
+                                           sample_times_ns)                                # defined here first)
+from gyro_instrument.core.scene_format import (CORE_SECTIONS, SITE_PARAMS, TOP_PARAMS, Block,  # noqa: F401
+                                               SceneFormat, SceneParts)                         # (re-exported)
+from gyro_instrument.core.site import Site
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable."""
+    """A validated scene. Build it with :func:`gyro_instrument.scenes.load_scene`; it is immutable.
+
+    A block the format registers beyond ``sensor`` and ``estimator`` is read as an attribute too
+    (``scene.motion`` is ``scene.blocks["motion"]``); ``getattr(scene, name, None)`` is None for a
+    block the format does not have."""
 
     name: str
     description: str
@@ -77,10 +76,18 @@ class Scene:
     #: output channels per sample: ``time`` plus every instrument's ``COLUMNS`` (read from each
     #: instrument class when the scene is built; the memory and disk checks use it)
     output_channels: int = 0
-    #: the ship carrying the instruments (:class:`~gyro_instrument.core.motion.Motion`), None on a fixed pier
-    motion: object = None
+    #: every optional block of the format (``sensor``, ``estimator`` and any registered later), by
+    #: name: its validated value (:meth:`Block.check`)
+    blocks: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+
+    def __getattr__(self, name) -> object:
+        blocks = self.__dict__.get("blocks")      # (only reached for a name that is not a field)
+        if blocks is not None and name in blocks:
+            return blocks[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
+# ----------------------------------------------------------------------------- 1. parse
 def read_yaml(path) -> dict:
     """Read a scene file; a missing, unreadable, empty or non-mapping file is a SceneError."""
     if not os.path.exists(path):
@@ -100,6 +107,7 @@ def read_yaml(path) -> dict:
     return data
 
 
+# ----------------------------------------------------------------------------- 2. override
 def parse_override(text) -> tuple:
     """Split ``key.path=value`` into (['key', 'path'], value parsed as YAML)."""
     if "=" not in text:
@@ -121,7 +129,7 @@ def parse_override(text) -> tuple:
     return key.split("."), parsed
 
 
-def apply_overrides(data, overrides, effect_names=()) -> dict:
+def apply_overrides(data, overrides, fmt) -> dict:
     """Return a copy of ``data`` with each ``key.path=value`` override applied, in order.
 
     A value sets the key, creating the mappings on its way. ``null`` removes:
@@ -134,13 +142,14 @@ def apply_overrides(data, overrides, effect_names=()) -> dict:
 
     A path into an instrument the scene does not have is taken for a misspelling and refused
     with the closest name, unless the overrides also give that instrument's ``type`` (which adds
-    a new instrument, e.g. ``instruments.p2.type=spherical_pendulum``). ``effect_names`` (the
-    effect registry's names) lets ``effects.<name>=null`` refuse an unknown effect.
+    a new instrument, e.g. ``instruments.p2.type=spherical_pendulum``). ``fmt`` (a
+    :class:`SceneFormat`) gives the top-level keys ``key=null`` may name and the effect names
+    ``effects.<name>=null`` may name. Values are not checked here: that is the validation
+    stage's (:func:`validate_scene`).
 
     A rate set in another spelling (``spin_rate_turn_s`` for ``spin_rate_rad_s``, see
     :data:`~gyro_instrument.core.params.RATE_ALIASES`) replaces the spelling the scene gave.
     """
-    import copy
     data = copy.deepcopy(data)
     parsed = [parse_override(t) if isinstance(t, str) else (list(t[0]), t[1]) for t in overrides or ()]
     typed = set()
@@ -152,7 +161,7 @@ def apply_overrides(data, overrides, effect_names=()) -> dict:
     for path, value in parsed:
         _check_instrument_name(data, path, value, typed)
         if value is None:
-            _remove(data, path, effect_names)
+            _remove(data, path, fmt)
         else:
             _drop_other_spellings(data, path)
             _set(data, path, value)
@@ -161,17 +170,12 @@ def apply_overrides(data, overrides, effect_names=()) -> dict:
 
 def _drop_other_spellings(data, path):
     """Before an override sets ``a.b.<stem><suffix>``, remove the same rate's other spellings there."""
-    from gyro_instrument.core.params import RATE_ALIASES
-    suffixes = ("_rad_s",) + tuple(s for s, _ in RATE_ALIASES)
-    key = path[-1]
-    stem = next((key[:-len(s)] for s in suffixes if key.endswith(s)), None)
     node = data
     for part in path[:-1]:
         node = node.get(part) if isinstance(node, dict) else None
-    if stem and isinstance(node, dict):
-        for s in suffixes:
-            if stem + s != key:
-                node.pop(stem + s, None)
+    if isinstance(node, dict):
+        for other in other_rate_spellings(path[-1]):
+            node.pop(other, None)
 
 
 def _check_instrument_name(data, path, value, typed):
@@ -216,10 +220,10 @@ def _remove_effect(data, name):
             spec["effects"] = [e for e in spec["effects"] if e != name]
 
 
-def _remove(data, path, effect_names):
+def _remove(data, path, fmt):
     """``key.path=null``: remove an effect or an instrument, or reset a key to its default."""
     field_ = ".".join(path)
-    known_top = {p.name for p in TOP_PARAMS} | set(SECTIONS)
+    known_top = fmt.known_keys()
     if path[0] not in known_top:
         raise SceneError(field_, None, unknown_key_hint(path[0], known_top))
     if path[0] == "effects":
@@ -231,8 +235,8 @@ def _remove(data, path, effect_names):
             data.pop("effects", None)
             return
         name = path[1]
-        if effect_names and name not in effect_names:
-            raise SceneError(field_, None, unknown_key_hint(name, effect_names, "effect"))
+        if fmt.effects and name not in fmt.effects:
+            raise SceneError(field_, None, unknown_key_hint(name, fmt.effects, "effect"))
         listed = name in effects if isinstance(effects, (dict, list)) else False
         if len(path) == 2:
             _remove_effect(data, name)
@@ -252,50 +256,56 @@ def _remove(data, path, effect_names):
     _set(data, path, None)                       # None: the key's default (validate_params)
 
 
-def build_scene(data, instrument_registry, effect_registry, sensor_params=(), estimator_params=(),
-                source="") -> Scene:
-    """Validate a raw scene mapping and build a frozen :class:`Scene`.
+# ----------------------------------------------------------------------------- 3. validate
+def validate_scene(data, fmt, source="") -> Scene:
+    """Validate a scene document (already overridden) and return the frozen :class:`Scene`.
+
+    Checked in this order, the first error raised: the top-level keys, the top-level values, the
+    site, the effects, the instruments (each against its type's ``PARAMS``, ``check_params`` and
+    ``check_effects``), every scene effect used by some instrument, then each of ``fmt``'s blocks.
 
     Parameters
     ----------
     data : dict
-        The raw scene (already overridden).
-    instrument_registry : dict
-        type name -> instrument class with ``PARAMS``, ``SUPPORTED_EFFECTS`` and the classmethods
-        ``check_params(prefix, params)`` and ``check_effects(prefix, params, effect_names)`` (the
-        instrument protocol, ``gyro_instrument.instruments.base``).
-    effect_registry : dict
-        effect name -> :class:`~gyro_instrument.core.effect.Effect` subclass.
-    sensor_params, estimator_params : sequence of Param
-        Specifications of the optional ``sensor`` and ``estimator`` sections.
+        The scene document.
+    fmt : SceneFormat
+        The instrument types, effects and optional blocks.
+    source : str
+        Where the document came from (a path, ``recorded``).
+
+    Raises
+    ------
+    SceneError
+        Naming the field, its value and what is valid.
     """
     if not isinstance(data, dict):
         raise SceneError("scene", data, "must be a YAML mapping")
-    known = {p.name for p in TOP_PARAMS} | set(SECTIONS)
+    known = fmt.known_keys()
     for key in data:
         if key not in known:
             raise SceneError(str(key), data[key], unknown_key_hint(key, known))
-    top = validate_params("", TOP_PARAMS, {k: v for k, v in data.items() if k not in SECTIONS})
+    top = validate_params("", TOP_PARAMS, {k: v for k, v in data.items() if k not in fmt.sections})
     if "site" not in data:
         raise SceneError("site", None, "is required (a mapping with latitude_deg)")
     site_raw = validate_params("site", SITE_PARAMS, data["site"])
     site = Site(math.radians(site_raw["latitude_deg"]), site_raw["earth_rate_rad_s"], site_raw["gravity_m_s2"],
                 site_raw["latitude_known"])
-    effects_raw, effects = _build_effects(data.get("effects"), effect_registry)
-    instruments = _build_instruments(data.get("instruments"), instrument_registry, effect_registry, effects)
-    _check_effects_used(effects_raw, effects, instruments, instrument_registry)
-    sensor = validate_params("sensor", sensor_params, data.get("sensor")) if sensor_params or data.get("sensor") else {}
-    estimator = (validate_params("estimator", estimator_params, data.get("estimator"))
-                 if estimator_params or data.get("estimator") else {})
-    motion = parse_motion(data.get("motion"), site.latitude_rad, top["duration_s"])
-    check_sailing(motion, instruments, instrument_registry)
+    effects_raw, effects = _build_effects(data.get("effects"), fmt.effects)
+    instruments = _build_instruments(data.get("instruments"), fmt.instruments, fmt.effects, effects)
+    _check_effects_used(effects_raw, effects, instruments, fmt.instruments)
+    blocks = {}
+    parts = SceneParts(top, site, effects, instruments, fmt)
+    for block in fmt.blocks:
+        blocks[block.name] = block.check(data.get(block.name), parts)
     return Scene(name=top["name"], description=top["description"], site=site, duration_s=top["duration_s"],
                  sample_rate_hz=top["sample_rate_hz"], seed=top["seed"],
                  effects=MappingProxyType(effects), instruments=MappingProxyType(instruments),
-                 sensor=MappingProxyType(sensor), estimator=MappingProxyType(estimator),
+                 sensor=MappingProxyType(blocks.get("sensor", {})),
+                 estimator=MappingProxyType(blocks.get("estimator", {})),
                  source=source, raw=MappingProxyType(data),
-                 output_channels=1 + sum(len(instrument_registry[spec[0]].COLUMNS) for spec in instruments.values())
-                 + (len(SHIP_COLUMNS) if motion else 0), motion=motion)
+                 output_channels=1 + sum(len(fmt.instruments[spec[0]].COLUMNS) for spec in instruments.values())
+                 + sum(b.channels(blocks[b.name]) for b in fmt.blocks if b.channels is not None),
+                 blocks=MappingProxyType(blocks))
 
 
 def _build_effects(effects_raw, effect_registry):
@@ -378,91 +388,23 @@ def _check_effects_used(effects_raw, effects, instruments, instrument_registry):
                              f"is not supported by any instrument in this scene; instruments that support it: "
                              f"{', '.join(supporters) or 'none'} (remove it with --set effects.{e}=null)")
 
-
-#: Sim time starts here (time 0 means "no time yet" to ROS): 1e9 s, 2001-09-09T01:46:40Z.
-EPOCH_NS = 1_000_000_000 * 1_000_000_000
-
-
-def sample_times_ns(scene) -> np.ndarray:
-    """Sample stamps in integer nanoseconds from release: round(i · 1e9 / f) for i = 0..N.
-
-    Raises SceneError (on ``duration_s``) when the run would not fit in the memory available
-    (:func:`gyro_instrument.core.memory.check_memory`)."""
-    from gyro_instrument.core.memory import check_memory
-    n = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
-    check_memory(scene, n)    # SceneError on duration_s before allocating a run that cannot fit
-    return np.round(np.arange(n) * (1e9 / scene.sample_rate_hz)).astype(np.int64)
-
-
-def sample_times(scene) -> np.ndarray:
-    """Sample times in seconds, ``sample_times_ns / 1e9`` (the same floats a ROS stamp gives back)."""
-    return sample_times_ns(scene) / 1e9
+# ----------------------------------------------------------------------------- 4. build
+def build_instruments(scene, fmt) -> dict:
+    """Instrument objects of a validated scene: name -> instrument of ``fmt``'s type, each given
+    the scene's site, its validated parameters and only the effects the scene lists for it; then
+    each block with an ``attach`` hook is attached to every instrument (:class:`Block`)."""
+    out = {}
+    for name, (itype, params, effect_names) in scene.instruments.items():
+        cls = fmt.instruments[itype]
+        out[name] = cls(name, scene.site, params, {e: scene.effects[e] for e in effect_names})
+        for block in fmt.blocks:
+            if block.attach is not None:
+                block.attach(out[name], scene.blocks.get(block.name))
+    return out
 
 
-#: Default streaming window (s of simulated time per block of :func:`sample_blocks`).
-DEFAULT_WINDOW_S = 10.0
-
-
-class SampleBlocks:
-    """The stamps of :func:`sample_times_ns` (or their seconds) in consecutive blocks of
-    ``window_s`` seconds of simulated time (the last block shorter), generated block by block: an
-    iterator whose memory is one block, whatever the duration.
-
-    Attributes
-    ----------
-    count : int
-        Samples in the run.
-    block_samples : int
-        Samples per block (the last may hold fewer).
-    end_ns : int
-        Stamp of the last sample (ns from release).
-    end_s : float
-        The last sample time in seconds as the last block gives it (``end_ns / 1e9``): what a
-        streaming instrument bounds its last step with (:func:`gyro_instrument.instruments.base.run_span`).
-
-    Raises
-    ------
-    SceneError
-        On ``window_s`` when it is not a positive finite number; on ``duration_s`` when one block
-        would not fit in the memory available (:func:`gyro_instrument.core.memory.check_memory`
-        applied to one block: a streamed run holds one block at a time).
-    """
-
-    def __init__(self, scene, window_s=DEFAULT_WINDOW_S, seconds=False) -> None:
-        from gyro_instrument.core.memory import check_memory
-        if not (isinstance(window_s, (int, float)) and not isinstance(window_s, bool) and math.isfinite(window_s)
-                and window_s > 0):
-            raise SceneError("window_s", window_s, "must be a positive finite number of seconds")
-        self.count = int(math.floor(scene.duration_s * scene.sample_rate_hz + 1e-9)) + 1
-        self.block_samples = max(1, int(math.floor(window_s * scene.sample_rate_hz + 1e-9)))
-        check_memory(scene, min(self.block_samples, self.count))
-        self._step = 1e9 / scene.sample_rate_hz
-        self._seconds = seconds
-        self._next = 0
-        self.end_ns = int(np.round(np.arange(self.count - 1, self.count) * self._step).astype(np.int64)[0])
-        self.end_s = self.end_ns / 1e9
-
-    def __iter__(self) -> "SampleBlocks":
-        return self
-
-    def __next__(self) -> np.ndarray:
-        i = self._next
-        if i >= self.count:
-            raise StopIteration
-        self._next = min(self.count, i + self.block_samples)
-        block = np.round(np.arange(i, self._next) * self._step).astype(np.int64)
-        return block / 1e9 if self._seconds else block
-
-
-def sample_blocks_ns(scene, window_s=DEFAULT_WINDOW_S) -> SampleBlocks:
-    """The stamps of :func:`sample_times_ns` in consecutive blocks of ``window_s`` seconds of
-    simulated time (the last block shorter), generated block by block (:class:`SampleBlocks`):
-    memory is one block, whatever the duration. Raises SceneError on ``window_s`` when it is not a
-    positive finite number, on ``duration_s`` when one block would not fit in memory."""
-    return SampleBlocks(scene, window_s)
-
-
-def sample_blocks(scene, window_s=DEFAULT_WINDOW_S) -> SampleBlocks:
-    """:func:`sample_blocks_ns` in seconds (``stamps / 1e9``, the floats of :func:`sample_times`);
-    its ``end_s`` is the run's last sample time."""
-    return SampleBlocks(scene, window_s, seconds=True)
+def load(path, overrides, fmt, source=None) -> Scene:
+    """Stages 1-3 in order, once each: :func:`read_yaml`, :func:`apply_overrides`,
+    :func:`validate_scene` (``source`` defaults to ``path``). Raises SceneError."""
+    return validate_scene(apply_overrides(read_yaml(path), overrides, fmt), fmt,
+                          source=path if source is None else source)

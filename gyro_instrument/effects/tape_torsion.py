@@ -4,9 +4,10 @@ A suspended gyroscope (Wild GAK1, Fennel KT1) hangs on a thin metal tape that ke
 horizontal; twisting the tape by the swing angle gives a restoring torque −D_B (u − Z) toward the
 tape's torque-free reading Z (the *tape zero*, on the instrument's scale). With the directing
 torque D_K = C ρ0 n cos γ (Quet 1853 sec. 4 §1 eq. 8, times A) the swing is about
-c = (D_K N + D_B Z)/(D_K + D_B) near north N (N = c + (D_B/D_K)(c − Z)); exactly, D_K sin(c − N) = D_B (Z − c) (physics_notes "North
-finding"); with the rotor stopped the gyroscope swings on the tape alone, a torsion pendulum of
-angular frequency √(D_B / J). Contributes to the ``torsion`` mechanics of a swinging hinge.
+c = (D_K N + D_B Z)/(D_K + D_B) near north N (N = c + (D_B/D_K)(c − Z)); exactly, D_K sin(c − N) = D_B (Z − c)
+(the two torques, −D_K sin(u − N) and −D_B (u − Z), balance at u = c); with the rotor stopped the
+gyroscope swings on the tape alone, a torsion pendulum of angular frequency √(D_B / J). Contributes
+to the ``torsion`` mechanics of a swinging hinge.
 """
 
 from gyro_instrument.core.effect import TORSION, Effect

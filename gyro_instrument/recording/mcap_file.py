@@ -1,11 +1,11 @@
 """The file under :class:`~gyro_instrument.recording.mcap_io.BagWriter`: records buffered and written
 in one ``pwrite`` with a provisional end after them, so the file on disk is a complete MCAP after
-every commit (:class:`_TailKeepingFile`); :class:`DiskFull`, the error a full disk raises."""
+every commit (:class:`TailKeepingFile`); :class:`DiskFull`, the error a full disk raises."""
 
 import os
 
 
-class _TailKeepingFile:
+class TailKeepingFile:
     """The writer's output stream: data records are buffered and reach the file in one ``pwrite``
     together with a provisional end (summary, footer, magic) placed after them. The next commit
     writes over that provisional end from its first byte, so the file on disk is a complete MCAP
@@ -19,17 +19,17 @@ class _TailKeepingFile:
         self._end = 0              # end of what is on disk
         self._tail = b""           # the provisional end on disk now
 
-    def write(self, data):
+    def write(self, data) -> int:
         self._pending += data
         return len(data)
 
-    def tell(self):
+    def tell(self) -> int:
         return self._pos + len(self._pending)
 
-    def flush(self):
+    def flush(self) -> None:
         pass
 
-    def commit(self, tail=b""):
+    def commit(self, tail=b"") -> None:
         """Write the pending records and then ``tail`` (not part of the data: overwritten next time).
 
         When the write fails (ENOSPC: the disk is full, EDQUOT, EFBIG...) the file is put back as
@@ -63,7 +63,7 @@ class _TailKeepingFile:
         except OSError:
             pass                   # nothing better to do: the reader reads up to the last complete record
 
-    def rewrite_tail(self, tail):
+    def rewrite_tail(self, tail) -> None:
         """Replace the provisional end on disk by ``tail`` (no longer than it: the space it takes is
         already the file's), the file cut after it."""
         if len(tail) > len(self._tail):
@@ -75,7 +75,7 @@ class _TailKeepingFile:
         os.ftruncate(self._fd, at)
         self._tail, self._end = bytes(tail), at
 
-    def close(self):
+    def close(self) -> None:
         os.close(self._fd)
 
 
@@ -98,18 +98,18 @@ class DiskFull(OSError):
                 f"needs {self.needed} bytes, {free} bytes free; the bag is closed readable up to its last commit")
 
 
-class _Sink:
+class Sink:
     """A byte sink that reports file offsets from ``start`` (for the provisional end)."""
 
     def __init__(self, start):
         self.start, self.buf = start, bytearray()
 
-    def write(self, data):
+    def write(self, data) -> int:
         self.buf += data
         return len(data)
 
-    def tell(self):
+    def tell(self) -> int:
         return self.start + len(self.buf)
 
-    def flush(self):
+    def flush(self) -> None:
         pass

@@ -31,7 +31,7 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
 # the file under the writer (and its error) are mcap_file's, re-exported here
-from gyro_instrument.recording.mcap_file import DiskFull, _Sink, _TailKeepingFile  # noqa: F401
+from gyro_instrument.recording.mcap_file import DiskFull, Sink, TailKeepingFile  # noqa: F401
 from gyro_instrument.recording.bag_scan import DAMAGE_RECORD, STATUS_RECORD, scan_bag
 from gyro_instrument.recording.definitions import concatenated_definition, type_hash
 
@@ -73,7 +73,7 @@ class BagWriter:
     def __init__(self, path, chunk_size=256 * 1024, compression="zstd", commit_period_s=0.5) -> None:
         self.path = path
         self.failed = None
-        self._fh = _TailKeepingFile(path)
+        self._fh = TailKeepingFile(path)
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[compression]
         # chunks are closed here (flush), never by mcap's own size test
         self._w = Writer(self._fh, chunk_size=1 << 62, compression=comp, enable_data_crcs=True)
@@ -181,7 +181,7 @@ class BagWriter:
     @staticmethod
     def _end_of(w, at, status) -> bytes:
         """What ``finish`` on the snapshot ``w`` writes at file offset ``at``, after ``status``."""
-        sink = _Sink(at)
+        sink = Sink(at)
         w._Writer__stream = sink
         w.add_metadata(STATUS_RECORD, status)
         w.finish()
@@ -233,7 +233,7 @@ class BagWriter:
 
     def _write_out(self, tail):
         """Commit to disk; on a full disk the file is left as the last commit made it (see
-        :meth:`_TailKeepingFile.commit`), this writer is closed (``failed``) and DiskFull raised."""
+        :meth:`TailKeepingFile.commit`), this writer is closed (``failed``) and DiskFull raised."""
         try:
             self._fh.commit(tail)
         except DiskFull as exc:

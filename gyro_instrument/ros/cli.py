@@ -72,9 +72,9 @@ def _command(core_cli, argv):
             print(f"gyro-instrument: note: --nmea-udp {note}", file=sys.stderr)
     from gyro_instrument.ros.lockstep import DeliveryError
     from gyro_instrument.ros.suite import NodeFailure, run_suite
-    progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
     try:
-        result, stats = _run_suite(run_suite, args, full, progress, bag_format, ros_args)
+        result, stats = run_suite(args.scene, args.overrides, args.duration_s, args.bag,
+                                  run_options(args, full, bag_format, ros_args))
     except NodeFailure as exc:       # the last line names the node and the reason
         print(f"gyro-instrument: {exc}", file=sys.stderr)
         return 3
@@ -99,13 +99,17 @@ def _command(core_cli, argv):
     return 0
 
 
-def _run_suite(run_suite, args, full, progress, bag_format, ros_args):
-    return run_suite(args.scene, args.overrides, args.duration_s, args.bag, args.real_time_factor,
-                     command=" ".join(["gyro-instrument"] + full), progress=progress,
-                     overwrite=args.overwrite, bag_format=bag_format,
-                     max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
-                     namespace=args.namespace, ros_args=ros_args, window_s=args.window_s,
-                     nmea_udp=args.nmea_udp or "")
+def run_options(args, full, bag_format, ros_args) -> "RunOptions":  # noqa: F821
+    """The :class:`~gyro_instrument.ros.suite.RunOptions` of ``run``'s parsed ``args`` (``full``: the
+    whole command line, recorded in the bag; ``bag_format`` as checked; ``ros_args``: after
+    ``--ros-args``)."""
+    from gyro_instrument.ros.suite import RunOptions
+    progress = None if (args.quiet or args.stats) else (lambda msg: print(msg, file=sys.stderr))
+    return RunOptions(real_time_factor=args.real_time_factor, command=" ".join(["gyro-instrument"] + full),
+                      progress=progress, overwrite=args.overwrite, bag_format=bag_format,
+                      max_bag_size=int(args.max_bag_size), max_bag_duration_s=args.max_bag_duration,
+                      namespace=args.namespace, ros_args=tuple(ros_args), window_s=args.window_s,
+                      nmea_udp=args.nmea_udp or "")
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import resource
 import signal
 import threading
 import time
+from dataclasses import dataclass
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
@@ -70,10 +71,70 @@ def _params(scene, overrides, duration_s, **extra):
     return ps
 
 
-def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0.0, command="",
-              timeout_s=10.0, progress=None, batch=None, overwrite=False, bag_format=None, max_bag_size=0,
-              max_bag_duration_s=0.0, namespace="", ros_args=(), window_s=DEFAULT_WINDOW_S, nmea_udp="") -> tuple:
+@dataclass(frozen=True)
+class RunOptions:
+    """How :func:`run_suite` runs a scene (what it runs is its scene, overrides, duration and bag).
+
+    ``gyro-instrument run`` builds one from its options (:func:`gyro_instrument.ros.cli`); a
+    caller changes the defaults it needs: ``RunOptions(real_time_factor=1.0, window_s=100.0)``.
+
+    Attributes
+    ----------
+    real_time_factor : float
+        Simulated seconds per wall second; 0 runs as fast as possible.
+    command : str
+        The command line recorded in the bag's metadata.
+    timeout_s : float
+        Wall seconds a sample may take to be delivered (:class:`DeliveryError` after).
+    progress : callable or None
+        Called with one line of progress text now and then.
+    batch : int or None
+        Samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms of
+        wall time when paced; capped at :data:`MAX_BATCH`).
+    overwrite : bool
+        Replace an existing file at the bag's path (never the scene file).
+    bag_format : str or None
+        ``mcap`` (one file) or ``rosbag2`` (a bag directory, split at ``max_bag_size`` bytes or
+        ``max_bag_duration_s`` of log time; :mod:`gyro_instrument.recording.bag_layout`); default
+        from the path (a trailing slash or splitting: rosbag2).
+    max_bag_size : int
+        Split size of a rosbag2 directory, bytes (0: no split by size).
+    max_bag_duration_s : float
+        Split duration of a rosbag2 directory, s of log time (0: no split by time).
+    namespace : str
+        Every node (and so every topic, ``clock`` included) in this namespace, so that suites in
+        different namespaces run side by side.
+    ros_args : sequence of str
+        The arguments after ``--ros-args`` (remapping, log levels, ``-p`` for parameters the suite
+        does not set itself), applied to every node.
+    window_s : float
+        Simulated seconds integrated per block (a positive finite number).
+    nmea_udp : str
+        HOST:PORT the estimator sends ``$HEHDT`` sentences to (its parameter ``nmea_udp``; checked
+        and resolved before any node starts); '' sends none.
+    """
+
+    real_time_factor: float = 0.0
+    command: str = ""
+    timeout_s: float = 10.0
+    progress: object = None
+    batch: int | None = None
+    overwrite: bool = False
+    bag_format: str | None = None
+    max_bag_size: int = 0
+    max_bag_duration_s: float = 0.0
+    namespace: str = ""
+    ros_args: tuple = ()
+    window_s: float = DEFAULT_WINDOW_S
+    nmea_udp: str = ""
+
+
+def run_suite(scene, overrides=(), duration_s=None, bag=None, options=RunOptions()) -> tuple:
     """Run the scene's nodes; return (estimate dict, stats dict).
+
+    ``scene`` (a shipped name or a path), its ``overrides`` (``--set`` texts) and ``duration_s``
+    (None: the scene's) say what runs; ``bag`` (None: no recording) where it is recorded;
+    ``options`` (:class:`RunOptions`) how.
 
     The simulators integrate one window of ``window_s`` simulated seconds at a time
     (:func:`~gyro_instrument.recording.joints.joint_blocks` over ``Instrument.stream``) and publish
@@ -88,21 +149,6 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
     give the process's peak RSS before the estimate (``peak_rss_streaming_mb``) and at the end
     (``peak_rss_mb``), in MB.
 
-    ``namespace``: every node (and so every topic, ``clock`` included) in this namespace, so that
-    suites in different namespaces run side by side. ``ros_args``: the arguments after
-    ``--ros-args`` (remapping, log levels, ``-p`` for parameters the suite does not set itself),
-    applied to every node.
-
-    ``nmea_udp``: HOST:PORT the estimator sends ``$HEHDT`` sentences to (its parameter ``nmea_udp``;
-    checked and resolved before any node starts).
-
-    ``batch``: samples published per lock-step (default :data:`BATCH` at full speed, at most 20 ms
-    of wall time when paced; capped at :data:`MAX_BATCH`). ``bag``: record to this path; an
-    existing file there is replaced only with ``overwrite`` (never when it is the scene file).
-    ``bag_format``: ``mcap`` (one file) or ``rosbag2`` (a bag directory, split at ``max_bag_size``
-    bytes or ``max_bag_duration_s`` of log time; see :mod:`gyro_instrument.recording.bag_layout`);
-    default from the path (a trailing slash or splitting: rosbag2).
-
     Raises
     ------
     SceneError
@@ -113,51 +159,53 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, real_time_factor=0
         A sample was not delivered within ``timeout_s``.
     """
     t_start = time.perf_counter()
-    overrides = list(overrides)
+    opts, overrides, bag_format, batch = options, list(overrides), options.bag_format, options.batch
     scene_obj = api.load_scene(scene, overrides, duration_s or None)    # refuse bad input before any node starts
     if bag:
-        bag_format = api.check_bag(scene, bag, bag_format, overwrite, max_bag_size, max_bag_duration_s, field="bag")
-    check_window(window_s)
-    if nmea_udp:
-        resolve_udp_target(nmea_udp)                      # exit 2 naming --nmea-udp before any node starts
+        bag_format = api.check_bag(scene, bag, bag_format, opts.overwrite, opts.max_bag_size, opts.max_bag_duration_s,
+                                   field="bag")
+    check_window(opts.window_s)
+    if opts.nmea_udp:
+        resolve_udp_target(opts.nmea_udp)                 # exit 2 naming --nmea-udp before any node starts
     check_run_memory(scene_obj)                           # and a run that cannot fit in memory
     context = rclpy.Context()
     stop, handlers = _install_stop_handlers()
-    args = ["gyro-instrument"] + (["--ros-args", *ros_args] if ros_args else []) + ensure_log_dir()
+    args = ["gyro-instrument"] + (["--ros-args", *opts.ros_args] if opts.ros_args else []) + ensure_log_dir()
     rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    ns = {"namespace": namespace} if namespace else {}
+    ns = {"namespace": opts.namespace} if opts.namespace else {}
     nodes = []
     try:
-        sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s)
-        _wall_epoch(sims, real_time_factor)
+        sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, opts.window_s)
+        _wall_epoch(sims, opts.real_time_factor)
         est = EstimatorNode(context=context, **ns, parameter_overrides=_params(
-            scene, overrides, duration_s, **({"nmea_udp": str(nmea_udp)} if nmea_udp else {})))
+            scene, overrides, duration_s, **({"nmea_udp": str(opts.nmea_udp)} if opts.nmea_udp else {})))
         rec = RecorderNode(context=context, reorder=False, output_path=bag, **ns, parameter_overrides=_params(
-            scene, overrides, duration_s, output=shown(bag), overwrite=bool(overwrite), command=shown(command),
-            format=bag_format or "", max_bag_size=int(max_bag_size or 0),
-            max_bag_duration=float(max_bag_duration_s or 0.0))) if bag else None
+            scene, overrides, duration_s, output=shown(bag), overwrite=bool(opts.overwrite),
+            command=shown(opts.command),
+            format=bag_format or "", max_bag_size=int(opts.max_bag_size or 0),
+            max_bag_duration=float(opts.max_bag_duration_s or 0.0))) if bag else None
         nodes = sims + [est] + ([rec] if rec else [])
         ex = SingleThreadedExecutor(context=context)
         for n in nodes:
             ex.add_node(n)
         sim_pubs, lockstep, need = _wire(context, sims, est, rec)
-        _wait_for_discovery(ex, sim_pubs, need, timeout_s, stop)
+        _wait_for_discovery(ex, sim_pubs, need, opts.timeout_s, stop)
         n_samples = max((s.samples for s in sims), default=0)
         dt = 1.0 / scene_obj.sample_rate_hz
         if batch is None:
-            batch = BATCH if real_time_factor <= 0 else int(0.02 * real_time_factor / dt)
+            batch = BATCH if opts.real_time_factor <= 0 else int(0.02 * opts.real_time_factor / dt)
         batch = max(1, min(int(batch), MAX_BATCH))
         published, first_message_s, wall = _stream(
-            sims, rec, ex, lockstep, sim_pubs, n_samples, dt, batch, real_time_factor, timeout_s, progress,
-            stop, t_start)
+            sims, rec, ex, lockstep, sim_pubs, n_samples, dt, batch, opts.real_time_factor, opts.timeout_s,
+            opts.progress, stop, t_start)
         if rec is not None and rec.failed is not None:
             # the disk filled: the bag is left readable up to its last commit; one line, exit 2
             rec.close(state="disk full")
             raise BagWriteError("recorder: " + rec.failed.line("--bag"))
         # the process's peak so far: the streaming part of the run, before the estimate's work arrays
         peak_streaming_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-        result = _finalize(est, rec, ex, timeout_s)
-        stats = _stats(sims, est, rec, n_samples, dt, wall, published, batch, first_message_s, window_s,
+        result = _finalize(est, rec, ex, opts.timeout_s)
+        stats = _stats(sims, est, rec, n_samples, dt, wall, published, batch, first_message_s, opts.window_s,
                        peak_streaming_mb)
         return result, stats
     finally:

@@ -4,16 +4,21 @@
 YAML path, applies ``--set key.path=value`` overrides, validates every value against the
 instruments' and effects' parameter specifications, and returns a frozen
 :class:`~gyro_instrument.core.scene.Scene`. ``build_instruments`` turns it into instrument
-objects, each given only the effects the scene lists for it.
+objects, each given only the effects the scene lists for it. The stages are
+:mod:`gyro_instrument.core.scene`'s, run once each in order with :data:`FORMAT`, the shipped
+scene format (the registries and the optional blocks ``sensor:``, ``estimator:`` and a ship's ``motion:``; a new
+top-level block is one more :class:`~gyro_instrument.core.scene.Block` in it).
 """
 
 import os
 from importlib import resources
 
+from gyro_instrument.core import scene as stages
 from gyro_instrument.core.effect import DEFAULT_ON
 from gyro_instrument.core.errors import SceneError
+from gyro_instrument.core.motion import SHIP_COLUMNS, check_sailing, parse_motion
 from gyro_instrument.core.params import Param
-from gyro_instrument.core.scene import Scene, apply_overrides, build_scene, read_yaml
+from gyro_instrument.core.scene import Block, Scene, SceneFormat
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments import REGISTRY as INSTRUMENTS
 
@@ -43,6 +48,30 @@ ESTIMATOR_PARAMS = (
 )
 
 
+def _motion(raw, parts):
+    """The ``motion:`` block: the ship (core/motion.py), None on a fixed pier; only instrument types
+    that can sail (``FEELS_MOTION``) may be carried. Raises SceneError."""
+    motion = parse_motion(raw, parts.site.latitude_rad, parts.top["duration_s"])
+    check_sailing(motion, parts.instruments, parts.fmt.instruments)
+    return motion
+
+
+def _sail(instrument, motion):
+    if motion is not None:
+        instrument.motion = motion
+
+
+#: The shipped scene format: what :func:`load_scene` accepts. A new top-level block is one more
+#: :class:`~gyro_instrument.core.scene.Block` here (validated after the ones before it).
+FORMAT = SceneFormat(INSTRUMENTS, EFFECTS, blocks=(
+    Block("sensor", SENSOR_PARAMS, doc="measurement model applied to every angle channel (optional; below)"),
+    Block("estimator", ESTIMATOR_PARAMS,
+          doc="how `estimate` measures periods and which hemisphere it may assume (optional; below)"),
+    Block("motion", check_value=_motion, channels=lambda m: len(SHIP_COLUMNS) if m is not None else 0,
+          attach=_sail, doc="the ship carrying the instruments (optional: without it, a fixed pier; below)"),
+))
+
+
 def shipped_scene_names() -> list:
     """Names of the scenes installed with the package."""
     root = resources.files(__name__)
@@ -64,28 +93,20 @@ def scene_path(name_or_path) -> str:
 
 def load_scene(name_or_path, overrides=()) -> Scene:
     """Load, override and validate a scene (see module docstring). Raises SceneError."""
-    path = scene_path(name_or_path)
-    data = apply_overrides(read_yaml(path), overrides, effect_names=tuple(EFFECTS))
-    return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=path)
+    return stages.load(scene_path(name_or_path), overrides, FORMAT)
 
 
 def scene_from_data(data, source="recorded", overrides=()) -> Scene:
     """Validate an already-read scene mapping (e.g. the one stored in a bag or beside a table),
     with ``--set`` ``overrides`` applied first."""
-    if overrides:
-        data = apply_overrides(data, overrides, effect_names=tuple(EFFECTS))
-    return build_scene(data, INSTRUMENTS, EFFECTS, SENSOR_PARAMS, ESTIMATOR_PARAMS, source=source)
+    if overrides:                  # without overrides the mapping is validated as given (not copied)
+        data = stages.apply_overrides(data, overrides, FORMAT)
+    return stages.validate_scene(data, FORMAT, source=source)
 
 
 def build_instruments(scene) -> dict:
     """Instrument objects of a scene: name -> instrument, each with only its listed effects."""
-    out = {}
-    for name, (itype, params, effect_names) in scene.instruments.items():
-        cls = INSTRUMENTS[itype]
-        out[name] = cls(name, scene.site, params, {e: scene.effects[e] for e in effect_names})
-        if getattr(scene, "motion", None) is not None:
-            out[name].motion = scene.motion         # the ship (core/motion.py): only FEELS_MOTION types sail
-    return out
+    return stages.build_instruments(scene, FORMAT)
 
 
 def not_simulated(effect_name) -> str:

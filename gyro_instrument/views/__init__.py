@@ -30,6 +30,7 @@ install 'gyro_instrument[plot]'``); without it the command exits 2 saying so.
 """
 
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -140,12 +141,52 @@ def gyroscope_residual_rows(series) -> list:
     return rows
 
 
-def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=False, fmt="png", dpi=DPI,
-              window=None, animate=False, options=None, given=()) -> tuple:
+@dataclass(frozen=True)
+class PlotOptions:
+    """How :func:`plot_file` reads and draws (``gyro-instrument plot``'s options).
+
+    Attributes
+    ----------
+    scene : str or None
+        The scene (a shipped name or a path) the input was made with (``--scene``); None: the one
+        stored in the input, if any.
+    overrides : sequence of str
+        ``--set key.path=value`` texts applied to that scene.
+    topics : sequence of str
+        ``INSTRUMENT=/TOPIC`` pairs (``--topic``): a bag's topic for an instrument whose topic is
+        not the one the scene gives it.
+    overwrite : bool
+        Replace views already in the output directory.
+    fmt : str
+        Image format, one of :data:`FORMATS`.
+    dpi : float
+        Resolution, dots per inch, in [20, 1200].
+    window : tuple or None
+        The time window drawn (:func:`gyro_instrument.views.rosette.parse_window`); None: all.
+    animate : bool
+        Also write ``animation.gif``.
+    table : TableOptions or None
+        How to read a table (:class:`~gyro_instrument.estimators.table_read.TableOptions`, the flags
+        of ``estimate --data``).
+    given : sequence of (flag, value)
+        The table flags the user gave, refused for a bag or a field book.
+    """
+
+    scene: str | None = None
+    overrides: tuple = ()
+    topics: tuple = ()
+    overwrite: bool = False
+    fmt: str = "png"
+    dpi: float = DPI
+    window: object = None
+    animate: bool = False
+    table: object = None
+    given: tuple = ()
+
+
+def plot_file(path, out_dir, options=PlotOptions()) -> tuple:
     """Read ``path`` (table or bag), draw the views into ``out_dir`` (and ``animation.gif`` with
-    ``animate``); return (paths written, notes). ``options``: how to read a table (:class:`~gyro_
-    instrument.estimators.table_read.TableOptions`, the flags of ``estimate --data``); ``given``: the
-    (flag, value) pairs the user gave for them, refused for a bag or a field book.
+    ``options.animate``) as ``options`` (:class:`PlotOptions`) says; return (paths written, notes).
 
     Raises
     ------
@@ -154,6 +195,8 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
         already in ``out_dir`` without ``overwrite`` (nothing is written then); ``out_dir`` is a file;
         a table flag for a bag or a field book.
     """
+    o = options
+    fmt, dpi, overwrite, given = o.fmt, o.dpi, o.overwrite, o.given
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise SceneError("--out", out_dir, "is a file; give a directory for the views")
     check_dir_writable(out_dir)                      # before anything is read or drawn
@@ -169,18 +212,18 @@ def plot_file(path, out_dir, scene_arg=None, overrides=(), topics=(), overwrite=
                                                    f"{'bag' if bag else 'field book'}: leave the flag out")
     if is_field_book(path):                          # a surveyor's field book (views/field_book_view.py)
         from gyro_instrument.scenes import load_scene
-        scene = load_scene(scene_arg, list(overrides)) if scene_arg else None
+        scene = load_scene(o.scene, list(o.overrides)) if o.scene else None
         return plot_field_book(path, out_dir, scene, fmt, dpi, overwrite), []
-    names = [f"{v}.{fmt}" for v in VIEWS] + (["animation.gif"] if animate else [])
+    names = [f"{v}.{fmt}" for v in VIEWS] + (["animation.gif"] if o.animate else [])
     if not overwrite:
         existing = [v for v in names if os.path.exists(os.path.join(out_dir, v))]
         if existing:
             raise SceneError("--out", out_dir, f"already holds {', '.join(existing)}; pass "
                                                f"--overwrite to replace them, or give a new directory")
-    series, scene, notes = load_series(path, scene_arg, overrides, topics, options=options)
+    series, scene, notes = load_series(path, o.scene, o.overrides, o.topics, options=o.table)
     title = f"({shown(os.path.basename(os.fsdecode(path).rstrip('/')))})"
-    written = draw_views(series, scene, out_dir, title, fmt, dpi, window)
-    if animate:
+    written = draw_views(series, scene, out_dir, title, fmt, dpi, o.window)
+    if o.animate:
         from gyro_instrument.views.animate import write_animation
         written.append(write_animation(series, scene, os.path.join(out_dir, "animation.gif")))
     return written, notes
