@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gyro_instrument.estimators import rate_gyro_north as R
+from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
 from gyro_instrument.estimators.pipeline import estimate_records
 from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, GM_ALLAN_PEAK, gm_allan_variance
@@ -176,7 +176,7 @@ def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
     the planner bins more coarsely), and at the planned number of sequences the bound meets the target
     while one sequence fewer does not (the search's 2 % tolerance aside)."""
     from gyro_instrument.estimators.planner import parse_targets, plan
-    from gyro_instrument.estimators.rate_gyro_plan import sigma_mount_rad
+    from gyro_instrument.estimators.north.rate_gyro_plan import sigma_mount_rad
     scene, truth, iname, inst = _one("rate_gyro_four_position")
     f = R.fit_record(inst.observation(), measure(scene, truth, 1)[iname])
     assert sigma_mount_rad(inst, inst.p, scene.duration_s, scene.sample_rate_hz) == pytest.approx(f["sigma_rad"], rel=0.02)
@@ -190,10 +190,10 @@ def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
 
 
 def test_bench_rows_noise_free_exact_and_sigma_at_the_bound():
-    """The bench's table (estimators/rate_gyro_study.py, the kind's bench study) at 10 min: the noise-free record gives the mount
+    """The bench's table (estimators/north/rate_gyro_study.py, the kind's bench study) at 10 min: the noise-free record gives the mount
     azimuth exactly (the linear model is the simulated one: < 1e-6″), and the mean reported σ is the
     planner's bound to 10 % (the estimator's bins vs the planner's; a carousel's long bins lose most)."""
-    from gyro_instrument.estimators.rate_gyro_study import rate_gyro_rows, same_time_lines
+    from gyro_instrument.estimators.north.rate_gyro_study import rate_gyro_rows, same_time_lines
     rows = rate_gyro_rows(quick=True, duration_s=600.0)
     assert {r["scene"] for r in rows} == {c[0] for c in CASES}
     for r in rows:

@@ -7,8 +7,8 @@
   Foucault fit :func:`.foucault.estimate_foucault` and its bound
   (:func:`.foucault.foucault_crlb_small_swing_rad_s`).
 * :class:`AzimuthKind` (``azimuth``): a horizontal gyroscope's swing centre is the meridian: the
-  ``north`` block (:func:`.north_estimate.north_entry`), the joint fit's Cramér–Rao bound
-  (:mod:`.bounds_azimuth`), the Schuler mean as the swing goes (:mod:`.north_live`), published
+  ``north`` block (:func:`.north.estimate.north_entry`), the joint fit's Cramér–Rao bound
+  (:mod:`.north.bounds`), the Schuler mean as the swing goes (:mod:`.north.live`), published
   live as the instrument's heading.
 
 Each is an entry point of ``gyro_instrument.measurements`` (setup.py); a package adds its own kind
@@ -96,15 +96,15 @@ class AzimuthKind(MeasurementKind):
     LIVE = "heading"
 
     def estimate(self, obs, rec, corrections, checks, sensor) -> tuple:
-        from gyro_instrument.estimators.north_estimate import north_entry
+        from gyro_instrument.estimators.north.estimate import north_entry
         return north_entry(obs, rec, corrections, checks, sensor)
 
     def probe(self, scene, obs) -> tuple:
-        from gyro_instrument.estimators.bounds_azimuth import azimuth_model
+        from gyro_instrument.estimators.north.bounds import azimuth_model
         return azimuth_model(scene, obs)
 
     def bound(self, model, T, sensor) -> tuple:
-        from gyro_instrument.estimators.bounds_azimuth import fit_bound
+        from gyro_instrument.estimators.north.bounds import fit_bound
         return fit_bound(model, T, sensor), "Cramer-Rao bound of the whole joint fit"
 
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
@@ -116,7 +116,7 @@ class AzimuthKind(MeasurementKind):
         return NorthLive(obs.name, swing, scene.sensor.get("noise_rad") or None, off, off_s)
 
     def combine(self, blocks) -> dict | None:
-        from gyro_instrument.estimators.north_estimate import best_block
+        from gyro_instrument.estimators.north.estimate import best_block
         return best_block(blocks)
 
     def plan(self, scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
@@ -125,20 +125,20 @@ class AzimuthKind(MeasurementKind):
         return plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor)
 
     def plan_entry(self, model) -> dict:
-        from gyro_instrument.estimators.bounds_azimuth import azimuth_entry
+        from gyro_instrument.estimators.north.bounds import azimuth_entry
         return azimuth_entry(model)
 
 
 class NorthLive(LiveTracker):
     """The live north of one horizontal gyroscope (and its rotor-off swing), from the first swing on
-    (issue 37): per record a :class:`.north_live.SwingFit` of the record so far (the predicted
-    frequency as a prior) every half swing of the gyroscope, and a :class:`.north_live.NorthTracker`
+    (issue 37): per record a :class:`.north.live.SwingFit` of the record so far (the predicted
+    frequency as a prior) every half swing of the gyroscope, and a :class:`.north.live.NorthTracker`
     of its reversal points every quarter swing of the record; the live north is whichever of
-    :func:`.north_live.fit_north` and :func:`.north_live.live_north` (both tape-corrected where
+    :func:`.north.live.fit_north` and :func:`.north.live.live_north` (both tape-corrected where
     there is a rotor-off swing) has the smaller σ."""
 
     def __init__(self, name, swing_s, sigma, off_name=None, off_swing_s=None):
-        from gyro_instrument.estimators.north_live import NorthTracker, SwingFit
+        from gyro_instrument.estimators.north.live import NorthTracker, SwingFit
         self.name = name
         self.trackers = {name: NorthTracker(swing_s, sigma)}
         self.fits = {name: SwingFit(swing_s, sigma)}
@@ -158,8 +158,8 @@ class NorthLive(LiveTracker):
         return min(0.25 * self.trackers[name].swing_s, 0.5 * self.trackers[self.name].swing_s)
 
     def window_s_of(self, name) -> float:
-        """The fit's span (:data:`.north_live.FIT_SWINGS` swings); the reversal points are searched
-        in its last :meth:`.north_live.NorthTracker.window_s`."""
+        """The fit's span (:data:`.north.live.FIT_SWINGS` swings); the reversal points are searched
+        in its last :meth:`.north.live.NorthTracker.window_s`."""
         return max(self.fits[name].window_s(), self.trackers[name].window_s())
 
     def update(self, name, rec) -> tuple | None:
@@ -184,7 +184,7 @@ class NorthLive(LiveTracker):
     def live(self) -> "object | None":
         """The better (smaller σ) of the fit's and the reversal points' live north (a
         :class:`.north.NorthEstimate`), or None."""
-        from gyro_instrument.estimators.north_live import fit_north, live_north
+        from gyro_instrument.estimators.north.live import fit_north, live_north
         off_fit = self.fits[self.off].summary if self.off else None
         cands = [fit_north(self.fits[self.name].summary, off_fit, tape=self.off is not None),
                  live_north(self.trackers[self.name], self.trackers.get(self.off))]

@@ -134,7 +134,7 @@ def _refuse_duplicates(names, path, field):
         seen[name] = i
 
 
-def _csv_separator(first_line, path, field, separator):
+def csv_separator(first_line, path, field, separator) -> str:
     """The CSV separator: ``separator`` when given, else the one of ``,``, ``;``, tab the header holds
     (``,`` when it holds none: a single column). SceneError when it holds several."""
     if separator is not None:
@@ -169,7 +169,7 @@ def _read_csv(path, field, separator, time_source=None, names=None):
                     first = line
                     break
             excel = first.strip().lower().startswith("sep=") and len(first.strip()) == 5
-            sep = first.strip()[4] if excel and separator is None else _csv_separator(
+            sep = first.strip()[4] if excel and separator is None else csv_separator(
                 first if not excel else "", path, field, separator)
             fh.seek(0)
             rows = list(csv.reader(fh, delimiter=sep))

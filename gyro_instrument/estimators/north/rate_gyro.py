@@ -34,7 +34,7 @@ import math
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve, solve_triangular
 
-from gyro_instrument.estimators.north_estimate import null_block
+from gyro_instrument.estimators.north.estimate import null_block
 from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, block_sums
 
 ARCSEC_PER_RAD = 648000.0 / math.pi
@@ -261,7 +261,7 @@ def _sign(f, p) -> dict:
 
 
 def north_block(obs, f) -> dict:
-    """The ``north`` block (keys as the gyrotheodolite's, estimators/north_estimate.py) from :func:`fit_record`."""
+    """The ``north`` block (keys as the gyrotheodolite's, estimators/north/estimate.py) from :func:`fit_record`."""
     p, name = obs.instrument.p, obs.name
     if "reason" in f:
         return null_block(name, f["reason"])
