@@ -40,7 +40,7 @@ def _north(scene, truth, seed):
     rec = dict(recs["gak1"])
     if "gak1_rotor_off" in recs:
         rec[ROTOR_OFF] = recs["gak1_rotor_off"]
-    return north_entry(obs, rec, sensor=SensorModel.from_scene(scene))[0]
+    return north_entry(obs, rec, sensor=SensorModel.from_scene(scene))[0].to_json()
 
 
 def _truth_par(inst):

@@ -207,6 +207,7 @@ class NorthLive(LiveTracker):
 def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     """The Foucault rate of one pendulum record (estimators/foucault.py) and its checks."""
     from gyro_instrument.estimators.adequacy import check_entry, check_period, halves_entry, plane_fit_entry
+    from gyro_instrument.estimators.entries import PlaneEntry, PlaneNull, RestPoint
     from gyro_instrument.estimators.foucault import estimate_foucault
     from gyro_instrument.estimators.latitude import RateMeasurement
     from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
@@ -218,16 +219,15 @@ def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     except EstimationError as exc:
         if isinstance(exc, NoSignal):
             checks.append(check_entry(name, "signal", "no_signal", str(exc), expected=DETECTION_SNR))
-        return {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}, None
-    est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
-           "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
-           "measured_plane_rate_rad_s": f.measured_rate_rad_s,
-           "measured_plane_rate_sigma_rad_s": f.measured_rate_sigma_rad_s, "sigma_basis": f.sigma_basis,
-           "sigma_basis_detail": f.sigma_basis_text,
-           "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
-           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "period_sigma_s": f.period_sigma_s,
-           "rest_point": f.rest_point, "windows": f.windows, "notes": f.notes,
-           "ellipse_scale": ellipse_scale(f.measured_rate_rad_s, f.airy_correction_rad_s, f.k_sigma_rad_s)}
+        return PlaneNull(type=inst.type_name, foucault_rate_rad_s=None, reason=str(exc)), None
+    est = PlaneEntry(type=inst.type_name, foucault_rate_rad_s=f.k_rad_s, foucault_rate_sigma_rad_s=f.k_sigma_rad_s,
+                     crlb_foucault_rate_rad_s=f.crlb_k_rad_s, measured_plane_rate_rad_s=f.measured_rate_rad_s,
+                     measured_plane_rate_sigma_rad_s=f.measured_rate_sigma_rad_s, sigma_basis=f.sigma_basis,
+                     sigma_basis_detail=f.sigma_basis_text, ellipse_correction_rad_s=f.airy_correction_rad_s,
+                     amplitude_rad=f.amplitude_rad, minor_axis_rad=f.minor_axis_rad, period_s=f.period_s,
+                     period_sigma_s=f.period_sigma_s, rest_point=RestPoint(**f.rest_point), windows=f.windows,
+                     notes=f.notes,
+                     ellipse_scale=ellipse_scale(f.measured_rate_rad_s, f.airy_correction_rad_s, f.k_sigma_rad_s))
     checks.append(check_entry(name, "signal", "passed", f"swing detected (A^2 N / (4 sigma^2) >= {DETECTION_SNR:g}; "
                                                        "estimators/foucault.py)", expected=DETECTION_SNR))
     entry = check_period(name, inst, f.period_s)
@@ -239,14 +239,15 @@ def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     return est, RateMeasurement(name, PLANE_RATE, f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
 
 
-def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> dict:
-    """How the ellipse (Airy) correction hangs on the position scale: it is (3/8) a b / l² times the
+def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> "EllipseScale":
+    """How the ellipse (Airy) correction hangs on the position scale (an :class:`.entries.EllipseScale`): it is (3/8) a b / l² times the
     swing frequency (physics_notes "Real Foucault pendulums"), a and b the axes read from the track, so
     a scale s times the assumed one multiplies it by s² while the measured turn is unchanged. ``matters``:
     halving the scale would move k by more than its σ (3/4 of the correction > σ) — then positions given
     in pixels (or a wrong length) decide the answer, and ``k_at_half_scale_rad_s`` /
     ``k_at_double_scale_rad_s`` say by how much."""
+    from gyro_instrument.estimators.entries import EllipseScale
     m, c = float(measured_rad_s), float(correction_rad_s)
-    return {"exponent": 2, "share_of_measured_rate": c / m if m else None,
-            "k_without_correction_rad_s": m, "k_at_half_scale_rad_s": m - c / 4.0, "k_at_double_scale_rad_s": m - 4.0 * c,
-            "matters": bool(abs(0.75 * c) > float(sigma_rad_s or 0.0))}
+    return EllipseScale(exponent=2, share_of_measured_rate=c / m if m else None, k_without_correction_rad_s=m,
+                        k_at_half_scale_rad_s=m - c / 4.0, k_at_double_scale_rad_s=m - 4.0 * c,
+                        matters=bool(abs(0.75 * c) > float(sigma_rad_s or 0.0)))

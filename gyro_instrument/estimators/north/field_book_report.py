@@ -79,7 +79,7 @@ def _tape_entry(tape) -> dict:
 def _methods(ests, book) -> dict:
     out = {}
     for k, v in ests.items():
-        out[k] = method_entry(v) | _north_fields(v.centre_rad)
+        out[k] = method_entry(v).to_json() | _north_fields(v.centre_rad)
     ks, m = triple_means(book.on)
     out["schuler_mean"]["triple_means"] = [
         {"turning_points": [int(k) + book.on.first_number + j for j in range(3)]} | angle_fields("mean", math.degrees(x))
