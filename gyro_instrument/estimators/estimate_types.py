@@ -10,6 +10,7 @@ estimated is ``null`` with a ``reason``, never NaN.
 
 from dataclasses import dataclass
 
+from gyro_instrument.estimators import estimate_docs as D
 from gyro_instrument.estimators.entries import PlaneEntry, PlaneNull, PluginEntry, SwingEntry, SwingNull, UnusedEntry
 from gyro_instrument.estimators.north.block import FieldBookBlock, NorthBlock, NullNorthBlock, RateNorthBlock
 from gyro_instrument.estimators.record import ABSENT, Json, Record, doc
@@ -52,9 +53,8 @@ _EARTH_RATE = "combined Earth rate n, rad/s; when n was taken as known, the know
 _EARTH_RATE_SIGMA = "standard error of n, rad/s; null when n was taken as known"
 _KNOWN = ("true when n was not estimated but held at the scene's site.earth_rate_rad_s (IERS conventional "
           "7.292115e-5 rad/s by default) and the latitude fitted alone")
-_BASIS = "why n was held known or estimated (the instruments cannot separate n and the latitude, or estimator.earth_rate)"
-_HEMI_BASIS = ("why: measured (the sign of a sign-sensitive measurement, with the Δχ² by which the other hemisphere "
-               "fits worse), assumed (estimator.hemisphere), or not determined")
+_BASIS = "why n was held known or estimated; earth_rate_known is " + D.EARTH_RATE_KNOWN
+_HEMI_BASIS = D.HEMISPHERE
 _METHOD = "which measurements were combined and which instrument carries the latitude"
 
 
@@ -68,7 +68,7 @@ class Combined(Record):
     earth_rate_basis: str = doc(_BASIS)
     hemisphere: str = doc("north, south or not determined by these instruments", schema={"enum": HEMISPHERES})
     hemisphere_basis: str = doc(_HEMI_BASIS)
-    latitude_deg: float = doc("combined latitude, deg; |γ| when latitude_is_absolute")
+    latitude_deg: float = doc("combined latitude, deg: " + D.LATITUDE)
     latitude_sigma_deg: float | None = doc("1-σ half-interval of the latitude (Δχ² = 1), deg; null when the "
                                            "likelihood is not locally Gaussian (latitude_sigma_reason says why)")
     latitude_interval_deg: list[float] = doc("the Δχ² = 1 interval [low, high] of the mode, deg (asymmetric near "
@@ -103,7 +103,7 @@ class Unresolved(Record):
     hemisphere_basis: str = doc(_HEMI_BASIS)
     latitude_deg: None = doc("null: the latitude is not determined")
     latitude_sigma_deg: None = doc("null")
-    reason: str = doc("why the combined latitude (or n) is null")
+    reason: str = doc(D.REASON)
     crlb: Crlb = doc("Cramér–Rao bounds (the latitude's null)")
     method: str | None = doc(_METHOD + "; null when n is not determined either")
 
@@ -125,6 +125,8 @@ class NoRateMeasurement(Record):
 @dataclass(frozen=True, kw_only=True)
 class Item9(Record):
     """Quet item 9: cos γ = (T_m/T_h)² ρ_m/ρ_h (finite-amplitude, spin and ring-inertia corrections)."""
+
+    DOC = D.ITEM9
 
     cos_latitude: float = doc("cos γ from the horizontal and meridian swings (dimensionless)")
     cos_latitude_sigma: float = doc("its standard error (dimensionless)")
@@ -194,6 +196,8 @@ class ClassicMethods(Record):
 class Check(Record):
     """One adequacy check of the data (estimators/adequacy.py) for one instrument (or ``combined``)."""
 
+    DOC = D.CHECKS
+
     instrument: str = doc("the instrument's name, or combined")
     check: str = doc("amplitude, sampling, signal, period, fit, halves, site, hemisphere, north")
     status: str = doc("passed, flagged (with the figure), failed (site: the estimate disagrees with the scene's "
@@ -223,6 +227,8 @@ class Disagreement(Record):
 class Site(Record):
     """The scene's site as evidence (nothing compared when site.latitude_known is false)."""
 
+    DOC = D.SITE
+
     latitude_known: bool = doc("false when the scene says site.latitude_known: false (a record from an unknown place)")
     latitude_deg: float = doc("the scene's latitude, deg")
     earth_rate_rad_s: float = doc("the scene's Earth rate, rad/s")
@@ -247,8 +253,7 @@ class Estimate(Record):
     observation_s: float | None = doc("record length, s (measured data: the data's span, first to last valid "
                                       "sample; replay: the longest matched topic's span)")
     truth: Truth = doc("the simulated site (measured data: the scene's nominal values)")
-    instruments: dict[str, Entry] = doc("per instrument, its measurement kind's entry; one the estimator does not "
-                                        "measure has type and the reason")
+    instruments: dict[str, Entry] = doc(D.INSTRUMENTS)
     methods: ClassicMethods = doc("Quet's classical methods")
     combination: Combined | Unresolved | NoRateMeasurement = doc("the combined latitude and Earth rate", inline=True)
     north: NorthBlock | RateNorthBlock | NullNorthBlock = doc(
@@ -257,8 +262,7 @@ class Estimate(Record):
     blocks: dict[str, Json] = doc("a plug-in kind's block under its BLOCK key (docs/extending.md)", ABSENT, inline=True)
     checks: list[Check] = doc("the adequacy checks of the data, one entry per instrument and check")
     site: Site = doc("the scene's site as evidence")
-    scene_notes: list[str] = doc("what the scene leaves out that a reader would assume (empty when nothing); "
-                                 "written by the command line and the nodes", ABSENT)
+    scene_notes: list[str] = doc(D.SCENE_NOTES + " (written by the command line and the nodes)", ABSENT)
     data: str = doc("measured data (estimate --data): the file's name", ABSENT)
     data_notes: list[str] = doc("measured data: what was left out, sorted or not used (see csv.md)", ABSENT)
     topics: dict[str, Json] = doc("a bag recorded by another tool: matched (instrument -> topic), unmatched "

@@ -8,6 +8,7 @@ Azimuths are clockwise from true north, in degrees (the edge); σ in arcsec; rat
 
 from dataclasses import dataclass
 
+from gyro_instrument.estimators import estimate_docs as D
 from gyro_instrument.estimators.record import ABSENT, Json, Record, doc
 
 __all__ = ["FieldBookBlock", "MethodEntry", "NorthBlock", "NullNorthBlock", "PreOrientation", "RateBias",
@@ -71,6 +72,8 @@ class NorthBlock(Record):
     """A horizontal gyroscope's north (issue 24): the exact fit of the swing equation to the rotor-on and
     rotor-off records (estimators/north/exact.py), σ at the Cramér–Rao bound of the whole problem; the
     reversal-point methods beside it with their biases."""
+
+    DOC = D.NORTH
 
     instrument: str = doc("the instrument whose block this is")
     mount_azimuth_deg: float = doc(_MOUNT)
@@ -188,6 +191,8 @@ class RateNorthBlock(Record):
     """A rate gyro's north (issue 35): generalised least squares of r = A cos(M + φ) + b with the sensor's own
     noise covariance (white ARW + Gauss–Markov bias instability, exact for the bin means); σ = the
     Cramér–Rao bound."""
+
+    DOC = D.RATE_NORTH
 
     instrument: str = doc("the instrument whose block this is")
     mount_azimuth_deg: float | None = doc(_MOUNT + "; null when two positions' mirror image is not excluded")
