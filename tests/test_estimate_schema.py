@@ -11,6 +11,7 @@ checked by objects it must refuse (an unknown key, a missing one, a wrong type o
 import copy
 import importlib.util
 import json
+import math
 from pathlib import Path
 
 import jsonschema
@@ -110,12 +111,21 @@ def test_an_estimate_of_measured_data_validates(validator, capsys, tmp_path):
 
 
 def test_a_field_book_estimate_validates(validator, capsys, tmp_path):
-    """Six turning points of a swing about 12.3° (deg on the circle, clockwise), as a surveyor writes them."""
+    """A book with every part of the block: 16 turning points of a swing about 12.3° decaying by 0.93 a swing
+    (deg on the circle, clockwise), number 5 missed (its reading empty), number 9 off by 0.05° (an outlier: the
+    others scatter by 0.0003°), with times and the rotor-off tape's readings; alone and with the scene's latitude."""
+    rows = ["turning_point,time_s,reading_deg,tape_time_s,tape_reading_deg"]
+    for k in range(16):
+        a = 12.3 + 2.0 * 0.93 ** k * (-1) ** k + (0.05 if k == 9 else 0.0) + 0.0003 * math.sin(7 * k)
+        rows.append(f"{k},{30.0 * k:.1f},{'' if k == 5 else f'{a:.5f}'},{30.0 * k + 5:.1f},"
+                    f"{0.4 + 0.3 * 0.95 ** k * (-1) ** k:.5f}")
     book = tmp_path / "book.csv"
-    book.write_text("reading_deg\n14.1\n10.6\n13.9\n10.8\n13.7\n11.0\n", encoding="utf-8")
-    est = _run_json(capsys, "estimate", "--reversal-points", str(book))
-    assert est["field_book"] == "book.csv" or est["field_book"].endswith("book.csv")
-    assert not _errors(validator, est)
+    book.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    for scene in ([], ["--scene", "gyrotheodolite"]):
+        est = _run_json(capsys, "estimate", "--reversal-points", str(book), *scene)
+        north = est["north"]
+        assert len(north["missed"]) == 1 and len(north["outliers"]) == 1 and north["tape"] is not None
+        assert not _errors(validator, est)
 
 
 def _quet(capsys) -> dict:

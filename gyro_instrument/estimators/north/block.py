@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from gyro_instrument.estimators import estimate_docs as D
 from gyro_instrument.estimators.record import ABSENT, Json, Record, doc
 
-__all__ = ["FieldBookBlock", "MethodEntry", "NorthBlock", "NullNorthBlock", "PreOrientation", "RateBias",
+__all__ = ["FieldBookBlock", "MethodEntry", "MissedPoint", "Outlier", "NorthBlock", "NullNorthBlock", "PreOrientation", "RateBias",
            "RateFisher", "RateMethodEntry", "RateNoiseModel", "RateNorthBlock", "RateScaleFactor",
            "RateScaleFactorAssumed", "RateSign", "TapeEntry"]
 
@@ -217,13 +217,62 @@ class RateNorthBlock(Record):
 
 
 @dataclass(frozen=True, kw_only=True)
-class FieldBookBlock(Record):
-    """The north of a field book (msg_docs/estimate.md "Field books"): the Schuler mean (the headline) and
-    Lavrov's, each with the angle in deg, d°m′s″ and gon, the circle reading of north, the reduction, the
-    tape, the turning points read, missed and outlying. Its keys are the book's (open)."""
+class MissedPoint(Record):
+    """A turning point the book skipped (its number absent): left out in its place."""
 
-    OPEN = True
+    turning_point: int = doc("its number")
+    line: int | None = doc("the book's line (null when the row is absent)")
+    time_s: float | None = doc("its time when the row has one, s")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Outlier(Record):
+    """A reading far from its same-side neighbours' mean: named, not dropped."""
+
+    column: str = doc("the book's column")
+    turning_point: int = doc("its number")
+    line: int = doc("the book's line")
+    reading: str = doc("the reading as written")
+    sigmas: float = doc("its residual in units of the neighbours' robust scatter")
+    threshold_sigmas: float = doc("the book-wide threshold (false-alarm probability 0.002)")
+    residual_arcsec: float = doc("its residual, arcsec")
+
+
+_DMS = "the same in d°m′s″, to 0.1″"
+_GON = "the same in gon, in [0, 400)"
+
+
+@dataclass(frozen=True, kw_only=True)
+class FieldBookBlock(Record):
+    """The north of a field book: the Schuler mean (the headline) and Lavrov's, each with the angle in deg,
+    d°m′s″ and gon, the circle reading of north, the reduction, the tape, the turning points read, missed and
+    outlying (msg_docs/estimate.md "Field books" below)."""
+
     instrument: None = doc("null: a book names no instrument")
     field_book: str = doc("the book's file")
+    scene: str | None = doc("the scene lending latitude and tape, null without --scene")
+    scene_instrument: str | None = doc("the scene's first horizontal gyroscope, null without a scene")
+    latitude_deg: float | None = doc("the scene's latitude, deg; null without a scene")
     mount_azimuth_deg: float = doc(_MOUNT)
-    method: str = doc("schuler_mean", schema={"enum": ["schuler_mean"]})
+    mount_azimuth_dms: str = doc(_DMS)
+    mount_azimuth_gon: float = doc(_GON)
+    north_reading_deg: float = doc("the circle reading of north (= −mount, in [0, 360)), deg")
+    north_reading_dms: str = doc(_DMS)
+    north_reading_gon: float = doc(_GON)
+    sigma_arcsec: float | None = doc(_SIGMA + ", from the scatter of the turning points (null with 3)")
+    crlb_arcsec: None = doc("null: no record")
+    method: str = doc("schuler_mean: the headline", schema={"enum": ["schuler_mean"]})
+    reduction: str = doc("raw: ... when neither the book nor the scene has a tape, else tape removed (...)")
+    tape: dict[str, Json] | None = doc(
+        "null for the raw reduction; else source, ratio_db_dk, ratio_sigma, zero_reading_deg / _dms / _gon (the tape "
+        "zero's circle reading), zero_sigma_arcsec, and from the book's times the half periods, the undamped ones and "
+        "each swing's damping ratio, each method's tape zero zero_reading_by_method_deg")
+    methods: dict[str, dict[str, Json]] = doc(
+        "schuler_mean and lavrov, each a method entry with the same angle fields (mount_azimuth_dms, _gon, "
+        "north_reading_deg, _dms, _gon); schuler_mean.triple_means: the means (a_k + 2a_(k+1) + a_(k+2))/4 a "
+        "surveyor prints beside the readings, with their turning points")
+    turning_points: int = doc("the number read")
+    missed: list[MissedPoint] = doc("turning points the book skipped")
+    outliers: list[Outlier] = doc("readings named as outlying (not dropped)")
+    refused: dict[str, str] = doc("method -> why it was refused")
+    notes: list[str] = doc("what the reduction noticed")

@@ -15,6 +15,7 @@ from gyro_instrument.core.angle_formats import format_angle
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
 from gyro_instrument.estimators.north.field_book import book_schuler_mean, outliers, read_field_book, reduce_field_book, triple_means
+from gyro_instrument.estimators.north.block import FieldBookBlock, MissedPoint, Outlier
 from gyro_instrument.estimators.north.estimate import arcsec_or_none, method_entry
 
 #: |cos(latitude)| below which the directing torque is taken to vanish (cos 90° in floating point is 6e-17)
@@ -88,7 +89,7 @@ def _methods(ests, book) -> dict:
 
 
 def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
-    """The ``north`` block of a field book (module docstring).
+    """The ``north`` block of a field book (module docstring): the JSON of a :class:`.block.FieldBookBlock`.
 
     Parameters
     ----------
@@ -120,11 +121,12 @@ def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separato
                     + " (the swing centre is north's reading)"
     else:
         reduction = f"tape removed ({tape['source']}; exact relation N = c - atan(x (Z - c)))"
-    return {"instrument": None, "field_book": str(path), "scene": None if scene is None else scene.name,
-            "scene_instrument": inst_name, "latitude_deg": None if scene is None else scene.site.latitude_deg,
-            **_north_fields(head.centre_rad), "sigma_arcsec": arcsec_or_none(head.sigma_rad), "crlb_arcsec": None,
-            "method": "schuler_mean", "reduction": reduction, "tape": None if tape is None else _tape_entry(tape),
-            "methods": _methods(ests, book), "turning_points": int(book.on.index.size),
-            "missed": list(book.on.missed), "outliers": found, "refused": {},
-            "notes": notes + more + [f"{book.on.index.size} turning points read in {book.angle_unit}; the readings "
-                                     f"are the circle's, clockwise: north reads north_reading = -mount_azimuth"]}
+    return FieldBookBlock(
+        instrument=None, field_book=str(path), scene=None if scene is None else scene.name,
+        scene_instrument=inst_name, latitude_deg=None if scene is None else scene.site.latitude_deg,
+        **_north_fields(head.centre_rad), sigma_arcsec=arcsec_or_none(head.sigma_rad), crlb_arcsec=None,
+        method="schuler_mean", reduction=reduction, tape=None if tape is None else _tape_entry(tape),
+        methods=_methods(ests, book), turning_points=int(book.on.index.size),
+        missed=[MissedPoint(**m) for m in book.on.missed], outliers=[Outlier(**o) for o in found], refused={},
+        notes=notes + more + [f"{book.on.index.size} turning points read in {book.angle_unit}; the readings "
+                              f"are the circle's, clockwise: north reads north_reading = -mount_azimuth"]).to_json()
