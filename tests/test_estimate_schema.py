@@ -4,8 +4,9 @@ from it, and every estimate JSON of today valid against it.
 The validator is an independent one: the ``jsonschema`` package (draft 2020-12), not code of this project.
 What is validated: every shipped ``bags/*.estimate.json`` (``run --bag`` wrote them), the ``--json`` output of
 ``gyro-instrument estimate`` for every shipped scene (found from the scenes, not listed by hand), a table
-``simulate`` wrote read back with ``estimate --data``, ``replay`` of two shipped bags, and a field book. That the schema means something is
-checked by objects it must refuse (an unknown key, a missing one, a wrong type or value).
+``simulate`` wrote read back with ``estimate --data``, ``replay`` of two shipped bags, of a damaged copy and of
+its recovery, and a field book. That the schema means something is checked by objects it must refuse (an
+unknown key, a missing one, a wrong type or value).
 """
 
 import copy
@@ -98,6 +99,21 @@ def test_a_replayed_bag_validates(validator, capsys, bag):
     est = _run_json(capsys, "replay", str(ROOT / "bags" / f"{bag}.mcap"))
     assert est["scene"] == bag
     assert not _errors(validator, est)
+
+
+def test_a_damaged_and_a_recovered_bag_validate(validator, capsys, tmp_path):
+    """4000 zero bytes written into a copy of quet_paris.mcap at 1.5 MB (inside its data section): ``replay``
+    reports the lost stretch under ``damaged``; ``recover`` then ``replay`` reports it ``before_recovery``."""
+    bag = tmp_path / "dmg.mcap"
+    data = bytearray((ROOT / "bags" / "quet_paris.mcap").read_bytes())
+    data[1_500_000:1_504_000] = bytes(4000)
+    bag.write_bytes(bytes(data))
+    est = _run_json(capsys, "replay", str(bag))
+    assert est["damaged"] and not _errors(validator, est)
+    assert main(["recover", str(bag), "--out", str(tmp_path / "rec.mcap")]) == 0
+    capsys.readouterr()
+    est = _run_json(capsys, "replay", str(tmp_path / "rec.mcap"))
+    assert est["damaged"][0]["before_recovery"] is True and not _errors(validator, est)
 
 
 def test_an_estimate_of_measured_data_validates(validator, capsys, tmp_path):

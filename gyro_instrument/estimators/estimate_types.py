@@ -15,7 +15,7 @@ from gyro_instrument.estimators.entries import PlaneEntry, PlaneNull, PluginEntr
 from gyro_instrument.estimators.north.block import FieldBookBlock, NorthBlock, NullNorthBlock, RateNorthBlock
 from gyro_instrument.estimators.record import ABSENT, Json, Record, doc
 
-__all__ = ["Check", "ClassicMethods", "Combined", "Crlb", "Disagreement", "Estimate", "FieldBookEstimate",
+__all__ = ["Check", "ClassicMethods", "Combined", "Crlb", "DamagedStretch", "Disagreement", "Estimate", "FieldBookEstimate",
            "Foucault", "Item8", "Item9", "Item9Counting", "Item9Null", "NoRateMeasurement", "OtherLatitude", "Site",
            "Truth", "Unresolved"]
 
@@ -238,6 +238,24 @@ class Site(Record):
     disagreements: list[Disagreement] = doc("one per failed site check", ABSENT)
 
 
+@dataclass(frozen=True, kw_only=True)
+class DamagedStretch(Record):
+    """One stretch a replayed bag lost (the estimate uses only the intact messages)."""
+
+    offset: int | None = doc("where the loss starts in the file, bytes; null for a loss recorded by an earlier "
+                             "recover, or for messages whose channel definition was lost")
+    length: int | None = doc("its length, bytes (null as offset)")
+    lost_from_s: float | None = doc("start of the log-time span lost, s from the scene's start (null: unknown)")
+    lost_to_s: float | None = doc("its end, s (null: unknown)")
+    span_from: str | None = doc("chunk index (the damaged chunk's message_start_time-message_end_time from the intact "
+                                "summary), neighbouring messages (the summary is unusable: open between the last "
+                                "intact message before and the first after) or recorded by recover")
+    reason: str = doc("what was wrong, e.g. chunk CRC mismatch, chunk undecodable (ZstdError), unreadable records "
+                      "(framing lost)")
+    before_recovery: bool = doc("true for losses read from a recovered file's gyro_instrument_damage record", ABSENT)
+    file: str = doc("the .mcap of a bag directory the loss is in (absent for a bare .mcap)", ABSENT)
+
+
 Entry = SwingEntry | SwingNull | PlaneEntry | PlaneNull | UnusedEntry | PluginEntry
 
 
@@ -272,10 +290,8 @@ class Estimate(Record):
                                           "unmatched": {"type": "object", "additionalProperties": {"type": "string"}},
                                           "unused": {"type": "object", "additionalProperties": {"type": "string"}}},
                                       "additionalProperties": False})
-    damaged: list[dict[str, Json]] = doc(
-        "replay of a bag that lost data: one entry per lost stretch: offset and length (bytes, or null), "
-        "lost_from_s, lost_to_s (s from the scene's start, null at an unknown end), span_from, reason, "
-        "before_recovery, file", ABSENT)
+    damaged: list[DamagedStretch] = doc("replay of a bag that lost data: one entry per lost stretch (absent when "
+                                        "nothing was lost)", ABSENT)
     observation_read_s: float = doc("replay of a cut recording: span of the joint samples decoded, s", ABSENT)
     recording_cut: str = doc("replay: why the recording stops short of observation_s", ABSENT)
     replay_notes: list[str] = doc("replay: what the bag reader found", ABSENT)
