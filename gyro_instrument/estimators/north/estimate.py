@@ -285,10 +285,15 @@ def _pre_orientation(fitted, eq, biases, tape) -> PreOrientation:
 
 
 def best_block(blocks) -> "NorthBlock | RateNorthBlock | NullNorthBlock | None":
-    """The estimate's top-level ``north``: the block with the smallest σ (nulls last), or None."""
+    """The estimate's top-level ``north``: the block with the smallest σ (nulls last), or None. A block is a
+    record (:mod:`.block`) or, from a plug-in kind, its JSON dict."""
     if not blocks:
         return None
-    return min(blocks, key=lambda b: b.sigma_arcsec if b.sigma_arcsec is not None else math.inf)
+
+    def sigma(b):
+        value = b.get("sigma_arcsec") if isinstance(b, dict) else b.sigma_arcsec
+        return math.inf if value is None else value
+    return min(blocks, key=sigma)
 
 
 def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
