@@ -13,7 +13,8 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["tests", "tests.*"]),
-    package_data={"gyro_instrument.scenes": ["*.yaml"]},
+    # the scenes, and the estimate's JSON Schema (tools/gen_estimate_docs.py writes it from the typed records)
+    package_data={"gyro_instrument.scenes": ["*.yaml"], "gyro_instrument.estimators": ["estimate.schema.json"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
@@ -26,7 +27,10 @@ setup(
     extras_require={
         "ros": ROS,
         "test": ROS + ["pytest>=7", "pytest-xdist>=3.5", "hypothesis>=6", "rosbags>=0.10", "colcon-common-extensions", "matplotlib>=3.6",
-                       "dask[distributed]>=2023.1", "pynmea2==1.19.0"],
+                       "dask[distributed]>=2023.1", "pynmea2==1.19.0",
+                       # validates every estimate JSON against the shipped schema (tests/test_estimate_schema.py;
+                       # draft 2020-12's unevaluatedProperties needs >= 4.0, its referencing library >= 4.18)
+                       "jsonschema>=4.18"],
         "plot": ["matplotlib>=3.6"],
         "cluster": ["dask[distributed]>=2023.1"],
     },

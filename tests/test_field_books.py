@@ -16,9 +16,9 @@ from gyro_instrument.cli.parser import BOOK_TIME_UNITS
 from gyro_instrument.cli.text import north_lines
 from gyro_instrument.core.angle_formats import format_angle, parse_ddmmss, parse_dms
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators import field_book as fb
+from gyro_instrument.estimators.north import field_book as fb
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.field_book_read import TIME_UNITS
+from gyro_instrument.estimators.north.field_book_read import TIME_UNITS
 
 ARCSEC = math.pi / 648000.0
 #: a damped swing's turning points about 180°10' (arcsec from 180°): c + d(−q)^k, q = 0.97 per swing

@@ -13,7 +13,7 @@ import pytest
 
 from gyro_instrument.cli import main
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.field_book import write_field_book
+from gyro_instrument.estimators.north.field_book import write_field_book
 from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
 from gyro_instrument.instruments.observation_azimuth import HorizontalSwing
 from gyro_instrument.scenes import load_scene

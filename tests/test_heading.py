@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.site import Site
-from gyro_instrument.estimators.heading import (NOT_PROVIDED, UNMEASURED_TILT_VARIANCE_RAD2, ImuFields,
+from gyro_instrument.estimators.north.heading import (NOT_PROVIDED, UNMEASURED_TILT_VARIANCE_RAD2, ImuFields,
                                                 earth_rate_body, earth_rate_body_covariance, imu_fields,
                                                 orientation_xyzw, yaw_from_azimuth)
 from gyro_instrument.recording.nmea import (NmeaUdpSender, format_heading, hehdt_sentence, nmea_checksum,

@@ -16,7 +16,7 @@ from gyro_instrument.core.angles import unwrap
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
 from gyro_instrument.estimators.north import exact, joint
-from gyro_instrument.estimators.north_estimate import north_entry, swing_equation
+from gyro_instrument.estimators.north.estimate import north_entry, swing_equation
 from gyro_instrument.estimators.pipeline import measure, simulate_truth
 from gyro_instrument.instruments.observation_azimuth import ROTOR_OFF
 from gyro_instrument.scenes import load_scene
@@ -40,7 +40,7 @@ def _north(scene, truth, seed):
     rec = dict(recs["gak1"])
     if "gak1_rotor_off" in recs:
         rec[ROTOR_OFF] = recs["gak1_rotor_off"]
-    return north_entry(obs, rec, sensor=SensorModel.from_scene(scene))[0]
+    return north_entry(obs, rec, sensor=SensorModel.from_scene(scene))[0].to_json()
 
 
 def _truth_par(inst):

@@ -1,4 +1,4 @@
-"""The live north's growing fit (issue 37 item 5, estimators/north_live.py) on synthetic swings.
+"""The live north's growing fit (issue 37 item 5, estimators/north/live.py) on synthetic swings.
 
 A damped swing u(t) = c + A e^(−δt) cos(ωt) in white noise σ, the fit's prior frequency 1 % off
 (the predicted swing duration is a calibration, not the truth). References: the generating c, ω,
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.estimators.north_live import NorthTracker, SwingFit, fit_north
+from gyro_instrument.estimators.north.live import NorthTracker, SwingFit, fit_north
 
 
 def _swing(c=0.01, a=0.02, swing_s=12.8, tau_s=3000.0, sigma=1e-4, rate_hz=20.0, duration_s=300.0, seed=3):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators import field_book as fb
+from gyro_instrument.estimators.north import field_book as fb
 from gyro_instrument.estimators import north
 
 # a gyroscope swinging with a 20 s period (Quet's T = 10 s), 0.05 rad amplitude, read at 20 Hz
@@ -327,13 +327,13 @@ def test_bench_study_rows():
 
 
 def test_scatter_sigma_is_the_matrix_form_without_the_matrices():
-    """σ̂_a² = |P B a|² / tr(BᵀPB) (means._scatter_sigma's definition) evaluated without forming B (k × ν)
+    """σ̂_a² = |P B a|² / tr(BᵀPB) (means.scatter_sigma's definition) evaluated without forming B (k × ν)
     or BᵀPB (ν × ν): equal to the dense form to round-off (the dense form's own cancellation with
     readings of 0.3 rad and a scatter of 1e-4 rad is ~eps·0.3/1e-4 ≈ 7e-13 relative; measured ≤ 1e-12),
     and a day of a fast swing (2e5 reversal points, whose dense BᵀPB would be 320 GB) costs O(ν)."""
     import math
 
-    from gyro_instrument.estimators.north.means import _scatter_sigma
+    from gyro_instrument.estimators.north.means import scatter_sigma
     rng = np.random.default_rng(5)
     for nu in (4, 5, 9, 64, 257):
         a = 0.3 + 1e-4 * rng.normal(size=nu)
@@ -344,10 +344,10 @@ def test_scatter_sigma_is_the_matrix_form_without_the_matrices():
         P = np.eye(k) - 1.0 / k
         r = P @ B @ a
         dense = math.sqrt(float(r @ r) / float(np.trace(B.T @ P @ B)))
-        got, dof = _scatter_sigma(a)
+        got, dof = scatter_sigma(a)
         assert dof == nu - 3 and abs(got / dense - 1) < 1e-11, nu
     big = 0.3 + 1e-4 * rng.normal(size=200_000)
-    got, dof = _scatter_sigma(big)
+    got, dof = scatter_sigma(big)
     # independent readings of σ 1e-4: each triple mean has σ √(3/8) 1e-4 and σ̂ recovers 1e-4 within 1 %
     assert dof == 199_997 and abs(got / 1e-4 - 1) < 0.01
 

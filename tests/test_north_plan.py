@@ -20,7 +20,7 @@ from gyro_instrument.cli import main as cli_main
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
 from gyro_instrument.estimators.bounds import SensorSpec
-from gyro_instrument.estimators.bounds_azimuth import AzimuthModel, azimuth_sigmas, solve_azimuth
+from gyro_instrument.estimators.north.bounds import AzimuthModel, azimuth_sigmas, solve_azimuth
 from gyro_instrument.estimators.planner import ARCSEC_RAD, parse_targets, plan, verify_plan
 from gyro_instrument.instruments.measurement import kind
 from gyro_instrument.instruments.observation_azimuth import AZIMUTH

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gyro_instrument.estimators import rate_gyro_north as R
+from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
 from gyro_instrument.estimators.pipeline import estimate_records
 from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, GM_ALLAN_PEAK, gm_allan_variance
@@ -110,7 +110,7 @@ def test_two_positions_mirror_image_resolved_by_the_stated_prior():
     says so; no prior (± 180°) gives a null azimuth with both candidates."""
     scene, truth, iname, inst = _one("rate_gyro_two_position")
     rec = measure(scene, truth, 7)[iname]
-    block = R.north_block(inst.observation(), R.fit_record(inst.observation(), rec))
+    block = R.north_block(inst.observation(), R.fit_record(inst.observation(), rec)).to_json()
     cands = block["sign"]["candidates_deg"]
     assert sorted(cands)[0] + sorted(cands)[1] == pytest.approx(360.0, abs=1e-9)  # M and −M (φ0 = 0)
     assert block["sign"]["resolved_by"] == "prior"
@@ -118,7 +118,7 @@ def test_two_positions_mirror_image_resolved_by_the_stated_prior():
     for prior, tol, expect in ((300.0, 45.0, max(cands)), (60.0, 180.0, None)):
         sc, tr, _, inst2 = _one("rate_gyro_two_position", (f"instruments.mems.mount_azimuth_prior_deg={prior}",
                                                           f"instruments.mems.mount_azimuth_prior_tolerance_deg={tol}"))
-        b = R.north_block(inst2.observation(), R.fit_record(inst2.observation(), measure(sc, tr, 7)[iname]))
+        b = R.north_block(inst2.observation(), R.fit_record(inst2.observation(), measure(sc, tr, 7)[iname])).to_json()
         assert b["sign"]["candidates_deg"] == pytest.approx(cands)
         if expect is None:
             assert b["mount_azimuth_deg"] is None and b["sign"]["resolved_by"] is None and "mirror" in b["reason"]
@@ -167,7 +167,7 @@ def test_estimate_reports_the_north_block_and_no_latitude():
 
 def test_one_position_gives_a_null_block_with_its_reason():
     scene, truth, iname, inst = _one("rate_gyro_four_position", ("instruments.fog.positions=1",))
-    b = R.north_block(inst.observation(), R.fit_record(inst.observation(), measure(scene, truth)[iname]))
+    b = R.north_block(inst.observation(), R.fit_record(inst.observation(), measure(scene, truth)[iname])).to_json()
     assert b["mount_azimuth_deg"] is None and "one position" in b["reason"]
 
 
@@ -176,7 +176,7 @@ def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
     the planner bins more coarsely), and at the planned number of sequences the bound meets the target
     while one sequence fewer does not (the search's 2 % tolerance aside)."""
     from gyro_instrument.estimators.planner import parse_targets, plan
-    from gyro_instrument.estimators.rate_gyro_plan import sigma_mount_rad
+    from gyro_instrument.estimators.north.rate_gyro_plan import sigma_mount_rad
     scene, truth, iname, inst = _one("rate_gyro_four_position")
     f = R.fit_record(inst.observation(), measure(scene, truth, 1)[iname])
     assert sigma_mount_rad(inst, inst.p, scene.duration_s, scene.sample_rate_hz) == pytest.approx(f["sigma_rad"], rel=0.02)
@@ -190,10 +190,10 @@ def test_plan_bound_is_the_estimators_sigma_and_its_time_reaches_the_target():
 
 
 def test_bench_rows_noise_free_exact_and_sigma_at_the_bound():
-    """The bench's table (estimators/rate_gyro_study.py, the kind's bench study) at 10 min: the noise-free record gives the mount
+    """The bench's table (estimators/north/rate_gyro_study.py, the kind's bench study) at 10 min: the noise-free record gives the mount
     azimuth exactly (the linear model is the simulated one: < 1e-6″), and the mean reported σ is the
     planner's bound to 10 % (the estimator's bins vs the planner's; a carousel's long bins lose most)."""
-    from gyro_instrument.estimators.rate_gyro_study import rate_gyro_rows, same_time_lines
+    from gyro_instrument.estimators.north.rate_gyro_study import rate_gyro_rows, same_time_lines
     rows = rate_gyro_rows(quick=True, duration_s=600.0)
     assert {r["scene"] for r in rows} == {c[0] for c in CASES}
     for r in rows:
@@ -215,16 +215,16 @@ def test_the_registered_kind_gives_the_same_block_bound_and_a_live_heading():
     obs = inst.observation()
     assert measured(inst)
     assert estimate_records(scene, truth[1], measure(scene, truth, 2))["north"] == \
-        R.north_block(obs, R.fit_record(obs, measure(scene, truth, 2)[iname]))
+        R.north_block(obs, R.fit_record(obs, measure(scene, truth, 2)[iname])).to_json()
     rec = measure(scene, truth, 2)[iname]
     block, none = k.estimate(obs, rec, (), [], None)
     assert none is None and block == R.north_block(obs, R.fit_record(obs, rec))
     model, _ = k.probe(scene, obs)
-    assert k.bound(model, scene.duration_s, None)[0] == pytest.approx(block["sigma_arcsec"] / R.ARCSEC_PER_RAD, rel=0.02)
+    assert k.bound(model, scene.duration_s, None)[0] == pytest.approx(block.sigma_arcsec / R.ARCSEC_PER_RAD, rel=0.02)
     half = {key: v[: v.size // 2] for key, v in rec.items()}
     m_half, s_half = k.tracker(obs, scene, {}).update(iname, half)
     assert abs(R._wrap(m_half - math.radians(inst.p.mount_azimuth_deg))) < 4.0 * s_half
-    assert s_half > block["sigma_arcsec"] / R.ARCSEC_PER_RAD
+    assert s_half > block.sigma_arcsec / R.ARCSEC_PER_RAD
 
 
 def test_an_index_logged_in_degrees_just_below_a_turn_is_the_same_heading():

@@ -173,8 +173,8 @@ def write_rows(path, rows, metadata) -> int:
     """Rows as a Parquet table at ``path`` (columns: the union of the rows' keys in first-seen order,
     absent values null; a column pyarrow cannot type as one kind written as JSON text). Returns
     the column count."""
-    from gyro_instrument.estimators.data_io import _pyarrow
-    pa = _pyarrow()
+    from gyro_instrument.estimators.table_read import import_pyarrow
+    pa = import_pyarrow()
     names = list(dict.fromkeys(k for r in rows for k in r))
     arrays = []
     for name in names:

@@ -14,7 +14,7 @@ EXIT_BAD_INPUT = 2
 EXIT_INTEGRATION_FAILED = 3
 EXIT_CLOSED_PIPE = 141
 #: ``--time-unit``: the units of ``--data`` (s, ms, us, ns, min) and, for ``--reversal-points``, clock
-#: times (hms); equal to ``estimators.field_book_read.TIME_UNITS`` (tests/test_field_books.py)
+#: times (hms); equal to ``estimators.north.field_book_read.TIME_UNITS`` (tests/test_field_books.py)
 BOOK_TIME_UNITS = ("s", "ms", "us", "ns", "min", "hms")
 
 

@@ -317,17 +317,19 @@ SITE_CAUSES = ("a driven or damped pendulum (a drive, a Charron ring or the air 
                "or the wrong scene (set site.latitude_deg, or site.latitude_known=false for an unknown place)")
 
 
-def site_check(result, site) -> None:
+def site_check(result, site) -> tuple:
     """The ``site`` checks: each pendulum's Foucault rate against n sin γ at the scene's site, and a
     combination with a gyroscope's latitude (and an estimated Earth rate) against the site's; beyond
-    :data:`SITE_Z` σ ``failed`` (the estimate stands: the measurement is the answer). Sets
-    ``result["site"]``; nothing is compared when ``site.latitude_known`` is false."""
+    :data:`SITE_Z` σ ``failed`` (the estimate stands: the measurement is the answer). ``result``: the
+    estimate's JSON so far (its ``instruments`` and the combined keys). Returns (the ``site`` block, a
+    :class:`.estimate_types.Site`, and the checks' entries); nothing is compared when
+    ``site.latitude_known`` is false."""
+    from gyro_instrument.estimators.estimate_types import Disagreement, Site
     lat = site.latitude_deg
     block = {"latitude_known": site.latitude_known, "latitude_deg": lat, "earth_rate_rad_s": site.earth_rate_rad_s}
-    result["site"] = block
     if not site.latitude_known:
         block["detail"] = "site.latitude_known is false: the estimate is not compared with the site"
-        return
+        return Site(**block), []
     where = f"{abs(lat):.2f}° {'N' if lat >= 0 else 'S'}"
     k0 = site.k_vertical_rad_s
     block["expected_foucault_rate_rad_s"] = k0
@@ -367,8 +369,8 @@ def site_check(result, site) -> None:
         if entries[-1]["status"] == "failed":
             disagree.append({"instrument": "combined", "what": "latitude", "z": z, "headline": said})
     block["agrees"] = not disagree
-    block["disagreements"] = disagree
-    result["checks"] += entries
+    block["disagreements"] = [Disagreement(**d) for d in disagree]
+    return Site(**block), entries
 
 
 def _z(diff, sigma) -> float:

@@ -34,8 +34,8 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.table_read import (ANGLE_UNITS, ARROW_TIME_UNITS, SEPARATORS,  # noqa: F401
-                                                   TIME_COLUMN, TIME_UNITS, TableOptions, _pyarrow, channel_meanings,
-                                                   load_table, read_table, table_kind)
+                                                   TIME_COLUMN, TIME_UNITS, TableOptions, import_pyarrow,
+                                                   channel_meanings, load_table, read_table, table_kind)
 from gyro_instrument.estimators.table_write import (BYTES_PER_VALUE, QUEUED_WRITES, ROWS_PER_WRITE,  # noqa: F401
                                                     SCALE_KEY, SCENE_KEY, TableWriter, output_bytes, scale_readings_text,
                                                     scene_of_table, scene_sidecar_path, scene_yaml_text, table_metadata,

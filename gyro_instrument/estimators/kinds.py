@@ -7,8 +7,8 @@
   Foucault fit :func:`.foucault.estimate_foucault` and its bound
   (:func:`.foucault.foucault_crlb_small_swing_rad_s`).
 * :class:`AzimuthKind` (``azimuth``): a horizontal gyroscope's swing centre is the meridian: the
-  ``north`` block (:func:`.north_estimate.north_entry`), the joint fit's Cramér–Rao bound
-  (:mod:`.bounds_azimuth`), the Schuler mean as the swing goes (:mod:`.north_live`), published
+  ``north`` block (:func:`.north.estimate.north_entry`), the joint fit's Cramér–Rao bound
+  (:mod:`.north.bounds`), the Schuler mean as the swing goes (:mod:`.north.live`), published
   live as the instrument's heading.
 
 Each is an entry point of ``gyro_instrument.measurements`` (setup.py); a package adds its own kind
@@ -96,15 +96,15 @@ class AzimuthKind(MeasurementKind):
     LIVE = "heading"
 
     def estimate(self, obs, rec, corrections, checks, sensor) -> tuple:
-        from gyro_instrument.estimators.north_estimate import north_entry
+        from gyro_instrument.estimators.north.estimate import north_entry
         return north_entry(obs, rec, corrections, checks, sensor)
 
     def probe(self, scene, obs) -> tuple:
-        from gyro_instrument.estimators.bounds_azimuth import azimuth_model
+        from gyro_instrument.estimators.north.bounds import azimuth_model
         return azimuth_model(scene, obs)
 
     def bound(self, model, T, sensor) -> tuple:
-        from gyro_instrument.estimators.bounds_azimuth import fit_bound
+        from gyro_instrument.estimators.north.bounds import fit_bound
         return fit_bound(model, T, sensor), "Cramer-Rao bound of the whole joint fit"
 
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
@@ -116,7 +116,7 @@ class AzimuthKind(MeasurementKind):
         return NorthLive(obs.name, swing, scene.sensor.get("noise_rad") or None, off, off_s)
 
     def combine(self, blocks) -> dict | None:
-        from gyro_instrument.estimators.north_estimate import best_block
+        from gyro_instrument.estimators.north.estimate import best_block
         return best_block(blocks)
 
     def plan(self, scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
@@ -125,20 +125,20 @@ class AzimuthKind(MeasurementKind):
         return plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor)
 
     def plan_entry(self, model) -> dict:
-        from gyro_instrument.estimators.bounds_azimuth import azimuth_entry
+        from gyro_instrument.estimators.north.bounds import azimuth_entry
         return azimuth_entry(model)
 
 
 class NorthLive(LiveTracker):
     """The live north of one horizontal gyroscope (and its rotor-off swing), from the first swing on
-    (issue 37): per record a :class:`.north_live.SwingFit` of the record so far (the predicted
-    frequency as a prior) every half swing of the gyroscope, and a :class:`.north_live.NorthTracker`
+    (issue 37): per record a :class:`.north.live.SwingFit` of the record so far (the predicted
+    frequency as a prior) every half swing of the gyroscope, and a :class:`.north.live.NorthTracker`
     of its reversal points every quarter swing of the record; the live north is whichever of
-    :func:`.north_live.fit_north` and :func:`.north_live.live_north` (both tape-corrected where
+    :func:`.north.live.fit_north` and :func:`.north.live.live_north` (both tape-corrected where
     there is a rotor-off swing) has the smaller σ."""
 
     def __init__(self, name, swing_s, sigma, off_name=None, off_swing_s=None):
-        from gyro_instrument.estimators.north_live import NorthTracker, SwingFit
+        from gyro_instrument.estimators.north.live import NorthTracker, SwingFit
         self.name = name
         self.trackers = {name: NorthTracker(swing_s, sigma)}
         self.fits = {name: SwingFit(swing_s, sigma)}
@@ -158,8 +158,8 @@ class NorthLive(LiveTracker):
         return min(0.25 * self.trackers[name].swing_s, 0.5 * self.trackers[self.name].swing_s)
 
     def window_s_of(self, name) -> float:
-        """The fit's span (:data:`.north_live.FIT_SWINGS` swings); the reversal points are searched
-        in its last :meth:`.north_live.NorthTracker.window_s`."""
+        """The fit's span (:data:`.north.live.FIT_SWINGS` swings); the reversal points are searched
+        in its last :meth:`.north.live.NorthTracker.window_s`."""
         return max(self.fits[name].window_s(), self.trackers[name].window_s())
 
     def update(self, name, rec) -> tuple | None:
@@ -184,7 +184,7 @@ class NorthLive(LiveTracker):
     def live(self) -> "object | None":
         """The better (smaller σ) of the fit's and the reversal points' live north (a
         :class:`.north.NorthEstimate`), or None."""
-        from gyro_instrument.estimators.north_live import fit_north, live_north
+        from gyro_instrument.estimators.north.live import fit_north, live_north
         off_fit = self.fits[self.off].summary if self.off else None
         cands = [fit_north(self.fits[self.name].summary, off_fit, tape=self.off is not None),
                  live_north(self.trackers[self.name], self.trackers.get(self.off))]
@@ -207,6 +207,7 @@ class NorthLive(LiveTracker):
 def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     """The Foucault rate of one pendulum record (estimators/foucault.py) and its checks."""
     from gyro_instrument.estimators.adequacy import check_entry, check_period, halves_entry, plane_fit_entry
+    from gyro_instrument.estimators.entries import PlaneEntry, PlaneNull, RestPoint
     from gyro_instrument.estimators.foucault import estimate_foucault
     from gyro_instrument.estimators.latitude import RateMeasurement
     from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, NoSignal
@@ -218,16 +219,15 @@ def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     except EstimationError as exc:
         if isinstance(exc, NoSignal):
             checks.append(check_entry(name, "signal", "no_signal", str(exc), expected=DETECTION_SNR))
-        return {"type": inst.type_name, "foucault_rate_rad_s": None, "reason": str(exc)}, None
-    est = {"type": inst.type_name, "foucault_rate_rad_s": f.k_rad_s,
-           "foucault_rate_sigma_rad_s": f.k_sigma_rad_s, "crlb_foucault_rate_rad_s": f.crlb_k_rad_s,
-           "measured_plane_rate_rad_s": f.measured_rate_rad_s,
-           "measured_plane_rate_sigma_rad_s": f.measured_rate_sigma_rad_s, "sigma_basis": f.sigma_basis,
-           "sigma_basis_detail": f.sigma_basis_text,
-           "ellipse_correction_rad_s": f.airy_correction_rad_s, "amplitude_rad": f.amplitude_rad,
-           "minor_axis_rad": f.minor_axis_rad, "period_s": f.period_s, "period_sigma_s": f.period_sigma_s,
-           "rest_point": f.rest_point, "windows": f.windows, "notes": f.notes,
-           "ellipse_scale": ellipse_scale(f.measured_rate_rad_s, f.airy_correction_rad_s, f.k_sigma_rad_s)}
+        return PlaneNull(type=inst.type_name, foucault_rate_rad_s=None, reason=str(exc)), None
+    est = PlaneEntry(type=inst.type_name, foucault_rate_rad_s=f.k_rad_s, foucault_rate_sigma_rad_s=f.k_sigma_rad_s,
+                     crlb_foucault_rate_rad_s=f.crlb_k_rad_s, measured_plane_rate_rad_s=f.measured_rate_rad_s,
+                     measured_plane_rate_sigma_rad_s=f.measured_rate_sigma_rad_s, sigma_basis=f.sigma_basis,
+                     sigma_basis_detail=f.sigma_basis_text, ellipse_correction_rad_s=f.airy_correction_rad_s,
+                     amplitude_rad=f.amplitude_rad, minor_axis_rad=f.minor_axis_rad, period_s=f.period_s,
+                     period_sigma_s=f.period_sigma_s, rest_point=RestPoint(**f.rest_point), windows=f.windows,
+                     notes=f.notes,
+                     ellipse_scale=ellipse_scale(f.measured_rate_rad_s, f.airy_correction_rad_s, f.k_sigma_rad_s))
     checks.append(check_entry(name, "signal", "passed", f"swing detected (A^2 N / (4 sigma^2) >= {DETECTION_SNR:g}; "
                                                        "estimators/foucault.py)", expected=DETECTION_SNR))
     entry = check_period(name, inst, f.period_s)
@@ -239,14 +239,15 @@ def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
     return est, RateMeasurement(name, PLANE_RATE, f.k_rad_s, f.k_sigma_rad_s, crlb_sigma=max(f.crlb_k_rad_s, 1e-150))
 
 
-def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> dict:
-    """How the ellipse (Airy) correction hangs on the position scale: it is (3/8) a b / l² times the
+def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> "EllipseScale":
+    """How the ellipse (Airy) correction hangs on the position scale (an :class:`.entries.EllipseScale`): it is (3/8) a b / l² times the
     swing frequency (physics_notes "Real Foucault pendulums"), a and b the axes read from the track, so
     a scale s times the assumed one multiplies it by s² while the measured turn is unchanged. ``matters``:
     halving the scale would move k by more than its σ (3/4 of the correction > σ) — then positions given
     in pixels (or a wrong length) decide the answer, and ``k_at_half_scale_rad_s`` /
     ``k_at_double_scale_rad_s`` say by how much."""
+    from gyro_instrument.estimators.entries import EllipseScale
     m, c = float(measured_rad_s), float(correction_rad_s)
-    return {"exponent": 2, "share_of_measured_rate": c / m if m else None,
-            "k_without_correction_rad_s": m, "k_at_half_scale_rad_s": m - c / 4.0, "k_at_double_scale_rad_s": m - 4.0 * c,
-            "matters": bool(abs(0.75 * c) > float(sigma_rad_s or 0.0))}
+    return EllipseScale(exponent=2, share_of_measured_rate=c / m if m else None, k_without_correction_rad_s=m,
+                        k_at_half_scale_rad_s=m - c / 4.0, k_at_double_scale_rad_s=m - 4.0 * c,
+                        matters=bool(abs(0.75 * c) > float(sigma_rad_s or 0.0)))

@@ -14,19 +14,24 @@ Each instrument's record is estimated as its observation says
 on the record, and the observation supplies the laws.
 """
 
+import dataclasses
+
 from gyro_instrument.core.site import SIDEREAL_RATE_RAD_S
 from gyro_instrument.estimators.adequacy import InadequateData, check_before_fit, hemisphere_entry, site_check
 from gyro_instrument.estimators.combine import classic_methods, combined, null_combined
+from gyro_instrument.estimators.entries import UnusedEntry
+from gyro_instrument.estimators.estimate_types import Check, Estimate, Truth
 from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
+from gyro_instrument.estimators.record import ABSENT, Record, to_json
 from gyro_instrument.instruments.measurement import declared_kinds, kind, measured
 from gyro_instrument.instruments.observation import CORRECTIONS, FINITE_AMPLITUDE_CORRECTIONS
 from gyro_instrument.scenes import load_scene
 from gyro_instrument.sensors import SensorModel
 
-__all__ = ["CORRECTIONS", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStream", "estimable", "estimate_records",
+__all__ = ["CORRECTIONS", "FINITE_AMPLITUDE_CORRECTIONS", "MeasureStream", "build_estimate", "estimable", "estimate_records",
            "estimated_instruments", "estimator_instruments", "known_earth_rate", "measure", "missing_companions",
-           "seed_sweep", "simulate_truth"]
+           "seed_sweep", "simulate_truth", "with_block"]
 
 
 def estimable(inst) -> bool:
@@ -64,7 +69,8 @@ def missing_companions(insts, records) -> list:
 
 
 def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
-    """The ``estimate`` JSON object (see module docstring) from measured records.
+    """The ``estimate`` JSON object (see module docstring) from measured records: the JSON of
+    :func:`build_estimate`'s typed :class:`.estimate_types.Estimate` (msg_docs/estimate.md).
 
     ``corrections`` — the subset of :data:`CORRECTIONS` to apply (all by default); a study of
     what a correction is worth passes fewer.
@@ -75,26 +81,30 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
         The data fail a check no estimate can survive (estimators/adequacy.py): one line naming
         the check, and, in a scene of several instruments, how to leave the failing one out.
     """
+    return build_estimate(scene, insts, records, corrections).to_json()
+
+
+def build_estimate(scene, insts, records, corrections=CORRECTIONS) -> Estimate:
+    """The typed estimate (:class:`.estimate_types.Estimate`) of :func:`estimate_records`; raises as it says."""
     unknown = set(corrections) - CORRECTIONS
     if unknown:
         raise ValueError(f"unknown corrections {sorted(unknown)}; known: {sorted(CORRECTIONS)}")
     site = scene.site
-    result = {"scene": scene.name, "seed": scene.seed, "observation_s": float(scene.duration_s),
-              "truth": {"latitude_deg": site.latitude_deg, "earth_rate_rad_s": site.earth_rate_rad_s},
-              "instruments": {}, "methods": {}}
-    meas, gyros, pend, checks, blocks = [], {}, None, [], {}
+    truth = Truth(latitude_deg=site.latitude_deg, earth_rate_rad_s=site.earth_rate_rad_s)
+    entries, meas, gyros, pend, checks, blocks = {}, [], {}, None, [], {}
     sensor = SensorModel.from_scene(scene)
     for name, inst in insts.items():
         obs = inst.observation()
         try:
             est, m = _instrument_estimate(name, obs, records.get(name, {}), corrections, checks, sensor)
             for key, k, block in _also_measured(obs, est, records, corrections, checks, sensor):
+                est = with_block(est, key, block)
                 blocks.setdefault(key, []).append((k, block))
         except InadequateData as exc:
             if len(insts) > 1:
                 exc.add_hint(f"or leave {name} out: --set instruments.{name}=null")
             raise
-        result["instruments"][name] = est
+        entries[name] = est
         if m is not None:
             meas.append(m)
             role = kind(m.kind).CLASSIC
@@ -103,18 +113,21 @@ def estimate_records(scene, insts, records, corrections=CORRECTIONS) -> dict:
             elif role == "gyro":
                 gyros[name] = (obs, est, m)
     if meas:
-        result.update(combined(meas, scene.estimator.get("hemisphere"), *known_earth_rate(scene, insts, meas),
-                               earth_rate=scene.estimator.get("earth_rate")))
+        combination = combined(meas, scene.estimator.get("hemisphere"), *known_earth_rate(scene, insts, meas),
+                               earth_rate=scene.estimator.get("earth_rate"))
     else:
-        result.update(null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
-                                     "(plane, cone, gimbal) or a pendulum with a measured oscillation"))
-    for key, found in blocks.items():
-        result[key] = found[0][0].combine([b for _, b in found])
-    classic_methods(result, gyros, pend, scene.estimator.get("earth_rate"))
-    entry = hemisphere_entry(result.get("hemisphere"), result.get("hemisphere_basis", ""), site.latitude_deg)
-    result["checks"] = checks + ([entry] if entry else [])
-    site_check(result, site)
-    return result
+        combination = null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
+                                    "(plane, cone, gimbal) or a pendulum with a measured oscillation")
+    found = {key: f[0][0].combine([b for _, b in f]) for key, f in blocks.items()}
+    methods = classic_methods(combination.hemisphere, truth.earth_rate_rad_s, gyros, pend,
+                              scene.estimator.get("earth_rate"))
+    entry = hemisphere_entry(combination.hemisphere, getattr(combination, "hemisphere_basis", ""), site.latitude_deg)
+    checks += [entry] if entry else []
+    evidence, site_entries = site_check({"instruments": to_json(entries), **combination.to_json()}, site)
+    return Estimate(scene=scene.name, seed=scene.seed, observation_s=float(scene.duration_s), truth=truth,
+                    instruments=entries, methods=methods, combination=combination,
+                    north=found.pop("north", ABSENT), blocks=found or ABSENT,
+                    checks=[Check(**c) for c in checks + site_entries], site=evidence)
 
 
 def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
@@ -125,14 +138,26 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     used."""
     engine = kind(obs.MEASUREMENT) if obs.MEASUREMENT is not None else None
     if engine is None or not engine.RATE or not obs.has_record(rec):
-        entry = {"type": obs.type_name}
+        reason = ABSENT
         if not _block_kinds(obs) or not obs.has_record(rec):
-            entry["reason"] = (f"not used by the estimator ({obs.PENDING_ESTIMATOR})" if obs.PENDING_ESTIMATOR else
-                               "not used by the estimator (no Earth-rate measurement from this instrument)")
-        return entry, None
+            reason = (f"not used by the estimator ({obs.PENDING_ESTIMATOR})" if obs.PENDING_ESTIMATOR else
+                      "not used by the estimator (no Earth-rate measurement from this instrument)")
+        return UnusedEntry(type=obs.type_name, reason=reason), None
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)
     return engine.estimate(obs, rec, corrections, checks, sensor)
+
+
+def with_block(entry, key, block) -> "Record | dict":
+    """``entry`` (a record, or a plug-in kind's dict) with its kind's block under ``key`` (the kind's
+    ``BLOCK``): a record's field of that name, else its open ``extra``; a dict gains the key."""
+    if isinstance(entry, dict):
+        return entry | {key: block}
+    if key in {f.name for f in dataclasses.fields(entry)}:
+        return dataclasses.replace(entry, **{key: block})
+    if "extra" in {f.name for f in dataclasses.fields(entry)}:
+        return dataclasses.replace(entry, extra=(entry.extra or {}) | {key: block})
+    raise ValueError(f"the entry {type(entry).__name__} has no place for a {key!r} block")
 
 
 def _block_kinds(obs) -> list:
@@ -145,7 +170,8 @@ def _block_kinds(obs) -> list:
 def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
     """The engines of the kinds an observation measures that give a block (:func:`_block_kinds`: the
     azimuth of ``ALSO_MEASURES``), on its record and its companions' (``companions()``: record key ->
-    instrument name); each result goes into the instrument's entry under the kind's ``BLOCK``.
+    instrument name); the caller puts each into the instrument's entry under the kind's ``BLOCK``
+    (:func:`with_block`).
     Returns ``(BLOCK, kind, block)`` for each."""
     kinds = _block_kinds(obs)
     if not kinds or not obs.has_record(records.get(obs.name, {})):
@@ -156,7 +182,6 @@ def _also_measured(obs, est, records, corrections, checks, sensor) -> list:
     out = []
     for k in kinds:
         block, _ = k.estimate(obs, rec, corrections, checks, sensor)
-        est[k.BLOCK] = block
         out.append((k.BLOCK, k, block))
     return out
 

@@ -24,7 +24,7 @@ from gyro_instrument.estimators.bounds import (CLOSED_FORM_CYCLES, EXACT_SAMPLES
                                                MAX_OBSERVATION_S, PENDULUM_MIN_PERIODS, YEAR_S, InstrumentModel,
                                                Planner, SensorSpec, combined, counting_sigma, instrument_models,
                                                instrument_sigma, samples, shortest_time, sine_fit_covariance)
-from gyro_instrument.estimators.bounds_azimuth import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
+from gyro_instrument.estimators.north.bounds import (NORTH_LAWS, NORTH_METHODS, azimuth_sigmas,
                                                        rotor_off_plan, solve_azimuth)
 from gyro_instrument.instruments.measurement import kind, load as load_kinds
 
@@ -230,11 +230,11 @@ def _finite(x):
 
 def plan_azimuth(scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
     """The plan of an azimuth target: per horizontal gyroscope the fit's T at the Cramér–Rao bound of
-    the whole joint problem (:func:`.bounds_azimuth.solve_azimuth`, :func:`.bounds_azimuth.fit_bound`:
+    the whole joint problem (:func:`.north.bounds.solve_azimuth`, :func:`.north.bounds.fit_bound`:
     the exact swing equation in scale readings, the rotor-off swing simultaneous over the same span,
     as the scene simulates it); for the instrument that needs the least (the one the estimate's
     top-level ``north`` would carry), T per north method by its σ law, each method's σ at the fit's T,
-    σ(T) on a log grid, the rotor-off swing's part (:func:`.bounds_azimuth.rotor_off_plan`) and the systematic floor
+    σ(T) on a log grid, the rotor-off swing's part (:func:`.north.bounds.rotor_off_plan`) and the systematic floor
     (the noise-free estimate's azimuth error at the fit's T). ``observation_s`` is the fit's, on the
     sample grid (rounded up: the record passes the estimator's own check)."""
     entry = {"target": name, "value": value, "quantity": "azimuth"}

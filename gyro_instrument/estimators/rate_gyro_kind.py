@@ -3,8 +3,8 @@
 :class:`RateAzimuthKind` is a :class:`~gyro_instrument.instruments.measurement.MeasurementKind`
 (the shipped entry point ``rate_azimuth`` of ``gyro_instrument.measurements``, setup.py, and in
 :data:`~gyro_instrument.instruments.measurement.SHIPPED`): its engine is
-:func:`.rate_gyro_north.north_entry` (the ``north`` block by GLS), its planner probe and Fisher
-information :mod:`.rate_gyro_plan` (``plan --target azimuth_*``: time per position, number of
+:func:`.north.rate_gyro.north_entry` (the ``north`` block by GLS), its planner probe and Fisher
+information :mod:`.north.rate_gyro_plan` (``plan --target azimuth_*``: time per position, number of
 positions), its live tracker :class:`RateNorthLive`. The estimator, the planner, the estimator node,
 the recorder and ``replay`` reach it through the kind only, as any other kind.
 
@@ -17,7 +17,7 @@ estimate's block replaces it.
 import math
 from dataclasses import dataclass
 
-from gyro_instrument.estimators import rate_gyro_north as R
+from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.instruments.measurement import LiveTracker, MeasurementKind
 from gyro_instrument.instruments.rate_gyro import RATE_AZIMUTH
 
@@ -95,7 +95,7 @@ class RateAzimuthKind(MeasurementKind):
         return RateGyroModel(obs.name, self.name, inst, float(scene.sample_rate_hz), first), None
 
     def bound(self, model, T, sensor) -> tuple:
-        from gyro_instrument.estimators.rate_gyro_plan import sigma_mount_rad
+        from gyro_instrument.estimators.north.rate_gyro_plan import sigma_mount_rad
         inst = model.instrument
         return (sigma_mount_rad(inst, inst.p, T, model.sample_rate_hz),
                 "J = H^T C^-1 H of the schedule's bin means (white ARW + Gauss-Markov bias instability)")
@@ -104,7 +104,7 @@ class RateAzimuthKind(MeasurementKind):
         return RateNorthLive(obs)
 
     def combine(self, blocks) -> dict | None:
-        from gyro_instrument.estimators.north_estimate import best_block
+        from gyro_instrument.estimators.north.estimate import best_block
         return best_block(blocks)
 
     def plan_entry(self, model) -> dict:
@@ -112,17 +112,17 @@ class RateAzimuthKind(MeasurementKind):
                 "mount_azimuth_deg": model.instrument.p.mount_azimuth_deg % 360.0}
 
     def plan(self, scene_arg, overrides, models, skipped, sensor, name, value, si, floor=True) -> dict:
-        from gyro_instrument.estimators.rate_gyro_plan import plan_target
+        from gyro_instrument.estimators.north.rate_gyro_plan import plan_target
         from gyro_instrument.scenes import load_scene
         scene = load_scene(scene_arg, list(overrides))
         return plan_target(scene, {m.name: m.instrument for m in models}, name, value, si, si / value)
 
     def plan_lines(self, entry) -> list:
-        """The plan text of its target (:func:`.rate_gyro_plan.plan_lines`)."""
-        from gyro_instrument.estimators.rate_gyro_plan import plan_lines
+        """The plan text of its target (:func:`.north.rate_gyro_plan.plan_lines`)."""
+        from gyro_instrument.estimators.north.rate_gyro_plan import plan_lines
         return plan_lines(entry)
 
     def bench(self, out_dir, quick, write, progress, reference_rows) -> list:
-        """North in the same time beside the gyrotheodolite (:func:`.rate_gyro_study.bench`)."""
-        from gyro_instrument.estimators.rate_gyro_study import bench
+        """North in the same time beside the gyrotheodolite (:func:`.north.rate_gyro_study.bench`)."""
+        from gyro_instrument.estimators.north.rate_gyro_study import bench
         return bench(out_dir, quick, write, progress, reference_rows)

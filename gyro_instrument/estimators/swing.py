@@ -13,8 +13,10 @@ import math
 import numpy as np
 
 from gyro_instrument.estimators.adequacy import check_fit, check_period, detection_snr, signal_entry
+from gyro_instrument.estimators.entries import Counting, CountingNull, SwingEntry, SwingNull
 from gyro_instrument.estimators.latitude import RateMeasurement
 from gyro_instrument.estimators.period import DETECTION_SNR, EstimationError, count_oscillations, fit_oscillation
+from gyro_instrument.estimators.record import ABSENT
 from gyro_instrument.instruments.observation import AMPLITUDE_CORRECTION, CORRECTIONS, SPIN_CORRECTION
 
 
@@ -89,10 +91,10 @@ def _counting(t, y, F):
     """Quet's counting baseline for the estimate JSON (its swing reduced to small amplitude by F)."""
     try:
         c = count_oscillations(t, y)
-        return {"swing_duration_s": c.swing_duration_s, "swing_duration_sigma_s": c.swing_duration_sigma_s,
-                "swings": c.swings, "small_amplitude_swing_duration_s": c.swing_duration_s / F}
+        return Counting(swing_duration_s=c.swing_duration_s, swing_duration_sigma_s=c.swing_duration_sigma_s,
+                        swings=c.swings, small_amplitude_swing_duration_s=c.swing_duration_s / F)
     except EstimationError as exc:
-        return {"swing_duration_s": None, "reason": str(exc)}
+        return CountingNull(swing_duration_s=None, reason=str(exc))
 
 
 def swing_estimate(obs, rec, corrections=CORRECTIONS, checks=None, sensor=None) -> tuple:
@@ -104,17 +106,18 @@ def swing_estimate(obs, rec, corrections=CORRECTIONS, checks=None, sensor=None) 
 
     Returns
     -------
-    (dict, RateMeasurement or None)
+    (SwingEntry or SwingNull, RateMeasurement or None)
         The instrument's entry of the estimate and its rate measurement (None when no swing is measured).
     """
     checks = [] if checks is None else checks
     inst = obs.instrument
     t, y = rec["t"], rec["angle"]
     out = {"type": obs.type_name, "configuration": obs.label}
+    null = lambda why: (SwingNull(**out, swing_duration_s=None, reason=why), None)  # noqa: E731
     spin = rec[obs.spin_channel]
     spin_ok = np.isfinite(spin)
     if not spin_ok.any():
-        return out | {"swing_duration_s": None, "reason": "no valid spin samples"}, None
+        return null("no valid spin samples")
     rho_mean = float(np.mean(spin[spin_ok]))
     out["mean_spin_rad_s"] = rho_mean
     warp = env = ratio = None
@@ -126,16 +129,15 @@ def swing_estimate(obs, rec, corrections=CORRECTIONS, checks=None, sensor=None) 
     try:
         fit, warp = _fit_swing(obs, t, y, warp, env, ratio, corrections)
     except EstimationError as exc:
-        return out | {"swing_duration_s": None, "reason": f"no oscillation measured: {exc}; {obs.null_reason}"}, None
+        return null(f"no oscillation measured: {exc}; {obs.null_reason}")
     obs.rate_terms(rec)
     why = obs.rate_withheld(fit.amplitude)
     if why:
-        return out | {"swing_duration_s": None, "reason": why}, None
+        return null(why)
     snr = detection_snr(fit.amplitude, fit.n_samples, fit.residual_rms)
     checks.append(signal_entry(obs.name, snr, DETECTION_SNR))
     if snr < DETECTION_SNR:
-        return out | {"swing_duration_s": None,
-                      "reason": f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {obs.null_reason}"}, None
+        return null(f"no oscillation detected (SNR {snr:.3g} < {DETECTION_SNR:g}); {obs.null_reason}")
     entry = check_period(obs.name, inst, 2.0 * math.pi / fit.omega_rad_s)
     if entry:
         checks.append(entry)
@@ -168,5 +170,7 @@ def _swing_result(obs, out, fit, rec, notes, rho_mean, corrections):
                 "samples": fit.n_samples, "notes": notes + fit.notes})
     out["counting"] = _counting(t, y, F)
     r = obs.measured_rate(T0, sig_T0, crlb_T0, rho_mean)
-    out.update(r.extra)
-    return out, RateMeasurement(obs.name, obs.MEASUREMENT, r.value, r.sigma, obs.normal_enu, True, r.crlb)
+    extra = dict(r.extra)
+    second = extra.pop("second_order_correction", ABSENT)
+    entry = SwingEntry(**out, second_order_correction=second, extra=extra or ABSENT)
+    return entry, RateMeasurement(obs.name, obs.MEASUREMENT, r.value, r.sigma, obs.normal_enu, True, r.crlb)

@@ -115,7 +115,8 @@ def table_kind(path) -> str:
     return "parquet" if str(path).lower().endswith((".parquet", ".pq")) else "csv"
 
 
-def _pyarrow():
+def import_pyarrow() -> "types.ModuleType":
+    """pyarrow with its parquet module (a dependency); raises SceneError naming the package when it is missing."""
     try:
         import pyarrow
         import pyarrow.parquet  # noqa: F401
@@ -134,7 +135,7 @@ def _refuse_duplicates(names, path, field):
         seen[name] = i
 
 
-def _csv_separator(first_line, path, field, separator):
+def csv_separator(first_line, path, field, separator) -> str:
     """The CSV separator: ``separator`` when given, else the one of ``,``, ``;``, tab the header holds
     (``,`` when it holds none: a single column). SceneError when it holds several."""
     if separator is not None:
@@ -169,7 +170,7 @@ def _read_csv(path, field, separator, time_source=None, names=None):
                     first = line
                     break
             excel = first.strip().lower().startswith("sep=") and len(first.strip()) == 5
-            sep = first.strip()[4] if excel and separator is None else _csv_separator(
+            sep = first.strip()[4] if excel and separator is None else csv_separator(
                 first if not excel else "", path, field, separator)
             fh.seek(0)
             rows = list(csv.reader(fh, delimiter=sep))
@@ -277,7 +278,7 @@ def _arrow_time_seconds(pa, column, name, time_unit, path, field):
 def _read_parquet(path, field, time_source, time_unit):
     """(names, arrays, notes) of a Parquet file; the ``time_source`` column may be a timestamp or a
     duration (converted to seconds), every other column must be numeric."""
-    pa = _pyarrow()
+    pa = import_pyarrow()
     try:
         # the schema first: read_table fails on a name twice (ArrowInvalid of its dataset layer)
         with opened_unless_utf8(path) as src:

@@ -13,7 +13,7 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.files import opened_unless_utf8
-from gyro_instrument.estimators.table_read import TIME_COLUMN, _pyarrow, table_kind
+from gyro_instrument.estimators.table_read import TIME_COLUMN, import_pyarrow, table_kind
 
 #: Estimated bytes per value written, by format, for the disk check before a run
 #: (:func:`output_bytes`). CSV: a double in its shortest round-trip form is at most 24 characters
@@ -71,7 +71,7 @@ class TableWriter:
 
     def __enter__(self) -> "TableWriter":
         from gyro_instrument.core.files import is_utf8, replaced_atomically
-        pa = _pyarrow()
+        pa = import_pyarrow()
         import pyarrow.csv  # noqa: F401
         self._pa = pa
         self._replace = replaced_atomically(self.path)
@@ -225,7 +225,7 @@ def table_scene(path) -> tuple | None:
     if table_kind(path) == "parquet":
         try:
             with opened_unless_utf8(path) as src:
-                meta = _pyarrow().parquet.read_schema(src).metadata or {}
+                meta = import_pyarrow().parquet.read_schema(src).metadata or {}
         except Exception:               # noqa: BLE001 - read_table reports an unreadable file
             return None
         text = meta.get(SCENE_KEY.encode())

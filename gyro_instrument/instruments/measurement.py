@@ -80,7 +80,7 @@ class LiveTracker:
         """Take the tail ``rec`` (``t`` s and the record keys) of instrument ``name``; returns the
         live value when there is a new one (for ``LIVE = 'heading'``: ``(mount azimuth rad, σ rad)``),
         else None. The node keeps the last value and publishes it at
-        :data:`~gyro_instrument.estimators.heading.HEADING_RATE_HZ` of sim time (every sample when the
+        :data:`~gyro_instrument.estimators.north.heading.HEADING_RATE_HZ` of sim time (every sample when the
         instrument samples slower), stamped with the instrument's latest sample."""
         return None
 

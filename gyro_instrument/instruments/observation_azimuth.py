@@ -6,7 +6,7 @@ the azimuth of the scale's zero (``mount_azimuth_deg``). :class:`HorizontalSwing
 observation of a horizontal plane gyroscope: its swing-rate measurement (:data:`SWING_RATE`, as
 :class:`~.observation.SwingRate`) and beside it an :data:`AZIMUTH` measurement
 (``ALSO_MEASURES``), which the estimator's engine for that kind turns into the ``north`` block
-(``estimators/north_estimate.py``). :class:`TapeSwing` is the same gyroscope with the rotor stopped:
+(``estimators/north/estimate.py``). :class:`TapeSwing` is the same gyroscope with the rotor stopped:
 a torsion pendulum on its tape, no Earth-rate measurement, read by the rotor-on gyroscope's north
 estimate for the tape zero and the tape's stiffness (``companions``).
 """

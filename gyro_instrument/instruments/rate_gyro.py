@@ -16,7 +16,7 @@ but not used by the estimator), repeated over the run; or, with ``carousel_rate_
 continuous turn φ = φ0 + ω t (a carousel: the Earth rate modulated at ω, above the bias
 instability's corner). Two positions (φ0, φ0 + 180°) measure cos(M + φ0) only: M and its mirror
 image −M − 2φ0 fit the data equally; a coarse prior (``mount_azimuth_prior_deg`` ±
-``mount_azimuth_prior_tolerance_deg``, a magnetic compass's) picks one (estimators/rate_gyro_north.py).
+``mount_azimuth_prior_tolerance_deg``, a magnetic compass's) picks one (estimators/north/rate_gyro.py).
 
 Published as ``sensor_msgs/JointState`` (msg_docs/topics.md): joint ``table`` (position = the index
 angle φ, rad; velocity = its centred difference) and joint ``sensitive_axis`` (velocity = the
@@ -40,7 +40,7 @@ from gyro_instrument.instruments.observation import JointLayout, Observation
 from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, DEG_RT_H, GM_ALLAN_PEAK, GM_ALLAN_PEAK_TAU, GyroErrors
 
 #: Measurement kind: the azimuth of a turntable's reference from the Earth rate a rate gyro reads at
-#: several headings (the ``north`` block, estimators/rate_gyro_north.py).
+#: several headings (the ``north`` block, estimators/north/rate_gyro.py).
 RATE_AZIMUTH = "rate_azimuth"
 #: the measured channels (record keys): the encoder's index angle (rad) and the gyro's rate (rad/s)
 INDEX, RATE = "index", "rate"

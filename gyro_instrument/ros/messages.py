@@ -75,7 +75,7 @@ def earth_rate_vector(t_ns, earth_rate_rad_s, latitude_rad, frame_id=SITE_FRAME)
 
 
 def imu(t_ns, frame_id, fields) -> Imu:
-    """sensor_msgs/Imu from :class:`~gyro_instrument.estimators.heading.ImuFields` (copied field by
+    """sensor_msgs/Imu from :class:`~gyro_instrument.estimators.north.heading.ImuFields` (copied field by
     field: quaternion x, y, z, w; covariances row-major)."""
     msg = Imu()
     msg.header.stamp = stamp(t_ns)

@@ -1,6 +1,6 @@
 """``plot book.csv``: a field book drawn (issue 33 item 5).
 
-A CSV whose header holds a ``reading`` column (:mod:`gyro_instrument.estimators.field_book`) is a
+A CSV whose header holds a ``reading`` column (:mod:`gyro_instrument.estimators.north.field_book`) is a
 field book, not a table of samples. One view, ``field_book``: above, the turning points as read
 (against their times, else their numbers) relative to the circle reading of north, joined in the
 order observed, with the swing centre (the Schuler mean of the raw readings), north (the centre less
@@ -49,8 +49,8 @@ def _x(sw, times):
 
 def field_book_figure(plt, path, scene=None, title="") -> "object":
     """The figure (module docstring) of the book at ``path``; ``scene`` lends its latitude and tape."""
-    from gyro_instrument.estimators.field_book import read_field_book
-    from gyro_instrument.estimators.field_book_report import field_book_block
+    from gyro_instrument.estimators.north.field_book import read_field_book
+    from gyro_instrument.estimators.north.field_book_report import field_book_block
     book = read_field_book(path)
     n = field_book_block(path, scene=scene)
     nr = n["north_reading_deg"]

@@ -23,6 +23,13 @@ Sign convention (the scale of issue 24, item 1)
   u_N = c + (D_B/D_K)(c − Z) near north; exactly, tan(c − u_N) = x (Z − c) with x the period ratio
   (:func:`tape_north`, :func:`tape_corrected`; physics_notes "North finding").
 
+The package: the methods (:mod:`.base`, :mod:`.means`, :mod:`.timing`, :mod:`.fit`, all run on one
+record by :func:`.methods.north_methods`); the estimate's ``north`` block (:mod:`.estimate`: the exact
+fit :mod:`.exact` started by :mod:`.joint`); north as the swing goes (:mod:`.live`); the planner's bound
+(:mod:`.bounds`); field books (:mod:`.field_book`, :mod:`.field_book_read`, :mod:`.field_book_report`);
+the heading published (:mod:`.heading`); the rate gyro's north (:mod:`.rate_gyro`, :mod:`.rate_gyro_plan`,
+:mod:`.rate_gyro_study`). Only public names are re-exported here.
+
 The methods (issue 24, item 3), each returning a :class:`NorthEstimate`
 ------------------------------------------------------------------------
 =========================  ====================================  ===========================================
@@ -55,50 +62,10 @@ procedures are described in K. P. Logan, *Determining an azimuth with a gyrotheo
 ETL-0440 (1986). The derivations used here are written out in each function's docstring.
 """
 
-import numpy as np
-
-from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.north.base import (  # noqa: F401
-    TWO_PI, NorthEstimate, ReversalPoints, mount_azimuth_rad, wrap_pi, damped_swing, _sides, _runs,
-    _coarse_level, _local_poly, _poly_root, _basis, _coarse_extrema, _refined_extrema,
-    reversal_points, half_period, _finite, _noise)
-from gyro_instrument.estimators.north.means import (  # noqa: F401
-    schuler_weights, schuler_bias, _scatter_sigma, _readings, schuler_mean, lavrov_triples,
-    _geometric, _geometric_jac, lavrov)
-from gyro_instrument.estimators.north.timing import (  # noqa: F401
-    transit_offset, transit_times, transit_method)
+    TWO_PI, NorthEstimate, ReversalPoints, damped_swing, half_period, mount_azimuth_rad, reversal_points, wrap_pi)
 from gyro_instrument.estimators.north.fit import (  # noqa: F401
-    _fit_jacobian, _fit_model, _fit_start, fit_record, crlb_centre, crlb_centre_long, tape_ratio,
-    tape_corrected, tape_north, undamped_omega)
-
-
-# ----------------------------------------------------------------------------- all together
-def north_methods(t, u, noise_sigma_rad=None, mark_rad=None, drift=False, fit=True) -> tuple:
-    """Every method on one record: ({name: NorthEstimate}, {name: why it was refused}).
-
-    Names: ``schuler_mean`` and ``lavrov`` (on the reversal points, σ propagated from their σ),
-    ``transit`` (the mark: ``mark_rad``, default the Schuler mean — a mark set near the centre, as
-    a surveyor first sets the theodolite near north from a rough reversal-point reading) and ``fit``
-    (with a linear drift of the centre when ``drift``: the centre at the mean sample time; left out
-    when not ``fit``).
-    """
-    out, refused = {}, {}
-    try:
-        rp = reversal_points(t, u, noise_sigma_rad)
-    except SceneError as exc:                      # too short for two reversal points: every method refused
-        return out, {k: str(exc) for k in ("schuler_mean", "lavrov", "transit", "fit")}
-    runs = {"schuler_mean": lambda: schuler_mean(rp.readings_rad, rp.sigmas_rad),
-            "lavrov": lambda: lavrov(rp.readings_rad, rp.sigmas_rad),
-            "transit": lambda: transit_method(t, u, out["schuler_mean"].centre_rad if mark_rad is None
-                                              else mark_rad, noise_sigma_rad, rp),
-            "fit": lambda: fit_record(t, u, noise_sigma_rad, drift=drift)}
-    if not fit:                                    # the estimate's fit is the exact one (.exact)
-        runs.pop("fit")
-    for name, run in runs.items():
-        try:
-            out[name] = run()
-        except KeyError:                           # transit's mark is the Schuler mean's centre
-            refused[name] = f"its mark is the Schuler mean's centre, refused: {refused.get('schuler_mean')}"
-        except (SceneError, np.linalg.LinAlgError) as exc:
-            refused[name] = str(exc)
-    return out, refused
+    crlb_centre, crlb_centre_long, fit_record, tape_corrected, tape_north, tape_ratio, undamped_omega)
+from gyro_instrument.estimators.north.means import lavrov, lavrov_triples, schuler_bias, schuler_mean, schuler_weights  # noqa: F401
+from gyro_instrument.estimators.north.methods import north_methods  # noqa: F401
+from gyro_instrument.estimators.north.timing import transit_method, transit_offset, transit_times  # noqa: F401

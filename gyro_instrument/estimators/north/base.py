@@ -118,7 +118,7 @@ def damped_swing(t, centre_rad, amplitude_rad, omega_rad_s, damping_per_s=0.0, p
 
 
 # ----------------------------------------------------------------------------- reversal points
-def _sides(u, level, band):
+def level_sides(u, level, band) -> np.ndarray:
     """+1 / −1 for samples beyond level ± band, carried forward through the band (0 before the first
     sample that leaves it): hysteresis, so noise near the level makes no extra half swings."""
     side = np.where(u > level + band, 1, np.where(u < level - band, -1, 0))
@@ -127,7 +127,7 @@ def _sides(u, level, band):
     return side[idx]
 
 
-def _runs(side):
+def sign_runs(side) -> list:
     """(start, stop, sign) of the runs of constant non-zero ``side``."""
     edges = np.concatenate([[0], np.nonzero(np.diff(side) != 0)[0] + 1, [side.size]])
     return [(int(a), int(b), int(side[a])) for a, b in zip(edges[:-1], edges[1:]) if side[a] != 0]
@@ -139,7 +139,7 @@ def _coarse_level(u):
     return float(np.median(u)), 0.5 * float(hi - lo)
 
 
-def _local_poly(t, u, t0, h, degree):
+def local_poly(t, u, t0, h, degree) -> tuple | None:
     """Least-squares polynomial in x = (t − t0)/h over |x| ≤ 1: (coef, (XᵀX)⁻¹, rss, dof) or None."""
     sel = np.abs(t - t0) <= h
     x = (t[sel] - t0) / h
@@ -151,7 +151,7 @@ def _local_poly(t, u, t0, h, degree):
     return coef, np.linalg.inv(X.T @ X), float(r @ r), x.size - degree - 1
 
 
-def _poly_root(coef, x0, order):
+def poly_root(coef, x0, order) -> float | None:
     """Root of the ``order``-th derivative of the polynomial ``coef`` (increasing powers) near x0,
     by Newton (Horner on floats); None if it leaves (−0.9, 0.9)."""
     p = [float(c) for c in coef]
@@ -176,7 +176,7 @@ def _poly_root(coef, x0, order):
     return x if abs(x) < 0.9 else None
 
 
-def _basis(x, degree, order):
+def poly_derivative_row(x, degree, order) -> np.ndarray:
     """Row of d^order/dx^order of (1, x, …, x^degree) at x."""
     return np.array([math.perm(k, order) * x ** (k - order) if k >= order else 0.0 for k in range(degree + 1)])
 
@@ -187,7 +187,7 @@ def _coarse_extrema(t, u):
     level, amp = _coarse_level(u)
     if not amp > 0:
         raise SceneError("record", f"{u.size} samples", "no swing: the record is constant")
-    runs = _runs(_sides(u, level, 0.2 * amp))
+    runs = sign_runs(level_sides(u, level, 0.2 * amp))
     idx = [a + int(np.argmax(s * (u[a:b] - level))) for a, b, s in runs]
     if len(idx) < 2:
         raise SceneError("record", f"{t[-1] - t[0]:.6g} s", "must hold at least two reversal points "
@@ -200,14 +200,14 @@ def _refined_extrema(t, u, idx, h, degree):
     list of (t*, a*, g_value, g_slope, g_curv, coef, (XᵀX)⁻¹, rss, dof)."""
     blocks, cur = [], []
     for i in idx:
-        fit = _local_poly(t, u, t[i], h, degree)
-        x = None if fit is None else _poly_root(fit[0], 0.0, 1)
+        fit = local_poly(t, u, t[i], h, degree)
+        x = None if fit is None else poly_root(fit[0], 0.0, 1)
         if x is None:
             blocks.append(cur)
             cur = []
             continue
         coef, C, rss, dof = fit
-        g0, g1, g2 = (_basis(x, degree, k) for k in range(3))
+        g0, g1, g2 = (poly_derivative_row(x, degree, k) for k in range(3))
         cur.append((t[i] + x * h, float(g0 @ coef), g0, g1, g2, coef, C, rss, dof))
     blocks.append(cur)
     return max(blocks, key=len)
@@ -242,7 +242,7 @@ def reversal_points(t, u, noise_sigma_rad=None, degree=4, window_fraction=0.125)
     -------
     ReversalPoints
     """
-    t, u = _finite(t, u)
+    t, u = finite_samples(t, u)
     if not 2 <= degree <= 6:
         raise SceneError("degree", degree, "must be in [2, 6]")
     if not 0.05 <= window_fraction <= 0.2:
@@ -271,7 +271,8 @@ def half_period(times_s) -> tuple:
     return mean_interval(times) if times.size >= 3 else (float(times[1] - times[0]), math.nan)
 
 
-def _finite(t, u):
+def finite_samples(t, u) -> tuple:
+    """(t, u) as 1-D float arrays of the samples where both are finite; raises SceneError as it says."""
     t = np.asarray(t, dtype=float)
     u = np.asarray(u, dtype=float)
     if t.shape != u.shape or t.ndim != 1:

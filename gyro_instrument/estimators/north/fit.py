@@ -10,12 +10,12 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.north.base import TWO_PI, NorthEstimate, reversal_points, _finite
+from gyro_instrument.estimators.north.base import TWO_PI, NorthEstimate, reversal_points, finite_samples
 from gyro_instrument.estimators.north.means import schuler_mean
 
 
 # ----------------------------------------------------------------------------- the full-record fit
-def _fit_jacobian(tau, p, damping, drift):
+def fit_jacobian(tau, p, damping, drift) -> np.ndarray:
     """Columns ∂u/∂(c, a, b, ω[, δ][, d]) of u = c + d τ + e^(−δτ)(a cos ωτ + b sin ωτ)."""
     _, a, b, w = p[:4]
     dl = p[4] if damping else 0.0
@@ -29,7 +29,8 @@ def _fit_jacobian(tau, p, damping, drift):
     return np.column_stack(cols)
 
 
-def _fit_model(tau, p, damping, drift):
+def fit_model(tau, p, damping, drift) -> np.ndarray:
+    """u(τ) = c + d τ + e^(−δτ)(a cos ωτ + b sin ωτ) (rad) at ``tau`` (s from the record's centre) for p = (c, a, b, ω[, δ][, d])."""
     c, a, b, w = p[:4]
     dl = p[4] if damping else 0.0
     return c + (p[-1] * tau if drift else 0.0) + np.exp(-dl * tau) * (a * np.cos(w * tau) + b * np.sin(w * tau))
@@ -55,8 +56,8 @@ def sine_fit(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=None
     t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
     tau = t - t_ref
     p0 = _fit_start(tau, u, rp, damping, drift)
-    sol = least_squares(lambda p: _fit_model(tau, p, damping, drift) - u, p0,
-                        jac=lambda p: _fit_jacobian(tau, p, damping, drift), method="lm", xtol=1e-14)
+    sol = least_squares(lambda p: fit_model(tau, p, damping, drift) - u, p0,
+                        jac=lambda p: fit_jacobian(tau, p, damping, drift), method="lm", xtol=1e-14)
     return sol, t_ref
 
 
@@ -70,9 +71,9 @@ def fit_record(t, u, noise_sigma_rad=None, damping=True, drift=False, t_ref_s=No
     estimate (:func:`crlb_centre`; ≈ σ/√N for a long record). σ: the given sensor σ, else the
     residual rms with N − p degrees of freedom.
     """
-    t, u = _finite(t, u)
+    t, u = finite_samples(t, u)
     sol, t_ref = sine_fit(t, u, noise_sigma_rad, damping, drift, t_ref_s)
-    J = _fit_jacobian(t - t_ref, sol.x, damping, drift)
+    J = fit_jacobian(t - t_ref, sol.x, damping, drift)
     inv = np.linalg.inv(J.T @ J)
     if noise_sigma_rad is not None:
         sigma, src = float(noise_sigma_rad), "inverse Fisher information at the estimate (sensor σ given)"
@@ -103,7 +104,7 @@ def crlb_centre(t, amplitude_rad, omega_rad_s, noise_sigma_rad, damping_per_s=0.
     t_ref = float(np.mean(t)) if t_ref_s is None else float(t_ref_s)
     tau = t - t_ref
     a, b = amplitude_rad * math.cos(phase_rad), -amplitude_rad * math.sin(phase_rad)
-    J = _fit_jacobian(tau, np.array([0.0, a, b, omega_rad_s, damping_per_s] + ([0.0] if drift else [])), True, drift)
+    J = fit_jacobian(tau, np.array([0.0, a, b, omega_rad_s, damping_per_s] + ([0.0] if drift else [])), True, drift)
     if not fit_damping:                     # δ known: its column leaves the information matrix
         J = np.delete(J, 4, axis=1)
     return float(noise_sigma_rad * math.sqrt(np.linalg.inv(J.T @ J)[0, 0]))

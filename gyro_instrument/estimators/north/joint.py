@@ -17,7 +17,7 @@ import numpy as np
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.north import exact
-from gyro_instrument.estimators.north.fit import _fit_model, sine_fit, tape_north, undamped_omega
+from gyro_instrument.estimators.north.fit import fit_model, sine_fit, tape_north, undamped_omega
 
 
 @dataclass(frozen=True)
@@ -56,7 +56,7 @@ def summarise(t, w, sigma=None, drift=False) -> SineSummary:
     x = sol.x
     tau0 = t[0] - t_ref
     h = 1e-3 * math.pi / x[3]
-    u = _fit_model(np.array([tau0, tau0 + h, tau0 - h]), x, True, drift)
+    u = fit_model(np.array([tau0, tau0 + h, tau0 - h]), x, True, drift)
     J = sol.jac
     try:
         cov = np.linalg.inv(J.T @ J) * (2 * sol.cost / max(t.size - x.size, 1) if sigma is None else sigma ** 2)

@@ -40,8 +40,8 @@ def schuler_bias(first_deviation_rad, ratio, nu) -> float:
     return first_deviation_rad * (1 - q) ** 2 * (1 - (-q) ** (nu - 2)) / (4 * (1 + q) * (nu - 2))
 
 
-def _scatter_sigma(a):
-    """Reading σ from the scatter of the triple means m_j = (a_j + 2a_(j+1) + a_(j+2))/4 about their
+def scatter_sigma(a) -> tuple:
+    """(σ, dof): the reading σ from the scatter of the triple means m_j = (a_j + 2a_(j+1) + a_(j+2))/4 about their
     mean, (ν − 3 dof; None for ν < 4): each m_j estimates the centre (a linear decay cancels in each),
     so with independent readings of σ_a, E Σ(m_j − m̄)² = σ_a² tr(Bᵀ P B) (B the triple matrix, P the
     centring); hence σ̂_a² = Σ(m_j − m̄)² / tr(BᵀPB). Exponential damping leaves the m_j alternating by
@@ -78,7 +78,7 @@ def schuler_mean(readings, sigmas=None) -> NorthEstimate:
 
     L = (a1 + 3a2 + 4a3 + … + 4a(ν−2) + 3a(ν−1) + aν) / (4(ν−2)) (:func:`schuler_weights`).
     σ: with reading σ's, propagated (readings independent): σ_L² = Σ w_i² σ_i²; without (a field
-    book), from the scatter of the triple means (:func:`_scatter_sigma`, ν − 3 dof, ν ≥ 4).
+    book), from the scatter of the triple means (:func:`scatter_sigma`, ν − 3 dof, ν ≥ 4).
     Unbiased for a linear amplitude decay; second-order bias under exponential damping
     (:func:`schuler_bias`).
     """
@@ -88,7 +88,7 @@ def schuler_mean(readings, sigmas=None) -> NorthEstimate:
     if s is not None:
         sig, src = float(math.sqrt(np.sum(w ** 2 * s ** 2))), "propagated from the reading σ's"
     else:
-        sr, dof = _scatter_sigma(a)
+        sr, dof = scatter_sigma(a)
         sig = None if sr is None else sr * float(math.sqrt(w @ w))
         src = (f"from the scatter of the triple means ({dof} dof)" if sr is not None
                else "none: 3 readings leave no scatter and no reading σ was given")
@@ -114,12 +114,14 @@ def lavrov_triples(readings) -> np.ndarray:
     return a[1:-1] + p * m / den
 
 
-def _geometric(params, i):
+def geometric_sequence(params, i) -> np.ndarray:
+    """Lavrov's reversal points a_i = c + d (−q)^i at the points' numbers ``i`` (rad), params (c, d, q)."""
     c, d, q = params
     return c + d * (-q) ** i
 
 
-def _geometric_jac(params, i):
+def geometric_sequence_jac(params, i) -> np.ndarray:
+    """Columns ∂a_i/∂(c, d, q) of :func:`geometric_sequence`."""
     _, d, q = params
     return np.column_stack([np.ones_like(i), (-q) ** i, d * i * (-1.0) ** i * q ** np.maximum(i - 1, 0)])
 
@@ -139,9 +141,9 @@ def lavrov(readings, sigmas=None) -> NorthEstimate:
     d0 = a[0] - c0
     q0 = float(np.median(-(a[1:] - c0) / (a[:-1] - c0))) if np.all(a[:-1] != c0) else 1.0
     wt = 1.0 / s if s is not None else np.ones_like(a)
-    sol = least_squares(lambda p: wt * (_geometric(p, i) - a), [c0, d0, q0],
-                        jac=lambda p: wt[:, None] * _geometric_jac(p, i), method="lm", xtol=1e-15, ftol=1e-15)
-    J = wt[:, None] * _geometric_jac(sol.x, i)
+    sol = least_squares(lambda p: wt * (geometric_sequence(p, i) - a), [c0, d0, q0],
+                        jac=lambda p: wt[:, None] * geometric_sequence_jac(p, i), method="lm", xtol=1e-15, ftol=1e-15)
+    J = wt[:, None] * geometric_sequence_jac(sol.x, i)
     cov = np.linalg.pinv(J.T @ J)
     needs = "≥ 3 consecutive reversal points (≥ 4 for a σ from the scatter)"
     if s is not None:

@@ -10,7 +10,7 @@ from dataclasses import field
 import numpy as np
 
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.north.base import NorthEstimate, _sides, _runs, _local_poly, _poly_root, _basis, reversal_points, _finite
+from gyro_instrument.estimators.north.base import NorthEstimate, level_sides, sign_runs, local_poly, poly_root, poly_derivative_row, reversal_points, finite_samples
 
 
 # ----------------------------------------------------------------------------- transit (timing) method
@@ -41,18 +41,18 @@ def transit_times(t, u, mark_rad, noise_sigma_rad, half_period_s, band_rad, wind
     root by (3/35)(that term)/slope — a relative error (ωh)⁴/280 of the offset x0 (2.7e-4 at ±T/12,
     measured); the quartic removes it at the same noise as a cubic over ±T/12.
     """
-    runs = _runs(_sides(u, mark_rad, band_rad))
+    runs = sign_runs(level_sides(u, mark_rad, band_rad))
     h = window_fraction * 2.0 * half_period_s
     times, sig, side = [], [], []
     for (a, b, s0), (a1, b1, s1) in zip(runs[:-1], runs[1:]):
         seg = np.nonzero(s0 * (u[a:a1] - mark_rad) > 0)[0]     # the last sample still on the old side
         k = a + int(seg[-1]) if seg.size else a1
-        fit = _local_poly(t, u - mark_rad, t[k], h, degree)
-        x = None if fit is None else _poly_root(fit[0], 0.0, 0)
+        fit = local_poly(t, u - mark_rad, t[k], h, degree)
+        x = None if fit is None else poly_root(fit[0], 0.0, 0)
         if x is None:
             continue
         coef, C, _, _ = fit
-        g0, g1 = _basis(x, degree, 0), _basis(x, degree, 1)
+        g0, g1 = poly_derivative_row(x, degree, 0), poly_derivative_row(x, degree, 1)
         times.append(t[k] + x * h)
         sig.append(noise_sigma_rad * math.sqrt(g0 @ C @ g0) * h / abs(g1 @ coef))
         side.append(s1)
@@ -70,7 +70,7 @@ def transit_method(t, u, mark_rad, noise_sigma_rad=None, rp=None) -> NorthEstima
     and is left out). Needs a mark inside the swing (|c − mark| < A) and ≥ 3 transits. ``rp``: the
     record's :func:`reversal_points` when the caller has them.
     """
-    t, u = _finite(t, u)
+    t, u = finite_samples(t, u)
     rp = reversal_points(t, u, noise_sigma_rad) if rp is None else rp
     amp = 0.5 * np.abs(np.diff(rp.readings_rad))
     band = 0.2 * float(np.min(amp))

@@ -9,9 +9,9 @@ per instrument (``tracker(observation, scene, companions)``,
 records it reads when due. A ``heading`` (the azimuth kind,
 :class:`~gyro_instrument.estimators.kinds.NorthLive`: from the first swing on, the better of a
 growing damped-sine fit with the predicted frequency as a prior and the Schuler mean of the
-reversal points, :mod:`~gyro_instrument.estimators.north_live`) goes out as ``sensor_msgs/Imu`` on
-``<instrument>/heading`` (:func:`~gyro_instrument.estimators.heading.imu_fields`, pre-serialized)
-at :data:`~gyro_instrument.estimators.heading.HEADING_RATE_HZ` of sim time (every sample when the
+reversal points, :mod:`~gyro_instrument.estimators.north.live`) goes out as ``sensor_msgs/Imu`` on
+``<instrument>/heading`` (:func:`~gyro_instrument.estimators.north.heading.imu_fields`, pre-serialized)
+at :data:`~gyro_instrument.estimators.north.heading.HEADING_RATE_HZ` of sim time (every sample when the
 instrument samples slower), stamped with the sample, and, with parameter ``nmea_udp``, as
 ``$HEHDT`` over UDP; the final estimate's block (the fit) replaces it. The work per joint message
 is bounded: for the azimuth, a tail of 1.75 swings every quarter swing, at most ``FIT_SWINGS``
@@ -28,7 +28,7 @@ from rclpy.serialization import deserialize_message
 from gyro_instrument.core.memory import sample_count
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
-from gyro_instrument.estimators.heading import HEADING_RATE_HZ, imu_fields
+from gyro_instrument.estimators.north.heading import HEADING_RATE_HZ, imu_fields
 from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
 from gyro_instrument.recording.cdr import imu_layout
 from gyro_instrument.recording.frames import instrument_frames

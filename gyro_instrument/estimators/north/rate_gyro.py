@@ -34,7 +34,9 @@ import math
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve, solve_triangular
 
-from gyro_instrument.estimators.north_estimate import null_block
+from gyro_instrument.estimators.north.block import (NullNorthBlock, RateBias, RateFisher, RateMethodEntry, RateNoiseModel,
+                                                     RateNorthBlock, RateScaleFactor, RateScaleFactorAssumed, RateSign)
+from gyro_instrument.estimators.north.estimate import null_block
 from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, block_sums
 
 ARCSEC_PER_RAD = 648000.0 / math.pi
@@ -238,30 +240,31 @@ def fit_record(obs, rec) -> dict:
                       "Earth rate; two must be 180 deg apart (or use >= 3)"}
 
 
-def _method(f, method, needs, crlb_rad=None) -> dict:
+def _method(f, method, needs, crlb_rad=None, **more) -> RateMethodEntry:
+    """One method's entry (``more``: the closed form's own keys)."""
     out = {"mount_azimuth_deg": _deg360(f["mount_rad"]), "sigma_arcsec": _arcsec(f["sigma_rad"]),
            "sigma_source": "the sensor's noise model (white + Gauss-Markov), propagated", "n_used": f.get("n_used"),
            "needs": needs, "bias": method, "bias_arcsec": 0.0, "bias_flagged": False, "notes": []}
     if crlb_rad is not None:
         out["crlb_arcsec"] = _arcsec(crlb_rad)
-    return out
+    return RateMethodEntry(**out, **more)
 
 
-def _sign(f, p) -> dict:
+def _sign(f, p) -> RateSign:
     """The ``sign`` entry: how the mirror image of a two-position north was ruled out (or not)."""
     if f["mode"] != "two":
-        return {"resolved_by": "data", "detail": "three or more headings: cos and sin of the heading are both measured, "
-                                                  "M = atan2(c, a) has no mirror image"}
+        return RateSign(resolved_by="data", detail="three or more headings: cos and sin of the heading are both "
+                                                    "measured, M = atan2(c, a) has no mirror image")
     how = (f"the coarse prior mount_azimuth_prior_deg = {p.mount_azimuth_prior_deg:g} +/- "
            f"{p.mount_azimuth_prior_tolerance_deg:g} deg: the candidates lie {f['distance_deg'][0]:.3g} and "
            f"{f['distance_deg'][1]:.3g} deg from it")
-    return {"resolved_by": "prior" if f["resolved"] else None, "candidates_deg": f["candidates_deg"],
-            "detail": how + ("" if f["resolved"] else "; the prior does not exclude the other one: north is ambiguous "
-                             "(state a prior that does, or add positions)")}
+    return RateSign(resolved_by="prior" if f["resolved"] else None, candidates_deg=f["candidates_deg"],
+                    detail=how + ("" if f["resolved"] else "; the prior does not exclude the other one: north is "
+                                  "ambiguous (state a prior that does, or add positions)"))
 
 
-def north_block(obs, f) -> dict:
-    """The ``north`` block (keys as the gyrotheodolite's, estimators/north_estimate.py) from :func:`fit_record`."""
+def north_block(obs, f) -> "RateNorthBlock | NullNorthBlock":
+    """The ``north`` block (keys as the gyrotheodolite's, estimators/north/estimate.py) from :func:`fit_record`."""
     p, name = obs.instrument.p, obs.name
     if "reason" in f:
         return null_block(name, f["reason"])
@@ -273,31 +276,34 @@ def north_block(obs, f) -> dict:
     if cf is not None:
         cf["n_used"] = f["samples"]
         methods["closed_form"] = _method(cf, "none for equal dwells; unequal ones weight the positions unevenly",
-                                         "four positions at 90 deg steps") | {
-            "north_index_deg": math.degrees(cf["north_index_rad"]), "position_means_rad_s": cf["position_means_rad_s"]}
+                                         "four positions at 90 deg steps", north_index_deg=math.degrees(cf["north_index_rad"]),
+                                         position_means_rad_s=cf["position_means_rad_s"])
     undetermined = ["latitude and scale factor: a horizontal axis reads (1 + s) n cos(latitude) only; the site's "
                     "latitude is taken as given",
                     "the Earth's vertical rate n sin(latitude): the sensitive axis is horizontal"]
     block = {"instrument": name, "mount_azimuth_deg": _deg360(f["mount_rad"]), "sigma_arcsec": _arcsec(f["sigma_rad"]),
              "crlb_arcsec": _arcsec(f["sigma_rad"]), "method": "gls", "tape": None, "methods": methods, "refused": {},
              "pre_orientation": None, "sign": _sign(f, p),
-             "bias": {"rate_rad_s": f["bias_rad_s"], "sigma_rad_s": f["bias_sigma_rad_s"],
-                      "deg_h": f["bias_rad_s"] / DEG_H, "sigma_deg_h": f["bias_sigma_rad_s"] / DEG_H,
-                      "meaning": "the turn-on bias plus the bias instability's mean over the record"},
-             "noise_model": noise | {"bins": f["bins"], "samples": f["samples"]},
-             "fisher": {"matrix": f["fisher"].tolist(), "parameters": (["a", "c", "b"] if f["mode"] == "full" else ["d", "b"]),
-                        "formula": "J = H^T C^-1 H over bin means, C = sigma_w^2 diag(1/n) + sigma_g^2 S/(n n^T)"},
+             "bias": RateBias(rate_rad_s=f["bias_rad_s"], sigma_rad_s=f["bias_sigma_rad_s"], deg_h=f["bias_rad_s"] / DEG_H,
+                              sigma_deg_h=f["bias_sigma_rad_s"] / DEG_H,
+                              meaning="the turn-on bias plus the bias instability's mean over the record"),
+             "noise_model": RateNoiseModel(**noise, bins=f["bins"], samples=f["samples"]),
+             "fisher": RateFisher(matrix=f["fisher"].tolist(),
+                                  parameters=(["a", "c", "b"] if f["mode"] == "full" else ["d", "b"]),
+                                  formula="J = H^T C^-1 H over bin means, C = sigma_w^2 diag(1/n) + sigma_g^2 S/(n n^T)"),
              "residual_chi2_per_dof": f["chi2"] / f["dof"] if f["dof"] > 0 else None,
              "positions": f["headings"]}
     if f["mode"] == "full":
-        block["scale_factor"] = {"amplitude_rad_s": f["amplitude_rad_s"], "amplitude_sigma_rad_s": f["amplitude_sigma_rad_s"],
-                                 "ppm": f["scale_factor_ppm"], "sigma_ppm": f["scale_factor_sigma_ppm"],
-                                 "meaning": "A/(n cos latitude) - 1 at the site's stated latitude"}
+        block["scale_factor"] = RateScaleFactor(amplitude_rad_s=f["amplitude_rad_s"],
+                                                amplitude_sigma_rad_s=f["amplitude_sigma_rad_s"], ppm=f["scale_factor_ppm"],
+                                                sigma_ppm=f["scale_factor_sigma_ppm"],
+                                                meaning="A/(n cos latitude) - 1 at the site's stated latitude")
     else:
         undetermined.append("with two positions latitude and north are not separable (the data give d = (1 + s) n "
                             "cos(latitude) cos(M + phi0) only): n cos(latitude) at the stated latitude and a scale "
                             "factor of 0 are assumed")
-        block["scale_factor"] = {"assumed_ppm": 0.0, "mount_shift_arcsec_per_100ppm": _arcsec(100 * f["sf_shift_rad_per_ppm"])}
+        block["scale_factor"] = RateScaleFactorAssumed(
+            assumed_ppm=0.0, mount_shift_arcsec_per_100ppm=_arcsec(100 * f["sf_shift_rad_per_ppm"]))
         if not f["resolved"]:
             block.update(mount_azimuth_deg=None, interval_deg=None,
                          reason="two positions: north and its mirror image fit equally and the prior does not decide")
@@ -309,7 +315,7 @@ def north_block(obs, f) -> dict:
                       f"noise: white {noise['sigma_white_rad_s']:.4g} rad/s per sample, Gauss-Markov "
                       f"{noise['sigma_gm_rad_s']:.4g} rad/s with tau_c {noise['correlation_time_s']:g} s (the instrument's "
                       "datasheet figures), turn-on bias fitted"]
-    return block
+    return RateNorthBlock(**block)
 
 
 def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:

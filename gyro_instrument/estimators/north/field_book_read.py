@@ -3,7 +3,7 @@
 Part of :mod:`.field_book` (its docstring documents the columns, units and rules). One row is one
 turning point, in the order observed; lines starting with ``#`` are comments. The separator is
 sniffed from the header line as for ``estimate --data`` (``,``, ``;`` with decimal commas, or tab;
-:func:`.table_read._csv_separator`) unless ``--separator`` names it. Errors are
+:func:`.table_read.csv_separator`) unless ``--separator`` names it. Errors are
 :class:`~gyro_instrument.core.errors.SceneError` naming the file, the line, the column and the value.
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from gyro_instrument.core.angle_formats import ANGLE_UNITS, parse_angle, parse_clock
 from gyro_instrument.core.errors import SceneError
-from gyro_instrument.estimators.table_read import SEPARATORS, _csv_separator
+from gyro_instrument.estimators.table_read import SEPARATORS, csv_separator
 
 #: time units: seconds per unit; ``hms``: clock times ``mm:ss`` or ``hh:mm:ss`` (a bare ``time`` column
 #: whose cells hold a colon is read as ``hms``)
@@ -164,7 +164,7 @@ def _rows(path, field, separator):
     if len(lines) < 2:
         raise SceneError(field, path, "holds no turning points; expected a header such as time_s,reading_dms "
                                       "and one row per turning point")
-    sep = _csv_separator(lines[0][1], path, field, separator)
+    sep = csv_separator(lines[0][1], path, field, separator)
     rows = list(csv.reader([line for _, line in lines], delimiter=sep))
     return [n for n, _ in lines], [[c.strip() for c in r] for r in rows], sep
 

@@ -7,7 +7,7 @@ Each shipped rate-gyro scene is run for the gyrotheodolite's hour (``duration_s`
 two-position and carousel scenes ship shorter records) and estimated over seeded sensor draws (the
 gyro's own error model: turn-on bias, bias instability, angle random walk): per scene the rms of the
 mount azimuth's error, the mean reported σ, the planner's Cramér–Rao bound
-(:func:`~gyro_instrument.estimators.rate_gyro_plan.sigma_mount_rad`) and the noise-free error. The
+(:func:`~gyro_instrument.estimators.north.rate_gyro_plan.sigma_mount_rad`) and the noise-free error. The
 gyrotheodolite's row is the bench's own scene row (:func:`.north_study.scene_north_rows`: the fit at
 60 min, as shipped). No simulator beyond each scene's closed form; seconds in all.
 """
@@ -17,9 +17,9 @@ import os
 
 import numpy as np
 
-from gyro_instrument.estimators import rate_gyro_north as R
+from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.estimators.measure import measure, simulate_truth
-from gyro_instrument.estimators.rate_gyro_plan import sigma_mount_rad
+from gyro_instrument.estimators.north.rate_gyro_plan import sigma_mount_rad
 from gyro_instrument.scenes import load_scene
 
 #: the rate-gyro scenes compared and what they are

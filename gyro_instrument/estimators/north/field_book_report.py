@@ -14,8 +14,9 @@ import math
 from gyro_instrument.core.angle_formats import format_angle
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.field_book import _schuler, outliers, read_field_book, reduce_field_book, triple_means
-from gyro_instrument.estimators.north_estimate import _arcsec, _method_entry
+from gyro_instrument.estimators.north.field_book import book_schuler_mean, outliers, read_field_book, reduce_field_book, triple_means
+from gyro_instrument.estimators.north.block import FieldBookBlock, MissedPoint, Outlier
+from gyro_instrument.estimators.north.estimate import arcsec_or_none, method_entry
 
 #: |cos(latitude)| below which the directing torque is taken to vanish (cos 90° in floating point is 6e-17)
 POLE_COS = 1e-12
@@ -62,7 +63,7 @@ def scene_gyroscope(scene) -> tuple:
 
 def _scene_tape(name, inst) -> dict | None:
     """The scene's tape in the book's clockwise readings: zero −Z0, drift −Ż (the record reads
-    counter-clockwise, :mod:`.north_estimate`); None without a tape."""
+    counter-clockwise, :mod:`.estimate`); None without a tape."""
     D_B, Z0, dZ = inst.tape
     if not D_B:
         return None
@@ -73,13 +74,13 @@ def _scene_tape(name, inst) -> dict | None:
 def _tape_entry(tape) -> dict:
     zero = math.degrees(tape["zero_rad"])
     out = {k: v for k, v in tape.items() if k not in ("zero_rad", "zero_sigma_rad")}
-    return out | angle_fields("zero_reading", zero) | {"zero_sigma_arcsec": _arcsec(tape["zero_sigma_rad"])}
+    return out | angle_fields("zero_reading", zero) | {"zero_sigma_arcsec": arcsec_or_none(tape["zero_sigma_rad"])}
 
 
 def _methods(ests, book) -> dict:
     out = {}
     for k, v in ests.items():
-        out[k] = _method_entry(v) | _north_fields(v.centre_rad)
+        out[k] = method_entry(v).to_json() | _north_fields(v.centre_rad)
     ks, m = triple_means(book.on)
     out["schuler_mean"]["triple_means"] = [
         {"turning_points": [int(k) + book.on.first_number + j for j in range(3)]} | angle_fields("mean", math.degrees(x))
@@ -88,7 +89,7 @@ def _methods(ests, book) -> dict:
 
 
 def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
-    """The ``north`` block of a field book (module docstring).
+    """The ``north`` block of a field book (module docstring): the JSON of a :class:`.block.FieldBookBlock`.
 
     Parameters
     ----------
@@ -111,7 +112,7 @@ def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separato
         scene_tape, notes = _scene_tape(inst_name, inst), notes + more
     ests, tape, more = reduce_field_book(book, scene_tape)
     head = ests["schuler_mean"]
-    found = outliers(book.on, _schuler(book.on).centre_rad)         # about the swing's own centre
+    found = outliers(book.on, book_schuler_mean(book.on).centre_rad)         # about the swing's own centre
     if tape is None and book.off is not None:
         reduction = "raw: the tape's pull is NOT removed (its readings lack the times of both swings, or are fewer " \
                     "than 3, and the scene has no tape)"
@@ -120,11 +121,12 @@ def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separato
                     + " (the swing centre is north's reading)"
     else:
         reduction = f"tape removed ({tape['source']}; exact relation N = c - atan(x (Z - c)))"
-    return {"instrument": None, "field_book": str(path), "scene": None if scene is None else scene.name,
-            "scene_instrument": inst_name, "latitude_deg": None if scene is None else scene.site.latitude_deg,
-            **_north_fields(head.centre_rad), "sigma_arcsec": _arcsec(head.sigma_rad), "crlb_arcsec": None,
-            "method": "schuler_mean", "reduction": reduction, "tape": None if tape is None else _tape_entry(tape),
-            "methods": _methods(ests, book), "turning_points": int(book.on.index.size),
-            "missed": list(book.on.missed), "outliers": found, "refused": {},
-            "notes": notes + more + [f"{book.on.index.size} turning points read in {book.angle_unit}; the readings "
-                                     f"are the circle's, clockwise: north reads north_reading = -mount_azimuth"]}
+    return FieldBookBlock(
+        instrument=None, field_book=str(path), scene=None if scene is None else scene.name,
+        scene_instrument=inst_name, latitude_deg=None if scene is None else scene.site.latitude_deg,
+        **_north_fields(head.centre_rad), sigma_arcsec=arcsec_or_none(head.sigma_rad), crlb_arcsec=None,
+        method="schuler_mean", reduction=reduction, tape=None if tape is None else _tape_entry(tape),
+        methods=_methods(ests, book), turning_points=int(book.on.index.size),
+        missed=[MissedPoint(**m) for m in book.on.missed], outliers=[Outlier(**o) for o in found], refused={},
+        notes=notes + more + [f"{book.on.index.size} turning points read in {book.angle_unit}; the readings "
+                              f"are the circle's, clockwise: north reads north_reading = -mount_azimuth"]).to_json()

@@ -73,7 +73,7 @@ class AzimuthModel:
     eq: object = None
     par: dict = field(default_factory=dict)
     initial: tuple = ()
-    #: the estimator's check (``north_estimate._check_swing``): one full small-swing period, s
+    #: the estimator's check (``north.estimate._check_swing``): one full small-swing period, s
     check_period_s: float = 0.0
     rate_hz: float = 0.0
     rotor_off_name: str = ""
@@ -156,7 +156,7 @@ def exact_truth(inst, off_inst=None) -> tuple:
     damping rate; ``initial``: each record's (w0, v0) at t = 0, the rotor-off instrument's read on
     its own scale (its release u0 plus its mount reading).
     """
-    from gyro_instrument.estimators.north_estimate import swing_equation
+    from gyro_instrument.estimators.north.estimate import swing_equation
     c = inst.reduced_coefficients()
     par = {"north": -inst.mount_reading_rad, "directing": c["a"] * inst.p.spin_rate_rad_s, "tape": c["kb"],
            "zero": -c["zero"], "zero_rate": -c["zero_rate"], "damping": c["damping"]}

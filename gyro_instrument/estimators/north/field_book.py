@@ -61,7 +61,8 @@ from scipy.optimize import least_squares
 from gyro_instrument.core.angle_formats import ANGLE_UNITS, NUMBER_UNITS  # noqa: F401
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.field_book_read import (  # noqa: F401
+from gyro_instrument.estimators.north.means import geometric_sequence, geometric_sequence_jac
+from gyro_instrument.estimators.north.field_book_read import (  # noqa: F401
     COLUMNS, TIME_UNITS, FieldBook, Swing, read_field_book)
 
 #: Book-wide false-alarm probability of the outlier test (:func:`outliers`).
@@ -103,10 +104,10 @@ def triple_means(sw) -> tuple:
     return np.array(ks, dtype=int), np.array([(pos[k] + 2 * pos[k + 1] + pos[k + 2]) / 4 for k in ks])
 
 
-def _schuler(sw) -> north.NorthEstimate:
+def book_schuler_mean(sw) -> north.NorthEstimate:
     """The Schuler mean of the turning points present: :func:`.north.schuler_mean` when none is missed;
     else the mean of the complete triple means with σ from their scatter, σ̂_a² = |P m|² / tr(BᵀPB)
-    (B the triples' rows over the readings present, P the centring: :func:`.north.means._scatter_sigma`'s
+    (B the triples' rows over the readings present, P the centring: :func:`.north.means.scatter_sigma`'s
     formula with B written out)."""
     if sw.consecutive:
         return north.schuler_mean(sw.readings_rad)
@@ -141,9 +142,9 @@ def geometric_fit(sw, c0) -> tuple:
     ratios = [-(a[j + 1] - c0) / (a[j] - c0) for j in adj if a[j] != c0]
     q0 = float(np.median(ratios)) if ratios else 1.0
     d0 = (a[0] - c0) if a[0] != c0 else float(np.ptp(a)) / 2
-    sol = least_squares(lambda p: north._geometric(p, i) - a, [c0, d0, q0], jac=lambda p: north._geometric_jac(p, i),
+    sol = least_squares(lambda p: geometric_sequence(p, i) - a, [c0, d0, q0], jac=lambda p: geometric_sequence_jac(p, i),
                         method="lm", xtol=1e-15, ftol=1e-15)
-    J = north._geometric_jac(sol.x, i)
+    J = geometric_sequence_jac(sol.x, i)
     dof = a.size - 3
     cov = np.linalg.pinv(J.T @ J) * float(sol.fun @ sol.fun) / dof if dof > 0 else None
     return sol.x, cov, sol.fun
@@ -254,7 +255,7 @@ def outliers(sw, centre_rad, alpha=OUTLIER_ALPHA) -> list:
 def _period_ratio(book, lav_q) -> tuple:
     """(ratio, σ, entry) from the undamped half periods of both swings (module docstring)."""
     hp = {s: half_period(sw) for s, sw in (("on", book.on), ("off", book.off))}
-    _, q_off, sq_off = _lavrov(book.off, _schuler(book.off).centre_rad)
+    _, q_off, sq_off = _lavrov(book.off, book_schuler_mean(book.off).centre_rad)
     q = {"on": lav_q, "off": (q_off, sq_off)}
     und = {s: undamped_half_period(*hp[s], *q[s]) for s in hp}
     try:
@@ -287,7 +288,7 @@ def _scene_x(est, tape) -> float:
 def _tape_zeros(off) -> dict:
     """Each method's tape zero from the rotor-off turning points: the Schuler mean's and Lavrov's (the
     latter exact under exponential damping), so that each method reduces both swings alike."""
-    z = _schuler(off)
+    z = book_schuler_mean(off)
     return {"schuler_mean": z, "lavrov": _lavrov(off, z.centre_rad)[0]}
 
 
@@ -313,7 +314,7 @@ def reduce_field_book(book, scene_tape=None) -> tuple:
         ``tape`` says where the tape came from, its ratio and zero; None for the raw reduction.
     """
     notes = []
-    schuler = _schuler(book.on)
+    schuler = book_schuler_mean(book.on)
     lav, q_on, sq_on = _lavrov(book.on, schuler.centre_rad)
     ests = {"schuler_mean": schuler, "lavrov": lav}
     off_ok = book.off is not None and book.off.index.size >= 3

@@ -1,7 +1,7 @@
 """``plan --target azimuth_*`` for a rate gyro: time per position and number of positions from the
 Fisher information (issue 35 item 3).
 
-The bound is the estimator's own (:mod:`.rate_gyro_north`): J = Hᵀ C⁻¹ H of the bin means of the
+The bound is the estimator's own (:mod:`.rate_gyro`): J = Hᵀ C⁻¹ H of the bin means of the
 schedule the instrument would run (its index angles and settled samples, :func:`~gyro_instrument.
 instruments.rate_gyro.schedule`), the noise the instrument's datasheet figures give (white ARW,
 Gauss–Markov bias instability), at the scene's true mount azimuth (two positions: σ depends on it,
@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from gyro_instrument.estimators import rate_gyro_north as R
+from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.instruments.rate_gyro import RATE_AZIMUTH, schedule
 
 #: longest record planned (s): a week

@@ -38,7 +38,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from gyro_instrument.estimators import north
-from gyro_instrument.estimators.north.fit import _fit_jacobian, _fit_model
+from gyro_instrument.estimators.north.fit import fit_jacobian, fit_model
 from gyro_instrument.estimators.north.joint import SineSummary, tape_from_records
 
 #: the tail of the record the tracker is given, in half periods (one swing each): 1.75 full swings
@@ -181,16 +181,16 @@ class SwingFit:
         lin, *_ = np.linalg.lstsq(np.column_stack([np.ones_like(tau), e * np.cos(w * tau), e * np.sin(w * tau)]),
                                   u, rcond=None)
         p0 = np.array([*lin, w, d])
-        sig = self.noise_sigma_rad or max(float(np.std(u - _fit_model(tau, p0, True, False))), 1e-12)
+        sig = self.noise_sigma_rad or max(float(np.std(u - fit_model(tau, p0, True, False))), 1e-12)
         prior = np.array([self.omega0, 0.0])
         rows = np.zeros((2, 5))
         rows[0, 3], rows[1, 4] = 1.0 / self.prior_sigma[0], 1.0 / self.prior_sigma[1]
 
         def res(p):
-            return np.concatenate([(_fit_model(tau, p, True, False) - u) / sig, (p[3:] - prior) / self.prior_sigma])
+            return np.concatenate([(fit_model(tau, p, True, False) - u) / sig, (p[3:] - prior) / self.prior_sigma])
 
         def jac(p):
-            return np.vstack([_fit_jacobian(tau, p, True, False) / sig, rows])
+            return np.vstack([fit_jacobian(tau, p, True, False) / sig, rows])
         try:
             sol = least_squares(res, p0, jac=jac, method="lm", xtol=1e-12, max_nfev=60)
             cov = np.linalg.inv(sol.jac.T @ sol.jac)
@@ -200,7 +200,7 @@ class SwingFit:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(np.diag(cov))) and x[3] > 0):
             return None
         self.nonlinear = (float(x[3]), float(x[4]))
-        u0 = _fit_model(np.array([0.0]), x, True, False)[0]
+        u0 = fit_model(np.array([0.0]), x, True, False)[0]
         rate0 = float(-x[4] * x[1] + x[3] * x[2])
         self.summary = SineSummary(float(x[0]), 0.0, float(x[3]), float(x[4]), math.sqrt(cov[3, 3]),
                                    math.sqrt(cov[4, 4]), float(t[0]), float(u0), rate0, (float(cov[0, 0]), 0.0, 0.0))

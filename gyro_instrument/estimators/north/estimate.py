@@ -32,6 +32,8 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.angles import unwrap
 from gyro_instrument.estimators import north
 from gyro_instrument.estimators.north import exact, joint
+from gyro_instrument.estimators.north.block import (MethodEntry, NorthBlock, NullNorthBlock, PreOrientation, RateNorthBlock,
+                                                     TapeEntry)
 from gyro_instrument.estimators.adequacy import InadequateData, check_entry
 from gyro_instrument.instruments.observation_azimuth import ROTOR_OFF
 
@@ -57,31 +59,33 @@ def _deg(centre_rad) -> float:
     return math.degrees(north.mount_azimuth_rad(centre_rad))
 
 
-def _arcsec(x) -> float | None:
+def arcsec_or_none(x) -> float | None:
+    """An angle in rad as arcsec (float), None kept."""
     return None if x is None else float(x) * ARCSEC_PER_RAD
 
 
-def _method_entry(est, bias_rad=None, crlb_rad=None) -> dict:
-    """One method's entry; ``bias_rad``: its bias in this set-up (the method on the fitted model's own
-    noise-free records), flagged when it exceeds a quarter of the method's σ."""
-    out = {"mount_azimuth_deg": _deg(est.centre_rad), "sigma_arcsec": _arcsec(est.sigma_rad),
+def method_entry(est, bias_rad=None, crlb_rad=None) -> MethodEntry:
+    """One method's entry (a :class:`.block.MethodEntry`); ``bias_rad``: its bias in this set-up (the method
+    on the fitted model's own noise-free records), flagged when it exceeds a quarter of the method's σ."""
+    out = {"mount_azimuth_deg": _deg(est.centre_rad), "sigma_arcsec": arcsec_or_none(est.sigma_rad),
            "sigma_source": est.sigma_source, "n_used": est.n_used, "needs": est.needs,
            "bias": BIASES[est.method.split("+")[0]], "notes": list(est.notes)}
     if bias_rad is not None:
-        out["bias_arcsec"] = _arcsec(bias_rad)
+        out["bias_arcsec"] = arcsec_or_none(bias_rad)
         out["bias_flagged"] = bool(est.sigma_rad is not None and abs(bias_rad) > 0.25 * est.sigma_rad)
     if est.period_s is not None:
         out["period_s"] = est.period_s
     if crlb_rad is not None:
-        out["crlb_arcsec"] = _arcsec(crlb_rad)
-    return out
+        out["crlb_arcsec"] = arcsec_or_none(crlb_rad)
+    return MethodEntry(**out)
 
 
-def null_block(name, reason) -> dict:
-    """The ``north`` block when no azimuth can be had: nulls, the whole circle, the reason."""
-    return {"instrument": name, "mount_azimuth_deg": None, "sigma_arcsec": None, "crlb_arcsec": None,
-            "interval_deg": [0.0, 360.0], "method": None, "tape": None, "methods": {}, "refused": {},
-            "reason": reason}
+def null_block(name, reason, refused=None) -> NullNorthBlock:
+    """The ``north`` block when no azimuth can be had: nulls, the whole circle, the reason (and the
+    methods ``refused``: name -> why)."""
+    return NullNorthBlock(instrument=name, mount_azimuth_deg=None, sigma_arcsec=None, crlb_arcsec=None,
+                          interval_deg=[0.0, 360.0], method=None, tape=None, methods={}, refused=refused or {},
+                          reason=reason)
 
 
 def _latitude_limit_deg(inst, duration_s) -> float | None:
@@ -208,7 +212,7 @@ def north_entry(obs, rec, corrections=(), checks=None, sensor=None) -> tuple:
         return null_block(obs.name, str(exc)), None
 
 
-def _north_block(obs, rec, sensor) -> dict:
+def _north_block(obs, rec, sensor) -> "NorthBlock | NullNorthBlock":
     """The ``north`` block (:func:`north_entry`); raises as it says."""
     inst, name = obs.instrument, obs.name
     T = inst.predictions()["swing_duration_small_s"]
@@ -229,25 +233,24 @@ def _north_block(obs, rec, sensor) -> dict:
     try:
         fitted = joint.joint_fit(eq, records, sigma, _declared(inst))
     except (SceneError, np.linalg.LinAlgError, ValueError) as exc:
-        return null_block(name, f"the fit was refused: {exc}") | {"refused": refused}
+        return null_block(name, f"the fit was refused: {exc}", refused)
     ests["fit"] = _fit_entry(fitted, eq, records)
     biases = _biases(eq, fitted, records, sigma, drift)
     biases["fit"] = 0.0
     best = ests["fit"]
-    methods = {k: _method_entry(v, biases.get(k), best.sigma_rad if k == "fit" else None) for k, v in ests.items()}
-    block = {"instrument": name, "mount_azimuth_deg": _deg(best.centre_rad), "sigma_arcsec": _arcsec(best.sigma_rad),
-             "crlb_arcsec": _arcsec(best.sigma_rad), "method": "fit", "tape": _tape_entry(inst, fitted, tape, eq),
-             "methods": methods, "refused": refused,
-             "pre_orientation": _pre_orientation(fitted, eq, biases, tape),
-             "notes": ["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
+    methods = {k: method_entry(v, biases.get(k), best.sigma_rad if k == "fit" else None) for k, v in ests.items()}
+    return NorthBlock(
+        instrument=name, mount_azimuth_deg=_deg(best.centre_rad), sigma_arcsec=arcsec_or_none(best.sigma_rad),
+        crlb_arcsec=arcsec_or_none(best.sigma_rad), method="fit", tape=_tape_entry(inst, fitted, tape, eq),
+        methods=methods, refused=refused, pre_orientation=_pre_orientation(fitted, eq, biases, tape),
+        notes=["azimuth clockwise from true north of the scale's zero; the scale reads counter-clockwise "
                        "(Quet's u), true north reads +mount_azimuth",
                        "fit: the swing equation itself (sine law, tape toward its drifting zero, damping) fitted "
                        "jointly to the rotor-on and rotor-off records; sigma at the Cramer-Rao bound of the whole "
-                       "problem, tape calibration included"]}
-    return block
+                       "problem, tape calibration included"])
 
 
-def _tape_entry(inst, fitted, tape, eq) -> dict | None:
+def _tape_entry(inst, fitted, tape, eq) -> "TapeEntry | None":
     """The ``tape`` entry: the joint fit's k_B, zero and drift, and the surveyors' calibration."""
     if not eq.tape:
         return None
@@ -255,40 +258,46 @@ def _tape_entry(inst, fitted, tape, eq) -> dict | None:
     i, j = fitted.names.index("tape"), fitted.names.index("directing")
     g = np.zeros(len(fitted.names))
     g[i], g[j] = 1.0 / K, -par["tape"] / K ** 2            # ∂(k_B/K)
-    return {"instrument": inst.p.rotor_off_instrument, "ratio_db_dk": par["tape"] / K,
-            "ratio_sigma": float(math.sqrt(g @ fitted.cov @ g)), "zero_reading_deg": -math.degrees(par["zero"]),
-            "zero_sigma_arcsec": _arcsec(fitted.sigma("zero")),
-            "zero_rate_arcsec_h": -_arcsec(par.get("zero_rate", 0.0)) * 3600.0,
-            "surveyor_ratio": tape["ratio"] if tape else None, "surveyor_ratio_sigma": tape["ratio_sigma"] if tape else None,
-            "source": "the joint fit of both swings (k_B/K, the zero at t_ref and its drift); the reversal-point "
+    return TapeEntry(
+        instrument=inst.p.rotor_off_instrument, ratio_db_dk=par["tape"] / K,
+        ratio_sigma=float(math.sqrt(g @ fitted.cov @ g)), zero_reading_deg=-math.degrees(par["zero"]),
+        zero_sigma_arcsec=arcsec_or_none(fitted.sigma("zero")),
+        zero_rate_arcsec_h=-arcsec_or_none(par.get("zero_rate", 0.0)) * 3600.0,
+        surveyor_ratio=tape["ratio"] if tape else None, surveyor_ratio_sigma=tape["ratio_sigma"] if tape else None,
+        source="the joint fit of both swings (k_B/K, the zero at t_ref and its drift); the reversal-point "
                       "methods use the surveyors' calibration: x = T_on^2/(T_off^2 - T_on^2) from undamped periods, "
-                      "the rotor-off centre with its drift, and the exact relation N = c - atan(x (Z - c))"}
+               "the rotor-off centre with its drift, and the exact relation N = c - atan(x (Z - c))")
 
 
-def _pre_orientation(fitted, eq, biases, tape) -> dict:
+def _pre_orientation(fitted, eq, biases, tape) -> PreOrientation:
     """How far the swing's centre sits from north and what that costs each method (arcsec)."""
     par = fitted.par()
     N = fitted.north_rad
     K, kb = par["directing"], par.get("tape", 0.0)
     c = joint.equilibrium(N, K, kb, par.get("zero", 0.0))
     out = {"centre_from_north_deg": math.degrees(c - N),
-           "cost_arcsec": {k: _arcsec(v) for k, v in biases.items()}}
+           "cost_arcsec": {k: arcsec_or_none(v) for k, v in biases.items()}}
     if eq.tape:                             # x = k_B/(K cos(c − N)): the ratio the periods measure
         out["tape_zero_from_north_deg"] = math.degrees(north.wrap_pi(par["zero"] - N))
         x = kb / (K * math.cos(c - N))
-        out["linear_tape_law_error_arcsec"] = _arcsec(joint.linear_law_error_rad(c, par["zero"], x))
-    return out
+        out["linear_tape_law_error_arcsec"] = arcsec_or_none(joint.linear_law_error_rad(c, par["zero"], x))
+    return PreOrientation(**out)
 
 
-def best_block(blocks) -> dict | None:
-    """The estimate's top-level ``north``: the block with the smallest σ (nulls last), or None."""
+def best_block(blocks) -> "NorthBlock | RateNorthBlock | NullNorthBlock | None":
+    """The estimate's top-level ``north``: the block with the smallest σ (nulls last), or None. A block is a
+    record (:mod:`.block`) or, from a plug-in kind, its JSON dict."""
     if not blocks:
         return None
-    return min(blocks, key=lambda b: b["sigma_arcsec"] if b.get("sigma_arcsec") is not None else math.inf)
+
+    def sigma(b):
+        value = b.get("sigma_arcsec") if isinstance(b, dict) else b.sigma_arcsec
+        return math.inf if value is None else value
+    return min(blocks, key=sigma)
 
 
 def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
     """The ``north`` block of a field book (``estimate --reversal-points FILE``): moved to
     :func:`.field_book_report.field_book_block` (issue 33 item 5), re-exported here."""
-    from gyro_instrument.estimators.field_book_report import field_book_block as block
+    from gyro_instrument.estimators.north.field_book_report import field_book_block as block
     return block(path, angle_unit, time_unit, scene, separator, division_rad)
