@@ -18,11 +18,11 @@ import numpy as np
 
 from gyro_instrument.core import jit
 from gyro_instrument.core.angles import NumpyUnwrapper
-from gyro_instrument.core.dop853 import ScalarDOP853
 from gyro_instrument.core.dop853_jit import CompiledRun
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.quaternion import quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.core.rigid_body_flow import compiled_rhs_kernel, rhs_params, splitting_run, to_body
 from gyro_instrument.instruments.base import Simulation, run_span
 
@@ -125,7 +125,7 @@ class FreeGyroscopeRuns:
     #: DOP853's absolute tolerance on the state [q, ω (rad/s)] of the numerical path.
     DOP853_ATOL = 1e-14
 
-    def dop853_run(self, span_s, rtol, compiled=True) -> "CompiledRun | ScalarDOP853":
+    def dop853_run(self, span_s, rtol, compiled=True) -> Solver:
         """DOP853 from the release state (τ = 0) over ``span_s`` seconds at ``rtol`` (atol
         :data:`DOP853_ATOL`): Hairer's DOP853 compiled with its dense output
         (:class:`~gyro_instrument.core.dop853_jit.CompiledRun`, run with no end) on the compiled
@@ -276,14 +276,11 @@ class FreeGyroscopeRuns:
         for t in blocks:
             tau = t - t0
             w0, c0 = time.perf_counter(), time.process_time()
-            if isinstance(run, CompiledRun):
-                y = run.advance(tau)
-                traj = Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853 (compiled)",
-                                  dict(run.meta))
-            elif run is not None:
+            if run is not None:
                 traj = run.advance(tau)
-                traj.t = t
-                y = traj.y
+                traj.t, y = t, traj.y
+                if isinstance(run, CompiledRun):
+                    traj.method = "DOP853 (compiled)"
             elif split is not None:
                 state, start, h, order, torque = split
                 y = splitting_run(state, start, tau, h, order, self.p.inertia_ratio, torque)
