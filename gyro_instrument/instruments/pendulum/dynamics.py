@@ -6,7 +6,7 @@ integrates: the Cartesian constrained right-hand side summing the active effects
 streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
 swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
 pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
-gives the equations; :mod:`~gyro_instrument.instruments.pendulum_columns` turns bob states into the
+gives the equations; :mod:`~gyro_instrument.instruments.pendulum.columns` turns bob states into the
 published columns.
 """
 
@@ -24,11 +24,11 @@ from gyro_instrument.core.effect import CORIOLIS, POINT_MASS
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.parareal import compiled_hermite_samples, dense_output, hermite_rows
 from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
-# The columns live in pendulum_columns; re-exported here, where they were defined.
-from gyro_instrument.instruments.pendulum_columns import (angle_arguments, compiled_column_kernels,  # noqa: F401
+# The columns live in .columns; re-exported here, where they were defined.
+from gyro_instrument.instruments.pendulum.columns import (angle_arguments, compiled_column_kernels,  # noqa: F401
                                                           compiled_pendulum_columns, pendulum_columns,
                                                           unwrap_in_place)
-from gyro_instrument.instruments.pendulum_theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
+from gyro_instrument.instruments.pendulum.theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
                                                          quarter_period_s)
 
 
