@@ -1,6 +1,7 @@
 """Integration driver: method versus driver, as in scipy.integrate's ``OdeSolver``.
 
-:class:`Integration` is a resumable run of ``dy/dt = rhs(t, y)``: scipy's ``OdeSolver`` (any
+:class:`Integration` is a resumable run of ``dy/dt = rhs(t, y)`` (a
+:class:`~gyro_instrument.core.solver.Solver`, the interface of every driver): scipy's ``OdeSolver`` (any
 ``solve_ivp`` method, DOP853 by default) stepped by this driver toward the run's end, each
 :meth:`~Integration.advance` returning the states at the next block of sample times from the dense
 output of the steps that reach them, so the steps and samples are those of one ``solve_ivp`` call
