@@ -103,7 +103,7 @@ def _scene(duration_s, **params):
 def reference_run(p, t_end_s, steps_per_swing=STEPS_PER_SWING) -> tuple:
     """The compiled reference over [0, ``t_end_s``] for the pendulum ``p``: (end state [r, v], CPU s of
     the loop). Step = the first swing's period (as the fast path measures it) / ``steps_per_swing``."""
-    period = p._first_swing(*p.initial_state())[0]
+    period = p.first_swing(*p.initial_state())[0]
     h = period / steps_per_swing
     n_steps = int(math.floor(t_end_s / h))
     from gyro_instrument.core.effect import CENTRIFUGAL_GRADIENT, CORIOLIS, SINE_LAW, uncarried_terms
@@ -123,7 +123,7 @@ def reference_run(p, t_end_s, steps_per_swing=STEPS_PER_SWING) -> tuple:
 
 
 def _end_azimuth(p, y) -> float:
-    from gyro_instrument.instruments.pendulum.dynamics import pendulum_columns
+    from gyro_instrument.instruments.pendulum.columns import pendulum_columns
     cols = pendulum_columns(y[:3, None], y[3:, None], p.context.gravity_m_s2 / p.p.length_m)
     return float(cols["swing_azimuth"][-1])
 

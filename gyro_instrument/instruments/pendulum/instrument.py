@@ -43,7 +43,8 @@ from gyro_instrument.instruments.chain import HingeChain, Link
 from gyro_instrument.instruments.observation import PlanePrecession
 # The theory (.theory) and the dynamics (.dynamics) live apart; their public names
 # are re-exported here, where they were defined before.
-from gyro_instrument.instruments.pendulum.dynamics import SwingDynamics, pendulum_columns
+from gyro_instrument.instruments.pendulum.columns import pendulum_columns
+from gyro_instrument.instruments.pendulum.dynamics import SwingDynamics
 from gyro_instrument.instruments.pendulum.theory import (apsidal_angle, apsidal_rate_exact_rad_s,
                                                          apsidal_rate_from_rest_exact_rad_s,
                                                          apsidal_rate_from_rest_rad_s, areal_constant_over_omega0,
