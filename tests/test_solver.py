@@ -93,3 +93,49 @@ def test_a_bounded_run_finishes():
     assert run.status == FINISHED
     with pytest.raises(Exception, match="finished"):
         run.step()
+
+
+def _instrument(scene_name, overrides, name):
+    from gyro_instrument.scenes import build_instruments, load_scene
+    return build_instruments(load_scene(scene_name, overrides))[name]
+
+
+def _splitting_run():
+    from gyro_instrument.core.rigid_body_flow import SplittingRun
+    g = _instrument("free_gyroscope", ["instruments.free_gyro.model=numerical"], "free_gyro")
+    y0 = np.concatenate([g.q0, g.R0.T @ g.motion_constants()["omega0"]])
+    return SplittingRun(y0, 0.0, g.splitting_step(), g.p.splitting_order, g.p.inertia_ratio, g.torque_array())
+
+
+def _fixed_step_run():
+    body = _instrument("puiseux_spheroid", [], "spheroid")
+    return body.integration_run(0.0, 1.0, body.p.rtol, 1e-12, "rk8")
+
+
+def _swing_run():
+    from gyro_instrument.instruments.pendulum.fast_path import SwingRun
+    p = _instrument("foucault_pantheon", ["duration_s=200"], "pendulum")
+    p.WINDOW_SWINGS = 4                  # windows of 4 swings (~66 s): a step is one window
+    r0, v0 = p.initial_state()
+    return SwingRun(p, 0.0, 200.0, r0, v0, p.p.length_m * math.sin(p.p.initial_deflection_rad))
+
+
+ALL = dict(DRIVERS, SplittingRun=_splitting_run, FixedStepRun=_fixed_step_run, SwingRun=_swing_run)
+
+
+@pytest.mark.parametrize("name", list(ALL))
+def test_the_dense_output_is_what_advance_reads_there(name):
+    """After a step, the dense output at the step's end is the state ``advance`` gives there, bit for
+    bit (the same interpolant, or the same composition or substep, on the same doubles), and the run
+    goes on from it. The fast path's windows meet at a grid point, where ``advance`` reads the next
+    window's start (equal to the last one's interpolant at its end to rounding): it is asked inside
+    the window."""
+    run = ALL[name]()
+    assert isinstance(run, Solver)
+    run.step()
+    run.step()
+    at = np.array([run.t if name != "SwingRun" else run.t_old + 0.6 * (run.t - run.t_old)])
+    dense = run.dense_output()(at)
+    np.testing.assert_array_equal(dense, run.advance(at).y)
+    later = run.advance(np.array([run.t + 0.25, run.t + 0.5]))
+    assert later.y.shape[1] == 2 and np.all(np.isfinite(later.y))

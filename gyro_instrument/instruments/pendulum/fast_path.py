@@ -181,6 +181,8 @@ class SwingRun(Solver):
         The compiled kernels' arguments when the windows run compiled.
     """
 
+    method = "fast path RK8"
+
     def __init__(self, dyn, t0, t_end, r0, v0, amp, progress=None) -> None:
         super().__init__(t0, t_end)
         self.dyn, self.progress = dyn, progress
