@@ -17,7 +17,11 @@ Every driver implements it:
 * :class:`gyro_instrument.core.dop853.ScalarDOP853` — DOP853 on Python floats;
 * :class:`gyro_instrument.core.dop853_jit.CompiledRun` — DOP853 compiled with numba;
 * :class:`gyro_instrument.core.dop853_fortran.FortranRun` — Hairer's Fortran DOP853, sample to sample;
-* :class:`gyro_instrument.instruments.puiseux.fixed_step.FixedStepRun` — fixed RK8 steps, compiled.
+* :class:`gyro_instrument.core.rigid_body_flow.SplittingRun` — the free top's exact flow composed with
+  torque kicks;
+* :class:`gyro_instrument.instruments.puiseux.fixed_step.FixedStepRun` — fixed RK8 steps, compiled;
+* :class:`gyro_instrument.instruments.pendulum.fast_path.SwingRun` — the pendulum's windows of whole
+  swings (parareal on numpy, or compiled swing after swing).
 
 A driver whose loop runs compiled (or in Fortran) keeps its own :meth:`advance`; one that steps in
 Python uses :meth:`sample_steps`.
