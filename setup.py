@@ -43,13 +43,13 @@ setup(
         # plug-ins (gyro_instrument/core/plugins.py): the shipped instruments, effects and measurement
         # kinds are entry points of the groups a package extends (docs/extending.md)
         "gyro_instrument.instruments": [
-            "plane_gyroscope = gyro_instrument.instruments.plane_gyroscope:PlaneGyroscope",
-            "spherical_pendulum = gyro_instrument.instruments.pendulum:SphericalPendulum",
-            "compound_pendulum = gyro_instrument.instruments.pendulum:CompoundPendulum",
-            "free_gyroscope = gyro_instrument.instruments.free_gyroscope:FreeGyroscope",
+            "plane_gyroscope = gyro_instrument.instruments.plane_gyroscope.instrument:PlaneGyroscope",
+            "spherical_pendulum = gyro_instrument.instruments.pendulum.instrument:SphericalPendulum",
+            "compound_pendulum = gyro_instrument.instruments.pendulum.instrument:CompoundPendulum",
+            "free_gyroscope = gyro_instrument.instruments.free_gyroscope.instrument:FreeGyroscope",
             "puiseux_body = gyro_instrument.instruments.puiseux.instrument:PuiseuxBody",
             "gimbal_gyroscope = gyro_instrument.instruments.gimbal.instrument:GimbalGyroscope",
-            "rate_gyro = gyro_instrument.instruments.rate_gyro:RateGyro",
+            "rate_gyro = gyro_instrument.instruments.rate_gyro.instrument:RateGyro",
             "marine_gyrocompass = gyro_instrument.instruments.marine_gyrocompass:MarineGyrocompass",
         ],
         "gyro_instrument.effects": [

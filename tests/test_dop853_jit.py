@@ -35,7 +35,7 @@ def test_compiled_driver_takes_the_python_float_drivers_steps():
     to the last bit (both sum the stages in the same order; no fastmath)."""
     assert jit.enabled(), jit.status()
     run = dop853_jit.CompiledRun(_kernel(_pendulum), [4.0], [1.0, 0.0], 0.0, 1e-10, 1e-12)
-    y = run.advance(T)
+    y = run.advance(T).y
     ref = ScalarDOP853(lambda t, a, b: (b, -4.0 * math.sin(a)), [1.0, 0.0], 0.0, 1e9, 1e-10, 1e-12).advance(T)
     assert run.meta["nsteps"] == ref.meta["nsteps"] and run.meta["nrejected"] == ref.meta["nrejected"]
     np.testing.assert_array_equal(y, ref.y)
@@ -49,12 +49,12 @@ def test_compiled_equals_plain_and_blocks_concatenate():
     bit for bit (the same operations in the same order). Blocks of any size: the one-shot run
     bit for bit (the steps never depend on the samples; the last step is kept across calls)."""
     kernel = _kernel(_pendulum)
-    one = dop853_jit.CompiledRun(kernel, [4.0], [1.0, 0.0], 0.0, 1e-10, 1e-12).advance(T)
+    one = dop853_jit.CompiledRun(kernel, [4.0], [1.0, 0.0], 0.0, 1e-10, 1e-12).advance(T).y
     plain = dop853_jit.CompiledRun(_pendulum, [4.0], [1.0, 0.0], 0.0, 1e-10, 1e-12, compiled=False)
     assert "plain Python" in plain.meta["driver"]
-    np.testing.assert_array_equal(plain.advance(T), one)
+    np.testing.assert_array_equal(plain.advance(T).y, one)
     run = dop853_jit.CompiledRun(kernel, [4.0], [1.0, 0.0], 0.0, 1e-10, 1e-12)
-    parts = [run.advance(T[a:b]) for a, b in ((0, 1), (1, 7), (7, 7), (7, 250), (250, 401))]
+    parts = [run.advance(T[a:b]).y for a, b in ((0, 1), (1, 7), (7, 7), (7, 250), (250, 401))]
     np.testing.assert_array_equal(np.concatenate(parts, axis=1), one)
     assert run.nfev > 0
 

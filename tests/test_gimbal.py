@@ -21,7 +21,7 @@ from gyro_instrument.core.params import validate_params
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments.gimbal import GimbalGyroscope, scaled_condition
-from gyro_instrument.instruments.gimbal.dynamics import KERNELS, compiled_kernel
+from gyro_instrument.instruments.gimbal.kernels import KERNELS, compiled_kernel
 from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
 SITE = Site.from_degrees(48.85)
@@ -360,8 +360,8 @@ def test_closed_form_is_the_chain(effects):
     rings near the lock, where q̈ grows as 1/sin²θ); observed 0.74 eps κ max(S, |q̈|) at worst
     (5e-13 of the scale without κ). A wrong sign or a missing term is O(1e-3..1) of S.
 
-    The numba kernels of ``integrator: compiled`` (:func:`~.dynamics.free_kernel`,
-    :func:`~.dynamics.held_kernel`) are held to the same bound, and compiled to the plain Python
+    The numba kernels of ``integrator: compiled`` (:func:`~.kernels.free_kernel`,
+    :func:`~.kernels.held_kernel`) are held to the same bound, and compiled to the plain Python
     function bit for bit (the same operations in the same order, no fastmath).
     """
     rng = np.random.default_rng(13)
@@ -413,7 +413,7 @@ def test_unknown_rigid_body_term_falls_back_to_the_chain():
     dropped by the closed form: ``auto`` runs the chain, an explicit ``closed_form`` is refused
     by name."""
     from gyro_instrument.core.effect import RIGID_BODY, Effect
-    from gyro_instrument.instruments.gimbal.dynamics import rigid_body_coefficients
+    from gyro_instrument.instruments.gimbal.torques import rigid_body_coefficients
 
     class Cubic(Effect):
         name = "cubic"
@@ -440,7 +440,7 @@ def test_hinge_terms_linear_or_called():
     :func:`test_closed_form_is_the_chain`, 1000 eps κ S; a dropped or doubled term is O(J q̇/τ) ≈ 1e-3 S
     here): a quadratic pivot drag is not linear (None) and is called as is."""
     from gyro_instrument.core.effect import DAMPING, SPIN, Effect, EffectContext, bound_hooks
-    from gyro_instrument.instruments.gimbal.dynamics import linear_hinge_coefficient
+    from gyro_instrument.instruments.gimbal.torques import linear_hinge_coefficient
 
     class QuadraticDrag(Effect):
         name = "quadratic_drag"

@@ -1,6 +1,6 @@
 """North from any set-up, exactly (issue 33 items 1, 2 and 7): the joint fit of the swing equation.
 
-The simulator integrates the reduced model of the tape-hung gyroscope (instruments/plane_gyroscope.py,
+The simulator integrates the reduced model of the tape-hung gyroscope (instruments/plane_gyroscope/instrument.py,
 Quet 1853 sec. 4 §1 eq. 2 with the sine law, the tape toward its drifting zero, the damping) and agrees
 with an independent model of the same equations to 1e-4″ (issue 33); the estimator fits that equation
 (estimators/north/exact.py). A noise-free record therefore has one answer, the scene's mount azimuth, to

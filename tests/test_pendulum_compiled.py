@@ -2,7 +2,7 @@
 the compiled run equals the numpy Newton-parareal run (GYRO_INSTRUMENT_JIT=0) to round-off, and the
 bench's compiled reference integrates the same equations.
 
-* :func:`~gyro_instrument.instruments.pendulum_dynamics.swing_grid` (serial RK8 over the swings) and
+* :func:`~gyro_instrument.instruments.pendulum.fast_path.swing_grid` (serial RK8 over the swings) and
   :func:`~gyro_instrument.core.parareal.hermite_samples` (quintic Hermite output) compiled by numba
   against the same functions run by Python: the same operations in the same order without
   fastmath, so equal to the last bit; ``hermite_samples`` also equals numpy's
@@ -26,7 +26,7 @@ from gyro_instrument.core.parareal import dense_output, hermite_samples
 from gyro_instrument.core.site import Site
 from gyro_instrument.effects import REGISTRY as EFFECTS
 from gyro_instrument.instruments.pendulum import SphericalPendulum
-from gyro_instrument.instruments.pendulum_dynamics import linear_point_mass_map, swing_grid
+from gyro_instrument.instruments.pendulum.fast_path import linear_point_mass_map, swing_grid
 from tests.conftest import make
 
 PARIS = Site.from_degrees(48.8462)
@@ -189,7 +189,7 @@ def test_column_kernels_compiled_equal_plain_python_and_numpy():
     # pendulum_columns' numpy (hypot is the C library's in both), so the compiled kernels, their plain
     # Python functions and numpy give the same doubles, blocks and chunks cut anywhere
     from gyro_instrument.core.angles import Unwrapper
-    from gyro_instrument.instruments import pendulum_dynamics as pd
+    from gyro_instrument.instruments.pendulum import columns as pd
     rng = np.random.default_rng(27)
     pos, vel = _columns_input(rng, 5000)
     w0sq = PARIS.gravity_m_s2 / 67.0

@@ -13,7 +13,8 @@ import pytest
 
 from gyro_instrument.core.site import Site
 from gyro_instrument.estimators.crossings import local_maxima, mean_interval, zero_crossings
-from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope, finite_amplitude_factor
+from gyro_instrument.effects.finite_amplitude import finite_amplitude_factor
+from gyro_instrument.instruments.plane_gyroscope import PlaneGyroscope
 
 EXACT = ("earth_rotation", "centrifugal", "finite_amplitude")
 REDUCED = ("earth_rotation", "finite_amplitude")   # Quet's eqs. (1)-(3)

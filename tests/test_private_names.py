@@ -8,20 +8,9 @@ import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "gyro_instrument"
 
-#: The imports of private names that remain, as (importing module, defining module, name). A
-#: SHRINKING list: estimators/ and instruments/ are being reorganised on other branches (issue 36
-#: items 1 and 4: the north package, the instrument packages); when they merge, their entries go
-#: (the test below fails on an entry that no longer exists, so the list is emptied as they land).
-#: Add nothing here: make the name public where it is defined instead.
-ALLOWED = {
-    # the compiled kernels read their dynamics module's private constants (issue 36 item 1, the
-    # integration interface, reorganises these modules on another branch)
-    ("gyro_instrument.instruments.gimbal.kernels", "gyro_instrument.instruments.gimbal.dynamics", "_rhs_inputs"),
-    ("gyro_instrument.instruments.gimbal.kernels", "gyro_instrument.instruments.gimbal.dynamics",
-     "_torque_constants"),
-    *(("gyro_instrument.instruments.puiseux.kernels", "gyro_instrument.instruments.puiseux.dynamics", n)
-      for n in ("_contact_response", "_general_sn", "_general_surface_terms", "_vertical")),
-}
+#: The imports of private names allowed, as (importing module, defining module, name): none. Add
+#: nothing here: make the name public where it is defined instead.
+ALLOWED = set()
 
 
 def _private(name):

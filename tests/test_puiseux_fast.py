@@ -280,8 +280,8 @@ def test_compiled_dop853_kernel_and_run_equal_the_plain_ones():
         k._exact_rhs(0.3, y, p, b)
         np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15 * np.max(np.abs(b)))
     # the whole run: the compiled driver and kernel against both as plain Python (same steps)
-    fast = fixed_step.CompiledDOP853Run(y0, 0.0, p, 1e-10, 1e-12).advance(t)
-    plain = fixed_step.CompiledDOP853Run(y0, 0.0, p, 1e-10, 1e-12, compiled=False).advance(t)
+    fast = fixed_step.compiled_dop853_run(y0, 0.0, p, 1e-10, 1e-12).advance(t)
+    plain = fixed_step.compiled_dop853_run(y0, 0.0, p, 1e-10, 1e-12, compiled=False).advance(t)
     assert fast.nfev == plain.nfev
     np.testing.assert_allclose(fast.y, plain.y, rtol=1e-13, atol=1e-14)
 

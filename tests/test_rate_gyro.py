@@ -1,7 +1,7 @@
 """The rate-gyro north finder (issue 35 item 3): physics of the estimate, not its shape.
 
 Every scene is simulated once and measured with many sensor seeds (the gyro's own error model:
-turn-on bias, Gauss–Markov bias instability, angle random walk; instruments/rate_gyro_sensor.py).
+turn-on bias, Gauss–Markov bias instability, angle random walk; instruments/rate_gyro/sensor.py).
 Calibration: Σ z² over N seeds, z = (M̂ − M)/σ, lies inside the χ²_N band (0.1 % – 99.9 %): σ is
 neither optimistic nor pessimistic. σ is the Cramér–Rao bound of the bin means; it is checked
 against the bound of the raw samples (dense covariance) on a short record.
@@ -16,7 +16,7 @@ from scipy.stats import chi2
 from gyro_instrument.estimators.north import rate_gyro as R
 from gyro_instrument.estimators.measure import MeasureStream, measure, simulate_truth
 from gyro_instrument.estimators.pipeline import estimate_records
-from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, GM_ALLAN_PEAK, gm_allan_variance
+from gyro_instrument.instruments.rate_gyro.sensor import DEG_H, GM_ALLAN_PEAK, gm_allan_variance
 from gyro_instrument.scenes import load_scene
 
 

@@ -4,7 +4,7 @@ The yardstick is what a compiled program on this machine does with the Foucault 
 pendulum of ``foucault_pantheon`` released at 2° over a sidereal day (86 164 s, output at 20 Hz),
 integrated serially by the 8th-order formula of DOP853's tableau (Hairer, Nørsett & Wanner; the
 doubles of :mod:`gyro_instrument.core.dop853`) at a fixed 48 steps per swing, on the rotating-frame
-equations of :meth:`~gyro_instrument.instruments.pendulum_dynamics.SwingDynamics.rhs_exact`
+equations of :meth:`~gyro_instrument.instruments.pendulum.dynamics.SwingDynamics.rhs_exact`
 written out here from the site's Earth rate Ω (ENU), g and l:
 
     r̈ = g + a(δr, v) − λ r,   a = −2 Ω × v − Ω × (Ω × δr),   δr = r − (0, 0, −l),
@@ -103,7 +103,7 @@ def _scene(duration_s, **params):
 def reference_run(p, t_end_s, steps_per_swing=STEPS_PER_SWING) -> tuple:
     """The compiled reference over [0, ``t_end_s``] for the pendulum ``p``: (end state [r, v], CPU s of
     the loop). Step = the first swing's period (as the fast path measures it) / ``steps_per_swing``."""
-    period = p._first_swing(*p.initial_state())[0]
+    period = p.first_swing(*p.initial_state())[0]
     h = period / steps_per_swing
     n_steps = int(math.floor(t_end_s / h))
     from gyro_instrument.core.effect import CENTRIFUGAL_GRADIENT, CORIOLIS, SINE_LAW, uncarried_terms
@@ -123,7 +123,7 @@ def reference_run(p, t_end_s, steps_per_swing=STEPS_PER_SWING) -> tuple:
 
 
 def _end_azimuth(p, y) -> float:
-    from gyro_instrument.instruments.pendulum_dynamics import pendulum_columns
+    from gyro_instrument.instruments.pendulum.columns import pendulum_columns
     cols = pendulum_columns(y[:3, None], y[3:, None], p.context.gravity_m_s2 / p.p.length_m)
     return float(cols["swing_azimuth"][-1])
 
@@ -144,7 +144,7 @@ def compiled_reference_rows(quick=False, progress=print) -> list[dict]:
     """Two rows measured in one run: the compiled reference (:func:`rk8_reference`) and the fast
     path (``simulate`` of ``foucault_pantheon`` as shipped, ``integrator: auto``) over a sidereal
     day (``quick``: one hour, compiled although shorter than
-    :attr:`~gyro_instrument.instruments.pendulum_dynamics.SwingDynamics.COMPILED_MIN_SWINGS`), each
+    :attr:`~gyro_instrument.instruments.pendulum.dynamics.SwingDynamics.COMPILED_MIN_SWINGS`), each
     with its CPU (median of :data:`REPEATS`, interleaved), its CPU over the reference's, its end error (swing azimuth at the last sample against DOP853 rtol 1e-13, rad)
     and the numba status line (:func:`gyro_instrument.core.jit.status`). Keys: ``case``, ``method``,
     ``simulated_s``, ``cpu_s`` (median of :data:`REPEATS`), ``cpu_system_s`` (its system part),

@@ -58,7 +58,7 @@ def write_plots(out_dir) -> list:
 
 
 def _pyplot():
-    from gyro_instrument.views import matplotlib_config_dir
+    from gyro_instrument.views.backend import matplotlib_config_dir
     matplotlib_config_dir()
     try:
         import matplotlib

@@ -12,8 +12,8 @@ work-precision study that chooses its integrators.
 * :func:`gimbal_work_precision_rows` — the two-ring gimbal's error against a tight reference versus
   CPU per simulated second, for the generic hinge chain (``solve_ivp`` DOP853) and the closed form
   (:mod:`gyro_instrument.instruments.gimbal.dynamics`) through three DOP853 drivers: Hairer's
-  Fortran code from sample to sample (:class:`~gyro_instrument.instruments.gimbal.dynamics.ClosedFormRun`),
-  scipy's ``OdeSolver`` with dense output (:class:`~gyro_instrument.instruments.gimbal.dynamics.DenseRun`)
+  Fortran code from sample to sample (:class:`~gyro_instrument.core.dop853_fortran.FortranRun`),
+  scipy's ``OdeSolver`` with dense output (:func:`~gyro_instrument.instruments.gimbal.runs.dense_run`)
   and the Python-float driver of :mod:`gyro_instrument.core.dop853`; for the free rings (the fast
   nutation) and the locked rings (a slow swing). The rows show why ``integrator: auto`` runs the
   closed form, with the Fortran driver for the free rings and the dense-output driver for the others.
@@ -200,7 +200,8 @@ def gimbal_work_precision_rows(quick=False, progress=print) -> list:
     chain's right-hand side to round-off (``tests/test_gimbal.py``), so it may serve as the
     reference of both."""
     from gyro_instrument.core.integrate import integrate
-    from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, DenseRun
+    from gyro_instrument.core.dop853_fortran import FortranRun
+    from gyro_instrument.instruments.gimbal.runs import dense_run
     from gyro_instrument.instruments.gimbal.instrument import ATOL
     rows = []
     cases = (("free rings (nutation 134 Hz)", "free", 0.3 if quick else 1.0, (1e-7, 1e-9, 1e-11)),
@@ -211,7 +212,7 @@ def gimbal_work_precision_rows(quick=False, progress=print) -> list:
         rhs, y0 = g.closed_form(chain)
         nf = chain.nf
         progress(f"  gimbal work-precision: {label}, reference")
-        ref = _angles(ClosedFormRun(rhs, y0, t[0], 1e-13, 1e-16).advance(t), nf)
+        ref = _angles(FortranRun(rhs, y0, t[0], 1e-13, 1e-16).advance(t).y, nf)
         case = f"gimbal_paris gimbal_locked, {label}, {dur:g} s at 20 Hz"
 
         def add(driver, rtol, run):
@@ -223,11 +224,11 @@ def gimbal_work_precision_rows(quick=False, progress=print) -> list:
 
         for rtol in rtols:
             progress(f"  gimbal work-precision: {label}, rtol {rtol:g}")
-            for driver, cls in (("closed form, Fortran DOP853 sample to sample", ClosedFormRun),
-                                ("closed form, scipy DOP853 dense output", DenseRun)):
-                def run(cls=cls, rtol=rtol):
-                    r = cls(rhs, y0, t[0], rtol, ATOL)
-                    return r.advance(t), r.nfev
+            for driver, make in (("closed form, Fortran DOP853 sample to sample", FortranRun),
+                                 ("closed form, scipy DOP853 dense output", dense_run)):
+                def run(make=make, rtol=rtol):
+                    r = make(rhs, y0, t[0], rtol, ATOL)
+                    return r.advance(t).y, r.nfev
                 add(driver, rtol, run)
 
             def scalar(rtol=rtol):

@@ -8,7 +8,7 @@ Rows, each at rtol 1e-7, 1e-9 and 1e-11 (atol 1e-13):
 * ``compiled DOP853 (numba)``: the closed form's numba kernel through
   :class:`~gyro_instrument.core.dop853_jit.CompiledRun` (``integrator: compiled``, auto's choice);
 * ``Fortran DOP853 (scipy.integrate.ode)``: the closed form on Python floats through Hairer's
-  Fortran code from sample to sample (:class:`~gyro_instrument.instruments.gimbal.dynamics.ClosedFormRun`,
+  Fortran code from sample to sample (:class:`~gyro_instrument.core.dop853_fortran.FortranRun`,
   ``integrator: closed_form``).
 
 Error: the largest difference of the output angles (``outer_angle`` ψ − 90°, ``inner_angle``,
@@ -55,8 +55,9 @@ def _spin_drift(g, y) -> float:
 def work_precision_rows(quick=False, progress=print) -> list:
     """Rows (dicts with :data:`KEYS`) of the free gimbal's integrators; see the module docstring.
     ``quick``: 1 s simulated (~5 s of CPU in all)."""
+    from gyro_instrument.core.dop853_fortran import FortranRun
     from gyro_instrument.core.dop853_jit import CompiledRun
-    from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, compiled_kernel
+    from gyro_instrument.instruments.gimbal.kernels import compiled_kernel
     duration = 1.0 if quick else 10.0
     g, t = _free_gimbal(duration)
     chain = g.build_chain()
@@ -65,15 +66,15 @@ def work_precision_rows(quick=False, progress=print) -> list:
     kernel = compiled_kernel(name)
     CompiledRun(kernel, params, y0, t[0], 1e-7, ATOL).advance(t[:2])          # warm-up: numba's cache
     progress(f"  spin_gimbal: reference (Fortran DOP853, rtol {REF_RTOL:g}, atol {REF_ATOL:g}), {duration:g} s")
-    ref = ClosedFormRun(rhs, y0, t[0], REF_RTOL, REF_ATOL).advance(t)[:2]
+    ref = FortranRun(rhs, y0, t[0], REF_RTOL, REF_ATOL).advance(t).y[:2]
     makers = (("compiled DOP853 (numba)", lambda rtol: CompiledRun(kernel, params, y0, t[0], rtol, ATOL)),
-              ("Fortran DOP853 (scipy.integrate.ode)", lambda rtol: ClosedFormRun(rhs, y0, t[0], rtol, ATOL)))
+              ("Fortran DOP853 (scipy.integrate.ode)", lambda rtol: FortranRun(rhs, y0, t[0], rtol, ATOL)))
     rows = []
     for rtol in RTOLS:
         for label, make in makers:
             progress(f"  spin_gimbal: {label}, rtol {rtol:g}")
             c0 = time.process_time()
-            y = make(rtol).advance(t)
+            y = make(rtol).advance(t).y
             cpu = time.process_time() - c0
             rows.append({"instrument": "gimbal_paris gimbal_locked, free rings (nutation 134 Hz), 20 Hz",
                          "integrator": label, "setting": f"rtol {rtol:g}, atol {ATOL:g}",

@@ -164,7 +164,7 @@ def peak_memory_rows(short_s, long_s, middle_s=None, progress=print) -> list:
     (``GYRO_INSTRUMENT_JIT=0``): the long run against the short one within :data:`RSS_MARGIN_MB`,
     and (with ``middle_s``, a run of full windows too) long / middle within 5 %: memory does not
     grow with the duration. With ``middle_s``, also the shipped path (runs of ≥ 2048 swings compiled
-    with numba, :attr:`~gyro_instrument.instruments.pendulum_dynamics.SwingDynamics.COMPILED_MIN_SWINGS`)
+    with numba, :attr:`~gyro_instrument.instruments.pendulum.dynamics.SwingDynamics.COMPILED_MIN_SWINGS`)
     for the middle and long runs: long / middle within 5 %, and what numba's runtime and kernels
     add to a process (compiled less numpy at the long duration; stated, no goal). A 1 h run is never
     compiled, so comparing it with a compiled 48 h would count numba's runtime as growth."""

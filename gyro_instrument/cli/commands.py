@@ -259,7 +259,7 @@ def _field_book_estimate(args) -> int:
     """``estimate --reversal-points FILE [--scene SCENE]``: north from a field book (no simulation); the
     scene, when given, lends its latitude and tape (:func:`.north.field_book_report.field_book_block`)."""
     from gyro_instrument.core.angle_formats import parse_scale_division
-    from gyro_instrument.estimators.north.estimate import field_book_block
+    from gyro_instrument.estimators.north.field_book_report import field_book_block
     if args.data:
         raise SceneError("--reversal-points", args.reversal_points, "reads a field book: leave --data out")
     if args.columns or args.time_column != "time_s":

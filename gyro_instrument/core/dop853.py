@@ -15,11 +15,11 @@ once after the run. Model: scipy's ``scipy/integrate/_ivp/rk.py`` (``RungeKutta.
 """
 
 import math
-import time
 
 import numpy as np
 
 from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.core.trajectory import Trajectory
 
 # The DOP853 tableau: Hairer's 8(5,3) Runge-Kutta pair with its 7th-order dense output (E. Hairer,
@@ -238,8 +238,9 @@ def _dense_samples(t_eval, t_old, t_new_all, h_all, y_old, coef, n):
     return out
 
 
-class ScalarDOP853:
-    """DOP853 on a small state held in Python floats, resumable block by block.
+class ScalarDOP853(Solver):
+    """DOP853 on a small state held in Python floats, resumable block by block (a
+    :class:`~gyro_instrument.core.solver.Solver`).
 
     ``f(t, *y) -> tuple`` of the derivatives. Same method, step control and dense output as
     ``integrate(..., method="DOP853")`` (see the module docstring). :meth:`advance` steps until the
@@ -257,28 +258,31 @@ class ScalarDOP853:
         or a non-finite state.
     """
 
+    method = "DOP853"
+
     def __init__(self, f, y0, t0, t_end, rtol=1e-10, atol=1e-12) -> None:
+        super().__init__(t0, t_end)
         y = tuple(float(v) for v in y0)
         if not all(math.isfinite(v) for v in y):
             raise IntegrationError(f"initial state is not finite: {y}")
         self.f, self.y, self.n = f, y, len(y)
-        self.t0 = self.t = float(t0)
-        self.t_end = float(t_end)
         self.rtol = max(float(rtol), 100 * np.finfo(float).eps)   # as scipy's validate_tol
         self.atol = float(atol)
-        self.nfev = self.nsteps = self.nrej = 0
-        self.wall_time_s = self.cpu_time_s = 0.0
+        self._nfev = self.nsteps = self.nrej = 0
         self._steps = ([], [], [], [], [])      # t_old, t_new, h, y_old, dense coefficients
         if self.t_end != self.t0:
-            w0, c0 = time.perf_counter(), time.process_time()
-            self.attempt, self.dense = _dop853_kernels(self.n)
-            self.fy = tuple(f(self.t, *y))
-            self.h_abs = _initial_step(f, self.t, y, self.fy, self.t_end, self.rtol, self.atol)
-            self.nfev = 2
-            self.wall_time_s += time.perf_counter() - w0
-            self.cpu_time_s += time.process_time() - c0
+            with self.clock():
+                self.attempt, self.dense = _dop853_kernels(self.n)
+                self.fy = tuple(f(self.t, *y))
+                self.h_abs = _initial_step(f, self.t, y, self.fy, self.t_end, self.rtol, self.atol)
+                self._nfev = 2
 
-    def _step(self):
+    @property
+    def nfev(self) -> int:
+        """Right-hand-side evaluations so far."""
+        return self._nfev
+
+    def _step_impl(self):
         """One accepted step from the current state; its dense coefficients are kept."""
         f, t, y, fy = self.f, self.t, self.y, self.fy
         t_new, h, z, fz, stages, self.h_abs, evals, rejections = _accepted_step(
@@ -291,34 +295,42 @@ class ScalarDOP853:
         t_new_all.append(t_new)
         h_all.append(h)
         y_old.append(y)
-        self.nfev += evals + 3
+        self._nfev += evals + 3
         self.nrej += rejections
         self.nsteps += 1
-        self.t, self.y, self.fy = t_new, z, fz
+        self.t_old, self.t, self.y, self.fy = t, t_new, z, fz
 
-    def advance(self, t) -> Trajectory:
+    def _dense_output_impl(self):
+        """The last step's 7th-order interpolant (scipy's ``Dop853DenseOutput``)."""
+        last = tuple(kept[-1:] for kept in self._steps)
+        n = self.n
+
+        def sol(t):
+            return _dense_samples(np.atleast_1d(np.asarray(t, dtype=float)), *last, n).T
+        return sol
+
+    def advance(self, t, progress=None) -> Trajectory:
         """States at the sample times ``t`` (1-D, non-decreasing, not before the previous block's
         last sample nor past ``t_end``), s. Returns a :class:`Trajectory` of this block whose
-        ``nfev``, ``wall_time_s`` and ``cpu_time_s`` count the whole run so far."""
+        ``nfev``, ``wall_time_s`` and ``cpu_time_s`` count the whole run so far; ``progress(t)``
+        after each step."""
         t = np.asarray(t, dtype=float)
         if self.t_end == self.t0:
             return Trajectory(t, np.array(self.y)[:, None].repeat(t.size, axis=1), 0, 0.0, 0.0, "DOP853")
         if t.size and t[-1] > self.t_end:
             raise IntegrationError(f"sample time {t[-1]!r} s is after the run's end {self.t_end!r} s")
-        w0, c0 = time.perf_counter(), time.process_time()
-        last = float(t[-1]) if t.size else self.t
-        while self.t < last or not self._steps[0]:
-            self._step()
-        out = _dense_samples(t, *self._steps, self.n) if t.size else np.empty((0, self.n))
-        for kept in self._steps:               # the last step may hold the next block's first samples
-            del kept[:-1]
-        self.wall_time_s += time.perf_counter() - w0
-        self.cpu_time_s += time.process_time() - c0
-        if not np.all(np.isfinite(out)):
-            raise IntegrationError("DOP853 produced a non-finite state")
-        return Trajectory(t, out.T.copy(), self.nfev, self.wall_time_s, self.cpu_time_s, "DOP853",
-                          {"rtol": self.rtol, "atol": self.atol, "nsteps": self.nsteps, "nrejected": self.nrej,
-                           "driver": "scalar"})
+        with self.clock():
+            last = float(t[-1]) if t.size else self.t
+            while self.t < last or not self._steps[0]:
+                self.take_step()
+                if progress is not None:
+                    progress(self.t)
+            out = _dense_samples(t, *self._steps, self.n) if t.size else np.empty((0, self.n))
+            for kept in self._steps:               # the last step may hold the next block's first samples
+                del kept[:-1]
+        self.meta = {"rtol": self.rtol, "atol": self.atol, "nsteps": self.nsteps, "nrejected": self.nrej,
+                     "driver": "scalar"}
+        return self.trajectory(t, out.T.copy())
 
 
 def integrate_dop853_scalar(f, y0, t_eval, rtol=1e-10, atol=1e-12) -> Trajectory:
@@ -356,7 +368,7 @@ def first_crossing(f, y0, t_end, g, after=0.0, rtol=1e-10, atol=1e-12) -> tuple:
     g_old = 1.0
     while run.t_end != run.t0 and run.t < run.t_end:
         t_old = run.t
-        run._step()
+        run.step()
         g_new = g(run.y) if run.t > after else 1.0
         if g_old >= 0.0 >= g_new:
             lo, hi = max(t_old, after), run.t

@@ -26,7 +26,6 @@ identical up to round-off, and ~1000× slower.
 
 import functools
 import math
-import time
 from collections.abc import Callable
 
 import numpy as np
@@ -34,6 +33,8 @@ import numpy as np
 from gyro_instrument.core import jit
 from gyro_instrument.core.dop853 import A, A_EXTRA, B, C, C_EXTRA, D, E3, E5, N_STAGES
 from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.solver import Solver
+from gyro_instrument.core.trajectory import Trajectory
 
 # The tableau as contiguous arrays (numba freezes module-level arrays into the machine code).
 _A, _AX, _D = (np.ascontiguousarray(m) for m in (A, A_EXTRA, D))
@@ -295,8 +296,9 @@ def driver(compiled: bool = True) -> "Callable":
     return _namespace(compiled)["_advance"]
 
 
-class CompiledRun:
-    """A resumable DOP853 run of a kernel ``f(t, y, p, dy)`` (see the module docstring).
+class CompiledRun(Solver):
+    """A resumable DOP853 run of a kernel ``f(t, y, p, dy)`` (see the module docstring), a
+    :class:`~gyro_instrument.core.solver.Solver` with no end (``t_end`` = ∞).
 
     Parameters
     ----------
@@ -323,23 +325,23 @@ class CompiledRun:
 
     #: Samples per compiled call of :meth:`advance` between two ``progress`` reports.
     CHUNK = 1024
+    method = "DOP853"
 
     def __init__(self, kernel, params, y0, t0, rtol, atol, compiled=True) -> None:
-        w0, c0 = time.perf_counter(), time.process_time()
-        self.kernel, self.compiled = kernel, bool(compiled and jit.enabled())
-        self._advance = driver(self.compiled)
-        n = len(y0)
-        self.p = np.ascontiguousarray(params, dtype=float)
-        self.st = np.zeros(9)
-        self.st[_T] = float(t0)
-        self.W, self.K, self.F = np.zeros((6, n)), np.zeros((_NS + 4, n)), np.zeros((8, n))
-        self.W[0] = np.asarray(y0, dtype=float)
-        self.rtol, self.atol = max(float(rtol), 100 * np.finfo(float).eps), float(atol)
-        if not np.all(np.isfinite(self.W[0])):
-            raise IntegrationError(f"DOP853 (compiled) cannot start at t = {t0:.6g} s: the initial state "
-                                   f"{self.W[0].tolist()} is not finite")
-        self.wall_time_s = time.perf_counter() - w0
-        self.cpu_time_s = time.process_time() - c0
+        super().__init__(t0)
+        with self.clock():
+            self.kernel, self.compiled = kernel, bool(compiled and jit.enabled())
+            self._advance = driver(self.compiled)
+            n = len(y0)
+            self.p = np.ascontiguousarray(params, dtype=float)
+            self.st = np.zeros(9)
+            self.st[_T] = float(t0)
+            self.W, self.K, self.F = np.zeros((6, n)), np.zeros((_NS + 4, n)), np.zeros((8, n))
+            self.W[0] = np.asarray(y0, dtype=float)
+            self.rtol, self.atol = max(float(rtol), 100 * np.finfo(float).eps), float(atol)
+            if not np.all(np.isfinite(self.W[0])):
+                raise IntegrationError(f"DOP853 (compiled) cannot start at t = {t0:.6g} s: the initial state "
+                                       f"{self.W[0].tolist()} is not finite")
         self.meta = {"rtol": self.rtol, "atol": self.atol,
                      "driver": f"DOP853 (core.dop853_jit, {jit.status() if self.compiled else 'plain Python'})"}
 
@@ -349,28 +351,56 @@ class CompiledRun:
         return int(self.st[_NFEV])
 
     @property
-    def t(self) -> float:
-        """End of the last step, s."""
-        return float(self.st[_T])
+    def y(self) -> np.ndarray:
+        """The state at :attr:`t` (a copy)."""
+        return self.W[0].copy()
 
-    def advance(self, t, progress=None) -> np.ndarray:
+    def _run(self, t, out):
+        """The compiled driver over the samples ``t`` into ``out``; raises on its failure codes."""
+        status = self._advance(self.kernel, self.p, self.st, self.W, self.K, self.F, t, out, self.rtol, self.atol)
+        self.t = float(self.st[_T])
+        if self.st[_HAS_STEP]:
+            self.t_old = float(self.st[_T_OLD])
+        if status != OK:
+            self._failed = True
+            raise IntegrationError(f"DOP853 (compiled) failed at t = {self.t:.6g} s: {_FAILURES[status]}")
+
+    def _step_impl(self):
+        """One step: the driver asked for the next double after the current step's end, which the
+        next step covers (the steps never depend on the samples); that sample's dense output costs
+        the step's three extra stages, which a sample in the step would have cost anyway."""
+        self._run(np.array([np.nextafter(self.t, np.inf)]), np.empty((self.W.shape[1], 1)))
+
+    def _dense_output_impl(self):
+        """The last step's 7th-order interpolant (scipy's ``Dop853DenseOutput``, Horner form as
+        :func:`_dense_value`), from the coefficients the driver keeps."""
+        if not self.st[_HAS_DENSE]:
+            self._run(np.array([self.t]), np.empty((self.W.shape[1], 1)))     # makes F (a sample in the step)
+        t_old, h, F = float(self.st[_T_OLD]), float(self.st[_H]), self.F.copy()
+
+        def sol(t):
+            x = (np.atleast_1d(np.asarray(t, dtype=float)) - t_old) / h
+            v = np.zeros((F.shape[1], x.size))
+            for k in range(6, -1, -1):
+                v += F[k][:, None]
+                v *= x if k % 2 == 0 else 1.0 - x
+            return v + F[7][:, None]
+        return sol
+
+    def advance(self, t, progress=None) -> Trajectory:
         """States at the sample times ``t`` (1-D, non-decreasing, from the previous block's last
-        sample on, not before ``t0``), shape (n, len(t)); ``progress(t_i)`` after each chunk of
-        :data:`CHUNK` samples."""
+        sample on, not before ``t0``) as a :class:`Trajectory` (y of shape (n, len(t)));
+        ``progress(t_i)`` after each chunk of :data:`CHUNK` samples."""
         t = np.ascontiguousarray(t, dtype=float)
-        w0, c0 = time.perf_counter(), time.process_time()
-        out = np.empty((self.W.shape[1], t.size))
-        for lo in range(0, t.size, self.CHUNK):
-            hi = min(lo + self.CHUNK, t.size)
-            part = np.empty((out.shape[0], hi - lo))
-            status = self._advance(self.kernel, self.p, self.st, self.W, self.K, self.F, t[lo:hi], part,
-                                   self.rtol, self.atol)
-            if status != OK:
-                raise IntegrationError(f"DOP853 (compiled) failed at t = {self.t:.6g} s: {_FAILURES[status]}")
-            out[:, lo:hi] = part
-            if progress is not None:
-                progress(t[hi - 1])
-        self.meta["nsteps"], self.meta["nrejected"] = int(self.st[_NSTEPS]), int(self.st[_NREJ])
-        self.wall_time_s += time.perf_counter() - w0
-        self.cpu_time_s += time.process_time() - c0
-        return out
+        with self.clock():
+            out = np.empty((self.W.shape[1], t.size))
+            for lo in range(0, t.size, self.CHUNK):
+                hi = min(lo + self.CHUNK, t.size)
+                part = np.empty((out.shape[0], hi - lo))
+                self._run(t[lo:hi], part)
+                out[:, lo:hi] = part
+                if progress is not None:
+                    progress(t[hi - 1])
+            self.meta["nsteps"], self.meta["nrejected"] = int(self.st[_NSTEPS]), int(self.st[_NREJ])
+        self._dense = None
+        return Trajectory(t, out, self.nfev, self.wall_time_s, self.cpu_time_s, self.method, dict(self.meta))

@@ -1,6 +1,7 @@
 """Integration driver: method versus driver, as in scipy.integrate's ``OdeSolver``.
 
-:class:`Integration` is a resumable run of ``dy/dt = rhs(t, y)``: scipy's ``OdeSolver`` (any
+:class:`Integration` is a resumable run of ``dy/dt = rhs(t, y)`` (a
+:class:`~gyro_instrument.core.solver.Solver`, the interface of every driver): scipy's ``OdeSolver`` (any
 ``solve_ivp`` method, DOP853 by default) stepped by this driver toward the run's end, each
 :meth:`~Integration.advance` returning the states at the next block of sample times from the dense
 output of the steps that reach them, so the steps and samples are those of one ``solve_ivp`` call
@@ -13,6 +14,7 @@ a caller (the CLI's progress line).
 """
 
 import contextvars
+import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -21,6 +23,7 @@ import numpy as np
 
 from gyro_instrument.core.dop853 import ScalarDOP853
 from gyro_instrument.core.errors import IntegrationError
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.core.trajectory import Trajectory
 
 __all__ = ["SCALAR_DOP853", "Integration", "Trajectory", "integrate", "integration", "report", "reporting"]
@@ -58,7 +61,7 @@ class _Counted:
         self.f = f
         self.n = 0
         self.t0, self.span = t0, (t1 - t0) or 1.0
-        self.reporting = _REPORTER.get() is not None
+        self.reporting = _REPORTER.get() is not None and math.isfinite(self.span)
 
     def __call__(self, t, y):
         self.n += 1
@@ -93,16 +96,18 @@ def _check_samples(t, after, t_end):
     return t
 
 
-class Integration:
-    """A resumable integration of ``dy/dt = rhs(t, y)`` from ``t0`` toward ``t_end``.
+class Integration(Solver):
+    """A resumable integration of ``dy/dt = rhs(t, y)`` from ``t0`` toward ``t_end``: scipy's
+    ``OdeSolver`` behind the :class:`~gyro_instrument.core.solver.Solver` interface.
 
     :meth:`advance` takes the next block of sample times and returns the states there, carrying
     the solver's exact state (current step, step size, last derivative) to the next block. The
     solver is scipy's ``OdeSolver`` driven step by step with ``t_bound = t_end`` — the loop of
-    ``scipy.integrate.solve_ivp`` with ``t_eval``: each sample is evaluated with the dense output
-    of the first step that reaches it — so the steps and the samples are those of one
-    ``solve_ivp`` call over the whole run, bit for bit, however the samples are cut into blocks
-    (``tests/test_streaming.py``). Memory is one step and one block, whatever ``t_end``.
+    ``scipy.integrate.solve_ivp`` with ``t_eval`` (:meth:`Solver.sample_steps`): each sample is
+    evaluated with the dense output of the first step that reaches it — so the steps and the
+    samples are those of one ``solve_ivp`` call over the whole run, bit for bit, however the
+    samples are cut into blocks (``tests/test_streaming.py``). Memory is one step and one block,
+    whatever ``t_end``; ``t_end = math.inf`` runs the steps with no end.
 
     Parameters
     ----------
@@ -114,6 +119,8 @@ class Integration:
         Start and end of the run, s (the end bounds the last step, as ``solve_ivp``'s ``t_span``).
     method, rtol, atol, max_step
         As for :func:`integrate`.
+    meta : dict, optional
+        Entries added to the trajectories' ``meta`` (the gimbal names its ``driver``).
 
     Raises
     ------
@@ -121,71 +128,57 @@ class Integration:
         A non-finite initial state; from :meth:`advance`, a failed step or a non-finite state.
     """
 
-    def __init__(self, rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> None:
+    def __init__(self, rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf,
+                 meta=None) -> None:
+        super().__init__(t0, t_end)
         self.y0 = np.asarray(y0, dtype=float)
         if not np.all(np.isfinite(self.y0)):
             raise IntegrationError(f"initial state is not finite: {self.y0}")
-        self.t0, self.t_end = float(t0), float(t_end)
         self.method = method
-        self.meta = {"rtol": rtol, "atol": atol, "nsteps": 0}
-        self.wall_time_s = self.cpu_time_s = 0.0
+        self.meta = {"rtol": rtol, "atol": atol, "nsteps": 0, **(meta or {})}
         self._last = None                       # last sample time returned
         self._counted = _Counted(rhs, self.t0, self.t_end)
         self._solver = None
-        self._dense = None                      # dense output of the current step (None: not made yet)
         if self.t_end != self.t0:
-            w0, c0 = time.perf_counter(), time.process_time()
-            self._solver = _solver_class(method)(self._counted, self.t0, self.y0, self.t_end, vectorized=False,
-                                                 rtol=rtol, atol=atol, max_step=max_step)
-            self._stepped = False
-            self._clock(w0, c0)
+            with self.clock():
+                self._solver = _solver_class(method)(self._counted, self.t0, self.y0, self.t_end, vectorized=False,
+                                                     rtol=rtol, atol=atol, max_step=max_step)
 
     @property
     def nfev(self) -> int:
         """Right-hand-side evaluations so far (counted by the driver)."""
         return self._counted.n
 
-    def _clock(self, w0, c0):
-        self.wall_time_s += time.perf_counter() - w0
-        self.cpu_time_s += time.process_time() - c0
+    @property
+    def y(self) -> np.ndarray:
+        """The state at :attr:`t`."""
+        return self.y0 if self._solver is None else self._solver.y
 
-    def _step(self):
+    def _step_impl(self):
         solver = self._solver
+        t_old = solver.t
         message = solver.step()
         if solver.status == "failed":
             raise IntegrationError(f"{self.method} failed at t = {solver.t:.6g} s: {message}")
-        self._stepped = True
-        self._dense = None
+        self.t_old, self.t = t_old, float(solver.t)
+        self.meta["nsteps"] += 1
 
-    def advance(self, t) -> Trajectory:
+    def _dense_output_impl(self):
+        return self._solver.dense_output()
+
+    def advance(self, t, progress=None) -> Trajectory:
         """States at the sample times ``t`` (1-D, increasing, after the previous block's, not past
         ``t_end``), s. Returns a :class:`Trajectory` of this block whose ``nfev``, ``wall_time_s``
-        and ``cpu_time_s`` count the whole run so far."""
+        and ``cpu_time_s`` count the whole run so far; ``progress(t)`` after each step."""
         if self._solver is None:              # a run of zero length: the initial state throughout
             t = np.asarray(t, dtype=float)
             return Trajectory(t, self.y0[:, None].repeat(t.size, axis=1), 0, 0.0, 0.0, self.method)
         t = _check_samples(t, self._last, self.t_end)
         if t.size:
             self._last = float(t[-1])
-        w0, c0 = time.perf_counter(), time.process_time()
-        solver, parts, i = self._solver, [], 0
-        while i < t.size:
-            if self._stepped:
-                # the samples this step reaches (solve_ivp: searchsorted(t_eval, t, side="right"))
-                j = int(np.searchsorted(t, solver.t, side="right"))
-                if j > i:
-                    if self._dense is None:
-                        self._dense = solver.dense_output()
-                    parts.append(self._dense(t[i:j]))
-                    i = j
-                    continue
-            self._step()
-        y = np.hstack(parts) if parts else np.empty((self.y0.size, 0))
-        self.meta["nsteps"] = int(solver.nfev)
-        self._clock(w0, c0)
-        if not np.all(np.isfinite(y)):
-            raise IntegrationError(f"{self.method} produced a non-finite state")
-        return Trajectory(t, y, self.nfev, self.wall_time_s, self.cpu_time_s, self.method, dict(self.meta))
+        with self.clock():
+            y = self.sample_steps(t, self.y0.size, progress)
+        return self.trajectory(t, y)
 
 
 def integration(rhs, y0, t0, t_end, method="DOP853", rtol=1e-10, atol=1e-12, max_step=np.inf) -> "Integration":

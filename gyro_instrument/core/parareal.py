@@ -23,7 +23,7 @@ or :func:`hermite_samples`, the same doubles sample by sample, compiled.
 
 Compiled (numba, :mod:`gyro_instrument.core.jit`) there is no interpreter to amortise and a
 single core does the sequential fine integration in less CPU than parareal's ≥ 2 passes; the
-pendulum then integrates its swings serially (:func:`gyro_instrument.instruments.pendulum_dynamics.swing_grid`)
+pendulum then integrates its swings serially (:func:`gyro_instrument.instruments.pendulum.fast_path.swing_grid`)
 and this module's Newton iteration is the path without numba (``GYRO_INSTRUMENT_JIT=0``) and for
 short runs.
 """

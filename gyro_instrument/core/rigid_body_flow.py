@@ -39,6 +39,8 @@ from collections.abc import Callable
 import numpy as np
 
 from gyro_instrument.core import jit
+from gyro_instrument.core.solver import Solver
+from gyro_instrument.core.trajectory import Trajectory
 
 #: Weights of symmetric compositions of Strang steps, by order: 2 Strang itself; 4 Yoshida's triple
 #: jump w1 = 1/(2 − 2^(1/3)), w0 = 1 − 2 w1; 6 Yoshida (1990) solution A, w1..w3 and w0 = 1 − 2 Σ.
@@ -227,3 +229,79 @@ def splitting_run(y, t0, times, h_max, order, mu, torque, compiled=True) -> np.n
     run = _compiled_loop() if compiled else _splitting_loop(free_flow, kick)
     run(y, float(t0), times, float(h_max), a, b, float(mu), np.asarray(torque, dtype=float), out)
     return out
+
+
+class SplittingRun(Solver):
+    """The splitting (:func:`splitting_run`) resumed block by block, a
+    :class:`~gyro_instrument.core.solver.Solver` with no end.
+
+    The state (7 floats: q, ω in body axes) and time are carried across blocks; the steps end on every
+    sample, so the samples depend on the sample times only, never on how they are cut into blocks.
+    :meth:`step` takes one composition step of ``h_max`` (of :data:`FREE_STEP_S` for the torque-free
+    body, whose exact flow takes any step); :meth:`dense_output` composes from the step's start to
+    each time asked (the method's own value there). No right-hand side is evaluated: ``nfev`` is 0.
+
+    Parameters
+    ----------
+    y0 : array_like (7,)
+        State at ``t0``: q (body → inertial, scalar first), ω in body axes (rad/s).
+    t0 : float
+        Start, s.
+    h_max : float
+        Largest step, s (``math.inf``: one exact step per sample, torque-free).
+    order : int
+        The composition's order (:func:`stages`).
+    mu : float
+        C/A.
+    torque : array
+        :func:`kick`'s array (empty: torque-free).
+    """
+
+    method = "splitting"
+    #: Step of :meth:`step` for the torque-free body (its exact flow takes any), s.
+    FREE_STEP_S = 1.0
+
+    def __init__(self, y0, t0, h_max, order, mu, torque) -> None:
+        super().__init__(t0)
+        self.y = np.array(y0, dtype=float)
+        self.h_max, self.order, self.mu = float(h_max), int(order), float(mu)
+        self.torque = np.asarray(torque, dtype=float)
+        self._y_old = None
+        self.meta = {"integrator": f"splitting order {order}", "step_s": h_max}
+
+    @property
+    def nfev(self) -> int:
+        """0: the exact flows and kicks evaluate no right-hand side."""
+        return 0
+
+    def _compose(self, y, t0, times) -> np.ndarray:
+        return splitting_run(y, t0, times, self.h_max, self.order, self.mu, self.torque)
+
+    def _step_impl(self):
+        h = self.h_max if math.isfinite(self.h_max) else self.FREE_STEP_S
+        self._y_old, t_old = self.y.copy(), self.t
+        self._compose(self.y, t_old, np.array([t_old + h]))
+        self.t_old, self.t = t_old, t_old + h
+
+    def _dense_output_impl(self):
+        y_old, t_old = self._y_old, self.t_old
+
+        def sol(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            return np.column_stack([self._compose(y_old.copy(), t_old, np.array([ti])) for ti in t]) \
+                if t.size else np.empty((7, 0))
+        return sol
+
+    def advance(self, t, progress=None) -> Trajectory:
+        """States (7, len(t)) at the times ``t`` (s, increasing, from the previous block's last on);
+        ``progress(t_i)`` after the block."""
+        t = np.asarray(t, dtype=float)
+        with self.clock():
+            y = self._compose(self.y, self.t, t)
+            if t.size:
+                self.t = float(t[-1])
+            self.t_old = self._y_old = self._dense = None          # the samples are not steps
+        if progress is not None and t.size:
+            progress(self.t)
+        return Trajectory(t, y, 0, self.wall_time_s, self.cpu_time_s, self.method, dict(self.meta))
+

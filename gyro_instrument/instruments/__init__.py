@@ -78,11 +78,29 @@ def simulator_kinds() -> dict:
     return out
 
 
+def _check_registered() -> None:
+    """Once the measurement kinds are loaded (:func:`.measurement.load`): every type registered before
+    is checked as :func:`register` checks a later one; a plug-in whose observation names a kind that
+    is not registered or not complete is unregistered, with one line in
+    :data:`gyro_instrument.core.plugins.REFUSED` (a shipped one raises ValueError)."""
+    for name, cls in list(REGISTRY.items()):
+        problem = measurement.observation_problem(cls.OBSERVATION)
+        if problem is None:
+            continue
+        if cls in SHIPPED:
+            raise ValueError(f"register: {name} {problem}")
+        unregister(name)
+        line = f"plug-in instrument {name} ({cls.__module__}.{cls.__qualname__}) refused: {problem}"
+        if line not in plugins.REFUSED:
+            plugins.REFUSED.append(line)
+
+
 #: The shipped instrument types, in registry order (also entry points of ``gyro_instrument.instruments``).
 SHIPPED = (PlaneGyroscope, SphericalPendulum, CompoundPendulum, FreeGyroscope, PuiseuxBody, GimbalGyroscope, RateGyro,
            MarineGyrocompass)
 plugins.discover("instruments", register, lambda c: REGISTRY.get(getattr(c, "type_name", None)) is c, SHIPPED,
                  key="type_name")
+measurement.on_load(_check_registered)
 
 __all__ = ["REGISTRY", "CompoundPendulum", "DirectingModel", "FreeGyroscope", "GimbalGyroscope", "Instrument",
            "JointLayout", "MarineGyrocompass", "Observation", "PlaneGyroscope", "PlanePrecession", "PuiseuxBody", "RateGyro",

@@ -55,6 +55,7 @@ SHIPPED = ("gyro_instrument.estimators.kinds:SwingKind", "gyro_instrument.estima
 #: name -> the kind (an instance of its class), in registration order.
 KINDS = {}
 _LOADED = []
+_ON_LOAD = []            # checks run by load() (on_load)
 
 
 class LiveTracker:
@@ -212,7 +213,8 @@ def load() -> dict:
         _LOADED.append(True)
         plugins.discover("measurements", register_kind, lambda c: type(KINDS.get(getattr(c, "name", None))) is c,
                          SHIPPED)
-        _check_registered()
+        for check in _ON_LOAD:
+            check()
     return KINDS
 
 
@@ -221,18 +223,13 @@ def loaded() -> bool:
     return bool(_LOADED)
 
 
-def _check_registered() -> None:
-    from gyro_instrument import instruments
-    for name, cls in list(instruments.REGISTRY.items()):
-        problem = observation_problem(cls.OBSERVATION)
-        if problem is None:
-            continue
-        if cls in instruments.SHIPPED:
-            raise ValueError(f"register: {name} {problem}")
-        instruments.unregister(name)
-        line = f"plug-in instrument {name} ({cls.__module__}.{cls.__qualname__}) refused: {problem}"
-        if line not in plugins.REFUSED:
-            plugins.REFUSED.append(line)
+def on_load(check) -> None:
+    """Call ``check()`` when :func:`load` has filled :data:`KINDS` (at once if it has): the instrument
+    registry (:mod:`gyro_instrument.instruments`) checks the types registered before the kinds were
+    loaded this way, so that this module does not import the package that imports it."""
+    _ON_LOAD.append(check)
+    if _LOADED:
+        check()
 
 
 def kind(name) -> MeasurementKind | None:

@@ -237,7 +237,7 @@ def replay_foreign(path, scene_arg=None, overrides=(), topic_remaps=()) -> dict:
         notes.append(f"{name} not matched: {reason}")
     if report["unused"]:
         notes.append(f"topics not used: {', '.join(report['unused'])}")
-    from gyro_instrument.recording.replay import check_companions
+    from gyro_instrument.recording.companions import check_companions
     check_companions(insts, samples, path, remaps)
     result = estimate_records(scene, {n: insts[n] for n in samples}, records_from_joints(insts, samples))
     spans = [float(v[0][-1] - v[0][0]) / 1e9 for v in samples.values()]

@@ -131,7 +131,7 @@ def plot_field_book(path, out_dir, scene=None, fmt="png", dpi=110, overwrite=Fal
     SceneError
         The book's bad input; the file already there without ``overwrite``.
     """
-    from gyro_instrument.views import pyplot
+    from gyro_instrument.views.backend import pyplot
     from gyro_instrument.views.figures import STYLE
     plt = pyplot()
     out = os.path.join(out_dir, f"{VIEW}.{fmt}")

@@ -295,9 +295,3 @@ def best_block(blocks) -> "NorthBlock | RateNorthBlock | NullNorthBlock | None":
         return math.inf if value is None else value
     return min(blocks, key=sigma)
 
-
-def field_book_block(path, angle_unit=None, time_unit=None, scene=None, separator=None, division_rad=None) -> dict:
-    """The ``north`` block of a field book (``estimate --reversal-points FILE``): moved to
-    :func:`.field_book_report.field_book_block` (issue 33 item 5), re-exported here."""
-    from gyro_instrument.estimators.north.field_book_report import field_book_block as block
-    return block(path, angle_unit, time_unit, scene, separator, division_rad)

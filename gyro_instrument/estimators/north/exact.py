@@ -160,7 +160,7 @@ def swing(eq, par, rec_kind, t, reading0, rate0, idx=()) -> tuple:
     p = _kernel_params(eq, par, rec_kind, idx)
     if jit.enabled():
         run = dop853_jit.CompiledRun(_compiled_kernel(), p, y0, t[0], RTOL, 1e-15)
-        y = run.advance(t)
+        y = run.advance(t).y
         return y[0], y[2::2].T
     dy = np.empty_like(y0)
 

@@ -1,6 +1,6 @@
 """North from a rate gyro on a turntable: generalised least squares at the Cramér–Rao bound (issue 35).
 
-The record (``index`` φ, rad; ``rate`` r, rad/s; instruments/rate_gyro.py) obeys, at heading M + φ,
+The record (``index`` φ, rad; ``rate`` r, rad/s; instruments/rate_gyro/instrument.py) obeys, at heading M + φ,
 
     r = A cos(M + φ) + b + g + w = a cos φ − c sin φ + b + g + w,   a = A cos M, c = A sin M,
 
@@ -8,7 +8,7 @@ A = (1 + s) n cos γ, b the turn-on bias, g the Gauss–Markov bias instability 
 (σ_w per sample): linear in θ = (a, c, b). The samples are reduced to bin means: each held
 position's run (a carousel's turn in bins of 10°), split into bins no longer than τ_c/16, so the
 Gauss–Markov's shape inside a dwell is kept; the bin means' covariance is exact
-(:func:`~gyro_instrument.instruments.rate_gyro_sensor.block_sums`):
+(:func:`~gyro_instrument.instruments.rate_gyro.sensor.block_sums`):
 
     C = σ_w² diag(1/n) + σ_g² S / (n nᵀ),   S_ij = Σ_{I_i × I_j} ρ^|k−l|,   ρ = exp(−Δ/τ_c).
 
@@ -37,7 +37,7 @@ from scipy.linalg import cho_factor, cho_solve, solve_triangular
 from gyro_instrument.estimators.north.block import (NullNorthBlock, RateBias, RateFisher, RateMethodEntry, RateNoiseModel,
                                                      RateNorthBlock, RateScaleFactor, RateScaleFactorAssumed, RateSign)
 from gyro_instrument.estimators.north.estimate import null_block
-from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, block_sums
+from gyro_instrument.instruments.rate_gyro.sensor import DEG_H, block_sums
 
 ARCSEC_PER_RAD = 648000.0 / math.pi
 #: a carousel's bins: at most this turn of the table each (rad)

@@ -67,7 +67,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.site import plane_frame
 from gyro_instrument.instruments.base import Column, DirectingModel, ExpectedSwing, Instrument, with_notes
 from gyro_instrument.instruments.chain import HingeChain
-from gyro_instrument.instruments.gimbal.dynamics import rigid_body_coefficients
+from gyro_instrument.instruments.gimbal.torques import rigid_body_coefficients
 # The chain and the integrators live in runs (GimbalRuns); ATOL is re-exported here, where it was defined.
 from gyro_instrument.instruments.gimbal.runs import ATOL, GimbalRuns
 from gyro_instrument.instruments.gimbal.theory import (free_mass_matrix, locked_swing_constant,

@@ -4,7 +4,7 @@
 arithmetic of :func:`~.dynamics.closed_form_rhs` (Quet 1853 sec. 4 §III eq. 12, first; the Kane
 equations unrolled for this chain, :mod:`.dynamics`) as right-hand sides ``f(t, y, p, dy)`` of
 :mod:`gyro_instrument.core.dop853_jit`, on floats and a parameter array from :func:`kernel_params`,
-with the hinge torques linear in the rates (the forms :func:`~.dynamics.linear_hinge_coefficient`
+with the hinge torques linear in the rates (the forms :func:`~.torques.linear_hinge_coefficient`
 measures; an effect of another form keeps the Python closed form). :func:`compiled_kernel` compiles
 them lazily through :func:`gyro_instrument.core.jit.compiled` (numba's on-disk cache, no fastmath),
 or returns the plain functions under ``GYRO_INSTRUMENT_JIT=0``: nothing here imports numba at
@@ -17,6 +17,8 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+
+from gyro_instrument.instruments.gimbal.torques import linear_hinge_coefficient, rhs_inputs, torque_constants
 
 
 def free_kernel(t, y, p, dy) -> None:
@@ -92,16 +94,14 @@ def kernel_params(configuration, inertias, omega_base, coefficients, effects, he
                   context=None) -> "tuple | None":
     """("free" or "held", p): the kernel and its parameter array for the arguments of
     :func:`~.dynamics.closed_form_rhs`; None when an effect's hinge torque is not linear in its rate
-    (:func:`~.dynamics.linear_hinge_coefficient`), which only the Python closed form calls."""
-    # imported here: dynamics re-exports this module's names, so it is imported first at module level
-    from gyro_instrument.instruments.gimbal.dynamics import _rhs_inputs, _torque_constants, linear_hinge_coefficient
-    inputs = _rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias, context)
+    (:func:`~.torques.linear_hinge_coefficient`), which only the Python closed form calls."""
+    inputs = rhs_inputs(inertias, omega_base, coefficients, effects, swing_inertias, context)
     (A, C, A1, C1, A2, C2, Ox, Oy, Oz, cl, cq, damp, spin, J_outer, J_inner) = inputs
     ks = [linear_hinge_coefficient(terms, j) for terms, j in ((damp, J_outer), (damp, J_inner), (spin, C))]
     if None in ks:
         return None
     (kx1, kx2, ky1, ky2, kz0, lx1, lx2, lx3, ly1, ly2, lz1, lz2, qx, qy, qz, q0, u2_s,
-     u2_c) = _torque_constants(A, C, A1, C1, A2, C2, cl, cq)
+     u2_c) = torque_constants(A, C, A1, C1, A2, C2, cl, cq)
     if configuration == "free":
         p = (C, Ox, Oy, Oz, kx1 + kx2, lx1 + lx2, lx3, qx, ky1 + ky2, ly1, ly2 + lx2, lx2, qy, kz0, lz1, lz2, qz,
              q0, u2_c + A2, u2_s - u2_c, -1.0 / (A + A1), 1.0 / C, *ks)

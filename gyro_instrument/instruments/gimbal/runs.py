@@ -16,16 +16,30 @@ from collections.abc import Iterator
 import numpy as np
 
 from gyro_instrument.core.effect import CARRIER_INERTIA, CENTRIFUGAL_TORQUE, DAMPING, GYROSCOPIC, RIGID_BODY, SPIN
-from gyro_instrument.core.integrate import Trajectory, integrate, report
+from gyro_instrument.core.dop853_fortran import FortranRun
+from gyro_instrument.core.dop853_jit import CompiledRun
+from gyro_instrument.core.integrate import Integration, integrate, report
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.instruments.base import Simulation
 from gyro_instrument.instruments.chain import HingeChain, Link
-from gyro_instrument.core.dop853_jit import CompiledRun
-from gyro_instrument.instruments.gimbal.dynamics import ClosedFormRun, DenseRun, closed_form_rhs
+from gyro_instrument.instruments.gimbal.dynamics import closed_form_rhs
 from gyro_instrument.instruments.gimbal.kernels import compiled_kernel, kernel_params
 from gyro_instrument.instruments.gimbal.theory import axial_momentum, quet_energy, spin_invariant, swing_inertias_kg_m2
 
 #: Absolute tolerance of both integrators (rad, rad/s), as before the closed form existed.
 ATOL = 1e-13
+
+
+def dense_run(rhs, y0, t0, rtol, atol) -> Integration:
+    """scipy's DOP853 on ``rhs(t, *y) -> tuple`` (:func:`~.dynamics.closed_form_rhs`) stepped with no
+    end from ``t0`` (s), the samples read from each step's dense output as ``solve_ivp`` does
+    (:class:`~gyro_instrument.core.integrate.Integration` with ``t_end`` = ∞): for a slow motion (the
+    locked and outer-fixed swings: a step covers many samples) this costs nothing per sample. The steps
+    never depend on the samples, so blocks concatenate to the one-shot run bit for bit."""
+    def f(t, y):
+        return np.array(rhs(t, *y.tolist()))
+    return Integration(f, y0, t0, math.inf, method="DOP853", rtol=rtol, atol=atol,
+                       meta={"driver": "DOP853 (scipy OdeSolver, dense output)"})
 
 
 class GimbalRuns:
@@ -148,14 +162,17 @@ class GimbalRuns:
         y0 = [float(v) for v in self.initial_state(chain)]
         return CompiledRun(compiled_kernel(name), params, y0, t0, self.p.rtol, ATOL)
 
-    def closed_form_run(self, chain, t0) -> "ClosedFormRun | DenseRun":
+    def closed_form_run(self, chain, t0) -> Solver:
         """The closed form's resumable run from ``t0`` (s): sample to sample through Hairer's Fortran
-        DOP853 (:class:`~.dynamics.ClosedFormRun`) for the free rings, whose nutation takes tens of
-        steps per sample; scipy's DOP853 with dense output (:class:`~.dynamics.DenseRun`) for the
-        slow locked and outer-fixed swings, whose steps cover many samples (``gyro-instrument bench``,
-        realtime.csv: the work-precision rows of both drivers)."""
-        run = ClosedFormRun if self.p.configuration == "free" else DenseRun
-        return run(*self.closed_form(chain), t0, self.p.rtol, ATOL)
+        DOP853 (:class:`~gyro_instrument.core.dop853_fortran.FortranRun`) for the free rings, whose
+        nutation takes tens of steps per sample; scipy's DOP853 stepped with no end, the samples read
+        from its dense output (:class:`~gyro_instrument.core.integrate.Integration`, ``t_end`` = ∞),
+        for the slow locked and outer-fixed swings, whose steps cover many samples
+        (``gyro-instrument bench``, realtime.csv: the work-precision rows of both drivers)."""
+        rhs, y0 = self.closed_form(chain)
+        if self.p.configuration == "free":
+            return FortranRun(rhs, y0, t0, self.p.rtol, ATOL)
+        return dense_run(rhs, y0, t0, self.p.rtol, ATOL)
 
     def simulate(self, t) -> Simulation:
         """Integrate from the initial angles and rates (relative to the Earth) with spin ρ0.
@@ -186,8 +203,9 @@ class GimbalRuns:
             return self._simulation(traj.t, traj.y, traj, chain)
         run = self._run(choice, chain, t[0])
         span = float(t[-1] - t[0]) or 1.0
-        y = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
-        return self._simulation(t, y, self._trajectory(run, t, y, choice, why), chain)
+        traj = run.advance(t, progress=lambda ti: report((ti - t[0]) / span))
+        traj.meta.update(integrator=choice, reason=why)
+        return self._simulation(t, traj.y, traj, chain)
 
     def _run(self, choice, chain, t0):
         """The resumable run of ``choice`` (``compiled`` or ``closed_form``) from ``t0``."""
@@ -212,12 +230,9 @@ class GimbalRuns:
                 if b.size == 0:
                     continue
                 run = self._run(choice, chain, b[0])
-            y = run.advance(b)
-            yield self._simulation(b, y, self._trajectory(run, b, y, choice, why), chain)
-
-    def _trajectory(self, run, t, y, choice, why) -> Trajectory:
-        return Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
-                          dict(run.meta, integrator=choice, reason=why))
+            traj = run.advance(b)
+            traj.meta.update(integrator=choice, reason=why)
+            yield self._simulation(b, traj.y, traj, chain)
 
     def _simulation(self, t, y, traj, chain) -> Simulation:
         """Columns and Quet's angles from states ``y`` (chain layout, shape (2 nf, m))."""

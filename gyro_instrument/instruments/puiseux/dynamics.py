@@ -58,7 +58,7 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
     qw, qx, qy, qz, wx, wy, wz = y
     A, B, C = inertia
     sxx, sxy, syy, szz, cz = surf.sxx, surf.sxy, surf.syy, surf.szz, surf.cz
-    nx, ny, nz, ndx, ndy, ndz = _vertical(qw, qx, qy, qz, wx, wy, wz)
+    nx, ny, nz, ndx, ndy, ndz = vertical(qw, qx, qy, qz, wx, wy, wz)
     # gradient of h: S n / s - c
     sx = sxx * nx + sxy * ny
     sy = sxy * nx + syy * ny
@@ -72,12 +72,12 @@ def contact_dynamics(y, surf, inertia, M, g, sqrt) -> tuple:
     tz = szz * ndz
     f = (sx * ndx + sy * ndy + sz * ndz) / (s * s * s)
     hx, hy, hz = tx / s - sx * f, ty / s - sy * f, tz / s - sz * f
-    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
+    qdot, wdot, N, zdot = contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
                                             gx, gy, gz, hx, hy, hz, A, B, C, M, g)
     return qdot, wdot, N, h, zdot, (nx, ny, nz)
 
 
-def _vertical(qw, qx, qy, qz, wx, wy, wz) -> tuple:
+def vertical(qw, qx, qy, qz, wx, wy, wz) -> tuple:
     """The upward vertical n in body axes (third row of R(q/|q|), body -> world) and its rate
     ṅ = n × w (n fixed in space, seen from the body): (nx, ny, nz, ṅx, ṅy, ṅz)."""
     nq = qw * qw + qx * qx + qy * qy + qz * qz
@@ -87,7 +87,7 @@ def _vertical(qw, qx, qy, qz, wx, wy, wz) -> tuple:
     return nx, ny, nz, ny * wz - nz * wy, nz * wx - nx * wz, nx * wy - ny * wx
 
 
-def _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz, gx, gy, gz, hx, hy, hz,
+def contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz, gx, gy, gz, hx, hy, hz,
                       A, B, C, M, g) -> tuple:
     """The rigid body's response to the plane, shared by :func:`contact_dynamics` and
     :func:`contact_dynamics_general` (the same operations in the same order for both): from the
@@ -164,23 +164,23 @@ def contact_dynamics_general(y, surf, inertia, M, g, sqrt) -> tuple:
     :class:`~gyro_instrument.instruments.puiseux.surface.GeneralEllipsoidSurface` (full S and
     centre c in principal axes): h = √(nᵀSn) − c·n, ∇h = Sn/s − c, H ṅ = Sṅ/s − Sn (Sn·ṅ)/s³.
     The surface terms are kept apart so that the sec. I-II bodies keep their exact arithmetic; the
-    body's response is shared (:func:`_contact_response`). Returns the same tuple.
+    body's response is shared (:func:`contact_response`). Returns the same tuple.
     """
     qw, qx, qy, qz, wx, wy, wz = y
     A, B, C = inertia
     sxx, sxy, sxz, syy, syz, szz = surf.sxx, surf.sxy, surf.sxz, surf.syy, surf.syz, surf.szz
     cx, cy, cz = surf.cx, surf.cy, surf.cz
-    nx, ny, nz, ndx, ndy, ndz = _vertical(qw, qx, qy, qz, wx, wy, wz)
-    sx, sy, sz = _general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz)
+    nx, ny, nz, ndx, ndy, ndz = vertical(qw, qx, qy, qz, wx, wy, wz)
+    sx, sy, sz = general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz)
     s = sqrt(nx * sx + ny * sy + nz * sz)
-    gx, gy, gz, h, hx, hy, hz = _general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz,
+    gx, gy, gz, h, hx, hy, hz = general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz,
                                                        syy, syz, szz, cx, cy, cz)
-    qdot, wdot, N, zdot = _contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
+    qdot, wdot, N, zdot = contact_response(qw, qx, qy, qz, wx, wy, wz, nx, ny, nz, ndx, ndy, ndz,
                                             gx, gy, gz, hx, hy, hz, A, B, C, M, g)
     return qdot, wdot, N, h, zdot, (nx, ny, nz)
 
 
-def _general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz) -> tuple:
+def general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz) -> tuple:
     """S n for the symmetric S of a :class:`~.surface.GeneralEllipsoidSurface` (floats or arrays)."""
     sx = sxx * nx + sxy * ny + sxz * nz
     sy = sxy * nx + syy * ny + syz * nz
@@ -188,7 +188,7 @@ def _general_sn(nx, ny, nz, sxx, sxy, sxz, syy, syz, szz) -> tuple:
     return sx, sy, sz
 
 
-def _general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz, syy, syz, szz, cx, cy, cz) -> tuple:
+def general_surface_terms(nx, ny, nz, ndx, ndy, ndz, sx, sy, sz, s, sxx, sxy, sxz, syy, syz, szz, cx, cy, cz) -> tuple:
     """From n, ṅ, S n and s = √(nᵀSn): ∇h = S n/s − c, h = s − c·n and H ṅ = S ṅ/s − S n (S n·ṅ)/s³
     (:func:`contact_dynamics_general`; plain float arithmetic, also compiled by :mod:`.kernels`).
     Returns (∇h (3), h, H ṅ (3))."""

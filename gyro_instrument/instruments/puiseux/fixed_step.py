@@ -9,7 +9,7 @@ exact model is stepped by compiled kernels (:mod:`.kernels`):
   spin r (Puiseux eq. 6): the figure axis u and its velocity in the world, the spin angle a
   quadrature (:mod:`.kernels`). The step is set by the nutation, not by the spin.
 * ``rk8`` — any body: the exact equations of :mod:`.dynamics` (quaternion and body rate).
-* ``dop853`` with numba on (:func:`gyro_instrument.core.jit.enabled`): :class:`CompiledDOP853Run`, Hairer's
+* ``dop853`` with numba on (:func:`gyro_instrument.core.jit.enabled`): :func:`compiled_dop853_run`, Hairer's
   adaptive DOP853 of :mod:`gyro_instrument.core.dop853_jit` on the same exact equations as a compiled
   kernel (:func:`.kernels._exact_rhs`): the method, tolerances and error control of scipy's DOP853
   (the run of ``GYRO_INSTRUMENT_JIT=0``), its steps run with no end rather than bounded by the run's
@@ -31,7 +31,6 @@ the run is cut into blocks.
 
 import functools
 import math
-import time
 import types
 
 import numpy as np
@@ -40,6 +39,7 @@ from gyro_instrument.core import dop853
 from gyro_instrument.core.dop853_jit import CompiledRun
 from gyro_instrument.core.errors import IntegrationError
 from gyro_instrument.core.quaternion import quat_mul, quat_to_matrix
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.core.trajectory import Trajectory
 
 #: h Ω at rtol 1e-10 (dimensionless), for each fixed-step integrator.
@@ -91,9 +91,13 @@ def body_states(x, r) -> np.ndarray:
     return np.vstack([q.T, w])
 
 
-class FixedStepRun:
-    """A resumable fixed-step run (the ``advance`` interface of
-    :class:`gyro_instrument.core.integrate.Integration`).
+class FixedStepRun(Solver):
+    """A resumable fixed-step run (a :class:`~gyro_instrument.core.solver.Solver` with no end).
+
+    :meth:`advance` integrates from sample to sample in equal substeps no longer than the step
+    (``h_max``); :meth:`step` takes one step of ``h_max``, and :meth:`dense_output` integrates from
+    that step's start to the times asked in one substep each (the formula's own 8th-order values
+    there).
 
     Parameters
     ----------
@@ -112,44 +116,77 @@ class FixedStepRun:
     """
 
     def __init__(self, model, y0, t0, params, omega_rad_s, rtol) -> None:
-        self.model = model
+        super().__init__(t0)
+        self.model = self.method = model
         self.params = np.asarray(params, dtype=float)
         self.h_max = H_OMEGA[model] * (rtol / 1e-10) ** 0.125 / max(omega_rad_s, 1e-300)
         self.r = float(self.params[5]) if model == "axis_rk8" else None
         self.x = axis_state(y0)[0] if model == "axis_rk8" else np.asarray(y0, dtype=float).copy()
         self.y0 = np.asarray(y0, dtype=float)
-        self.t = float(t0)
         self.nsteps = 0
-        self.cpu_time_s = 0.0
+        self._x_old = None
         self.meta = {"rtol": rtol, "h_omega": H_OMEGA[model], "omega_rad_s": omega_rad_s}
 
-    def advance(self, t) -> Trajectory:
-        """States (q, w) at the sample times ``t`` (s, increasing, from the last one returned)."""
-        c0 = time.process_time()
+    @property
+    def nfev(self) -> int:
+        """Right-hand-side evaluations so far (12 stages per step)."""
+        return 12 * self.nsteps
+
+    def _integrate(self, x, times):
+        """States (the model's) at ``times`` from ``x`` at ``times[0]``, in equal substeps ≤ ``h_max``."""
         k = fixed_step_kernels()
-        t = np.asarray(t, dtype=float)
-        times = t if t.size and t[0] == self.t else np.concatenate([[self.t], t])
-        steps = np.maximum(1, np.ceil(np.diff(times) / self.h_max))
-        sub = int(steps.max()) if steps.size else 0
         model = k.AXIS if self.model == "axis_rk8" else k.BODY
-        xs = k.rk8_samples(model, self.x, times, self.h_max, self.params, dop853.A, dop853.B)
+        xs = k.rk8_samples(model, x, times, self.h_max, self.params, dop853.A, dop853.B)
         if not np.all(np.isfinite(xs)):
             bad = times[np.argmax(~np.all(np.isfinite(xs), axis=0))]
+            self._failed = True
             raise IntegrationError(f"{self.model}: non-finite state, or the axis tilted past "
                                    f"{math.degrees(k.MAX_TILT_RAD):g} deg (the reduction's limit), near "
                                    f"t = {bad:.6g} s; integrator: rk8 or dop853 have no such limit")
-        self.x, self.t = xs[:, -1].copy(), float(times[-1])
-        self.nsteps += int(steps.sum())
-        xs = xs[:, times.size - t.size:]
-        y = body_states(xs, self.r) if self.model == "axis_rk8" else xs
-        self.cpu_time_s += time.process_time() - c0
-        meta = dict(self.meta, nsteps=self.nsteps, substeps=sub)
-        return Trajectory(t, y, 12 * self.nsteps, self.cpu_time_s, self.cpu_time_s, self.model, meta)
+        return xs
+
+    def _states(self, xs) -> np.ndarray:
+        """(q, w) from the model's states."""
+        return body_states(xs, self.r) if self.model == "axis_rk8" else xs
+
+    def _step_impl(self):
+        times = np.array([self.t, self.t + self.h_max])
+        xs = self._integrate(self.x, times)
+        self._x_old, self.x = self.x, xs[:, -1].copy()
+        self.t_old, self.t = self.t, float(times[-1])
+        self.nsteps += 1
+
+    def _dense_output_impl(self):
+        t_old, x_old = self.t_old, self._x_old
+
+        def sol(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            xs = np.column_stack([x_old if ti == t_old else self._integrate(x_old, np.array([t_old, ti]))[:, -1]
+                                  for ti in t]) if t.size else np.empty((x_old.size, 0))
+            return self._states(xs)
+        return sol
+
+    def advance(self, t, progress=None) -> Trajectory:
+        """States (q, w) at the sample times ``t`` (s, increasing, from the last one returned);
+        ``progress(t_i)`` after the block."""
+        with self.clock():
+            t = np.asarray(t, dtype=float)
+            times = t if t.size and t[0] == self.t else np.concatenate([[self.t], t])
+            steps = np.maximum(1, np.ceil(np.diff(times) / self.h_max))
+            sub = int(steps.max()) if steps.size else 0
+            xs = self._integrate(self.x, times)
+            self.x, self.t = xs[:, -1].copy(), float(times[-1])
+            self.nsteps += int(steps.sum())
+            y = self._states(xs[:, times.size - t.size:])
+            self.t_old = self._x_old = self._dense = None          # the samples are not steps
+            self.meta["nsteps"], self.meta["substeps"] = self.nsteps, sub
+        if progress is not None and t.size:
+            progress(t[-1])
+        return Trajectory(t, y, self.nfev, self.wall_time_s, self.cpu_time_s, self.model, dict(self.meta))
 
 
-class CompiledDOP853Run:
-    """A resumable adaptive DOP853 run of the exact equations compiled (``integrator: dop853`` with
-    numba on; the ``advance`` interface of :class:`gyro_instrument.core.integrate.Integration`):
+def compiled_dop853_run(y0, t0, params, rtol, atol, compiled=True) -> CompiledRun:
+    """The adaptive DOP853 run of the exact equations compiled (``integrator: dop853`` with numba on):
     :class:`~gyro_instrument.core.dop853_jit.CompiledRun` on :func:`dop853_kernel`.
 
     Parameters
@@ -166,14 +203,5 @@ class CompiledDOP853Run:
         The compiled driver and kernel (default), or both as plain Python (the reference the tests
         hold them to; ~1000× slower).
     """
-
-    def __init__(self, y0, t0, params, rtol, atol, compiled=True) -> None:
-        kernel = dop853_kernel() if compiled else fixed_step_kernels()._exact_rhs
-        self.run = CompiledRun(kernel, params, np.asarray(y0, dtype=float), t0, rtol, atol, compiled=compiled)
-
-    def advance(self, t) -> Trajectory:
-        """States (q, w) at the sample times ``t`` (s, non-decreasing, from the last one returned)."""
-        y = self.run.advance(np.asarray(t, dtype=float))
-        run = self.run
-        return Trajectory(np.asarray(t, dtype=float), y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853",
-                          dict(run.meta))
+    kernel = dop853_kernel() if compiled else fixed_step_kernels()._exact_rhs
+    return CompiledRun(kernel, params, np.asarray(y0, dtype=float), t0, rtol, atol, compiled=compiled)

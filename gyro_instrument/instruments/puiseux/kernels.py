@@ -10,7 +10,7 @@ Two right-hand sides, one stepper (and the exact one for DOP853)
 ----------------------------------------------------------------
 * :func:`body_rhs` (model 0) — the exact equations of :mod:`.dynamics` (quaternion q, body rate w;
   the general surface S, c, which holds every shape), sharing their float arithmetic
-  (``_vertical``, ``_general_sn``, ``_general_surface_terms``, ``_contact_response``).
+  (``vertical``, ``general_sn``, ``general_surface_terms``, ``contact_response``).
 * :func:`axis_rhs` (model 1) — the exact reduction of a body of revolution (A = B, S = diag(a, a, b),
   c = (0, 0, c_z): the ellipsoid of revolution, or ρ = ρ' with equal transverse moments). The
   torque about G of the normal force N at the contact point is N κ(c) e_z × u, with u the figure
@@ -49,8 +49,7 @@ import math
 import numpy as np
 
 from gyro_instrument.core import jit
-from gyro_instrument.instruments.puiseux.dynamics import (_contact_response, _general_sn, _general_surface_terms,
-                                                          _vertical)
+from gyro_instrument.instruments.puiseux import dynamics
 
 #: Index of the right-hand side in :func:`rk8_samples`.
 BODY, AXIS = 0, 1
@@ -58,10 +57,10 @@ BODY, AXIS = 0, 1
 MAX_TILT_RAD = math.radians(170.0)
 MIN_COS_TILT = math.cos(MAX_TILT_RAD)
 
-vertical = jit.compiled(_vertical)
-general_sn = jit.compiled(_general_sn)
-general_surface_terms = jit.compiled(_general_surface_terms)
-contact_response = jit.compiled(_contact_response)
+vertical = jit.compiled(dynamics.vertical)
+general_sn = jit.compiled(dynamics.general_sn)
+general_surface_terms = jit.compiled(dynamics.general_surface_terms)
+contact_response = jit.compiled(dynamics.contact_response)
 
 
 def _body_rhs(y, p, out):

@@ -15,12 +15,13 @@ import numpy as np
 
 from gyro_instrument.core import jit
 from gyro_instrument.core.angles import NumpyUnwrapper
-from gyro_instrument.core.integrate import Integration, integration
+from gyro_instrument.core.integrate import integration
+from gyro_instrument.core.solver import Solver
 from gyro_instrument.core.quaternion import quat_from_matrix, quat_mul, quat_to_matrix, rotation_matrix
 from gyro_instrument.core.site import compass_azimuth_from_enu
 from gyro_instrument.instruments.base import Simulation, run_span
 from gyro_instrument.instruments.puiseux.dynamics import contact_dynamics
-from gyro_instrument.instruments.puiseux.fixed_step import CompiledDOP853Run, FixedStepRun, axis_state
+from gyro_instrument.instruments.puiseux.fixed_step import FixedStepRun, axis_state, compiled_dop853_run
 
 
 class ContactRuns:
@@ -157,9 +158,9 @@ class ContactRuns:
             yield Simulation(t, columns, traj, extra=extra)
 
     def integration_run(self, t0, t_end, rtol, atol, integrator=None, compiled=None
-                        ) -> "Integration | FixedStepRun | CompiledDOP853Run":
+                        ) -> Solver:
         """The resumable run (``advance(block)``) of the chosen integrator (:meth:`integrator_choice`;
-        ``integrator`` overrides the parameter): DOP853 — compiled (:class:`.fixed_step.CompiledDOP853Run`,
+        ``integrator`` overrides the parameter): DOP853 — compiled (:func:`.fixed_step.compiled_dop853_run`,
         when ``compiled`` is None or True and numba is on) or scipy's on :meth:`rhs` (``compiled=False``,
         or numba off) — or a fixed-step run of :mod:`.fixed_step` with the same initial state, its step
         set by ``rtol`` and the fastest rate Ω of the motion (:mod:`.fixed_step`; ``atol`` applies to
@@ -169,7 +170,7 @@ class ContactRuns:
         if name == "dop853":
             if compiled is False or not jit.enabled():
                 return integration(self.rhs(), y0, t0, t_end, method="DOP853", rtol=rtol, atol=atol)
-            return CompiledDOP853Run(y0, t0, self.exact_params(), rtol, atol)
+            return compiled_dop853_run(y0, t0, self.exact_params(), rtol, atol)
         A, B, C = self.inertia
         M, g, sf = self.p.mass_kg, self.context.gravity_m_s2, self.surface
         w0 = float(np.linalg.norm(y0[4:]))

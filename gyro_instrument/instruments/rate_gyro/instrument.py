@@ -6,7 +6,7 @@ The gyro's sensitive axis is horizontal; the turntable turns it about the vertic
 index angle read on the table's encoder, clockwise seen from above. The Earth rate in ENU is
 n (0, cos γ, sin γ) and the axis (sin h, cos h, 0), so the rate about it is n cos γ cos h: a
 horizontal axis sees only the horizontal component, the turntable's own turn (about the vertical)
-not at all. The sensor reads (model of :mod:`.rate_gyro_sensor`)::
+not at all. The sensor reads (model of :mod:`.sensor`)::
 
     r = (1 + s) n cos γ cos(M + φ) + b0 + g(t) + w(t)
 
@@ -37,7 +37,7 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.instruments.base import Column, Instrument, Simulation, with_notes
 from gyro_instrument.instruments.channels import ANGLE, Channel, RATE as RATE_MEANING
 from gyro_instrument.instruments.observation import JointLayout, Observation
-from gyro_instrument.instruments.rate_gyro_sensor import DEG_H, DEG_RT_H, GM_ALLAN_PEAK, GM_ALLAN_PEAK_TAU, GyroErrors
+from gyro_instrument.instruments.rate_gyro.sensor import DEG_H, DEG_RT_H, GM_ALLAN_PEAK, GM_ALLAN_PEAK_TAU, GyroErrors
 
 #: Measurement kind: the azimuth of a turntable's reference from the Earth rate a rate gyro reads at
 #: several headings (the ``north`` block, estimators/north/rate_gyro.py).
@@ -68,7 +68,7 @@ def schedule(t_s, p) -> tuple:
 
 class RateGyroObservation(Observation):
     """What a rate gyro on a turntable measures: the index angle (exact encoder) and the rate (its
-    own error model, :class:`~.rate_gyro_sensor.GyroErrors`, not the scene's ``sensor``).
+    own error model, :class:`~.sensor.GyroErrors`, not the scene's ``sensor``).
 
     No Earth-rate measurement for the latitude (``MEASUREMENT`` None: one horizontal axis reads
     (1 + s) n cos γ, scale factor and latitude inseparable); an azimuth beside it (``ALSO_MEASURES``:

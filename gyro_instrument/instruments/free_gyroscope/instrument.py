@@ -79,7 +79,7 @@ Checks of the printed text (sec. 4 §II)
 
 Numerical path (``model: numerical``)
 -------------------------------------
-Run by :mod:`.free_gyroscope_runs` (the integrator choice, the drivers, the streamed run). The state
+Run by :mod:`.runs` (the integrator choice, the drivers, the streamed run). The state
 is the unit quaternion q (body → inertial, scalar first; body z is the figure axis) and
 the body-axis angular velocity ω, in the inertial frame. Two integrators (``integrator``):
 
@@ -127,11 +127,11 @@ from gyro_instrument.core.params import Param
 from gyro_instrument.core.quaternion import quat_from_matrix
 from gyro_instrument.instruments.base import Column, Instrument, with_notes
 from gyro_instrument.instruments.observation import RotorObservation
-# The geometry and the closed form live in free_gyroscope_theory; re-exported here, where they were defined.
-from gyro_instrument.instruments.free_gyroscope_theory import (angle_between, axis_from_alt_az, axis_relative_to_earth,
+# The geometry and the closed form live in .theory; re-exported here, where they were defined.
+from gyro_instrument.instruments.free_gyroscope.theory import (angle_between, axis_from_alt_az, axis_relative_to_earth,
                                                                body_frame, equatorial_basis)
-# The integrator choice, the drivers and the streamed run live in free_gyroscope_runs (FreeGyroscopeRuns).
-from gyro_instrument.instruments.free_gyroscope_runs import FreeGyroscopeRuns
+# The integrator choice, the drivers and the streamed run live in .runs (FreeGyroscopeRuns).
+from gyro_instrument.instruments.free_gyroscope.runs import FreeGyroscopeRuns
 
 __all__ = ["FreeGyroscope", "angle_between", "axis_from_alt_az", "axis_relative_to_earth", "body_frame",
            "equatorial_basis"]

@@ -41,10 +41,11 @@ from gyro_instrument.instruments.base import (Column, ExpectedSwing, Instrument,
                                               run_span, with_notes)
 from gyro_instrument.instruments.chain import HingeChain, Link
 from gyro_instrument.instruments.observation import PlanePrecession
-# The theory (pendulum_theory) and the dynamics (pendulum_dynamics) live apart; their public names
+# The theory (.theory) and the dynamics (.dynamics) live apart; their public names
 # are re-exported here, where they were defined before.
-from gyro_instrument.instruments.pendulum_dynamics import SwingDynamics, pendulum_columns
-from gyro_instrument.instruments.pendulum_theory import (apsidal_angle, apsidal_rate_exact_rad_s,
+from gyro_instrument.instruments.pendulum.columns import pendulum_columns
+from gyro_instrument.instruments.pendulum.dynamics import SwingDynamics
+from gyro_instrument.instruments.pendulum.theory import (apsidal_angle, apsidal_rate_exact_rad_s,
                                                          apsidal_rate_from_rest_exact_rad_s,
                                                          apsidal_rate_from_rest_rad_s, areal_constant_over_omega0,
                                                          binet_ellipse, min_deflection_for_areal_constant,
@@ -124,7 +125,7 @@ class SphericalPendulum(SwingDynamics, Instrument):
               doc="parareal: largest change of a swing's start state (relative to the amplitude) accepted"),
     )
     MECHANICS = frozenset({POINT_MASS, RESTORING_LAW})
-    #: Both models sum every ``point_mass`` term through its hook (:meth:`~.pendulum_dynamics.SwingDynamics.rhs_exact`,
+    #: Both models sum every ``point_mass`` term through its hook (:meth:`~.dynamics.SwingDynamics.rhs_exact`,
     #: ``rhs_linear``); the exact (Cartesian) model is exact in the angle, the sine law, and is taken
     #: when an effect gives a restoring law (:meth:`model_taken`), the small-angle model otherwise.
     MODELS = {"exact": frozenset({POINT_MASS, SINE_LAW}), "linear": frozenset({POINT_MASS})}

@@ -4,7 +4,7 @@ swing-plane azimuth from the Fradkin tensor, their unwrapping across blocks.
 :func:`pendulum_columns` is the numpy path; :func:`compiled_pendulum_columns` computes the same doubles
 with its arithmetic (:func:`angle_arguments`) and unwrapping (:func:`unwrap_in_place`) compiled by
 :mod:`gyro_instrument.core.jit` (the arctangents stay on numpy, whose values numba's do not match to the
-last bit). Split from :mod:`~gyro_instrument.instruments.pendulum_dynamics`, which re-exports them.
+last bit). Split from :mod:`~gyro_instrument.instruments.pendulum.dynamics`, which re-exports them.
 """
 
 import functools

@@ -5,7 +5,7 @@ horizontal Earth rate, beyond the paper), the apse line's rate (§III series; ex
 elliptic integral of the third kind), the sense of the precession and Binet's ellipse, the exact
 solution of the linear model. Pure functions of SI arguments; the instrument
 (:mod:`gyro_instrument.instruments.pendulum`) and its dynamics
-(:mod:`gyro_instrument.instruments.pendulum_dynamics`) call them.
+(:mod:`gyro_instrument.instruments.pendulum.dynamics`) call them.
 """
 
 import math

@@ -3,17 +3,14 @@
 :class:`SwingDynamics` holds what :class:`~gyro_instrument.instruments.pendulum.SphericalPendulum`
 integrates: the Cartesian constrained right-hand side summing the active effects' point-mass terms
 (:meth:`SwingDynamics.rhs_exact`), the small-angle model (:meth:`SwingDynamics.rhs_linear`), the
-streamed adaptive DOP853 runs and the fast path (windows of whole swings of a fixed-step RK8: compiled
-swing after swing by :func:`swing_grid` for long runs, else Newton-parareal from Quet's comparison
+streamed adaptive DOP853 runs and the fast path (:mod:`.fast_path`: windows of whole swings of a fixed-step RK8, compiled
+swing after swing by :func:`~.fast_path.swing_grid` for long runs, else Newton-parareal from Quet's comparison
 pendulum on numpy). The module docstring of :mod:`gyro_instrument.instruments.pendulum`
-gives the equations; :mod:`~gyro_instrument.instruments.pendulum_columns` turns bob states into the
+gives the equations; :mod:`~gyro_instrument.instruments.pendulum.columns` turns bob states into the
 published columns.
 """
 
-import bisect
-import functools
 import math
-import time
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -21,132 +18,14 @@ import numpy as np
 from gyro_instrument.core import dop853, jit
 from gyro_instrument.core.angles import Unwrapper
 from gyro_instrument.core.effect import CORIOLIS, POINT_MASS
-from gyro_instrument.core.integrate import Trajectory, integration
-from gyro_instrument.core.parareal import compiled_hermite_samples, dense_output, hermite_rows
+from gyro_instrument.core.integrate import integration
 from gyro_instrument.instruments.base import Simulation, check_period_count, run_span
-# The columns live in pendulum_columns; re-exported here, where they were defined.
-from gyro_instrument.instruments.pendulum_columns import (angle_arguments, compiled_column_kernels,  # noqa: F401
-                                                          compiled_pendulum_columns, pendulum_columns,
-                                                          unwrap_in_place)
-from gyro_instrument.instruments.pendulum_theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
+from gyro_instrument.instruments.pendulum.columns import compiled_pendulum_columns, pendulum_columns
+from gyro_instrument.instruments.pendulum.fast_path import (SwingRun, compiled_swing_grid, linear_point_mass_map,
+                                                            swing_frames)
+from gyro_instrument.instruments.pendulum.theory import (apsidal_rate_from_rest_rad_s, min_deflection_from_rest_rad,
                                                          quarter_period_s)
 
-
-
-def _swing_frames(U, w0sq):
-    """Rotations about the vertical by each state's swing-plane angle (Fradkin tensor), acting on
-    position and velocity: the frame in which a swing's one-period Jacobian varies slowly."""
-    x, y, vx, vy = U[:, 0], U[:, 1], U[:, 3], U[:, 4]
-    txx, tyy, txy = w0sq * x * x + vx * vx, w0sq * y * y + vy * vy, w0sq * x * y + vx * vy
-    a = 0.5 * np.unwrap(np.arctan2(2 * txy, txx - tyy))
-    c, s = np.cos(a), np.sin(a)
-    R = np.zeros((len(a), 6, 6))
-    for b in (0, 3):
-        R[:, b, b], R[:, b, b + 1], R[:, b + 1, b], R[:, b + 1, b + 1] = c, -s, s, c
-        R[:, b + 2, b + 2] = 1.0
-    return R
-
-
-def swing_grid(y0, h, m, n, lin, consts, a, b, ys, fs) -> None:
-    """Kernel: ``n`` swings of ``m`` fixed RK8 steps of size ``h`` (s) one after the other from ``y0``
-    = [r, v] (m, m/s, ENU), on the equations of :meth:`SwingDynamics.rhs_exact` with the point-mass
-    terms given as the affine map ``lin`` (3 × 7: [δr, v, 1], :func:`linear_point_mass_map`).
-
-    The same fixed-step formula as :func:`gyro_instrument.core.parareal.rk8_batch` (DOP853's
-    8th-order tableau ``a`` (12 × 12), ``b`` (12,)), taken serially: this is the sequential fine
-    solution that Newton-parareal converges to. Fills ``ys``, ``fs`` (shape (n, m + 1, 6): states
-    and derivatives at every step of every swing, the last point of a swing repeated as the first
-    of the next; swing-major, so that consecutive samples read nearby memory), the layout of
-    :func:`~gyro_instrument.core.parareal.hermite_samples`.
-    ``consts`` = (g (m/s²), a_b = 2 √(g/l) (1/s), b²/2 = g / (2 l) (1/s²), l² (m²), z_rest = −l (m)).
-    Plain Python on floats and arrays, compiled by :func:`~gyro_instrument.core.jit.compiled`."""
-    g, a_b, half_b2, l2, zr = consts[0], consts[1], consts[2], consts[3], consts[4]
-    # the map's entries as scalars: loads the compiler cannot hoist past the stores to k (aliasing)
-    x0, x1, x2, x3, x4, x5, x6 = lin[0, 0], lin[0, 1], lin[0, 2], lin[0, 3], lin[0, 4], lin[0, 5], lin[0, 6]
-    y0_, y1, y2, y3, y4, y5, y6 = lin[1, 0], lin[1, 1], lin[1, 2], lin[1, 3], lin[1, 4], lin[1, 5], lin[1, 6]
-    z0, z1, z2, z3, z4, z5, z6 = lin[2, 0], lin[2, 1], lin[2, 2], lin[2, 3], lin[2, 4], lin[2, 5], lin[2, 6]
-    k = np.empty((12, 6))
-    y = y0.copy()
-    yt = np.empty(6)
-    for i in range(n * m + 1):
-        j, step = i // m, i % m
-        for s in range(12):
-            if s == 0:
-                yt[:] = y
-            else:
-                for c in range(6):
-                    acc = 0.0
-                    for r in range(s):
-                        acc += a[s, r] * k[r, c]
-                    yt[c] = y[c] + acc * h
-            x, yy, z, vx, vy, vz = yt[0], yt[1], yt[2], yt[3], yt[4], yt[5]
-            dz = z - zr
-            fx = x0 * x + x1 * yy + x2 * dz + x3 * vx + x4 * vy + x5 * vz + x6
-            fy = y0_ * x + y1 * yy + y2 * dz + y3 * vx + y4 * vy + y5 * vz + y6
-            fz = -g + (z0 * x + z1 * yy + z2 * dz + z3 * vx + z4 * vy + z5 * vz + z6)
-            r2 = x * x + yy * yy + z * z
-            rv = x * vx + yy * vy + z * vz
-            lam = (vx * vx + vy * vy + vz * vz + x * fx + yy * fy + z * fz + a_b * rv + half_b2 * (r2 - l2)) / r2
-            k[s, 0], k[s, 1], k[s, 2] = vx, vy, vz
-            k[s, 3], k[s, 4], k[s, 5] = fx - lam * x, fy - lam * yy, fz - lam * z
-            if s == 0:
-                if j < n:
-                    ys[j, step] = y
-                    fs[j, step] = k[0]
-                if step == 0 and j > 0:
-                    ys[j - 1, m] = y
-                    fs[j - 1, m] = k[0]
-                if i == n * m:
-                    return
-        for c in range(6):
-            acc = 0.0
-            for s in range(12):
-                acc += b[s] * k[s, c]
-            y[c] = y[c] + acc * h
-
-
-@functools.cache
-def compiled_swing_grid() -> Callable:
-    """:func:`swing_grid` compiled (:func:`~gyro_instrument.core.jit.compiled`: numba with its cache), or
-    the plain function when compilation is off."""
-    return jit.compiled(swing_grid)
-
-
-def linear_point_mass_map(terms, scale_r, scale_v) -> np.ndarray | None:
-    """The sum of point-mass terms f(δr, v) as a 3 × 7 matrix ``L`` (f = L[:, :6] [δr, v] + L[:, 6], m/s²)
-    when it is affine in the state, else None.
-
-    The constant column is the sum at 0, the others the sum at the unit vectors less it (exact for
-    a linear term: Coriolis −2 Ω × v and the centrifugal gradient −Ω × (Ω × δr) are). The map is
-    accepted when it matches the sum to 1e-12 of its size at two random probes ``u`` on the
-    motion's scales ``scale_r`` (m) and ``scale_v`` (m/s) and at 1000 times them (a quadratic term
-    would differ by its own size there)."""
-    def total(u):
-        out = np.zeros(3)
-        for term in terms:
-            out += np.array(term(*u), dtype=float)
-        return out
-    const = total(np.zeros(6))
-    lin = np.column_stack([total(np.eye(6)[i]) - const for i in range(6)] + [const])
-    rng = np.random.default_rng(27)
-    for mag in (1.0, 1e3):
-        u = mag * rng.standard_normal(6) * np.array([scale_r] * 3 + [scale_v] * 3)
-        want = lin[:, :6] @ u + const
-        size = np.max(np.abs(lin[:, :6])) * np.sum(np.abs(u)) + np.max(np.abs(const))
-        if not np.all(np.isfinite(want)) or np.max(np.abs(total(u) - want)) > 1e-12 * size:
-            return None
-    return lin
-
-
-def _fill_samples(grid, rows, segment_s, t, t0, offset, out) -> None:
-    """Positions and velocities at times ``t`` into ``out`` (6, len(t)), from a window's grid whose first
-    segment starts at ``t0 + offset`` (s; the time taken as (t − t0) − offset):
-    :func:`~gyro_instrument.core.parareal.dense_output` on its table ``rows``, or with ``rows`` None its
-    compiled kernel :func:`~gyro_instrument.core.parareal.hermite_samples` (the same doubles)."""
-    if rows is None:
-        compiled_hermite_samples()(grid[0], grid[1], 3, segment_s, t, t0, offset, out)
-    else:
-        out[:] = dense_output(grid, segment_s, (t - t0) - offset, 3, rows=rows)
 
 
 class SwingDynamics:
@@ -212,7 +91,7 @@ class SwingDynamics:
         bounded by the run's end (:class:`~gyro_instrument.core.integrate.Integration`): the blocks
         concatenate to :meth:`simulate` bit for bit. The parareal path converges windows of
         :attr:`WINDOW_SWINGS` whole swings one after the other, each from the end state of the
-        last (:meth:`_stream_parareal`); the windows depend on the run, not on the blocks, so the
+        last (:class:`~.fast_path.SwingRun`); the windows depend on the run, not on the blocks, so the
         blocks concatenate to :meth:`simulate` bit for bit there too. ``options``: ``progress``
         (callable taking a line of text: parareal passes), ``t_end``.
 
@@ -239,7 +118,7 @@ class SwingDynamics:
         atol_z, atol_vz = max(atol_r, 1e-14 * self.p.length_m), max(atol_v, 1e-14 * self.p.length_m * w0)
         unwrappers = (Unwrapper(), Unwrapper())
         if self.chosen_integrator(t_end - t0)[0] == "parareal":
-            yield from self._stream_parareal(blocks, t0, t_end, r0, v0, amp, options.get("progress"), unwrappers)
+            yield from self._stream_fast(blocks, t0, t_end, r0, v0, amp, options.get("progress"), unwrappers)
             return
         exact = self.restoring_law() is not None          # finite_amplitude: the exact (Cartesian) model
         if exact:
@@ -260,7 +139,7 @@ class SwingDynamics:
             cols = pendulum_columns(pos, vel, w0sq, unwrappers)
             yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel})
 
-    def _first_swing(self, r0, v0):
+    def first_swing(self, r0, v0) -> tuple:
         """Period and apsidal turn of the first swing, from the full equations (DOP853, rtol 1e-12).
 
         The guess is Quet's: T = 4 × the quarter period (42) between θ0 and the minimum deflection
@@ -296,7 +175,7 @@ class SwingDynamics:
         for the first swing; it misses what the horizontal Earth rate and the slow change of the
         ellipse do later (the parareal fast path adds them). Returns (position, velocity, nfev)."""
         r0, v0 = self.initial_state()
-        period, turn, nfev, sol = self._first_swing(r0, v0)
+        period, turn, nfev, sol = self.first_swing(r0, v0)
         t = np.asarray(t, dtype=float) - float(t[0])
         n = np.floor(t / period)
         y = sol(t - n * period)
@@ -316,7 +195,7 @@ class SwingDynamics:
     #: swings 2.6 s and 164 MB, of 512 swings 2.6 s and 145 MB; the times differ within the noise).
     WINDOW_SWINGS = 2048
 
-    def _parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)):
+    def parareal_window(self, y_start, n_seg, period, phi, scale, progress, span=(0.0, 1.0)) -> tuple:
         """Newton-parareal over ``n_seg`` whole swings from ``y_start`` (:func:`~gyro_instrument.core.
         parareal.parareal`); first guess of each swing's start: ``y_start`` turned about the vertical by
         ``phi`` per swing (Quet's comparison pendulum, sec. 2). Returns (grid, info, end state)."""
@@ -329,7 +208,7 @@ class SwingDynamics:
             pred[:, b + 2] = y_start[b + 2]
         w0sq = self.context.gravity_m_s2 / self.p.length_m
         _, grid, info = parareal(self.rhs_exact(), y_start, period, pred, self.p.segment_steps, scale,
-                                 tol=self.p.shooting_tol, align=lambda U: _swing_frames(U, w0sq), progress=progress,
+                                 tol=self.p.shooting_tol, align=lambda U: swing_frames(U, w0sq), progress=progress,
                                  span=span)
         return grid, info, grid[0][-1, :, -1].copy()
 
@@ -342,10 +221,10 @@ class SwingDynamics:
     COMPILED_MIN_SWINGS = 2048
 
     def compiled_swings(self, scale_r, scale_v, swings) -> tuple | None:
-        """(kernel, lin, consts) for :func:`swing_grid` when the fast path runs compiled: a run of at least
+        """(kernel, lin, consts) for :func:`~.fast_path.swing_grid` when the fast path runs compiled: a run of at least
         :attr:`COMPILED_MIN_SWINGS` ``swings``, kernels compiled (:func:`~gyro_instrument.core.jit.enabled`)
         and the active point-mass terms affine (:func:`linear_point_mass_map` on the motion's scales,
-        m and m/s); else None (Newton-parareal on numpy, :meth:`_parareal_window`)."""
+        m and m/s); else None (Newton-parareal on numpy, :meth:`parareal_window`)."""
         if swings < self.COMPILED_MIN_SWINGS or not jit.enabled():
             return None
         lin = linear_point_mass_map(self.point_mass_terms(), scale_r, scale_v)
@@ -355,10 +234,10 @@ class SwingDynamics:
         consts = np.array([g, 2.0 * math.sqrt(g / l), 0.5 * (g / l), l * l, -l])
         return compiled_swing_grid(), lin, consts
 
-    def _serial_window(self, compiled, y_start, n_seg, period, span, buffers=None):
-        """The fast path compiled: :func:`swing_grid` over ``n_seg`` swings from ``y_start``, the
-        sequential fine solution (what :meth:`_parareal_window` converges to, with no shooting error).
-        Returns (grid, info, end state) as :meth:`_parareal_window`; the grid is written into
+    def serial_window(self, compiled, y_start, n_seg, period, span, buffers=None) -> tuple:
+        """The fast path compiled: :func:`~.fast_path.swing_grid` over ``n_seg`` swings from ``y_start``, the
+        sequential fine solution (what :meth:`parareal_window` converges to, with no shooting error).
+        Returns (grid, info, end state) as :meth:`parareal_window`; the grid is written into
         ``buffers`` (the previous window's grid, no longer needed) when they hold ``n_seg`` swings."""
         from gyro_instrument.core.integrate import report
         kernel, lin, consts = compiled
@@ -374,66 +253,16 @@ class SwingDynamics:
         info = {"iterations": 1, "changes": [], "rhs_columns": n_seg * m * dop853.N_STAGES + 1, "compiled": True}
         return (ys, fs), info, ys[-1, -1].copy()
 
-    def _stream_parareal(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers):
-        """The fast path (:mod:`gyro_instrument.core.parareal`), window by window of whole swings.
-
-        Segments are one swing period T, measured on the first swing of the full model
-        (:meth:`_first_swing`: Quet's quarter period (42) with the minimum deflection β of sec. 2 §II
-        as the guess); the first guess of each swing's start is the window's start turned by the
-        apsidal angle per period (sec. 2 §III: the comparison pendulum). Newton-parareal then
-        converges the starts on the full equations (:meth:`rhs_exact`, every listed effect), so the
-        result is the full model to ``shooting_tol``, not the comparison solution. A run of at least
-        :attr:`COMPILED_MIN_SWINGS` swings with numba (:meth:`compiled_swings`) integrates the same grid
-        compiled, swing after swing (:meth:`_serial_window`: the sequential fine solution that Newton
-        converges to, without its shooting error), samples it with the compiled Hermite kernel and forms
-        the columns with :func:`compiled_pendulum_columns` (the same doubles as :func:`pendulum_columns`). The run's
-        ceil((t_end − t0)/T) swings are cut into windows of :attr:`WINDOW_SWINGS`; window w + 1 starts
-        from the fine end state of window w's last swing, so the state carried is the integrated one
-        and the windows do not depend on how the samples are cut into blocks."""
-        c0, w0t = time.process_time(), time.perf_counter()
-        cpu = wall = 0.0                     # this generator's own time (not the consumer's between blocks)
-        period, phi, evals, _ = self._first_swing(r0, v0)
-        n_total = max(1, int(math.ceil((t_end - t0) / period)))
-        per = self.WINDOW_SWINGS
-        scale = np.array([amp] * 3 + [amp * math.sqrt(self.context.gravity_m_s2 / self.p.length_m)] * 3)
+    def _stream_fast(self, blocks, t0, t_end, r0, v0, amp, progress, unwrappers) -> Iterator[Simulation]:
+        """The fast path block by block: one :class:`~.fast_path.SwingRun` advanced over the blocks, the
+        columns formed with :func:`compiled_pendulum_columns` when it runs compiled (the same doubles as
+        :func:`pendulum_columns`)."""
+        run = SwingRun(self, t0, t_end, r0, v0, amp, progress)
         w0sq = self.context.gravity_m_s2 / self.p.length_m
-        compiled = self.compiled_swings(scale[0], scale[3], n_total)
-        window, grid, info, y_next = -1, None, None, np.concatenate([r0, v0])
-        passes = 0
+        columns = pendulum_columns if run.compiled is None else compiled_pendulum_columns
         for t in blocks:
-            if c0 is None:
-                c0, w0t = time.process_time(), time.perf_counter()
-            y = np.empty((6, t.size))
-
-            def win(i):                      # the window of sample i: its swing min(⌊(t − t0) / T⌋, last) // per
-                return min(max(math.floor((t[i] - t0) / period), 0), n_total - 1) // per
-            first, last = win(0), win(t.size - 1)
-            # the blocks increase, so the windows do: each window's samples are a slice (found by bisection)
-            bounds = [bisect.bisect_left(range(t.size), w, key=win) for w in range(first, last + 2)]
-            for w in range(first, last + 1):
-                while window < w:            # every window in turn: the state is carried through all
-                    window += 1
-                    n_seg = min(per, n_total - window * per)
-                    span = (window * per / n_total, (window * per + n_seg) / n_total)   # of the run, for progress
-                    rows = None                      # the previous window's grid is not needed any more
-                    if compiled is None:
-                        grid = None
-                        grid, info, y_next = self._parareal_window(y_next, n_seg, period, phi, scale, progress, span)
-                        rows = hermite_rows(grid, 3, period)  # once per window, for every block in it
-                    else:
-                        grid, info, y_next = self._serial_window(compiled, y_next, n_seg, period, span, grid)
-                    evals += info["rhs_columns"]
-                    passes += info["iterations"]
-                a, b = bounds[w - first], bounds[w - first + 1]
-                if b > a:
-                    _fill_samples(grid, rows, period, t[a:b], t0, (w * per) * period, y[:, a:b])
-            pos, vel = y[:3], y[3:]
-            cols = (pendulum_columns if compiled is None else compiled_pendulum_columns)(pos, vel, w0sq, unwrappers)
-            cpu, wall = cpu + time.process_time() - c0, wall + time.perf_counter() - w0t
-            c0 = None
-            how = "compiled, serial" if compiled is not None else f"{passes} parareal pass{'es' if passes != 1 else ''}"
-            traj = Trajectory(t, y, evals, wall, cpu,
-                              f"fast path RK8 ({self.p.segment_steps} steps/period, {how} in "
-                              f"{window + 1} window{'s' if window else ''})")
-            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": info,
-                                                   "period_s": period, "segments": n_total})
+            traj = run.advance(t)
+            pos, vel = traj.y[:3], traj.y[3:]
+            cols = columns(pos, vel, w0sq, unwrappers)
+            yield Simulation(t, cols, traj, extra={"position_enu": pos, "velocity_enu": vel, "parareal": run.info,
+                                                   "period_s": run.period_s, "segments": run.segments})

@@ -5,7 +5,7 @@
 ``eq_w``, the constants of motion, the model's Earth rate and whether a torque acts): it chooses the
 integrator, sizes the splitting's step from its measured error law, builds the right-hand side and
 the torques, runs the closed form (:meth:`~FreeGyroscopeRuns.analytic_state`), the splitting
-(:func:`~gyro_instrument.core.rigid_body_flow.splitting_run`) or DOP853 (compiled through
+(:class:`~gyro_instrument.core.rigid_body_flow.SplittingRun`) or DOP853 (compiled through
 :mod:`gyro_instrument.core.dop853_jit`, or on Python floats) block by block, and turns states into
 columns. The methods are described in :mod:`gyro_instrument.instruments.free_gyroscope` ("Numerical path").
 """
@@ -18,12 +18,12 @@ import numpy as np
 
 from gyro_instrument.core import jit
 from gyro_instrument.core.angles import NumpyUnwrapper
-from gyro_instrument.core.dop853 import ScalarDOP853
 from gyro_instrument.core.dop853_jit import CompiledRun
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.integrate import Trajectory, integration
 from gyro_instrument.core.quaternion import quat_from_rotvec, quat_mul, quat_to_matrix, rotate_about
-from gyro_instrument.core.rigid_body_flow import compiled_rhs_kernel, rhs_params, splitting_run, to_body
+from gyro_instrument.core.solver import Solver
+from gyro_instrument.core.rigid_body_flow import SplittingRun, compiled_rhs_kernel, rhs_params, to_body
 from gyro_instrument.instruments.base import Simulation, run_span
 
 
@@ -125,7 +125,7 @@ class FreeGyroscopeRuns:
     #: DOP853's absolute tolerance on the state [q, ω (rad/s)] of the numerical path.
     DOP853_ATOL = 1e-14
 
-    def dop853_run(self, span_s, rtol, compiled=True) -> "CompiledRun | ScalarDOP853":
+    def dop853_run(self, span_s, rtol, compiled=True) -> Solver:
         """DOP853 from the release state (τ = 0) over ``span_s`` seconds at ``rtol`` (atol
         :data:`DOP853_ATOL`): Hairer's DOP853 compiled with its dense output
         (:class:`~gyro_instrument.core.dop853_jit.CompiledRun`, run with no end) on the compiled
@@ -252,7 +252,7 @@ class FreeGyroscopeRuns:
     def stream(self, blocks, model=None, rtol=None, **options) -> Iterator[Simulation]:
         """Block by block (:meth:`Instrument.stream`), released at the first sample: the closed form
         at each block's times, or the numerical path's state carried across blocks (the splitting's
-        state and time, :func:`~gyro_instrument.core.rigid_body_flow.splitting_run`, or DOP853's step
+        state and time, :class:`~gyro_instrument.core.rigid_body_flow.SplittingRun`, or DOP853's step
         sequence, :meth:`dop853_run`); the unwrapped angles continue
         across blocks. The blocks concatenate to :meth:`simulate` bit for bit."""
         blocks, t0, t_end = run_span(blocks, options.pop("t_end", None))
@@ -265,31 +265,23 @@ class FreeGyroscopeRuns:
         integrator = options.pop("integrator", None) or self.chosen_integrator()[0]
         unwrappers = (NumpyUnwrapper(), NumpyUnwrapper())
         rtol = self.p.rtol if rtol is None else rtol
-        run = split = None
+        run = None
         wb0 = self.R0.T @ self.motion_constants()["omega0"]
         if model != "analytic" and integrator == "dop853":
             run = self.dop853_run(t_end - t0, rtol, options.pop("compiled", True))
         elif model != "analytic":
             order = options.pop("splitting_order", None) or self.p.splitting_order
             h = options.pop("step_s", None) or self.splitting_step()
-            split = [np.concatenate([self.q0, wb0]), 0.0, h, order, self.torque_array()]
+            run = SplittingRun(np.concatenate([self.q0, wb0]), 0.0, h, order, self.p.inertia_ratio,
+                               self.torque_array())
         for t in blocks:
             tau = t - t0
             w0, c0 = time.perf_counter(), time.process_time()
-            if isinstance(run, CompiledRun):
-                y = run.advance(tau)
-                traj = Trajectory(t, y, run.nfev, run.wall_time_s, run.cpu_time_s, "DOP853 (compiled)",
-                                  dict(run.meta))
-            elif run is not None:
+            if run is not None:
                 traj = run.advance(tau)
-                traj.t = t
-                y = traj.y
-            elif split is not None:
-                state, start, h, order, torque = split
-                y = splitting_run(state, start, tau, h, order, self.p.inertia_ratio, torque)
-                split[1] = float(tau[-1]) if len(tau) else start
-                traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "splitting",
-                                  {"integrator": f"splitting order {order}", "step_s": h})
+                traj.t, y = t, traj.y
+                if isinstance(run, CompiledRun):
+                    traj.method = "DOP853 (compiled)"
             else:
                 y = self.analytic_state(tau)
                 traj = Trajectory(t, y, 0, time.perf_counter() - w0, time.process_time() - c0, "analytic")
