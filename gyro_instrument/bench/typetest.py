@@ -28,6 +28,8 @@ NAMES = ("settling_time", "settle_point_error", "settle_point_rms", "repeatabili
          "dynamic_error", "speed_error_residual", "speed_change", "course_change", "follow_up")
 #: Default latitudes, degrees: the standard's range (0 to 70°) and both hemispheres.
 DEFAULT_LATITUDES = (0.0, 30.0, 45.0, 60.0, 70.0, -45.0, -70.0)
+#: ISO 22090-1 §5.3.3 and A.821(19) §4.1.1: latitudes up to 70° N or S.
+STANDARD_LATITUDE_DEG = 70.0
 #: --latitudes' valid range, degrees (a sea run sails 4° toward the equator; the track must stay within 89°).
 LATITUDE_LIMIT_DEG = 88.0
 
@@ -99,6 +101,9 @@ def row(name, instrument, lat_deg, value, note="", limit=None) -> dict:
     if limit is None:
         limit = c.limit / math.cos(math.radians(lat_deg)) if c.sec else c.limit
     ok = value is not None and math.isfinite(value) and value <= limit
+    if abs(lat_deg) > STANDARD_LATITUDE_DEG:
+        note = "; ".join(filter(None, (note, f"beyond the standard's {STANDARD_LATITUDE_DEG:g} deg: its limit "
+                                            f"extrapolated")))
     return {"instrument": instrument, "clause": c.clause, "name": name, "latitude_deg": lat_deg,
             "value": None if value is None else float(value), "limit": float(limit), "unit": c.unit,
             "pass": bool(ok), "note": note, "imo": c.imo}
