@@ -127,7 +127,8 @@ def compass_names(scene) -> list:
 
 
 def not_settled(names, instrument, lat_deg, why) -> list:
-    """FAIL rows (value null) for the tests ``names`` that need a settled compass."""
+    """FAIL rows (value null) for the tests ``names`` that need a settled compass (``why`` on one line)."""
+    why = " ".join(str(why).split())
     return [row(n, instrument, lat_deg, None, f"not measured: {why}") for n in names]
 
 

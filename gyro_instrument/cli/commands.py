@@ -355,7 +355,7 @@ def typetest_command(args) -> int:
     latitudes = DEFAULT_LATITUDES if args.latitudes is None else parse_latitudes(args.latitudes)
     if args.workers is not None and args.workers < 1:
         raise SceneError("--workers", args.workers, "must be an integer >= 1")
-    overrides = list(args.overrides) + ([f"duration_s={args.duration_s!r}"] if args.duration_s is not None else [])
+    overrides = list(args.overrides)
     api.load_scene(scene_arg(args), overrides)            # a bad scene stops here, before anything runs
     if args.out is not None:
         from gyro_instrument.views.typetest_view import check_pictures

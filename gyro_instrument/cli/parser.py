@@ -336,7 +336,12 @@ def _add_typetest_command(sub):
                                         "are not used) and compare each figure with its limit (sections 5.2-5.3, "
                                         "IMO A.424(XI) and A.821(19) beside them): a table of PASS/FAIL rows "
                                         "(docs/typetest.md)")
-    add_scene_arguments(p)
+    p.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path, with at least "
+                                 "one marine_gyrocompass")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the scene, as for 'simulate' (e.g. --set "
+                        "instruments.sperry.latitude_setting_deg=0); the site's latitude, duration_s and the "
+                        "motion block are not used by the tests")
     p.add_argument("--latitudes", default=None, metavar="LAT,LAT,...",
                    help="comma-separated latitudes in degrees, each in [-88, 88] (default 0,30,45,60,70,-45,-70); "
                         "a negative first one needs the = form: --latitudes=-23.5,61")
