@@ -130,7 +130,7 @@ def overrides(draw, scene):
 @st.composite
 def command_lines(draw, tmp):
     cmd = draw(st.sampled_from(["scenes", "describe", "simulate", "simulate", "estimate", "estimate", "replay",
-                                "recover", "bench", "run", "plan", "noise"]))
+                                "recover", "bench", "run", "plan", "typetest", "noise"]))
     scene = draw(st.sampled_from(SCENES))
     dur = ["--duration-s", draw(st.sampled_from(DURATIONS))]
     out = os.path.join(tmp, draw(st.sampled_from(["o.csv"] * 6 + ["no/such/dir/o.csv", ""])))
@@ -168,6 +168,10 @@ def command_lines(draw, tmp):
                                                  "latitude_arcsec=nan", "x"]), max_size=2))
         argv = ["plan", scene] + draw(overrides(scene)) + [a for t in targets for a in ("--target", t)] + \
             draw(st.sampled_from([[], ["--no-floor"], ["--json", "--no-floor"], ["--noise-factor", "0"]]))
+    elif cmd == "typetest":                       # bad latitudes fail fast; a good run is interrupted at 3 s
+        lats = draw(st.sampled_from(["45", "91", "x", "-23.5,61", "", "nan", "45,,60", "-88"]))
+        argv = ["typetest", scene, "--workers", "1", f"--latitudes={lats}"] + draw(overrides(scene)) + \
+            draw(st.sampled_from([[], ["--json"], ["--out", os.path.join(BAG, "x")]]))
     elif cmd == "bench":                          # fails fast: an output path that cannot be a directory
         argv = ["bench", "--quick", "--out", draw(st.sampled_from(["/proc/nope", os.path.join(BAG, "x"), BAG]))]
     else:                                         # random tokens: argparse's errors

@@ -348,6 +348,33 @@ def sweep_command(args) -> int:
     return 0
 
 
+def typetest_command(args) -> int:
+    """``gyro-instrument typetest``: :func:`gyro_instrument.bench.typetest.run_typetest`, a table or JSON."""
+    from gyro_instrument.bench.typetest import DEFAULT_LATITUDES, parse_latitudes, run_typetest
+    from gyro_instrument.cli.typetest_text import print_typetest
+    latitudes = DEFAULT_LATITUDES if args.latitudes is None else parse_latitudes(args.latitudes)
+    if args.workers is not None and args.workers < 1:
+        raise SceneError("--workers", args.workers, "must be an integer >= 1")
+    overrides = list(args.overrides)
+    api.load_scene(scene_arg(args), overrides)            # a bad scene stops here, before anything runs
+    if args.out is not None:
+        from gyro_instrument.views.typetest_view import check_pictures
+        check_pictures(args.out, args.overwrite)
+    result = run_typetest(scene_arg(args), overrides, latitudes, workers=args.workers,
+                          progress=lambda m: print(m, file=sys.stderr))
+    pictures = []
+    if args.out is not None:
+        from gyro_instrument.views.typetest_view import draw_typetest
+        pictures = draw_typetest(result["curves"], args.out)
+    if args.json:
+        print(json.dumps(to_jsonable({"tests": result["tests"]}), indent=2))
+    else:
+        print_typetest(result["tests"])
+    for path in pictures:
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
 def recover_command(args) -> int:
     """``gyro-instrument recover``: rewrite a damaged or cut bag's intact records (``--out``)."""
     from gyro_instrument.core.scene import EPOCH_NS
@@ -425,6 +452,7 @@ COMMANDS = {
     "bench": bench_command,
     "plan": plan_command,
     "sweep": sweep_command,
+    "typetest": typetest_command,
     "recover": recover_command,
     "plot": plot_command,
     "replay": replay_command,

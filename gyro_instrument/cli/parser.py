@@ -273,6 +273,7 @@ def _add_study_commands(sub):
                         "instead of local processes; needs the 'cluster' extra (pip install "
                         "'gyro_instrument[cluster]')")
     _add_sweep_command(sub)
+    _add_typetest_command(sub)
     p = sub.add_parser("plan", help="how long must I observe? the observation time per configuration each "
                                     "--target needs (Cramer-Rao bound of the scene's sensor model), its dependence "
                                     "on the time, the systematic floor, the effect of the sensor's noise and "
@@ -326,6 +327,35 @@ def _add_sweep_command(sub):
                         "workers for one to join, and for the cluster's versions and every worker's import of "
                         "gyro_instrument (another Dask, Python or gyro_instrument version, or a worker without "
                         "it: exit 2 naming them), before exit 2 (default 10)")
+
+
+def _add_typetest_command(sub):
+    """typetest: a marine gyrocompass through the type tests of ISO 22090-1 (docs/typetest.md)."""
+    p = sub.add_parser("typetest", help="run the type tests of ISO 22090-1 sections 6.2-6.9 on every marine_gyrocompass "
+                                        "of the scene at each latitude (the scene's own latitude and motion block "
+                                        "are not used) and compare each figure with its limit (sections 5.2-5.3, "
+                                        "IMO A.424(XI) and A.821(19) beside them): a table of PASS/FAIL rows "
+                                        "(docs/typetest.md)")
+    p.add_argument("scene", help="shipped scene name (see 'gyro-instrument scenes') or a YAML path, with at least "
+                                 "one marine_gyrocompass")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the scene, as for 'simulate' (e.g. --set "
+                        "instruments.sperry.latitude_setting_deg=0); the site's latitude, duration_s and the "
+                        "motion block are not used by the tests")
+    p.add_argument("--latitudes", default=None, metavar="LAT,LAT,...",
+                   help="comma-separated latitudes in degrees, each in [-88, 88] (default 0,30,45,60,70,-45,-70); "
+                        "a negative first one needs the = form: --latitudes=-23.5,61")
+    p.add_argument("--json", action="store_true",
+                   help='print {"tests": [{"clause", "name", "latitude_deg", "value", "limit", "unit", "pass", '
+                        '"instrument", "note", "imo"}, ...]}, one row per test, latitude and compass; value null '
+                        '(pass false) when the figure cannot be measured, with the reason in note')
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="also draw, per compass, the settling curve (heading error against time, the 0.7-deg band) "
+                        "and the spiral (tilt against azimuth) at every latitude as settling_<compass>.png and "
+                        "spiral_<compass>.png (needs matplotlib); files already there are refused unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace the pictures already in --out")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="processes for the (compass, latitude) pairs (default: the CPU count; 1: in this process)")
 
 
 def _add_recover_command(sub):

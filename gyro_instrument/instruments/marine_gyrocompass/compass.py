@@ -8,7 +8,7 @@ from its speed and latitude inputs (Anschütz and NAVIGAT manuals, gyrocompass_s
 the log through a first-order filter of time constant 20 s by default; a latitude set by hand or
 taken from the track, as from a GNSS input)::
 
-    heading = ψ − α + δ_s(V_f, ψ_r, φ_set) + δ_d(φ_set)
+    heading = ψ − α − e_f + δ_s(V_f, ψ_r, φ_set) + δ_d(φ_set)
 
 δ_s = atan2(−V_f cos ψ_r, R Ω cos φ_set + V_f sin ψ_r) the speed error the equations settle to
 (:func:`.theory.speed_error_rad`; ψ_r the compass's own corrected reading, as a compass knows no
@@ -16,6 +16,14 @@ other heading: three fixed-point steps from ψ − α), with ``speed_correction`
 (latitude) error, with damping in tilt (the Sperry latitude correction: ``latitude_setting_deg``). A
 latitude set wrong by Δφ leaves both corrections' change with latitude as an error
 (:meth:`MarineGyrocompass.predictions` reports it for the site).
+
+e_f is the follow-up's lag (ISO 22090-1 §3.9: the output's delay behind the turning ship). The
+element is free in azimuth; its follow-up (the phantom ring a servo keeps aligned with it, carrying
+the card and the transmitter) is modelled as a first-order system of bandwidth ``follow_up_bandwidth_hz``
+(ω_b = 2π f_b): de_f/dt = ψ' − ω_b e_f, solved exactly over the schedule's pieces of constant turn rate
+(:func:`.theory.follow_up_lag_rad`): a steady turn at rate r lags by r/ω_b. The element's own rate
+α' (≲ Ω, 7e-5 rad/s) is left out of it: a lag α'/ω_b below 1e-3° at any bandwidth over 0.01 Hz. The
+5-Hz default is ASSUMED (no published follow-up bandwidth was found; gyrocompass_sources.md).
 
 Design figures: Schuler tuning 84.4 min at the design latitude (Chalmers, *The gyroscopic compass*,
 ch. X: 40°; bitlit.ru/page/en/t-w-chalmers/the-gyroscopic-compass-a-non-mathematical-treatment/24);
@@ -108,6 +116,9 @@ class MarineGyrocompass(Instrument):
               doc="correct the speed error from the speed log and the latitude input"),
         Param("speed_filter_s", default=20.0, low=0.0, high=1000.0,
               doc="time constant of the speed log's filter, s (NAVIGAT X MK 1: 20 s; 0: none)"),
+        Param("follow_up_bandwidth_hz", default=5.0, low=0.0, high=1000.0, open_low=True,
+              doc="bandwidth of the first-order follow-up carrying the card, Hz (a steady turn at rate r lags by "
+                  "r / (2 pi f)); 5 Hz ASSUMED, no published figure"),
     )
     MECHANICS = frozenset({FRAME_RATE})
     COLUMNS = (
@@ -117,6 +128,7 @@ class MarineGyrocompass(Instrument):
         Column("tilt", "rad", "theta: the north end's tilt above the horizontal"),
         Column("element_roll", "rad", "beta: the element's pendulum swing about its spin axis"),
         Column("correction", "rad", "the speed and latitude corrections the compass adds"),
+        Column("follow_up_lag", "rad", "the follow-up's lag behind the ship's heading (first order)"),
     )
     MEASURED_CHANNELS = ("heading",)
     JOINTS = ("heading",)
@@ -211,15 +223,19 @@ class MarineGyrocompass(Instrument):
         return corr
 
     def simulate(self, t, **options) -> Simulation:
-        """Integrate the element on the ship (:func:`.dynamics.integrate_pieces`) and read the heading."""
+        """Integrate the element on the ship (:func:`.dynamics.integrate_pieces`) and read the heading.
+        Option ``initial_state``: the 7-component state (:data:`.dynamics.STATE`) at ``t[0]`` instead of
+        the switch-on state (a run continued from another, as the type test does)."""
         t = np.asarray(t, dtype=float)
-        traj = integrate_pieces(self.coefficients(), self.motion, self.pieces(), self.initial_state(), t,
-                                rtol=options.get("rtol", 1e-9))
+        y0 = options.get("initial_state")
+        traj = integrate_pieces(self.coefficients(), self.motion, self.pieces(),
+                                self.initial_state() if y0 is None else tuple(y0), t, rtol=options.get("rtol", 1e-9))
         al, tilt, beta, _, _, lat, vf = traj.y
         course = self.motion.track(t)["course"] if self.motion is not None else np.zeros_like(t)
-        raw = course - al
+        lag = th.follow_up_lag_rad(self.pieces(), t, 2 * math.pi * self.p.follow_up_bandwidth_hz)
+        raw = course - al - lag
         corr = self.corrections_rad(raw, lat, vf)
         heading = np.mod(raw + corr, 2 * math.pi)
         err = np.mod(heading - course + math.pi, 2 * math.pi) - math.pi
         return Simulation(t, {"heading": heading, "heading_error": err, "azimuth": al, "tilt": tilt,
-                              "element_roll": beta, "correction": corr}, traj)
+                              "element_roll": beta, "correction": corr, "follow_up_lag": lag}, traj)

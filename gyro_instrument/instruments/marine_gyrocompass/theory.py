@@ -86,3 +86,23 @@ def damping_ratio_tilt(damping_ratio, control_per_s, earth_rate_rad_s, latitude_
     gives ζ = (P_d/H) / (2 ω0)."""
     w0 = 2.0 * math.pi / undamped_period_s(control_per_s, earth_rate_rad_s, latitude_rad)
     return damping_ratio * control_per_s / (2.0 * w0)
+
+
+def follow_up_lag_rad(pieces, t_s, bandwidth_rad_s) -> np.ndarray:
+    """The lag e_f of a first-order follow-up behind the ship's heading at the sorted times ``t_s``, rad
+    (positive behind a turn to starboard): de_f/dt = r − ω_b e_f with the turn rate r constant over
+    each of the schedule's ``pieces`` (:class:`~gyro_instrument.core.motion.Piece`), e_f = 0 at the first
+    piece's start; within a piece e_f = r/ω_b + (e_0 − r/ω_b) exp(−ω_b (t − t_0)) (exact). A steady turn
+    lags by r/ω_b (ISO 22090-1 §3.9's follow-up error, §5.3.4 its limits)."""
+    t = np.asarray(t_s, dtype=float)
+    out = np.zeros_like(t)
+    e0, w = 0.0, float(bandwidth_rad_s)
+    for p in pieces:
+        if not t.size or p.t0 > t[-1]:
+            break
+        m = (t >= p.t0) & (t < p.t1)
+        steady = p.r / w
+        out[m] = steady + (e0 - steady) * np.exp(-w * (t[m] - p.t0))
+        if math.isfinite(p.t1):
+            e0 = steady + (e0 - steady) * math.exp(-w * (p.t1 - p.t0))
+    return out
