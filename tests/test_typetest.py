@@ -7,7 +7,6 @@ at 45 deg (every test, about 3 s). The full default table is under ``slow``."""
 
 import json
 import math
-import pathlib
 import subprocess
 import sys
 
@@ -20,7 +19,7 @@ from gyro_instrument.core.motion import EARTH_RADIUS_M, KNOT_M_S
 from gyro_instrument.instruments.marine_gyrocompass import theory as th
 from gyro_instrument.scenes import load_scene
 
-FAILING = str(pathlib.Path(__file__).resolve().parents[1] / "docs" / "typetest" / "marine_gyrocompass_failing.yaml")
+FAILING = "marine_gyrocompass_failing"
 KEYS = {"clause", "name", "latitude_deg", "value", "limit", "unit", "pass"}
 
 
@@ -80,7 +79,7 @@ def test_the_follow_up_lags_by_the_rate_over_its_bandwidth(cli_rows):
     ("latitude_unset", ("settle_point_error", "settle_point_rms"), {"settle_point_error"}),
 ])
 def test_the_failing_scene_fails_the_named_clause(compass, names, failing):
-    """docs/typetest/marine_gyrocompass_failing.yaml at 45 deg: undamped never settles (§6.2/§5.2, and what needs
+    """marine_gyrocompass_failing at 45 deg: undamped never settles (§6.2/§5.2, and what needs
     a settled compass is not measured); detuned x4 deflects by 4x the speed error's change (§5.3.3); the
     latitude input left at 0 leaves the damping error asin(tan 45/40) = 1.43 deg (§6.3/§5.2: 1.06 deg)."""
     scene = load_scene(FAILING)
