@@ -108,6 +108,9 @@ class MarineGyrocompass(Instrument):
               doc="correct the speed error from the speed log and the latitude input"),
         Param("speed_filter_s", default=20.0, low=0.0, high=1000.0,
               doc="time constant of the speed log's filter, s (NAVIGAT X MK 1: 20 s; 0: none)"),
+        Param("ned_heading", kind="bool", default=False,
+              doc="ROS: also publish the heading in NED on <name>/heading_ned (frame <name>_body_ned); "
+                  "simulate ignores it"),
     )
     MECHANICS = frozenset({FRAME_RATE})
     COLUMNS = (
@@ -121,7 +124,11 @@ class MarineGyrocompass(Instrument):
     MEASURED_CHANNELS = ("heading",)
     JOINTS = ("heading",)
     OBSERVATION = CompassObservation
-    SIMULATOR_NODE = "gyrocompass_sim"
+    #: Its own node (issue 39 item 5): the joint states, its heading as ``sensor_msgs/Imu`` and its state
+    #: on /diagnostics (:mod:`gyro_instrument.ros.nodes.compass`).
+    SIMULATOR_NODE = "marine_gyrocompass"
+    #: It publishes its heading (:func:`gyro_instrument.recording.topics.publications`).
+    SHOWS_HEADING: ClassVar[bool] = True
     #: It sails with the scene's ``motion:`` block (:func:`gyro_instrument.core.motion.check_sailing`).
     FEELS_MOTION: ClassVar[bool] = True
     #: The ship (:class:`~gyro_instrument.core.motion.Motion`), set by ``build_instruments``; None: a pier.
