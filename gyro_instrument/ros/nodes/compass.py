@@ -16,6 +16,7 @@ import math
 
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import DEFAULT_WINDOW_S
+from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.compass_stream import CompassStream
 from gyro_instrument.recording.nmea import NmeaUdpSender
 from gyro_instrument.ros import params as P
@@ -30,9 +31,9 @@ class CompassNode(SimulatorNode):
 
     SPECS = P.COMPASS
 
-    def __init__(self, name=COMPASS_NODE, kinds=("marine_gyrocompass",), **kwargs):
+    def __init__(self, name=COMPASS_NODE, kinds=None, **kwargs):
         self.nmea = None
-        super().__init__(name, kinds, **kwargs)
+        super().__init__(name, simulator_kinds().get(name, ()) if kinds is None else kinds, **kwargs)
 
     def _new_stream(self) -> CompassStream:
         seed = self.get_parameter("seed").value
