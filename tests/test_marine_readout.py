@@ -118,3 +118,16 @@ def test_sigma_is_the_spiral_envelope_over_the_floor():
     env = math.radians(20.0) / math.sqrt(1 - zeta ** 2) * np.exp(-lam * t)
     assert np.allclose(sig, np.hypot(env, floor), rtol=1e-12)
     assert sig[-1] == pytest.approx(floor, rel=1e-6)                 # 12 h: the envelope is gone
+
+
+def test_the_ned_frame_hangs_from_the_body_frame_turned_half_about_x():
+    from scipy.spatial.transform import Rotation
+    from gyro_instrument.recording.frames import instrument_frames
+    insts = build_instruments(load_scene("marine_gyrocompass", ["instruments.sperry.ned_heading=true"]))
+    tfs = {tf.child: tf for tf in instrument_frames(insts, None, "ship1/")}
+    assert "ship1/anschutz_body_ned" not in tfs          # only on request
+    tf = tfs["ship1/sperry_body_ned"]
+    assert tf.parent == "ship1/sperry_body" and tf.translation_m == (0.0, 0.0, 0.0)
+    # REP-103: the _ned twin of a forward-left-up frame is forward-right-down: its axes in the body frame
+    axes = Rotation.from_quat(tf.rotation_xyzw).apply(np.eye(3))
+    assert np.allclose(axes, [[1, 0, 0], [0, -1, 0], [0, 0, -1]], atol=1e-15)
