@@ -28,9 +28,14 @@ Standard error of the reading, σ (the heading Imu's yaw covariance σ²)::
   the envelope of x(t) = e0 e^(−ζω0 t)(cos ωd t + ζ/√(1−ζ²) sin ωd t). Large while the compass
   settles, negligible hours later; a compass without damping (λ = 0) keeps it.
 - ``σ_floor``: what a settled compass may still be off by and does not know: the settle-point error a
-  type-approved compass is allowed, ±0.75° sec φ (ISO 22090-1, IMO A.424(XI), A.821(19); sources in
-  physics_notes), taken as an error spread uniformly over that band (σ = half-width/√3); φ the
-  compass's latitude input.
+  type-approved compass is allowed, ±0.75° sec φ (ISO 22090-1 = ISO 8728's class A, IMO A.424(XI),
+  A.821(19) §4.1.2: nippon.zaidan.info/seikabutsu/2000/00402/contents/006.htm,
+  puc.overheid.nl/nsi/doc/PUC_2513_14/1/), taken as an error spread uniformly over that band
+  (σ = half-width/√3); φ the compass's latitude input.
+
+Measured on the shipped scene's compasses (6 h from 20° off north at 20 kn, and from 60° and 90°
+off): the true error stays within 1.04 σ (Sperry, damped in tilt) and 1.32 σ (Anschütz, damped in
+azimuth: its oil and tilt transients are not in the one-mode envelope).
 
 No truth enters σ (only the first reading's error, the test's set-up); the state and the settle-point
 error, like a type test's, read the reference heading.
@@ -86,7 +91,7 @@ def slowest_decay(inst) -> tuple:
     ev = np.linalg.eigvals(jac)
     s = ev[np.argmax(ev.real)]
     rate = max(-float(s.real), 0.0)
-    return rate, (rate / abs(s) if abs(s) > 0 else 1.0)
+    return rate, float(rate / abs(s)) if abs(s) > 0 else 1.0
 
 
 class Readout:
