@@ -74,6 +74,7 @@ setup(
             "gyrocompass_sim = gyro_instrument.ros.main:gyrocompass_sim",
             "pendulum_sim = gyro_instrument.ros.main:pendulum_sim",
             "top_sim = gyro_instrument.ros.main:top_sim",
+            "marine_gyrocompass = gyro_instrument.ros.main:marine_gyrocompass",
             "estimator = gyro_instrument.ros.main:estimator",
             "recorder = gyro_instrument.ros.main:recorder",
             "player = gyro_instrument.ros.main:player",

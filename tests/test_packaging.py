@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-EXECUTABLES = ("gyrocompass_sim", "pendulum_sim", "top_sim", "estimator", "recorder", "player")
+EXECUTABLES = ("gyrocompass_sim", "pendulum_sim", "top_sim", "marine_gyrocompass", "estimator", "recorder", "player")
 
 
 @pytest.fixture(scope="module")

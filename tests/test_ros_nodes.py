@@ -35,7 +35,7 @@ from gyro_instrument.ros.params import NODE_SPECS
 from gyro_instrument.ros.suite import run_suite
 
 BIN = Path(sys.executable).parent
-EXECUTABLES = ("gyrocompass_sim", "pendulum_sim", "top_sim", "estimator", "recorder", "player")
+EXECUTABLES = ("gyrocompass_sim", "pendulum_sim", "top_sim", "marine_gyrocompass", "estimator", "recorder", "player")
 
 
 def start(exe, *ros_args):

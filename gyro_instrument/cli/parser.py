@@ -412,7 +412,8 @@ def add_run_command(sub) -> None:
                         "localhost to ::1 and 127.0.0.1, gets each sentence at every one, noted once): from the "
                         "first swing (a rate gyro: its first sequence of positions) on at 10 Hz of sim time (every "
                         "sample of a slower instrument) as the estimate converges, and with the final estimate "
-                        "(the estimator's parameter nmea_udp)")
+                        "(the estimator's parameter nmea_udp); a scene with a marine gyrocompass: its node sends the "
+                        "first compass's reading at 10 Hz of sim time (its parameter nmea_udp)")
     p.add_argument("--json", action="store_true", help="print the same JSON object as 'estimate'")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.epilog = ("Everything after --ros-args goes to the nodes (remapping, log levels, -p for parameters "

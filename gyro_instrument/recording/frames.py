@@ -7,7 +7,9 @@ the suspension point: 3 m apart along east in the scene's order, at height l, as
 it) and a horizontal gyroscope's ``<gyro>_scale`` (x along the scale's zero, y left, z up: a yaw
 ψ = π/2 − M, M the mount azimuth the scene declares, as a robot description declares a sensor's
 mounting; the ``<gyro>/heading`` Imu is the *estimate* of the same rotation). A Puiseux body's
-``<body>_body`` moves with the body: it has no static transform.
+``<body>_body`` moves with the body: it has no static transform; nor has a marine gyrocompass's
+``<compass>_body`` (the ship's), but its NED twin ``<compass>_body_ned`` hangs from it (a turn of π
+about x: x forward, y starboard, z down) when the compass publishes its NED heading.
 
 The nodes publish the transforms live as latched ``geometry_msgs/TransformStamped``; the recorder
 writes them to the bag as one ``/tf_static`` ``tf2_msgs/msg/TFMessage`` encoded here
@@ -27,7 +29,8 @@ from datetime import datetime, timezone
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.core.scene import EPOCH_NS
 from gyro_instrument.recording.sim_stream import SPACING_M
-from gyro_instrument.recording.topics import SITE_FRAME, heading_frame, measures_azimuth, publications
+from gyro_instrument.recording.topics import (SITE_FRAME, compass_frame, heading_frame, measures_azimuth,
+                                              publications)
 
 #: relative, as a namespaced robot's tf topics are (``/tf_static`` in the root namespace)
 TF_STATIC = "tf_static"
@@ -113,6 +116,10 @@ def instrument_frames(insts, names=None, prefix="") -> list:
             if p.frame_id.endswith("_pivot"):
                 out.append(StaticTransform(prefixed(prefix, SITE_FRAME), prefixed(prefix, p.frame_id),
                                            (x, 0.0, float(inst.observation().length_m)), (0.0, 0.0, 0.0, 1.0)))
+        for p in publications(name, inst):
+            if p.key == "heading_ned":     # a compass's NED twin of its moving body frame: π about x
+                out.append(StaticTransform(prefixed(prefix, compass_frame(name)), prefixed(prefix, p.frame_id),
+                                           (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)))
         if measures_azimuth(inst):
             mount = math.radians(getattr(inst.p, "mount_azimuth_deg", None) or 0.0)
             out.append(StaticTransform(prefixed(prefix, SITE_FRAME), prefixed(prefix, heading_frame(name)),

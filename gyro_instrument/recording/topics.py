@@ -24,6 +24,7 @@ ESTIMATOR_TOPICS = {
 
 #: the last part of an instrument's topics, ``<instrument>/<suffix>``
 HEADING = "heading"
+HEADING_NED = "heading_ned"
 JOINT_STATES = "joint_states"
 BOB_POSITION = "bob_position"
 CONTACT_POINT = "contact_point"
@@ -107,7 +108,8 @@ def publications(name, inst) -> list:
     The one place outside ``instruments/`` that turns what an instrument declares about its
     published streams into topics: the joints of its observation's layout
     (``OBSERVATION.layout_of``), a bob position when the observation has a bob
-    (``OBSERVATION.SHOWS_BOB_POSITION``), ``SHOWS_AXIS`` and ``SHOWS_CONTACT_POINT``. The simulator
+    (``OBSERVATION.SHOWS_BOB_POSITION``), ``SHOWS_AXIS``, ``SHOWS_CONTACT_POINT`` and ``SHOWS_HEADING`` (a
+    compass's heading Imu, and its NED twin when the instrument's ``ned_heading`` is true; a class lists both). The simulator
     node, the recorder, the suite, ``--help`` and the docs take the topics from here. ``inst`` may be
     the instrument or its class.
     """
@@ -121,6 +123,11 @@ def publications(name, inst) -> list:
         out.append(Publication("bob", topic(BOB_POSITION), POINT_TYPE, frame_id=f"{name}_pivot"))
     if inst.SHOWS_CONTACT_POINT:
         out.append(Publication("contact", topic(CONTACT_POINT), POINT_TYPE, frame_id=f"{name}_body"))
+    if getattr(cls, "SHOWS_HEADING", False):          # a compass's own heading (the marine gyrocompass)
+        out.append(Publication("heading", heading_topic(name), IMU_TYPE, frame_id=compass_frame(name)))
+        if isinstance(inst, type) or getattr(inst.p, "ned_heading", False):
+            out.append(Publication("heading_ned", topic(HEADING_NED), IMU_TYPE,
+                                   frame_id=compass_frame(name, ned=True)))
     visual = []
     if bob:
         visual.append(Publication("plane", topic(SWING_PLANE), JOINT_STATE_TYPE, (f"{name}/swing_plane_azimuth",),
@@ -151,6 +158,13 @@ def heading_topic(instrument) -> str:
 def heading_frame(instrument) -> str:
     """Header frame of an instrument's heading: its body frame, x along the scale's zero, y left, z up."""
     return f"{instrument}_scale"
+
+
+def compass_frame(instrument, ned=False) -> str:
+    """Header frame of a compass's own heading (``SHOWS_HEADING``): the ship's body frame at the
+    compass, ``<instrument>_body`` (x forward, y to port, z up; it moves with the ship), or its NED
+    twin ``<instrument>_body_ned`` (x forward, y starboard, z down: REP-103's ``_ned`` suffix)."""
+    return f"{instrument}_body" + ("_ned" if ned else "")
 
 
 def live_kinds(inst) -> list:

@@ -31,6 +31,12 @@ _TOPICS = {
                  "writes tf_static (tf2_msgs/msg/TFMessage) to the bag: the scene's static frames"],
     "player": ["the bag's topics (relative names, each offered the QoS the bag recorded), clock"],
 }
+#: what a simulator node publishes beyond its instruments' publications
+_MORE = {P.COMPASS_NODE: [
+    "diagnostics (diagnostic_msgs/msg/DiagnosticArray), once per second of sim time: one status per compass, "
+    "named after it, keys state (settling / settled: ISO 22090-1 3.10), settle_point_error_deg, speed_correction, "
+    "latitude_setting_deg, ...",
+    "with nmea_udp: $HEHDT over UDP, the first compass's heading at 10 Hz of sim time"]}
 #: every node run alone publishes its state on /diagnostics (msg_docs/topics.md, "Services and liveness")
 LIVENESS_LINE = "diagnostics (diagnostic_msgs/msg/DiagnosticArray): this node's state every 0.5 s"
 _EXAMPLES = {
@@ -62,7 +68,8 @@ def help_text(name) -> str:
     kinds = simulator_kinds().get(name)
     if kinds is not None:
         summary = f"Simulates the scene's instruments of types {', '.join(kinds)} and publishes what they show."
-        return P.help_text(name, summary, P.NODE_SPECS[name], simulator_topics(kinds) + [LIVENESS_LINE],
+        return P.help_text(name, summary, P.NODE_SPECS[name], simulator_topics(kinds) + _MORE.get(name, [])
+                           + [LIVENESS_LINE],
                            f"{name} --ros-args -p scene:=SCENE -p publish_clock:=true -p real_time_factor:=0")
     return P.help_text(name, _SUMMARIES[name], P.NODE_SPECS[name], _TOPICS[name] + [LIVENESS_LINE], _EXAMPLES[name])
 
@@ -154,8 +161,8 @@ def _run(name, make, args=None, on_exit=None):
 
 
 def _simulator(name, args=None):
-    from gyro_instrument.ros.nodes import SimulatorNode
-    return _run(name, lambda: SimulatorNode(name, simulator_kinds().get(name, ())), args)
+    from gyro_instrument.ros.nodes.compass import simulator_node
+    return _run(name, lambda: simulator_node(name, simulator_kinds().get(name, ())), args)
 
 
 def gyrocompass_sim(args=None) -> int:
@@ -168,6 +175,10 @@ def pendulum_sim(args=None) -> int:
 
 def top_sim(args=None) -> int:
     return _simulator("top_sim", args)
+
+
+def marine_gyrocompass(args=None) -> int:
+    return _simulator("marine_gyrocompass", args)
 
 
 def estimator(args=None) -> int:

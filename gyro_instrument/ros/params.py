@@ -160,6 +160,16 @@ ESTIMATOR = SCENE + FRAMES + [
     Spec("nmea_decimals", "int", 3, "decimals of the $HEHDT heading in degrees (3: 0.001 deg = 3.6 arcsec)", 0, 6,
          read_only=True),
 ]
+#: the ship's gyrocompass's node (issue 39 item 5): a simulator that also sends its heading as NMEA
+COMPASS_NODE = "marine_gyrocompass"
+COMPASS = SIMULATOR + [
+    Spec("nmea_udp", "string", "", "HOST:PORT ([IPV6]:PORT) to send NMEA 0183 $HEHDT true-heading sentences to, one "
+                                   "UDP datagram each: the first marine gyrocompass's heading reading at 10 Hz of sim "
+                                   "time (every sample when it samples slower); empty: none. IANA's port for NMEA "
+                                   "over UDP is 10110", read_only=True),
+    Spec("nmea_decimals", "int", 1, "decimals of the $HEHDT heading in degrees (1: 0.1 deg, as ship's gyrocompasses "
+                                    "send it)", 0, 6, read_only=True),
+]
 #: The recorder's parameters that may be set until its recording starts (a value refused at start-up
 #: corrected at runtime starts it), and are refused once it records (a recording has one scene and
 #: one file).
@@ -203,6 +213,8 @@ class _NodeSpecs(dict):
     (``SIMULATOR_NODE``) has the simulators' parameters too."""
 
     def __missing__(self, name):
+        if name == COMPASS_NODE:
+            return COMPASS
         if name in simulator_kinds():
             return SIMULATOR
         raise KeyError(name)
@@ -210,7 +222,7 @@ class _NodeSpecs(dict):
 
 #: node name -> its parameters: every simulator node the instrument types name (``SIMULATOR_NODE``),
 #: then the estimator, the recorder and the player
-NODE_SPECS = _NodeSpecs({**{sim: SIMULATOR for sim in simulator_kinds()},
+NODE_SPECS = _NodeSpecs({**{sim: SIMULATOR for sim in simulator_kinds()}, COMPASS_NODE: COMPASS,
                          "estimator": ESTIMATOR, "recorder": RECORDER, "player": PLAYER})
 #: parameters rclpy (or the RMW) declares itself; not reported as unknown
 BUILTIN = ("use_sim_time", "start_type_description_service")

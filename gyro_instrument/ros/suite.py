@@ -35,7 +35,8 @@ from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
 from gyro_instrument.ros.log_dir import ensure_log_dir
-from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode, SimulatorNode
+from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode
+from gyro_instrument.ros.nodes.compass import COMPASS_NODE, simulator_node
 
 
 #: samples per batch at full speed; at most the publishers' KEEP_LAST depth (1000), so a writer
@@ -175,7 +176,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, options=RunOptions
     ns = {"namespace": opts.namespace} if opts.namespace else {}
     nodes = []
     try:
-        sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, opts.window_s)
+        sims = _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, opts.window_s, opts.nmea_udp)
         _wall_epoch(sims, opts.real_time_factor)
         est = EstimatorNode(context=context, **ns, parameter_overrides=_params(
             scene, overrides, duration_s, **({"nmea_udp": str(opts.nmea_udp)} if opts.nmea_udp else {})))
@@ -247,8 +248,9 @@ def _wall_epoch(sims, real_time_factor) -> None:
         s.set_stamp_offset(off)
 
 
-def _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s):
-    """Create one :class:`SimulatorNode` per simulator kind the scene's instruments need (in
+def _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, window_s, nmea_udp=""):
+    """Create one :class:`~gyro_instrument.ros.nodes.SimulatorNode` (the marine gyrocompass's
+    :class:`~gyro_instrument.ros.nodes.compass.CompassNode`, with ``nmea_udp``) per simulator kind the scene's instruments need (in
     :func:`~gyro_instrument.instruments.simulator_kinds` order), publishing on RELIABLE depth-1000
     topics and stepped by the suite (``real_time_factor`` 0); the first one publishes the clock.
     Returns the list of nodes."""
@@ -257,10 +259,11 @@ def _make_simulators(scene, scene_obj, overrides, duration_s, context, ns, windo
     types = {spec[0] for spec in scene_obj.instruments.values()}
     for name, kinds in simulator_kinds().items():
         if types & set(kinds):
-            sims.append(SimulatorNode(name, kinds, context=context, pub_qos=RELIABLE_1000, **ns,
-                                      parameter_overrides=_params(
+            more = {"nmea_udp": nmea_udp} if nmea_udp and name == COMPASS_NODE else {}
+            sims.append(simulator_node(name, kinds, context=context, pub_qos=RELIABLE_1000, **ns,
+                                       parameter_overrides=_params(
                 scene, overrides, duration_s, real_time_factor=0.0, publish_clock=owner,
-                window_s=float(window_s))))
+                window_s=float(window_s), **more)))
             owner = False
     return sims
 
@@ -360,12 +363,16 @@ def _finalize(est, rec, ex, timeout_s):
     """Compute the estimate (:meth:`EstimatorNode.finalize`); with a recorder, wait (up to
     ``timeout_s``) for the estimator's result messages to reach it, then close the bag with the
     estimate in its metadata. Returns the estimate (None when there is none)."""
+    # what the recorder and the estimator had before: /diagnostics also carries a marine compass's statuses
+    base = dict(rec.counts) if rec else {}
+    sent0 = dict(est.sent)
     result = est.finalize()
     if rec:
         # every message the estimator published on a recorded topic (the estimate's, the headings at
         # the reversal points, or the refusal's one /diagnostics status)
         def delivered():
-            return all(rec.counts[t] >= n for t, n in est.sent.items() if t in rec.counts)
+            return all(rec.counts[t] >= n and rec.counts[t] - base.get(t, 0) >= n - sent0.get(t, 0)
+                       for t, n in est.sent.items() if t in rec.counts)
         t_wait = time.monotonic() + timeout_s
         while not delivered() and time.monotonic() < t_wait:
             ex.spin_once(timeout_sec=0.001)

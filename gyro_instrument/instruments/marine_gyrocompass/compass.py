@@ -119,6 +119,9 @@ class MarineGyrocompass(Instrument):
         Param("follow_up_bandwidth_hz", default=5.0, low=0.0, high=1000.0, open_low=True,
               doc="bandwidth of the first-order follow-up carrying the card, Hz (a steady turn at rate r lags by "
                   "r / (2 pi f)); 5 Hz ASSUMED, no published figure"),
+        Param("ned_heading", kind="bool", default=False,
+              doc="ROS: also publish the heading in NED on <name>/heading_ned (frame <name>_body_ned); "
+                  "simulate ignores it"),
     )
     MECHANICS = frozenset({FRAME_RATE})
     COLUMNS = (
@@ -133,7 +136,11 @@ class MarineGyrocompass(Instrument):
     MEASURED_CHANNELS = ("heading",)
     JOINTS = ("heading",)
     OBSERVATION = CompassObservation
-    SIMULATOR_NODE = "gyrocompass_sim"
+    #: Its own node (issue 39 item 5): the joint states, its heading as ``sensor_msgs/Imu`` and its state
+    #: on /diagnostics (:mod:`gyro_instrument.ros.nodes.compass`).
+    SIMULATOR_NODE = "marine_gyrocompass"
+    #: It publishes its heading (:func:`gyro_instrument.recording.topics.publications`).
+    SHOWS_HEADING: ClassVar[bool] = True
     #: It sails with the scene's ``motion:`` block (:func:`gyro_instrument.core.motion.check_sailing`).
     FEELS_MOTION: ClassVar[bool] = True
     #: The ship (:class:`~gyro_instrument.core.motion.Motion`), set by ``build_instruments``; None: a pier.
