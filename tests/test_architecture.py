@@ -1,4 +1,4 @@
-"""Dependencies point one way (shared/architecture.md), checked by reading imports with ast:
+"""Dependencies point one way (docs/architecture.md), checked by reading imports with ast:
 
 core ← effects ← instruments/scenes ← sensors, estimators ← recording, bench, views ← cli ← ros
 

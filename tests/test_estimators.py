@@ -1,8 +1,10 @@
 """Estimator: periods at the Cramér–Rao bound, Quet's items 8-9, the Foucault rate with its
 ellipse correction, calibrated uncertainty, and null-with-reason at the singular latitudes.
 
-Reference: physics_notes 'Estimation' — var(ω̂) ≥ 24σ²/(A²Δt²N(N²−1)); the quet_paris example
-(μ=2, ρ0=2π·100 rad/s, σ=1e-4 rad, A=0.1 rad, 20 Hz, 10 min) allows ≈0.14″ of latitude.
+Reference: the Cramér–Rao bound of a sinusoid's frequency, var(ω̂) ≥ 24σ²/(A²Δt²N(N²−1)) (Rife &
+Boorstyn 1974, IEEE Trans. Inf. Theory 20(5) 591; estimators/period.py); through Quet 1853 sec. 4 §1
+item 9 the quet_paris example (μ=2, ρ0=2π·100 rad/s, σ=1e-4 rad, A=0.1 rad, 20 Hz, 10 min) allows
+≈0.14″ of latitude (this project's propagation, estimators/bounds.py).
 """
 
 import json
@@ -39,7 +41,8 @@ def test_fit_reaches_cramer_rao_bound_on_clean_sinusoids():
 
 
 def test_counting_is_orders_of_magnitude_worse_than_the_fit():
-    # Quet's counting resolves one swing in N (physics_notes: ~1e4 times worse than the fit).
+    # Quet's counting resolves one swing in N (~1e4 times worse than the fit: measured here, and in
+    # the plan example of docs/cli.md, 1.73e4x).
     rng = np.random.default_rng(2)
     t = np.arange(0, 600, 0.05)
     y = sine(t, w=math.pi / 12.8) + rng.normal(0, 1e-4, t.size)

@@ -1,9 +1,9 @@
 """Two-ring gimbal gyroscope (Quet 1853, sec. 4 §III–V) against the paper.
 
-Site: Paris, γ = 48.85° (Quet's k = 1/18212 s⁻¹ implies 48.847°; physics_notes.md), sidereal
+Site: Paris, γ = 48.85° (Quet's k = 1/18212 s⁻¹, sec. 2 §II, implies 48.847°; tests/test_site.py), sidereal
 n. Rotor A = 1e-3 kg m², μ = 2, ρ0 = 2π·100 rad/s (unless stated); rings A1 = 2.5e-4,
 A2 = 5e-4 kg m² (thin: C1 = 2A1, C2 = 2A2). Every "T" is ONE SWING, half the period
-(π/√K; sec. 4 §IV "durée des oscillations", physics_notes "What a printed 'T' means").
+(π/√K; sec. 4 §IV "durée des oscillations", as sec. 4 §1 eq. (9); docs/physics.md, Sources).
 
 Periods are measured by a least-squares sine fit over six swings of a 0.01° oscillation:
 the fit itself is exact for a sinusoid, the finite-amplitude lengthening a²/16 = 1.9e-9

@@ -26,9 +26,9 @@ EXACT = ("earth_rotation", "centrifugal", "finite_amplitude")
 @pytest.mark.parametrize("lat", [90.0, -90.0, 89.99, -89.99, 0.01, -0.01, 0.0])
 def test_singular_latitudes_simulate_and_estimate(capsys, lat):
     # Why hard: at ±90° the horizontal plane is perpendicular to Earth's axis (no torque, item 4)
-    # and cos γ is 0; at ±89.99° the swing lasts ~790 s (physics_notes); near 0° cos γ is flat and
-    # the pendulum barely precesses. Every output is finite JSON (no NaN/inf), the latitude is
-    # within 3σ of the truth or null with a reason, and the invariant (3) holds to 1e-12.
+    # and cos γ is 0; at ±89.99° the swing lasts ~790 s (Quet's sec. 4 §1 eq. (9), sin ω = cos γ);
+    # near 0° cos γ is flat and the pendulum barely precesses. Every output is finite JSON (no
+    # NaN/inf), the latitude is within 3σ of the truth or null with a reason, and the invariant (3) holds to 1e-12.
     scene = load_scene("quet_paris", [f"site.latitude_deg={lat}", "duration_s=300"])
     truth = simulate_truth(scene)
     for name, sim in truth[2].items():

@@ -3,7 +3,7 @@
 A damped swing u(t) = c + A e^(−δt) cos(ωt) in white noise σ, the fit's prior frequency 1 % off
 (the predicted swing duration is a calibration, not the truth). References: the generating c, ω,
 δ (independent of the code); the undamped relation ω_u² = ω_d² + δ² (a damped oscillator,
-physics_notes "North finding"). Tolerances: the centre within 4 σ of its own reported σ (a 4-σ
+derived in estimators/north/fit.py's undamped_omega). Tolerances: the centre within 4 σ of its own reported σ (a 4-σ
 miss has probability 6e-5 per look); σ non-increasing to 5 % (a refit moves its linearisation
 point) and below a tenth of the first after ten swings.
 """

@@ -1,7 +1,7 @@
 """Foucault and compound pendulums against Quet 1853 sec. 2 and sec. 3 §VI.
 
-References: eq. (42) and its exact elliptic form (physics_notes: 'test against the elliptic
-integral, not the series'); §II minimum deflection β = √(l/g) k sin θ0 cos(θ0/2); §III apsides'
+References: eq. (42) and its exact elliptic form (the test uses the elliptic integral, not the
+series, which is 59 % off at 179°); §II minimum deflection β = √(l/g) k sin θ0 cos(θ0/2); §III apsides'
 rate k(1 − (3/8) θ0 sin θ0 cos(θ0/2)); Binet's turning ellipse for the linear model; eq. (57)
 equivalent length λ = A/(Ml).
 """
@@ -35,8 +35,8 @@ def apsides(sim):
 def test_apsides_turn_at_quet_rate_from_rest(build):
     # §III: released from rest at θ0 the apsides turn at k(1 − (3/8) θ0 sin θ0 cos(θ0/2)).
     # 67 m, θ0 = 2°, one hour, released east-west (the k' = n cos γ residual, ~2e-5 relative
-    # for a north-south swing, is ~0 east-west: physics_notes). Tolerance: 2 % of the
-    # correction term (4.6e-4 k), as the issue asks.
+    # for a north-south swing, is ~0 east-west: this project's estimate
+    # of eq. (22)'s k' terms). Tolerance: 2 % of the correction term (4.6e-4 k), as the issue asks.
     p = build(SphericalPendulum, PARIS, FULL, length_m=67.0, initial_deflection_deg=2.0, initial_azimuth_deg=90.0,
               rtol=1e-12)
     t = np.arange(0.0, 3600.0, 0.02)
@@ -51,7 +51,7 @@ def test_apsides_turn_at_quet_rate_from_rest(build):
 
 def test_precession_sense_and_rate_foucault(build):
     # Sec. 2: the plane turns with the Sun's apparent motion (compass azimuth increasing in the
-    # north, decreasing in the south) at k = n sin γ: 11.326 °/h at Paris (physics_notes).
+    # north, decreasing in the south) at k = n sin γ: 11.326 °/h at Paris (computed from the sidereal n).
     assert math.degrees(PARIS.k_vertical_rad_s) * 3600 == pytest.approx(11.326, abs=1e-3)
     t = np.arange(0.0, 900.0, 0.05)
     for lat, sign in ((48.85, 1.0), (-33.9, -1.0)):
@@ -62,7 +62,7 @@ def test_precession_sense_and_rate_foucault(build):
 
 def test_minimum_deflection_from_rest_section2(build):
     # §II: β = √(l/g) k sin θ0 cos(θ0/2) (the printed 0.028 mm uses √(g/l) for √(l/g):
-    # physics_notes; the right value for 67 m at 2° is 0.33 mm of bob travel). Measured as the
+    # computed here; the right value for 67 m at 2° is 0.33 mm of bob travel). Measured as the
     # minimum of the deflection over a few swings; tolerance 2 %: β carries O(θ0²) corrections
     # of relative size ~1e-3 and the sampled minimum is refined by a parabola.
     p = build(SphericalPendulum, PARIS, FULL, length_m=67.0, initial_deflection_deg=2.0, rtol=1e-12)
@@ -166,7 +166,7 @@ def test_quarter_period_matches_elliptic_form_eq42(build, amp_deg):
     # √(l/g) K(sin²(α/2)) for a plane swing. Measured as half the interval between successive
     # apsides, with n = 0 effects off so the swing is exactly planar. Tolerance 1e-6: apsides
     # are refined by a parabola on 1e-3 s samples; the series form is checked to be far off at
-    # large amplitude (physics_notes: 59 % at 179°).
+    # large amplitude (59 % at 179°, computed from K(sin²(α/2))).
     site = Site.from_degrees(48.85)
     l = 10.0
     p = build(SphericalPendulum, site, ("finite_amplitude",), length_m=l, initial_deflection_deg=amp_deg, rtol=1e-12)

@@ -2,8 +2,8 @@
 
 Reference values: eq. (9) T = π/√(μ n ρ0 sin ω) (one swing = half a period), the pendulum
 finite-amplitude factor (2/π) K(sin(a/2)) (item 6), item 9 (T_m/T_h)² = cos γ, the exact
-rigid-body equation derived in the module docstring (physics_notes: dropped term of relative
-size n/(μρ0)).
+rigid-body equation derived in the module docstring (the term Quet drops has relative size
+n/(μρ0)).
 """
 
 import math
@@ -57,7 +57,7 @@ def test_item9_ratio_of_squares_is_cos_latitude(build):
 
 def test_eq10_recovers_earth_rate_and_item8_misprint_does_not(build):
     # Eq. (10) n = π²/(μ ρ0 T² sin ω) with the small-amplitude T. Item 8 prints π/(μρ0T²),
-    # which is off by a factor π (physics_notes: a misprint).
+    # which is off by a factor π (a misprint: docs/physics.md).
     g = build(PlaneGyroscope, Site.from_degrees(48.85), EXACT, plane="meridian", initial_angle_deg=0.01)
     T_meas, _ = measured_swing(g)
     T_small = T_meas / finite_amplitude_factor(math.radians(0.01))
@@ -69,7 +69,7 @@ def test_eq10_recovers_earth_rate_and_item8_misprint_does_not(build):
 
 
 def test_exact_and_reduced_differ_by_order_n_over_mu_rho(build):
-    # physics_notes: the exact equation adds −(μ−1) n² sin²ω cos u sin u to Quet's (2), so the
+    # The exact equation (the module docstring's) adds −(μ−1) n² sin²ω cos u sin u to Quet's (2), so the
     # restoring constant grows by the factor 1 + (μ−1) n sin ω / (μ ρ0) and T shrinks by half of
     # that: ΔT/T = −(μ−1) n sin ω / (2 μ ρ0) = −2.9e-8 here. Use a slow spin (ρ0 = 0.05 rad/s,
     # n/(μρ0) ≈ 7e-4) so the difference stands far above the 1e-10 measurement error;

@@ -45,7 +45,7 @@ def executor(pool):
 
 
 def test_fisher_of_the_fit_meets_the_pure_sinusoid_bound_in_the_long_record():
-    # physics_notes: var(ω̂) ≥ 24σ²/(A²Δt²N(N²−1)) for the four-parameter fit of a long record. The
+    # Rife & Boorstyn 1974: var(ω̂) ≥ 24σ²/(A²Δt²N(N²−1)) for the four-parameter fit of a long record. The
     # exact Fisher of the fit's model (offset, 1st and 3rd harmonic, ω) differs from it only by the
     # terms Σ τ² cos 2ωt / Σ τ² ~ 1/(4π cycles) (the sinusoid's phase within a finite record), so the
     # ratio must be within 0.5/cycles of 1 (23 cycles: 2 %; 234: 2e-3).
@@ -99,7 +99,8 @@ def test_plan_sensitivity_and_counting_follow_their_laws():
     for row in e["sensitivity"]["rows"]:
         if row["observation_s"] > 2 * d["min_record_s"]:
             assert row["observation_s"] == pytest.approx(row["law_observation_s"], rel=0.03), row
-    # counting: σ ∝ 1/T; against the fit the cost ratio is ~1e4 (physics_notes) and grows as the target tightens
+    # counting: σ ∝ 1/T; against the fit the cost ratio is ~1e4 (docs/cli.md's example) and grows as the
+    # target tightens
     c = e["counting"]
     assert c["observation_s"] / T > 1e4 and c["exceeds_a_year"] == (c["observation_s"] > 365.25 * 86400)
 

@@ -1,4 +1,4 @@
-"""Earth site, Quet's axes and ENU (physics_notes 'Frames and constants', REP-103/145)."""
+"""Earth site, Quet's axes (Quet 1853 sec. 1 §IV eq. (17)) and ENU (REP-103, REP-145)."""
 
 import math
 
@@ -12,7 +12,7 @@ from gyro_instrument.core.site import (QUET_RATE_RAD_S, SIDEREAL_RATE_RAD_S, Sit
 
 def test_sidereal_rate_is_two_pi_over_stellar_day():
     # IERS/GRS80 n = 7.292115e-5 rad/s is 2π over the stellar day 86164.0989 s (agreement to
-    # the 8 printed digits, 2e-8). physics_notes' 86164.0905 s is the mean sidereal day (relative to
+    # the 8 printed digits, 2e-8). The often-quoted 86164.0905 s is the mean sidereal day (relative to
     # the precessing equinox) and would give a value 1.2e-7 higher: shown, not used.
     assert SIDEREAL_RATE_RAD_S == pytest.approx(2 * math.pi / 86164.0989, rel=3e-8)
     assert 2 * math.pi / 86164.0905 / SIDEREAL_RATE_RAD_S - 1 == pytest.approx(1.18e-7, abs=0.02e-7)
@@ -20,7 +20,7 @@ def test_sidereal_rate_is_two_pi_over_stellar_day():
 
 def test_quet_paris_k_implies_latitude():
     # Quet: n = 1/13713 s⁻¹ and k = 0.0000549081 = 1/18212 at Paris imply γ = 48.847°
-    # (physics_notes); 1e-3 degree matches the printed digits.
+    # (sec. 2 §II, the Paris example); 1e-3 degree matches the printed digits.
     k = 0.0000549081
     assert math.degrees(math.asin(k / QUET_RATE_RAD_S)) == pytest.approx(48.847, abs=1e-3)
 

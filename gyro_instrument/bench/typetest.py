@@ -5,7 +5,7 @@ latitude (:mod:`.typetest_runs`) and every figure is compared with its limit (§
 test, latitude and compass. The scene's site latitude and ``motion:`` block are not used: every test
 builds its own pier, table or ship at the latitude tested.
 
-Sources of the limits (gyrocompass_sources.md §1a; stored public texts): ISO 22090-1 (the Japanese
+Sources of the limits (the standards' public texts): ISO 22090-1 (the Japanese
 translation site nippon.zaidan.info/seikabutsu/2000/00393/contents/003.htm, 005.htm §5.3, 006.htm §6.4–6.6);
 IMO A.821(19) (high-speed craft; puc.overheid.nl/nsi/doc/PUC_2513_14/1/ §4.1–4.2); IMO A.424(XI)'s class
 figures as summarised in nippon.zaidan.info/seikabutsu/2000/00402/contents/006.htm (its own text was

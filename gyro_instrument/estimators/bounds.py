@@ -21,7 +21,8 @@ conventions:
   amplitude a, the amplitude too (its error falls only as T^-1/2, so it matters for long records)
   — plus the mean spin's δρ/ρ = σ_spin/(ρ √(N(1 − p))).
   Beyond :data:`EXACT_SAMPLES` samples the closed form for a pure sinusoid,
-  var(ω̂) = 24 σ² / (A² Δt² N (N² − 1)) and var(â) = 2σ²/N (physics_notes, 'Estimation'), is used
+  var(ω̂) = 24 σ² / (A² Δt² N (N² − 1)) and var(â) = 2σ²/N (Rife & Boorstyn 1974, IEEE Trans. Inf.
+  Theory 20(5) 591; :mod:`.period`), is used
   when the record holds at least :data:`CLOSED_FORM_CYCLES` cycles (the offset and the third
   harmonic then change the bound by < 1e-3 relative); with fewer cycles the exact sums are taken
   on a thinned grid (≥ 2000 points per cycle, information scaled by the stride).

@@ -241,7 +241,7 @@ def plane_estimate(obs, rec, corrections, checks, sensor) -> tuple:
 
 def ellipse_scale(measured_rad_s, correction_rad_s, sigma_rad_s) -> "EllipseScale":
     """How the ellipse (Airy) correction hangs on the position scale (an :class:`.entries.EllipseScale`): it is (3/8) a b / l² times the
-    swing frequency (physics_notes "Real Foucault pendulums"), a and b the axes read from the track, so
+    swing frequency (Airy 1851, Mem. R. Astron. Soc. 20; Quet 1853 sec. 2 §III–IV), a and b the axes read from the track, so
     a scale s times the assumed one multiplies it by s² while the measured turn is unchanged. ``matters``:
     halving the scale would move k by more than its σ (3/4 of the correction > σ) — then positions given
     in pixels (or a wrong length) decide the answer, and ``k_at_half_scale_rad_s`` /

@@ -207,8 +207,9 @@ class HorizontalSwing(_ScaleReading, SwingRate):
 
     def rate_from_swing(self, T0, rho_mean) -> tuple:
         """:meth:`SwingRate.rate_from_swing` with the tape taken out of K: linearised about the equilibrium
-        c, ω² = (π/T0)² = K cos(c − N) + k_B, and there K sin(c − N) = k_B (Z − c) (physics_notes "North
-        finding"), so K = √((ω² − k_B)² + k_B² (Z − c)²) (Z − c from :meth:`rate_terms`; the scale's
+        c, ω² = (π/T0)² = K cos(c − N) + k_B, and there K sin(c − N) = k_B (Z − c) (the equilibrium of
+        :meth:`.plane_gyroscope.instrument.PlaneGyroscope.equilibrium_reading_rad`), so
+        K = √((ω² − k_B)² + k_B² (Z − c)²) (Z − c from :meth:`rate_terms`; the scale's
         zero far from north holds the centre degrees off the meridian, where ω² − k_B alone is
         K cos(c − N): 0.3 % low at a mount of 45°, 0.13° of latitude)."""
         if not self.has_tape():

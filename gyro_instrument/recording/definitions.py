@@ -3,7 +3,8 @@
 rosbag2 (jazzy, ``local_message_definition_source.cpp``) writes one schema per type: the root
 ``.msg`` text, then — depth-first through each type's dependencies in sorted order, each once —
 a newline, a line of 80 ``=``, a line ``MSG: pkg/Type`` (the name as the field writes it) and that
-type's text. (ros_notes says breadth-first with ``pkg/msg/Type``; the source says otherwise.) The type hash (``RIHS01_…``) comes from the
+type's text. (An early working note of this project said breadth-first with ``pkg/msg/Type``; the source
+says otherwise, and ``tests/test_recording.py`` holds the order.) The type hash (``RIHS01_…``) comes from the
 ``.json`` type description installed beside the ``.msg``. No rclpy needed.
 """
 

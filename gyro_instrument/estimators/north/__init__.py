@@ -21,7 +21,7 @@ Sign convention (the scale of issue 24, item 1)
 * Without a torsion tape the swing centre c *is* u_N. With a tape (torsion constant D_B, tape zero
   Z on the scale) the centre is pulled toward Z: c = (D_K u_N + D_B Z)/(D_K + D_B), hence
   u_N = c + (D_B/D_K)(c − Z) near north; exactly, tan(c − u_N) = x (Z − c) with x the period ratio
-  (:func:`tape_north`, :func:`tape_corrected`; physics_notes "North finding").
+  (:func:`tape_north`, :func:`tape_corrected`, where it is derived).
 
 The package: the methods (:mod:`.base`, :mod:`.means`, :mod:`.timing`, :mod:`.fit`, all run on one
 record by :func:`.methods.north_methods`); the estimate's ``north`` block (:mod:`.estimate`: the exact
@@ -56,8 +56,9 @@ removes it with the ratio from the rotor-on and rotor-off periods (:func:`tape_r
 relation N = c − atan(x (Z − c)) (:func:`tape_north`). The estimate's headline is none of these but
 :mod:`.exact`: the swing equation itself fitted to both records (no linearisation, no bias for any
 mount azimuth); :mod:`.joint` starts it and states each reduction's bias in the set-up at hand. Sources:
-Quet 1853 sec. 4 §1; physics_notes.md "North finding" (the Schuler mean is Freiberger
-Forschungshefte A 303 eq. 31b; the transit form N = N' + c·a·Δt with c ≈ π/(2T)); the GAK1
+Quet 1853 sec. 4 §1 (items 1 and 6, eqs. 2, 8–10); the Schuler mean is Freiberger
+Forschungshefte A 303 eq. 31b; the transit form N = N' + c·a·Δt with c ≈ π/(2T) is derived in
+:func:`.timing.transit_offset`; the GAK1
 procedures are described in K. P. Logan, *Determining an azimuth with a gyrotheodolite*, U.S. Army
 ETL-0440 (1986). The derivations used here are written out in each function's docstring.
 """

@@ -3,7 +3,7 @@
 Part of :mod:`gyro_instrument.estimators.north` (its docstring states the sign convention). In the
 clockwise scale reading w (= −angle, azimuth less the mount) a horizontal gyroscope on a torsion
 tape obeys (Quet 1853 sec. 4 §1 eq. 2 with the sine law and its O(n²) term, the tape of
-physics_notes "North finding", viscous pivot damping)::
+:func:`.fit.tape_north`, viscous pivot damping)::
 
     ẅ = −(K e^(−λτ) + b cos e) s(e) − k_B (w − Z − Ż τ) − d ẇ,    e = w − N,   τ = t − t_ref
 

@@ -121,7 +121,7 @@ def tape_ratio(period_on_s, period_off_s, period_on_sigma_s=0.0, period_off_sigm
 
     The suspended body (moment of inertia J about the vertical) swings rotor-off on the tape alone,
     a torsion pendulum ω_off² = D_B/J, and rotor-on under tape and directing torque,
-    ω_on² = (D_K + D_B)/J (D_K = C ρ0 n cos γ, Quet sec. 4 §1 eq. 8 times A; physics_notes). Hence
+    ω_on² = (D_K + D_B)/J (D_K = C ρ0 n cos γ, Quet sec. 4 §1 eq. 8 times A; the tape derived here). Hence
     D_B/D_K = ω_off²/(ω_on² − ω_off²) = T_on²/(T_off² − T_on²) (note: T_on²/T_off² alone is
     D_B/(D_K + D_B), not D_B/D_K). Either both full periods or both half periods.
 
@@ -147,8 +147,8 @@ def undamped_omega(omega_rad_s, damping_per_s=0.0, omega_sigma=0.0, damping_sigm
     """The undamped angular frequency of a damped swing, (ω_u, σ): ω_u² = ω_d² + δ² (rad/s).
 
     A damped oscillator ü + 2δu̇ + ω_u² u = 0 swings at ω_d = √(ω_u² − δ²) with amplitude ∝ e^(−δt).
-    The tape relation needs the stiffnesses ω_u² (physics_notes "North finding": T_on²/(T_off² − T_on²)
-    from *damped* periods carries −δ²/(D_K/A)).
+    The tape relation needs the stiffnesses ω_u² (:func:`tape_ratio`: T_on²/(T_off² − T_on²) from
+    *damped* periods carries −δ²/(D_K/A), as ω_d² = ω_u² − δ² above shows: derived here).
     """
     w, d = float(omega_rad_s), float(damping_per_s)
     wu = math.sqrt(w * w + d * d)
@@ -159,7 +159,7 @@ def tape_north(centre_rad, tape_zero_rad, ratio) -> float:
     """The north reading N from the swing's equilibrium c under tape torsion, exact (rad).
 
     The horizontal gyroscope's restoring torque is D_K sin(u − N) + D_B (u − Z) (Quet 1853 sec. 4 §1
-    eq. 2 with the sine law, times A, plus the tape; physics_notes "North finding"). At the
+    eq. 2 with the sine law, times A, plus the tape; the rest derived here). At the
     equilibrium c: D_K sin(c − N) = D_B (Z − c). Linearised about c the rotor-on swing has
     ω_on² = (D_K cos(c − N) + D_B)/A and the rotor-off swing ω_off² = D_B/A, so the measured ratio
     x = ω_off²/(ω_on² − ω_off²) = T_on²/(T_off² − T_on²) (:func:`tape_ratio`, undamped small-swing

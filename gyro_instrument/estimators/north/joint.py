@@ -185,7 +185,7 @@ def linear_law_error_rad(centre_rad, zero_rad, ratio) -> float:
 def equilibrium(north_rad, directing_per_s2, tape_per_s2=0.0, zero_rad=0.0) -> float:
     """The swing's equilibrium c on the scale (rad): K sin(c − N) = k_B (Z − c), by Newton from N
     (the restoring torque K sin(u − N) + k_B (u − Z) is monotonic while K cos(c − N) + k_B > 0, which
-    a tape weaker than the directing torque guarantees near the root; physics_notes "North finding").
+    a tape weaker than the directing torque guarantees near the root; derived in :func:`.fit.tape_north`).
     """
     N, K, kb, Z = float(north_rad), float(directing_per_s2), float(tape_per_s2), float(zero_rad)
     c = N

@@ -24,7 +24,7 @@ def transit_offset(dt_s, period_s, amplitude_rad) -> float:
 
         x0 = A sin(π Δt / (2T))   (exact for a sine),   x0 ≈ (π/(2T)) · A · Δt   (small offsets),
 
-    the surveyors' N = N' + c·a·Δt with c = π/(2T) (physics_notes "North finding"; in the field c is
+    the surveyors' N = N' + c·a·Δt with c = π/(2T) (derived here from the sine; in the field c is
     calibrated). T is the full period (two of Quet's swings). An equivalent form with the half
     difference Δt/2 reads x0 = A sin(π (Δt/2) / T).
     """

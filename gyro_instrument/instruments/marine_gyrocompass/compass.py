@@ -4,7 +4,9 @@ Instrument type ``marine_gyrocompass``. Its equations are those of :mod:`.dynami
 element on a ship, :mod:`gyro_instrument.core.motion`; without a ``motion:`` block on a fixed pier), its
 closed forms those of :mod:`.theory`. What it reads: the ship's heading ψ (its course) less the north
 end's azimuth α (the card's north is where the axis points), plus the corrections a real compass makes
-from its speed and latitude inputs (Anschütz and NAVIGAT manuals, gyrocompass_sources.md: a speed from
+from its speed and latitude inputs (Raytheon Anschütz *Standard 22* operator manual,
+easymanua.ls/raytheon-anschutz/standard-22-nx/manual?p=23; Northrop Grumman Sperry Marine *NAVIGAT X MK 1*
+manual, manualshive.com/ru/manual/northrop-grumman/navigat-x-mk-1/1708755?page=79: a speed from
 the log through a first-order filter of time constant 20 s by default; a latitude set by hand or
 taken from the track, as from a GNSS input)::
 
@@ -23,7 +25,8 @@ the card and the transmitter) is modelled as a first-order system of bandwidth `
 (ω_b = 2π f_b): de_f/dt = ψ' − ω_b e_f, solved exactly over the schedule's pieces of constant turn rate
 (:func:`.theory.follow_up_lag_rad`): a steady turn at rate r lags by r/ω_b. The element's own rate
 α' (≲ Ω, 7e-5 rad/s) is left out of it: a lag α'/ω_b below 1e-3° at any bandwidth over 0.01 Hz. The
-5-Hz default is ASSUMED (no published follow-up bandwidth was found; gyrocompass_sources.md).
+5-Hz default is ASSUMED (no follow-up bandwidth was found in the public manuals searched; ISO 22090-1
+§5.3.4 limits only the follow-up error).
 
 Design figures: Schuler tuning 84.4 min at the design latitude (Chalmers, *The gyroscopic compass*,
 ch. X: 40°; bitlit.ru/page/en/t-w-chalmers/the-gyroscopic-compass-a-non-mathematical-treatment/24);

@@ -13,8 +13,8 @@ Tech. Rep. 100, 1983, §4.2; the term Ω cos φ θ is the one the usual form dro
 Ω cos φ H/P_c is Ω² cos² φ R/g ≈ 3.5e-3). Hence:
 
 - the undamped period T(φ) = 2π / √((P_c/H + Ω cos φ) Ω cos φ): :func:`undamped_period_s`; the
-  common form 2π √(H/(P_c Ω cos φ)) is its first order (physics_notes.md, "A pendulous
-  (Schuler-tuned) gyrocompass"); T ∝ 1/√(cos φ): longer toward the poles, ≈ 84.4 min √(cos φ_d/cos φ);
+  common form 2π √(H/(P_c Ω cos φ)) is its first order in Ω cos φ H/P_c (derived here, from the
+  equation above); T ∝ 1/√(cos φ): longer toward the poles, ≈ 84.4 min √(cos φ_d/cos φ);
 - Schuler tuning: a north–south speed change ΔV_N deflects the axis by −(P_c/(g H)) ΔV_N (the
   ballistic deflection) while the settle point moves by −ΔV_N/(R Ω cos φ) (the speed error's change);
   they are equal, and the change dead-beat, when P_c/H = g/(R Ω cos φ_d) at the design latitude
@@ -30,7 +30,8 @@ Tech. Rep. 100, 1983, §4.2; the term Ω cos φ θ is the one the usual form dro
   compass reading high. δ = atan(V cos C / (R Ω cos φ + V sin C)) is the form the equations give
   exactly (for damping in azimuth; with damping in tilt its latitude error adds): :func:`speed_error_rad`.
   Teaching uses δ ≈ V cos C / (R Ω cos φ) (R Ω ≈ 900 kn); manufacturers' tables follow sin δ = V cos C /
-  (R Ω cos φ) (gyrocompass_sources.md, NAVIGAT X MK 1 table).
+  (R Ω cos φ) (C. Plath/Sperry *NAVIGAT X MK 1 Mod 10* manual, p. A-07, speed-error table;
+  manualshive.com/en/manual/c-plath/navigat-x-mk-1-mod-10/3123976?page=73).
 
 All functions take SI units and radians.
 """

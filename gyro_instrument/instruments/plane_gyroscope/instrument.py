@@ -32,8 +32,8 @@ record cannot give it) reads u itself. A torsion tape (the ``torsion`` effects, 
 ``tape_drift``) adds −(D_B/A)(u + M − Z(t)) to u'': the swing centre is pulled toward the tape zero Z,
 to the equilibrium D_K sin(c − N) = D_B (Z − c) (:meth:`PlaneGyroscope.equilibrium_reading_rad`; near
 north the linear c = (D_K N + D_B Z)/(D_K + D_B)) with D_K = C ρ0 n cos γ, and a rotor-off swing (the same gyroscope
-with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (physics_notes
-"North finding").
+with ``spin_rate_rad_s: 0``, named by ``rotor_off_instrument``) gives Z and D_B (D_K: Quet 1853
+sec. 4 §1 eq. 9, sin ω = cos γ; the tape: this package's model, derived in ``estimators/north/fit.py``).
 """
 
 import math
@@ -223,7 +223,7 @@ class PlaneGyroscope(Instrument):
         (a ρ + b cos u) s(u) + k_B (u + M − Z0 − Ż t) = 0, u = c − M, by Newton from north (u = 0).
         Without a tape c = M, true north's reading. With the rotor off: the tape zero (a torsion
         pendulum). The north estimate's :func:`~gyro_instrument.estimators.north.joint.equilibrium`
-        solves the same equation, in the clockwise reading (physics_notes "North finding")."""
+        solves the same equation, in the clockwise reading (derived in ``north.fit.tape_north``)."""
         c = self.reduced_coefficients()
         K, b, kb = c["a"] * self.p.spin_rate_rad_s * math.exp(-c["decay"] * t_s), c["b"], c["kb"]
         M = self.mount_reading_rad
