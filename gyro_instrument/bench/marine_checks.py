@@ -196,7 +196,7 @@ def speed_table_check(entries=None, earth_rate=SIDEREAL_RATE_RAD_S) -> dict:
     return out
 
 
-def table_compass(lat_deg, damping="azimuth"):
+def table_compass(lat_deg, damping="azimuth") -> "MarineGyrocompass":
     """A marine gyrocompass (the instrument's defaults: pendulous, Schuler-tuned at 40°) on a pier at
     ``lat_deg`` with ``damping``; its equations are what :func:`equations_settle_rad` sets to rest."""
     from gyro_instrument.scenes import build_instruments, scene_from_data
