@@ -104,3 +104,27 @@ def test_settling_and_period_against_the_published_figures():
     assert 1.0 < f["oscillations_to_settle"] < 4.0
     # ζ from one period's decrement against theory.damping_ratio_tilt (first order in ζ: 2 %)
     assert f["damping_ratio"] == pytest.approx(f["damping_ratio_closed_form"], rel=0.02)
+
+
+@pytest.mark.parametrize("lat0_deg,printed_end_deg", [(81.0, 2.3), (84.0, 3.6)])
+def test_a_simulated_compass_sailing_north_reads_the_next_latitudes_value(lat0_deg, printed_end_deg):
+    """Simulated (the instrument's simulate: DOP853 on its equations), damped in azimuth, uncorrected: at rest
+    on a ship reading 000° at 81° (84°), 5 kn for 12 h, it arrives at 82° (85°) still reading within 0.6° of
+    000°, and its speed error follows the equations' rest at the latitude of the moment to the lag of a
+    damped oscillator behind a ramp (rate · 2ζ/ω0 with ζ ≤ 1: the rest moves 0.3-0.6° in 12 h, the period is
+    3-4 h) and reads the table's value there (000°, 5 kn: 2.3 at 82°, 3.6 at 85°) to the rounding, the radii
+    and the Coriolis sway. 0.1 s of CPU each."""
+    r = mc.sailing_check(lat0_deg, 5.0, hours=12.0)
+    assert r["latitude_deg"] == pytest.approx(lat0_deg + 1.0, abs=0.01)
+    assert abs(r["heading_deg"]) < 0.6          # cos 0.6° = 1 - 5e-5: the 000° entry still applies
+    gc = mc.table_compass(lat0_deg)
+    start = -math.degrees(mc.equations_settle_rad(gc, math.radians(lat0_deg),
+                                                  -mc.emulated_error_rad(math.radians(lat0_deg), 0.0, 5 * KNOT_M_S),
+                                                  5 * KNOT_M_S))
+    from gyro_instrument.instruments.marine_gyrocompass import theory as th
+    period_h = th.undamped_period_s(gc.control_per_s(), SIDEREAL_RATE_RAD_S, math.radians(r["latitude_deg"])) / 3600
+    lag = abs(r["rest_deg"] - start) / 12.0 * 2 * period_h / (2 * math.pi)
+    assert abs(r["error_deg"] - r["rest_deg"]) <= lag
+    lo, hi = mc.r_omega_interval_m_s(ENTRIES)
+    allow = (mc.ROUNDING_DEG + mc.radius_allowance_deg(printed_end_deg, hi, MODEL_RO) + r["coriolis_bound_deg"] + lag)
+    assert abs(r["error_deg"] - printed_end_deg) <= allow
