@@ -51,7 +51,7 @@ def test_bench_scheduler_runs_the_sweeps_on_dask(bench):
 def test_bench_quick_writes_studies_and_plots(bench):
     for name in ("work_precision.csv", "targets.csv", "observation_time.csv", "systematic_floors.csv", "site_sweep.csv",
                  "effect_cost.csv", "summary.md", "spin_work_precision.csv", "compiled_reference.csv",
-                 "sweep_throughput.csv",
+                 "sweep_throughput.csv", "marine_checks.csv",
                  "work_precision.png", "observation_time.png", "effect_cost.png"):
         assert (bench / name).exists(), name
     assert "Regenerate: `gyro-instrument bench --quick" in (bench / "summary.md").read_text()

@@ -40,5 +40,9 @@ need it) and a markdown summary (``summary.md``) to ``--out``. Studies:
 * ``--scene SCENE`` (with ``--set``): only the observation-time study (floors with the scene's own
   effects) and the planner's accuracy on that scene (:func:`.studies.run_scene_bench`), with
   targets whose plans land near the scene's ``duration_s``;
+* ``marine_checks.csv`` (:mod:`.marine_checks`) — the marine gyrocompass against published figures
+  (issue 39 item 4): the NAVIGAT X MK 1 speed-error table against four laws, the emulated compass's
+  settle point and its equations at rest; its period, settling and decrement against Slater, Chalmers and
+  the NAVIGAT manual;
 * ``*.png`` (:mod:`.plots`) — work-precision, observation-time and effect-cost diagrams.
 """

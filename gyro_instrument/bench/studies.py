@@ -315,12 +315,15 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     # each measurement kind's own study (its optional ``bench``: the rate gyro's north in the same time)
     from gyro_instrument.instruments.measurement import load as load_kinds
     kind_lines = [line for k in load_kinds().values() for line in k.bench(out_dir, quick, _write, progress, north[1])]
+    from gyro_instrument.bench.marine_checks import HEADER as MARINE_HEADER, marine_check_lines, marine_check_rows
+    marine = marine_check_rows(quick, progress)      # issue 39 item 4: the compass against published figures
+    _write(os.path.join(out_dir, "marine_checks.csv"), MARINE_HEADER, marine)
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
     from gyro_instrument.bench.north_study import north_lines
     lines = (_bench_summary_lines(out_dir, quick, tg, st, wp, rt, gwp, ot, floors, pl, ss, ec) + cost_lines
-             + north_lines(*north) + kind_lines)
+             + north_lines(*north) + kind_lines + marine_check_lines(marine))
     return _write_summary(out_dir, lines, pngs)
 
 
