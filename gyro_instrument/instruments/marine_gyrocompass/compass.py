@@ -223,11 +223,7 @@ class MarineGyrocompass(Instrument):
         lat = latitude if p.latitude_setting_deg == TRACK else np.full_like(latitude, math.radians(p.latitude_setting_deg))
         corr = np.zeros_like(latitude)
         if p.speed_correction:
-            speed = np.zeros_like(latitude)
-            for _ in range(3):          # at its own corrected heading: a fixed point, dδ/dψ ≤ V/(R Ω cos φ) ≪ 1
-                psi = reading_raw + speed
-                speed = th.speed_error_rad(log_speed * np.sin(psi), log_speed * np.cos(psi), Om, lat)
-            corr = corr + speed
+            corr = corr + th.speed_correction_rad(reading_raw, log_speed, Om, lat)   # from its own reading
         if p.damping == "tilt":
             corr = corr + np.arcsin(np.clip(p.damping_torque_ratio * np.tan(lat), -1.0, 1.0))
         return corr

@@ -75,6 +75,19 @@ def speed_error_rad(v_east_m_s, v_north_m_s, earth_rate_rad_s, latitude_rad) -> 
                       + np.asarray(v_east_m_s))
 
 
+def speed_correction_rad(reading_rad, speed_m_s, earth_rate_rad_s, latitude_rad) -> "float | np.ndarray":
+    """The speed correction from the compass's own uncorrected reading G, rad (added to the reading):
+    −asin(V cos G / (R Ω cos φ)). Exactly the settle point of :func:`speed_error_rad`: with C the
+    course and δ that settle point, G = C − δ, and the law of sines in the triangle of the horizontal
+    Earth rate R Ω cos φ and the ship's velocity V gives sin(−δ) = V cos G / (R Ω cos φ) (the form of
+    the NAVIGAT X MK 1 manual's table, p. A-07; docs/marine_checks.md). No iteration: a fixed point in
+    the corrected heading converges slowly near the poles (0.9° off at 81°, 50 kn after 3 steps).
+    Clipped to ±90° where V cos G exceeds R Ω cos φ (no settle point). Works on floats or arrays."""
+    import numpy as np
+    ratio = np.asarray(speed_m_s) * np.cos(reading_rad) / (EARTH_RADIUS_M * earth_rate_rad_s * np.cos(latitude_rad))
+    return -np.arcsin(np.clip(ratio, -1.0, 1.0))
+
+
 def settled_tilt_rad(control_per_s, earth_rate_rad_s, latitude_rad) -> float:
     """The settled tilt of the north end, θ = Ω sin φ / (P_c/H + Ω cos φ), rad (up in north
     latitudes): the tilt at which the control torque's precession follows the vertical component
