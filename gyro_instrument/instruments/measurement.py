@@ -150,6 +150,12 @@ class MeasurementKind:
         this kind's name): lines without newlines, or None: the command's own printing."""
         return None
 
+    def warm(self) -> None:
+        """Load what :meth:`estimate` needs that costs time on first use in a new process (imports,
+        compiled kernels from numba's cache): the estimator node calls it at start-up, before it
+        subscribes, so that the estimate that follows the last sample does not pay for it (issue 37
+        item 6). Nothing by default."""
+
     def bench(self, out_dir, quick, write, progress, reference_rows) -> list:
         """Its own study for ``gyro-instrument bench``: CSVs written into ``out_dir`` through the bench's
         atomic ``write(path, header, rows)``, ``progress(text)`` as it goes, fewer seeds with ``quick``;

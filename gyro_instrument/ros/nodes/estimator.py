@@ -30,7 +30,8 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.estimators.heading import HEADING_RATE_HZ, imu_fields
 from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
-from gyro_instrument.recording.cdr import imu_layout
+from gyro_instrument.instruments.measurement import declared_kinds, kind
+from gyro_instrument.recording.cdr import imu_layout, restamped
 from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
@@ -71,7 +72,7 @@ class EstimatorNode(SceneNode):
         self._due = {}          # (tracker's instrument, record's) -> samples at which it is next given the tail
         self.live = {}          # tracker's instrument -> its last live value ((azimuth rad, σ rad) for a heading)
         self._heading_t = {}    # tracker's instrument -> stamp (ns) of its last heading published
-        self._imu_cols = {}     # tracker's instrument -> (value, its Imu fields as encoder columns)
+        self._imu_cols = {}     # tracker's instrument -> (value, its Imu encoded at stamp 0)
         self.nmea = None
         if self.load():
             self.prepare()
@@ -86,6 +87,7 @@ class EstimatorNode(SceneNode):
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
         buffered = self._buffered()
+        self._warm(buffered)
         for name, inst in self.insts.items():
             if name in buffered:
                 # records_from_joints reads the measured channels and the last joint's velocity
@@ -103,6 +105,17 @@ class EstimatorNode(SceneNode):
         period = float(self.get_parameter("publish_period_s").value)
         if period > 0:
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
+
+    def _warm(self, buffered) -> None:
+        """Each measurement kind of the kept instruments loads what its estimate pays for on first use
+        (``MeasurementKind.warm``: numba and the compiled kernels of the exact north fit), before the
+        subscriptions exist, so before the simulators start: the estimate then follows the last
+        sample without 1-2 s of imports (issue 37 item 6)."""
+        names = {k for n in buffered for k in declared_kinds(self.insts[n].observation())}
+        for name in sorted(names):
+            found = kind(name)
+            if found is not None:
+                found.warm()
 
     def _prepare_heading(self) -> None:
         """A live tracker per instrument whose kind publishes live (``LIVE``), and the NMEA sender."""
@@ -160,15 +173,16 @@ class EstimatorNode(SceneNode):
                     self._publish_heading(owner, t, *self.live[owner])
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
-        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized; the fields computed once per
-        estimate, only the stamp changes between two) and a ``$HEHDT`` for the first gyroscope."""
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized once per live value; only the
+        stamp changes between two, :func:`~gyro_instrument.recording.cdr.restamped`) and a ``$HEHDT`` for the first gyroscope."""
         key = (name, azimuth_rad, sigma_rad)
         if self._imu_cols.get(name, (None,))[0] != key:
             f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
-            self._imu_cols[name] = (key, [np.array([v]) for v in (
+            cols = [np.array([v]) for v in (
                 f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
-                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])
-        data = self.imu_layouts[name].encode([t_ns], *self._imu_cols[name][1])[0]
+                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)]
+            self._imu_cols[name] = (key, self.imu_layouts[name].encode([0], *cols)[0])
+        data = restamped(self._imu_cols[name][1], t_ns)
         self._send(heading_topic(name), data)
         if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
             try:
