@@ -87,7 +87,6 @@ class EstimatorNode(SceneNode):
         self.expected = sample_count(self.scene)
         self.last_stamp_ns = round((self.expected - 1) * (1e9 / self.scene.sample_rate_hz))
         buffered = self._buffered()
-        self._warm(buffered)
         for name, inst in self.insts.items():
             if name in buffered:
                 # records_from_joints reads the measured channels and the last joint's velocity
@@ -108,14 +107,23 @@ class EstimatorNode(SceneNode):
 
     def _warm(self, buffered) -> None:
         """Each measurement kind of the kept instruments loads what its estimate pays for on first use
-        (``MeasurementKind.warm``: numba and the compiled kernels of the exact north fit), before the
-        subscriptions exist, so before the simulators start: the estimate then follows the last
-        sample without 1-2 s of imports (issue 37 item 6)."""
-        names = {k for n in buffered for k in declared_kinds(self.insts[n].observation())}
-        for name in sorted(names):
-            found = kind(name)
-            if found is not None:
-                found.warm()
+        (``MeasurementKind.warm``: numba and the compiled kernels of the exact north fit) when the node
+        is run alone, in a thread of its own: it overlaps discovery and the stream, the node spins at
+        once (a cold numba cache compiles for many seconds: the simulators' ``wait_timeout_s`` must not
+        pass meanwhile), and :meth:`estimate` waits for it. The estimate
+        then follows the last sample without 1-2 s of imports (issue 37 item 6)."""
+        import threading
+        found = [kind(k) for k in sorted({k for n in buffered for k in declared_kinds(self.insts[n].observation())})]
+
+        def warm():
+            for k in found:
+                if k is not None:
+                    try:
+                        k.warm()
+                    except Exception as exc:      # the estimate pays for it then, and says what fails
+                        self.get_logger().warning(f"{k.name}: warm-up failed ({exc.__class__.__name__}: {exc})")
+        self._warming = threading.Thread(target=warm, name="estimator_warm", daemon=True)
+        self._warming.start()
 
     def _prepare_heading(self) -> None:
         """A live tracker per instrument whose kind publishes live (``LIVE``), and the NMEA sender."""
@@ -253,6 +261,8 @@ class EstimatorNode(SceneNode):
         ``input_timeout_s`` of wall time after the clock reached the last sample or after the input
         (joint samples and clock) went silent; a new run (the clock going back) starts a new estimate."""
         self.standalone = True
+        if self.scene is not None:
+            self._warm(self._buffered())
         self.create_timer(0.5, self._control, clock=STEADY)
         self.start_diagnostics()
         if self.scene is not None:
@@ -397,6 +407,8 @@ class EstimatorNode(SceneNode):
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
+        if getattr(self, "_warming", None) is not None:
+            self._warming.join()
         off = self.stamp_offset_ns or 0                  # stamps -> sim time from release (stamp_epoch)
         samples = {n: (lambda t, p, v: (t - off, p, v))(*b.arrays()) for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
