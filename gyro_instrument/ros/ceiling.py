@@ -5,8 +5,7 @@ Two processes, as two nodes run with ``ros2 run``: one publishes ``count`` pre-s
 ``sensor_msgs/JointState`` messages of the size the simulators publish (three joints, raw CDR,
 RELIABLE / KEEP_ALL, waiting and retrying when the writer's history is full, as the simulators do),
 the other takes them with the cheapest loop rclpy offers (one wait, then every waiting message
-taken with ``take_message`` while they keep coming,
-:func:`gyro_instrument.ros.nodes.base.drain_busy`, as every node run alone takes them). The rate is messages
+taken with ``take_message``, :func:`gyro_instrument.ros.nodes.base.drain`). The rate is messages
 received per second of wall time from the first to the last received. Run on loopback
 (``tools/loopback``): ``python -m gyro_instrument.ros.ceiling [count]`` prints one JSON line.
 """
@@ -54,7 +53,7 @@ def _subscriber(count) -> dict:
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from gyro_instrument.ros import messages as m
-    from gyro_instrument.ros.nodes.base import RELIABLE_ALL, drain_busy
+    from gyro_instrument.ros.nodes.base import RELIABLE_ALL, drain
     rclpy.init()
     node = rclpy.create_node("ceiling_subscriber")
     got = [0, None, None]
@@ -71,7 +70,7 @@ def _subscriber(count) -> dict:
     deadline = time.monotonic() + 120
     while got[0] < count and time.monotonic() < deadline:
         ex.spin_once(timeout_sec=0.1)
-        drain_busy(node)
+        drain(node)
     cpu = time.process_time() - cpu0
     node.destroy_node()
     rclpy.shutdown()

@@ -106,14 +106,14 @@ _STOP = _Stop()
 def _spin(node, on_exit=None):
     """Spin until SIGINT/SIGTERM (or an external shutdown) or until the node says it is ``done``;
     then the node's exit work, the node destroyed, and only then the context shut down."""
-    from gyro_instrument.ros.nodes.base import drain, drain_busy
+    from gyro_instrument.ros.nodes.base import drain
     ex = SingleThreadedExecutor(context=node.context)
     ex.add_node(node)
     try:
         while node.context.ok() and not _STOP.asked and not getattr(node, "done", False):
             try:
                 ex.spin_once(timeout_sec=0.1)
-                drain_busy(node)
+                drain(node)
             except RCLError:
                 if node.context.ok():
                     raise

@@ -84,8 +84,6 @@ OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.E
 def list_or(value) -> object:
     """An array parameter's value as a list (rclpy may hold an ``array.array``), others as they are."""
     return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
-
-
 def drain(node, limit=20000) -> int:
     """Take the messages waiting on ``node``'s raw subscriptions and run their callbacks, topic by
     topic, without the executor: one wait of the executor then serves a whole queue, not one
@@ -110,24 +108,6 @@ def drain(node, limit=20000) -> int:
     if hook is not None:
         hook()
     return n
-
-
-#: wall time (s) a node goes on taking messages while they keep coming before it waits in the executor again
-BUSY_S = 0.05
-
-
-def drain_busy(node, budget_s=BUSY_S) -> int:
-    """:func:`drain` again as long as it takes something, for at most ``budget_s`` of wall time: a
-    steady stream is served by take loops, not by one executor wait (its wait set rebuilt in Python,
-    ~15 % of the recorder's CPU in the separate-node route, issue 37 item 6) per few messages; timers
-    and services wait at most ``budget_s`` longer. Returns how many were taken."""
-    import time
-    total = n = drain(node)
-    end = time.monotonic() + budget_s
-    while n and time.monotonic() < end:
-        n = drain(node)
-        total += n
-    return total
 
 
 def acked(node, pubs) -> None:
