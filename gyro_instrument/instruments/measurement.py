@@ -31,7 +31,9 @@ it from the same record, each under its own key of the entry). A kind is one
 Optional: ``TARGET`` and :meth:`~MeasurementKind.plan` (a block kind's ``plan --target``: by default
 the shortest T whose ``bound`` meets it), :meth:`~MeasurementKind.plan_entry` (its entry in the plan),
 :meth:`~MeasurementKind.plan_lines` (the text of a target its own ``plan`` made, with its ``kind``),
-:meth:`~MeasurementKind.bench` (its own study in ``gyro-instrument bench``).
+:meth:`~MeasurementKind.bench` (its own study in ``gyro-instrument bench``),
+:meth:`~MeasurementKind.warm` (what its estimate loads on first use, loaded when the estimator node
+starts).
 
 :func:`register_kind` refuses a kind that leaves any of them out (one line naming what is missing);
 registering an instrument (:func:`gyro_instrument.instruments.register`) refuses one whose
