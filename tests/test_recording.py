@@ -120,3 +120,33 @@ def test_file_on_disk_is_a_complete_mcap_after_every_commit(tmp_path):
     assert recording_state(str(path)) == "complete"
     with AnyReader([path]) as r:
         assert sum(1 for _ in r.messages()) == 600
+
+
+def test_bulk_message_records_equal_mcap_own_add_message(tmp_path):
+    """BagWriter adds a chunk's messages in one write (mcap_io._add_messages, issue 37 item 6): the
+    file is byte for byte the one mcap's own Writer.add_message, called per message, writes (the same
+    records, message indexes, chunk index and statistics); messages out of log-time order, several
+    chunks, two channels, empty and odd-sized payloads, so offsets and time ranges are exercised."""
+    from gyro_instrument.recording import mcap_io
+
+    def own(w, rows):
+        for t, _, cid, pt, data, seq in rows:
+            w.add_message(channel_id=cid, log_time=t, publish_time=pt, data=data, sequence=seq)
+
+    files = []
+    for name, add in (("bulk.mcap", mcap_io._add_messages), ("own.mcap", own)):
+        old = mcap_io._add_messages
+        mcap_io._add_messages = add
+        try:
+            path = tmp_path / name
+            w = BagWriter(str(path), chunk_size=300, commit_period_s=1e9)
+            w.add_topic("/a", "std_msgs/msg/Float64")
+            w.add_topic("/b", "std_msgs/msg/Float64")
+            for i in range(40):
+                w.write("/a" if i % 3 else "/b", 10_000 - 37 * i if i % 7 == 0 else 1000 + i, bytes(i % 5) * 7)
+            w.close(state="complete")
+        finally:
+            mcap_io._add_messages = old
+        files.append(path.read_bytes())
+    assert files[0] == files[1]
+    assert len(list(read_messages(str(tmp_path / "bulk.mcap")))) == 40

@@ -79,3 +79,12 @@ def ros_route_rows(duration_s=600.0, progress=print) -> list:
     rows.append(("rclpy's ceiling / separate nodes' DDS deliveries per second (a clock tick to 3 subscribers, a "
                  "joint state to 2)", d_ratio, "x", "", bool(d_rate and ceil)))
     return rows
+
+
+if __name__ == "__main__":
+    # python -m gyro_instrument.bench.ros_route [OUT.csv]: the rows alone (about a minute), written as
+    # targets.csv is (docs/bench/ros_route.csv); run on loopback (tools/loopback)
+    from gyro_instrument.bench.studies import _write
+    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join("docs", "bench", "ros_route.csv")
+    _write(out, ("target", "measured", "unit", "goal", "met"), ros_route_rows())
+    print(f"wrote {out}")

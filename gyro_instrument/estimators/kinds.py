@@ -107,6 +107,10 @@ class AzimuthKind(MeasurementKind):
         from gyro_instrument.estimators.north.bounds import fit_bound
         return fit_bound(model, T, sensor), "Cramer-Rao bound of the whole joint fit"
 
+    def warm(self) -> None:
+        from gyro_instrument.estimators.north.exact import warm
+        warm()
+
     def tracker(self, obs, scene, companions) -> "NorthLive | None":
         swing = obs.instrument.predictions().get("swing_duration_small_s", math.inf)
         if not (math.isfinite(swing) and swing > 0):

@@ -31,7 +31,9 @@ it from the same record, each under its own key of the entry). A kind is one
 Optional: ``TARGET`` and :meth:`~MeasurementKind.plan` (a block kind's ``plan --target``: by default
 the shortest T whose ``bound`` meets it), :meth:`~MeasurementKind.plan_entry` (its entry in the plan),
 :meth:`~MeasurementKind.plan_lines` (the text of a target its own ``plan`` made, with its ``kind``),
-:meth:`~MeasurementKind.bench` (its own study in ``gyro-instrument bench``).
+:meth:`~MeasurementKind.bench` (its own study in ``gyro-instrument bench``),
+:meth:`~MeasurementKind.warm` (what its estimate loads on first use, loaded when the estimator node
+starts).
 
 :func:`register_kind` refuses a kind that leaves any of them out (one line naming what is missing);
 registering an instrument (:func:`gyro_instrument.instruments.register`) refuses one whose
@@ -150,6 +152,12 @@ class MeasurementKind:
         """The ``plan`` text of a target entry this kind's :meth:`plan` made (the entry's ``kind`` is
         this kind's name): lines without newlines, or None: the command's own printing."""
         return None
+
+    def warm(self) -> None:
+        """Load what :meth:`estimate` needs that costs time on first use in a new process (imports,
+        compiled kernels from numba's cache): the estimator node calls it at start-up, before it
+        subscribes, so that the estimate that follows the last sample does not pay for it (issue 37
+        item 6). Nothing by default."""
 
     def bench(self, out_dir, quick, write, progress, reference_rows) -> list:
         """Its own study for ``gyro-instrument bench``: CSVs written into ``out_dir`` through the bench's

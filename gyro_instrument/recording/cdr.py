@@ -34,6 +34,17 @@ def cdr_stamp_ns(data) -> int | None:
         return None
     return cdr_time_ns(data, 4)
 
+_STAMP_SET = struct.Struct("<II").pack
+
+
+def restamped(data, t_ns_from_release) -> bytes:
+    """``data`` (little-endian CDR bytes whose first field is a Time: a :meth:`CdrLayout.encode`
+    message) with the stamp ``EPOCH_NS + t`` instead of its own: byte for byte what ``encode`` writes
+    for that stamp (seconds floored, wrapped to 32 bits as its int32 cast), without numpy (~1 µs)."""
+    sec, nsec = divmod(EPOCH_NS + int(t_ns_from_release), 1_000_000_000)
+    return data[:4] + _STAMP_SET(sec & 0xFFFFFFFF, nsec) + data[12:]
+
+
 class CdrLayout:
     """The CDR bytes of a message type whose strings and sequence lengths are fixed, so that only
     the stamp (bytes 4–12: int32 sec, uint32 nanosec) and some float64 fields vary: a template

@@ -135,6 +135,15 @@ def _compiled_kernel():
     return jit.compiled(_kernel, signature_or_function=dop853_jit.rhs_signature())
 
 
+def warm() -> None:
+    """Import numba and load the swing kernel and the DOP853 driver (numba's cache: 1-2 s of CPU in a
+    new process, most of the estimator node's final estimate when it was paid there) with one swing
+    over three samples; nothing without numba."""
+    if jit.enabled():
+        swing(SwingEquation(), dict.fromkeys(GLOBAL, 0.0), "on", np.array([0.0, 0.5, 1.0]), 0.01, 0.0,
+              ("north", "on0_w0"))
+
+
 def _kernel_params(eq, par, kind, idx) -> np.ndarray:
     head = [par.get(g, 0.0) for g in GLOBAL] + [eq.second_order_per_s2, eq.spin_decay_per_s, eq.t_ref_s,
                                                  1.0 if eq.sine_law else 0.0, 1.0 if kind == "on" else 0.0, len(idx)]

@@ -30,7 +30,8 @@ from gyro_instrument.core.errors import SceneError
 from gyro_instrument.estimators.adequacy import InadequateData
 from gyro_instrument.estimators.north.heading import HEADING_RATE_HZ, imu_fields
 from gyro_instrument.estimators.pipeline import estimate_records, estimated_instruments, estimator_instruments
-from gyro_instrument.recording.cdr import imu_layout
+from gyro_instrument.instruments.measurement import declared_kinds, kind
+from gyro_instrument.recording.cdr import imu_layout, restamped
 from gyro_instrument.recording.frames import instrument_frames
 from gyro_instrument.recording.joint_buffer import JointBuffer
 from gyro_instrument.recording.joints import records_from_joints
@@ -71,7 +72,7 @@ class EstimatorNode(SceneNode):
         self._due = {}          # (tracker's instrument, record's) -> samples at which it is next given the tail
         self.live = {}          # tracker's instrument -> its last live value ((azimuth rad, σ rad) for a heading)
         self._heading_t = {}    # tracker's instrument -> stamp (ns) of its last heading published
-        self._imu_cols = {}     # tracker's instrument -> (value, its Imu fields as encoder columns)
+        self._imu_cols = {}     # tracker's instrument -> (value, its Imu encoded at stamp 0)
         self.nmea = None
         if self.load():
             self.prepare()
@@ -103,6 +104,26 @@ class EstimatorNode(SceneNode):
         period = float(self.get_parameter("publish_period_s").value)
         if period > 0:
             self.timers_.append(self.create_timer(period, self.finalize, clock=STEADY))
+
+    def _warm(self, buffered) -> None:
+        """Each measurement kind of the kept instruments loads what its estimate pays for on first use
+        (``MeasurementKind.warm``: numba and the compiled kernels of the exact north fit) when the node
+        is run alone, in a thread of its own: it overlaps discovery and the stream, the node spins at
+        once (a cold numba cache compiles for many seconds: the simulators' ``wait_timeout_s`` must not
+        pass meanwhile), and :meth:`estimate` waits for it. The estimate
+        then follows the last sample without 1-2 s of imports (issue 37 item 6)."""
+        import threading
+        found = [kind(k) for k in sorted({k for n in buffered for k in declared_kinds(self.insts[n].observation())})]
+
+        def warm():
+            for k in found:
+                if k is not None:
+                    try:
+                        k.warm()
+                    except Exception as exc:      # the estimate pays for it then, and says what fails
+                        self.get_logger().warning(f"{k.name}: warm-up failed ({exc.__class__.__name__}: {exc})")
+        self._warming = threading.Thread(target=warm, name="estimator_warm", daemon=True)
+        self._warming.start()
 
     def _prepare_heading(self) -> None:
         """A live tracker per instrument whose kind publishes live (``LIVE``), and the NMEA sender."""
@@ -160,15 +181,16 @@ class EstimatorNode(SceneNode):
                     self._publish_heading(owner, t, *self.live[owner])
 
     def _publish_heading(self, name, t_ns, azimuth_rad, sigma_rad) -> None:
-        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized; the fields computed once per
-        estimate, only the stamp changes between two) and a ``$HEHDT`` for the first gyroscope."""
+        """One ``sensor_msgs/Imu`` on ``<name>/heading`` (pre-serialized once per live value; only the
+        stamp changes between two, :func:`~gyro_instrument.recording.cdr.restamped`) and a ``$HEHDT`` for the first gyroscope."""
         key = (name, azimuth_rad, sigma_rad)
         if self._imu_cols.get(name, (None,))[0] != key:
             f = imu_fields(azimuth_rad, sigma_rad, self.scene.site)
-            self._imu_cols[name] = (key, [np.array([v]) for v in (
+            cols = [np.array([v]) for v in (
                 f.orientation_xyzw, f.orientation_covariance, f.angular_velocity_xyz_rad_s,
-                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)])
-        data = self.imu_layouts[name].encode([t_ns], *self._imu_cols[name][1])[0]
+                f.angular_velocity_covariance, f.linear_acceleration_xyz_m_s2, f.linear_acceleration_covariance)]
+            self._imu_cols[name] = (key, self.imu_layouts[name].encode([0], *cols)[0])
+        data = restamped(self._imu_cols[name][1], t_ns)
         self._send(heading_topic(name), data)
         if self.nmea is not None and azimuth_rad is not None and name == next(iter(self.trackers)):
             try:
@@ -239,6 +261,8 @@ class EstimatorNode(SceneNode):
         ``input_timeout_s`` of wall time after the clock reached the last sample or after the input
         (joint samples and clock) went silent; a new run (the clock going back) starts a new estimate."""
         self.standalone = True
+        if self.scene is not None:
+            self._warm(self._buffered())
         self.create_timer(0.5, self._control, clock=STEADY)
         self.start_diagnostics()
         if self.scene is not None:
@@ -383,6 +407,8 @@ class EstimatorNode(SceneNode):
         """Core call on everything received so far (None if nothing usable)."""
         if self.scene is None:
             return None
+        if getattr(self, "_warming", None) is not None:
+            self._warming.join()
         off = self.stamp_offset_ns or 0                  # stamps -> sim time from release (stamp_epoch)
         samples = {n: (lambda t, p, v: (t - off, p, v))(*b.arrays()) for n, b in self.buffers.items() if len(b) >= 3}
         recs = records_from_joints(self.insts, samples)
