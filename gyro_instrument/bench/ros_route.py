@@ -84,7 +84,7 @@ def ros_route_rows(duration_s=600.0, progress=print) -> list:
 if __name__ == "__main__":
     # python -m gyro_instrument.bench.ros_route [OUT.csv]: the rows alone (about a minute), written as
     # targets.csv is (docs/bench/ros_route.csv); run on loopback (tools/loopback)
-    from gyro_instrument.bench.studies import _write
+    from gyro_instrument.core.files import write_csv
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join("docs", "bench", "ros_route.csv")
-    _write(out, ("target", "measured", "unit", "goal", "met"), ros_route_rows())
+    write_csv(out, ("target", "measured", "unit", "goal", "met"), ros_route_rows())
     print(f"wrote {out}")

@@ -4,7 +4,6 @@ study (the work-precision and speed targets of :mod:`.work_precision`, the real-
 :mod:`.realtime`, the streaming rows of :mod:`.streaming`, the effect costs of :mod:`.effect_cost`)
 and writes the CSVs, plots and summary."""
 
-import csv
 import math
 import os
 import time
@@ -12,7 +11,7 @@ import time
 import numpy as np
 
 from gyro_instrument.bench.work_precision import REFERENCE, targets, work_precision
-from gyro_instrument.core.files import replaced_atomically
+from gyro_instrument.core.files import replaced_atomically, write_csv
 from gyro_instrument.core.parallel import process_executor
 from gyro_instrument.core.scene import sample_times
 from gyro_instrument.instruments.pendulum import binet_ellipse
@@ -239,13 +238,13 @@ def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print) -
         progress(f"observation time ({name})")
         ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
                                       executor=executor, scene=scene, overrides=overrides)
-        _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
-        _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
+        write_csv(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
+        write_csv(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
         progress(f"planner accuracy ({name})")
         targets = default_targets(scene, overrides)
         pl = planner_accuracy([(scene, list(overrides), targets)], 16 if quick else 100, executor=executor,
                               progress=progress) if targets else []
-    _write(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
+    write_csv(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
     from gyro_instrument.bench.plots import write_plots
     pngs = write_plots(out_dir)
     lines = [f"# gyro-instrument bench --scene {scene}" + (" (quick)" if quick else ""), "",
@@ -302,7 +301,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     os.makedirs(out_dir, exist_ok=True)
     progress("work-precision (Foucault pendulum, plane gyroscope)")
     wp = work_precision(quick, progress)
-    _write(os.path.join(out_dir, "work_precision.csv"),
+    write_csv(os.path.join(out_dir, "work_precision.csv"),
            ("instrument", "method", "setting", "cpu_s", "nfev", "error_rad"), wp)
     tg, st, rt, gwp, cost_lines = _speed_studies(out_dir, wp, quick, progress)
     own = executor is None
@@ -314,10 +313,10 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
             executor.shutdown()
     # each measurement kind's own study (its optional ``bench``: the rate gyro's north in the same time)
     from gyro_instrument.instruments.measurement import load as load_kinds
-    kind_lines = [line for k in load_kinds().values() for line in k.bench(out_dir, quick, _write, progress, north[1])]
+    kind_lines = [line for k in load_kinds().values() for line in k.bench(out_dir, quick, write_csv, progress, north[1])]
     from gyro_instrument.bench.marine_checks import HEADER as MARINE_HEADER, marine_check_lines, marine_check_rows
     marine = marine_check_rows(quick, progress)      # issue 39 item 4: the compass against published figures
-    _write(os.path.join(out_dir, "marine_checks.csv"), MARINE_HEADER, marine)
+    write_csv(os.path.join(out_dir, "marine_checks.csv"), MARINE_HEADER, marine)
     pngs = write_plots(out_dir)
     if not pngs:
         progress("plots need matplotlib: pip install matplotlib (or the 'plot' extra); the CSVs are written")
@@ -334,17 +333,17 @@ def _sweep_studies(out_dir, quick, progress, executor) -> tuple:
     progress("observation time")
     ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
                                   executor=executor)
-    _write(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
-    _write(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
+    write_csv(os.path.join(out_dir, "observation_time.csv"), OBS_HEADER, ot)
+    write_csv(os.path.join(out_dir, "systematic_floors.csv"), FLOOR_HEADER, floors)
     progress("planner accuracy (plan, then the Monte Carlo at the planned time)")
     pl = planner_accuracy([("quet_paris", [], ["latitude_arcsec=1", "earth_rate_rad_s=1e-10"])]
                           + ([] if quick else [("quet_gyroscopes", ["site.latitude_deg=60"], ["latitude_arcsec=1"])]),
                           16 if quick else 200, executor=executor, progress=progress)
-    _write(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
+    write_csv(os.path.join(out_dir, "planner.csv"), PLANNER_HEADER, pl)
     progress("site sweep")
     ss = site_sweep((-85, -60, -33.9, 5, 30, 48.8462, 70, 85) if not quick else (-33.9, 48.8462),
                     40 if not quick else 4, minutes=10.0 if not quick else 2.0, executor=executor)
-    _write(os.path.join(out_dir, "site_sweep.csv"), SITE_HEADER, ss)
+    write_csv(os.path.join(out_dir, "site_sweep.csv"), SITE_HEADER, ss)
     progress("effect cost")
     ec = effect_cost_rows(["quet_paris", "foucault_pantheon"] if quick else None,
                           duration_s=120.0 if quick else None, executor=executor)
@@ -353,7 +352,7 @@ def _sweep_studies(out_dir, quick, progress, executor) -> tuple:
     from gyro_instrument.bench.north_study import north_bench, write_north_csv
     north = north_bench(quick, executor=executor)
     write_north_csv(os.path.join(out_dir, "north_accuracy.csv"), os.path.join(out_dir, "north_gyrotheodolite.csv"),
-                    *north, _write)
+                    *north, write_csv)
     return ot, floors, pl, ss, ec, north
 
 
@@ -383,11 +382,11 @@ def _speed_studies(out_dir, wp, quick, progress) -> tuple:
                secs if secs is not None else float("nan"), "s" + ("" if secs is not None else
                                                                    " (matplotlib or pyarrow missing)"),
                "<= 10", secs is not None and secs <= 10.0))
-    _write(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
+    write_csv(os.path.join(out_dir, "targets.csv"), ("target", "measured", "unit", "goal", "met"), tg)
     progress("streaming: whole simulate process against the textbook script, peak memory, output throughput")
     from gyro_instrument.bench.streaming import streaming_rows
     st = streaming_rows(wp, REFERENCE[(3600.0 if quick else 86164.0989, 20.0)], quick, progress)
-    _write(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
+    write_csv(os.path.join(out_dir, "streaming.csv"), ("target", "measured", "unit", "goal", "met"), st)
     return tg, st, rt, gwp, cost_lines
 
 
@@ -461,10 +460,3 @@ def plot_day_seconds(out_dir, hours=24.0, rate_hz=20.0) -> tuple:
 
 def _fmt(x, spec):
     return "—" if x is None else format(x, spec)
-
-
-def _write(path, header, rows):
-    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        w.writerows(rows)

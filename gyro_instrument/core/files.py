@@ -10,6 +10,7 @@ or the previous complete file).
 """
 
 import contextlib
+import csv
 import os
 from collections.abc import Iterator
 
@@ -187,3 +188,12 @@ def check_output_dir(path, field="--out") -> None:
         raise SceneError(field, path, f"cannot be created as a directory ({exc.strerror})") from None
     if not os.access(path, os.W_OK | os.X_OK):
         raise SceneError(field, path, "is not writable")
+
+
+def write_csv(path, header, rows) -> None:
+    """Write ``header`` then ``rows`` (iterables of cells) as CSV to ``path``, replacing it atomically
+    (:func:`replaced_atomically`: a reader never sees half a file)."""
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows(rows)
