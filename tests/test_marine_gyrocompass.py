@@ -269,14 +269,3 @@ def test_bad_motion_is_one_line_and_exit_2(override, field, valid, capsys):
 def test_an_instrument_that_cannot_sail_is_refused_on_a_ship():
     with pytest.raises(SceneError, match="cannot sail"):
         load_scene("quet_paris", ["motion={speed_kn: 20, course_deg: 0}"])
-
-
-def test_estimate_says_the_sailing_estimator_is_not_yet_there():
-    """No measurement kind yet (issue 39 step 3): ``estimate`` lists the compass with that reason."""
-    from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
-    scene = load_scene("marine_gyrocompass", ["duration_s=600"])
-    truth = simulate_truth(scene)
-    est = estimate_records(scene, truth[1], measure(scene, truth))
-    for name in ("sperry", "anschutz"):
-        reason = est["instruments"][name]["reason"]
-        assert reason.startswith("not used by the estimator") and "not implemented yet" in reason
