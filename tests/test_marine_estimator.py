@@ -19,7 +19,8 @@ from gyro_instrument.sensors import SensorModel
 #: model's own misfit (residual rms 1.2e-4 rad on the noise-free record: the ship's latitude changes the
 #: period as it sails, the transients of the speed filter and the element's swing), so that the fit's σ
 #: is the noise's and can be compared with the scatter. At the shipped 1e-4 rad the misfit is of the
-#: noise's size and σ is widened by the residual scatter (conservative: rms z 0.63-0.91 over 20 seeds).
+#: noise's size and the curve's σ is widened by the residual scatter (conservative: rms z 0.68-0.81 over
+#: 20 seeds; the settled mean's, the noise's alone, 1.08).
 NOISE_RAD = 1e-3
 #: Ships of the calibration: both hemispheres, several courses and speeds (``--set`` overrides).
 SHIPS = (("site.latitude_deg=45",),
@@ -128,8 +129,8 @@ def test_the_sigmas_are_honest_over_seeds():
 @pytest.mark.slow
 def test_the_sigmas_are_honest_over_fifty_seeds():
     """50 seeds, four ships (45° N at 0°, 30° S at 120°, 60° N at 270°, 50° S at 45°; 10-25 kn), both
-    compasses: N = 400 z per quantity (tolerance 0.106). Measured: rms z period 1.026, damping 0.998,
-    asymptote 0.994, settled mean 1.021 (92 s)."""
+    compasses: N = 400 z per quantity (tolerance 0.106). Measured: rms z period 1.026, damping 0.989,
+    asymptote 1.013, settled mean 1.021 (about 100 s)."""
     _assert_calibrated(_z_scores(50, SHIPS))
 
 

@@ -27,10 +27,13 @@ def compass_lines(name, c) -> list:
                      f"{_pm(k['swing_ratio'], k['swing_ratio_sigma'], '.3f')}, undamped period "
                      f"{k['undamped_period_s']:.1f} s (theory {'null' if th is None else f'{th:.1f}'} s"
                      + ("" if k.get("theory_damping_ratio") is None else f", damping {k['theory_damping_ratio']:.4f}")
-                     + f"), settles to {_pm(k['settle_point_error_deg'], k['settle_point_error_sigma_deg'], '.4f')} deg")
+                     + "), settles to " + _pm(k['settle_point_error_deg'], k['settle_point_error_sigma_deg'], '.4f')
+                     + " deg")
     tr = c.get("track")
     if tr:
-        lines.append(f"    along the track after settling: rms {tr['rms_deg']:.3g} deg, max {tr['max_abs_deg']:.3g} deg; "
+        lines.append(f"    along the track after settling: rms {tr['rms_deg']:.3g} deg, "
+                     f"max {tr['max_abs_deg']:.3g} deg; "
                      f"the closed forms predict {tr['predicted_mean_deg']:.4f} deg, measured - predicted "
-                     f"{_pm(tr['measured_minus_predicted_deg'], tr['measured_minus_predicted_sigma_deg'], '.4f')} deg")
+                     + _pm(tr['measured_minus_predicted_deg'], tr['measured_minus_predicted_sigma_deg'], '.4f')
+                     + " deg")
     return lines

@@ -10,7 +10,11 @@ equations are a damped oscillator about the settle point, so
     e(t) = e_s + A exp(−λ τ) cos(ω τ + φ) [+ B exp(−μ τ)],  τ = t − t_0
 
 the bracket a real mode that damping in azimuth adds (the oil ballistic's lag makes the equations third
-order, :mod:`.dynamics`): it is kept when it lowers Akaike's criterion n ln(RSS/n) + 2k. The fit is
+order, :mod:`.dynamics`; the speed filter's and the element's swing's transients are faster still): it
+is kept when it lowers Akaike's criterion n ln(RSS/n) + 2k and its rate μ
+is above the predicted ω0 (a fit that holds μ at that bound is dropped: a slower real mode is a drift
+of the settle point the record cannot tell from e_s; with μ free the asymptote of a compass whose
+latitude input is wrong wandered by 1.4° with σ 14°). The fit is
 nonlinear least squares (scipy ``least_squares``, from the compass's predicted undamped period and three
 starting frequencies); its covariance s² (JᵀJ)⁻¹ gives the σ, s the larger of the sensor's noise and the
 residuals' rms (a model that misfits widens its σ). Derived: the damped period T_d = 2π/ω, the damping
@@ -95,9 +99,9 @@ def _model(p, tau) -> np.ndarray:
     return y + p[5] * np.exp(-p[6] * tau) if p.size > 5 else y
 
 
-def _fit_one(tau, e, p0) -> "object | None":
+def _fit_one(tau, e, p0, mu_min) -> "object | None":
     from scipy.optimize import least_squares
-    lo = [-np.inf, -np.inf, 0.0, 1e-6, -np.inf] + ([-np.inf, 1e-6] if len(p0) > 5 else [])
+    lo = [-np.inf, -np.inf, 0.0, 1e-6, -np.inf] + ([-np.inf, mu_min] if len(p0) > 5 else [])
     try:
         r = least_squares(lambda p: _model(p, tau) - e, p0, bounds=(lo, np.inf), x_scale="jac", method="trf",
                           max_nfev=2000)
@@ -133,14 +137,17 @@ def fit_curve(t, e, period_guess_s, sensor_sigma_rad, terms=(5, 7)) -> CurveFit:
                         f"the record ({span:.0f} s) is shorter than one swing of the compass (about "
                         f"{period_guess_s:.0f} s): no settling curve to fit")
     tau = t - t[0]
+    mu_min = 2 * math.pi / period_guess_s         # the extra mode decays faster than the swing turns a radian
     tail = e[tau >= 0.8 * span]
     es0 = float(np.median(tail))
     best = {}
     for k in terms:
         for f in START_FACTORS:
             w0 = f * 2 * math.pi / period_guess_s
-            p0 = [es0, float(e[0] - es0), 0.25 * w0, w0, 0.0] + ([0.0, 1.0 / 300.0] if k == 7 else [])
-            r = _fit_one(tau, e, p0)
+            p0 = [es0, float(e[0] - es0), 0.25 * w0, w0, 0.0] + ([0.0, 4.0 * mu_min] if k == 7 else [])
+            r = _fit_one(tau, e, p0, mu_min)
+            if r is not None and k == 7 and r.x[6] <= 1.001 * mu_min:
+                r = None                        # held at the bound: not a mode the record resolves
             if r is not None and (k not in best or r.cost < best[k].cost):
                 best[k] = r
     if not best:
