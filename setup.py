@@ -68,6 +68,7 @@ setup(
             "pendulum = gyro_instrument.estimators.kinds:PlaneKind",
             "azimuth = gyro_instrument.estimators.kinds:AzimuthKind",
             "rate_azimuth = gyro_instrument.estimators.rate_gyro_kind:RateAzimuthKind",
+            "compass = gyro_instrument.estimators.compass_kind:CompassKind",
         ],
         "console_scripts": [
             "gyro-instrument = gyro_instrument.ros.cli:main",

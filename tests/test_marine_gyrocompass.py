@@ -271,17 +271,6 @@ def test_an_instrument_that_cannot_sail_is_refused_on_a_ship():
         load_scene("quet_paris", ["motion={speed_kn: 20, course_deg: 0}"])
 
 
-def test_estimate_says_the_sailing_estimator_is_not_yet_there():
-    """No measurement kind yet (issue 39 step 3): ``estimate`` lists the compass with that reason."""
-    from gyro_instrument.estimators.pipeline import estimate_records, measure, simulate_truth
-    scene = load_scene("marine_gyrocompass", ["duration_s=600"])
-    truth = simulate_truth(scene)
-    est = estimate_records(scene, truth[1], measure(scene, truth))
-    for name in ("sperry", "anschutz"):
-        reason = est["instruments"][name]["reason"]
-        assert reason.startswith("not used by the estimator") and "not implemented yet" in reason
-
-
 @pytest.mark.parametrize("latitude_deg,speed_kn", [(45.0, 20.0), (-60.0, 30.0), (81.0, 50.0), (84.0, 50.0)])
 def test_the_speed_correction_from_the_reading_is_the_settle_point_exactly(latitude_deg, speed_kn):
     """The correction the compass computes from its own uncorrected reading G (sine law, NAVIGAT X MK 1

@@ -242,7 +242,7 @@ def test_the_groups_list_the_shipped_ones_and_the_plugins():
     assert listed["instruments"] == set(instruments.SHIPPED)
     assert listed["effects"] == set(effects.SHIPPED)
     assert listed["measurements"] == {type(measurement.kind(k)) for k in ("gyro", "pendulum", "azimuth",
-                                                                          "rate_azimuth")}
+                                                                          "rate_azimuth", "compass")}
     assert set(GROUPS.values()) == {"gyro_instrument.instruments", "gyro_instrument.effects",
                                     "gyro_instrument.measurements"}
 

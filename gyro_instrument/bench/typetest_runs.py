@@ -21,13 +21,9 @@ import numpy as np
 
 from gyro_instrument.core.motion import KNOT_M_S, parse_motion
 from gyro_instrument.core.site import Site
+from gyro_instrument.instruments.marine_gyrocompass.iso import (  # noqa: F401  (the definitions, re-exported)
+    SETTLE_BAND_DEG, SETTLE_INTERVAL_S, SP_INTERVAL_S, SP_READINGS, STEP_S, settle_point, settle_time_s)
 
-#: Reading interval, s (the settle criterion slides on it).
-STEP_S = 60.0
-#: §3.10: readings 30 min apart, within 0.7°.
-SETTLE_INTERVAL_S, SETTLE_BAND_DEG = 1800.0, 0.7
-#: §3.11: ten readings, 20 min apart.
-SP_READINGS, SP_INTERVAL_S = 10, 1200.0
 #: A pier run-up lasts this long at most (a settle later than the 6-h limit is still timed, to report it).
 MAX_RUN_UP_S = 12 * 3600.0
 #: §5.2, §5.3.1: settled within 6 h.
@@ -86,28 +82,6 @@ def simulate(gc, t, state=None) -> Run:
 def grid(t0, t1, step=STEP_S) -> np.ndarray:
     """Times from ``t0`` to ``t1`` (included) every ``step`` s."""
     return t0 + step * np.arange(int(round((t1 - t0) / step)) + 1)
-
-
-def settle_time_s(t, error_deg) -> "float | None":
-    """§3.10: the time of the third of the first three readings 30 min apart within 0.7°, s; None if none."""
-    k = int(round(SETTLE_INTERVAL_S / STEP_S))
-    if t.size <= 2 * k:
-        return None
-    a, b, c = error_deg[:-2 * k], error_deg[k:-k], error_deg[2 * k:]
-    spread = np.maximum(np.maximum(a, b), c) - np.minimum(np.minimum(a, b), c)
-    hit = np.flatnonzero(spread <= SETTLE_BAND_DEG)
-    return float(t[hit[0] + 2 * k]) if hit.size else None
-
-
-def settle_point(t, error_deg, after_s) -> "tuple | None":
-    """§3.11–3.12: (mean, rms about it) of the ten readings 20 min apart after ``after_s``, deg; None when
-    the run is too short."""
-    want = after_s + SP_INTERVAL_S * np.arange(1, SP_READINGS + 1)
-    idx = np.searchsorted(t, want - 1e-6)
-    if idx[-1] >= t.size:
-        return None
-    r = error_deg[idx]
-    return float(r.mean()), float(np.sqrt(np.mean((r - r.mean()) ** 2)))
 
 
 def run_up(scene, name, lat_deg, azimuth_deg=None) -> dict:

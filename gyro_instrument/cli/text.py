@@ -311,6 +311,9 @@ def _print_estimate_body(r, w):
                   f"of the position scale: k = {deg_h(sc['k_at_half_scale_rad_s'])} at half the scale, "
                   f"{deg_h(sc['k_at_double_scale_rad_s'])} at twice it, {deg_h(sc['k_without_correction_rad_s'])} "
                   f"without it (positions in pixels need --metres-per-pixel; check the length)\n")
+        elif isinstance(e.get("compass"), dict):
+            from gyro_instrument.cli.compass_text import compass_lines
+            w("".join(line + "\n" for line in compass_lines(name, e["compass"])))
         elif e.get("reason") is not None or len(e) <= 1:
             w(f"  {name}: null: {e.get('reason')}\n")
         else:                       # another kind's entry (a plug-in's): its numbers as they are, its blocks

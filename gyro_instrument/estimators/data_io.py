@@ -157,6 +157,7 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         used.update(f"{name}.{c}" for c in full)
         rec = {"t": t.copy()} | inst.observation().record_from_table(full, _reader(name, cols, col, used),
                                                                        t.size, notes)
+        rec = _with_track(inst.observation(), rec, cols, col, used, name, notes)
         n_nan = int(sum((~np.isfinite(rec[c])).sum() for c in rec if c not in ("t", "angle")))
         if n_nan:
             notes.append(f"{name}: {n_nan} missing or NaN values left out")
@@ -179,6 +180,24 @@ def records_from_table(insts, cols, path="data", field="--data") -> tuple:
         notes.append(f"columns matching no channel of the scene's instruments, not used: {shown}")
     t_ok = t[np.isfinite(t)]
     return records, notes, float(t_ok[-1] - t_ok[0]) if t_ok.size else 0.0
+
+
+def _with_track(obs, rec, cols, col, used, name, notes) -> dict:
+    """``rec`` with the ship's track an observation reads (``TRACK_KEYS``): the table's ``ship.<key>``
+    columns, else the scene's ``motion:`` block (the observation's ``complete``, noted)."""
+    if not obs.TRACK_KEYS:
+        return rec
+    from gyro_instrument.core.motion import SHIP
+    missing = []
+    for k in obs.TRACK_KEYS:
+        if f"{SHIP}.{k}" in cols:
+            used.add(f"{SHIP}.{k}")
+            rec[k] = col(f"{SHIP}.{k}")
+        else:
+            missing.append(f"{SHIP}.{k}")
+    if missing:
+        notes.append(f"{name}: no column {', '.join(missing)}: the ship's track from the scene's motion block")
+    return obs.complete(rec)
 
 
 def _check_companions(insts, records, path, field) -> None:

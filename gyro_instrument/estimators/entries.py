@@ -7,6 +7,7 @@ its own (:class:`PluginEntry`, open). Units: s, rad, rad/s.
 
 from dataclasses import dataclass
 
+from gyro_instrument.estimators.compass_entries import CompassBlock, CompassNull
 from gyro_instrument.estimators.north.block import NorthBlock, NullNorthBlock, RateNorthBlock
 from gyro_instrument.estimators.record import ABSENT, Json, Record, doc
 
@@ -146,11 +147,13 @@ class PlaneNull(Record):
 @dataclass(frozen=True, kw_only=True)
 class UnusedEntry(Record):
     """An instrument the estimator does not measure for the Earth rate (a free gyroscope, Puiseux's body), or
-    one that gives only a block (a rate gyro: its ``north``)."""
+    one that gives only a block (a rate gyro: its ``north``; a ship's gyrocompass: its ``compass``)."""
 
     type: str = doc(_TYPE)
     reason: str = doc("not used by the estimator (...)", ABSENT)
     north: _NorthAny = doc(_NORTH, ABSENT)
+    compass: CompassBlock | CompassNull = doc("a ship's gyrocompass's block (settle-point error, period and damping, "
+                                              "heading error along the track)", ABSENT)
     extra: dict[str, Json] = doc("a plug-in kind's block under its BLOCK key", ABSENT, inline=True)
 
 

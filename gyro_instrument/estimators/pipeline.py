@@ -119,6 +119,7 @@ def build_estimate(scene, insts, records, corrections=CORRECTIONS) -> Estimate:
         combination = null_combined("no Earth-rate measurement: needs a gyroscope with a directing line "
                                     "(plane, cone, gimbal) or a pendulum with a measured oscillation")
     found = {key: f[0][0].combine([b for _, b in f]) for key, f in blocks.items()}
+    found = {key: b for key, b in found.items() if b is not None}      # a kind whose blocks stay each its own
     methods = classic_methods(combination.hemisphere, truth.earth_rate_rad_s, gyros, pend,
                               scene.estimator.get("earth_rate"))
     entry = hemisphere_entry(combination.hemisphere, getattr(combination, "hemisphere_basis", ""), site.latitude_deg)
@@ -140,8 +141,7 @@ def _instrument_estimate(name, obs, rec, corrections, checks, sensor):
     if engine is None or not engine.RATE or not obs.has_record(rec):
         reason = ABSENT
         if not _block_kinds(obs) or not obs.has_record(rec):
-            reason = (f"not used by the estimator ({obs.PENDING_ESTIMATOR})" if obs.PENDING_ESTIMATOR else
-                      "not used by the estimator (no Earth-rate measurement from this instrument)")
+            reason = "not used by the estimator (no Earth-rate measurement from this instrument)"
         return UnusedEntry(type=obs.type_name, reason=reason), None
     corrections = obs.applicable_corrections(corrections)
     checks += check_before_fit(name, obs.instrument, rec)

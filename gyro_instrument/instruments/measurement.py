@@ -52,7 +52,8 @@ from gyro_instrument.core import plugins
 
 #: The shipped kinds, in order (also entry points of ``gyro_instrument.measurements``, setup.py).
 SHIPPED = ("gyro_instrument.estimators.kinds:SwingKind", "gyro_instrument.estimators.kinds:PlaneKind",
-           "gyro_instrument.estimators.kinds:AzimuthKind", "gyro_instrument.estimators.rate_gyro_kind:RateAzimuthKind")
+           "gyro_instrument.estimators.kinds:AzimuthKind", "gyro_instrument.estimators.rate_gyro_kind:RateAzimuthKind",
+           "gyro_instrument.estimators.compass_kind:CompassKind")
 
 #: name -> the kind (an instance of its class), in registration order.
 KINDS = {}

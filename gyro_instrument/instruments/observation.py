@@ -103,8 +103,10 @@ class Observation:
     HAS_ROTOR: ClassVar[bool] = False
     #: True when :meth:`bob_enu_m` gives a bob's position (published as ``<name>/bob``).
     SHOWS_BOB_POSITION: ClassVar[bool] = False
-    #: An instrument measured by no kind yet whose estimator is planned: the estimate says so (text), or None.
-    PENDING_ESTIMATOR: ClassVar[str | None] = None
+
+    #: The ship's track the estimator reads beside the measured channels (record keys; a table's
+    #: ``ship.<key>`` columns, :mod:`gyro_instrument.core.motion`); () for an instrument on a pier.
+    TRACK_KEYS: ClassVar[tuple] = ()
 
     @classmethod
     def layout_of(cls, inst_cls) -> JointLayout:

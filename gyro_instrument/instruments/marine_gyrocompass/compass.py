@@ -68,18 +68,39 @@ class LatitudeSetting(Param):
 
 
 class CompassObservation(Observation):
-    """The compass's heading reading (rad), an angle channel; no measurement kind yet.
+    """The compass's heading reading (rad), an angle channel, read beside the ship's track: the
+    measurement kind ``compass`` (:mod:`gyro_instrument.estimators.compass_kind`: settle-point error,
+    period and damping of the settling curve, heading error along the track). It gives no Earth-rate
+    measurement; its block is the instrument's ``compass``."""
 
-    The estimator for a sailing compass (settle-point error, damping, period with σ, from a recorded
-    run) is step 3 of issue 39 and not yet available: ``estimate`` lists the instrument with the
-    reason, as it lists every instrument it does not measure."""
-
-    PENDING_ESTIMATOR = ("the marine gyrocompass's estimator (settle-point error, damping and period from a "
-                         "sailing record) is not implemented yet; its reading's error is the "
-                         "simulated column heading_error")
+    ALSO_MEASURES = ("compass",)
+    TRACK_KEYS = ("course", "latitude", "speed")
 
     def unmeasured_reason(self) -> str:
-        return self.PENDING_ESTIMATOR
+        return "a ship's gyrocompass gives its heading error (the compass block), not an Earth-rate measurement"
+
+    def complete(self, rec) -> dict:
+        """``rec`` with the ship's track at its times (``course`` rad, ``latitude`` rad, ``speed`` m/s) where
+        it has none: the scene's ``motion:`` block (a pier: course 0 at the site, at rest), as a ship has its
+        course and position from GNSS and its speed from the log."""
+        if all(k in rec for k in self.TRACK_KEYS):
+            return rec
+        t = np.asarray(rec["t"], dtype=float)
+        mo = self.instrument.motion
+        if mo is None:
+            tr = {"course": np.zeros_like(t), "latitude": np.full_like(t, self.instrument.site.latitude_rad),
+                  "speed": np.zeros_like(t)}
+        else:
+            tr = mo.track(t)
+        return rec | {k: tr[k] for k in self.TRACK_KEYS if k not in rec}
+
+    def record_from_table(self, full, col, size, notes) -> dict:
+        """The heading column (the track: the table's ``ship.*`` columns, added by the table reader, or the
+        scene's, :meth:`complete`)."""
+        return {c: col(c) for c in full}
+
+    def table_columns(self) -> tuple:
+        return (("heading",),)
 
 
 class MarineGyrocompass(Instrument):
