@@ -12,9 +12,10 @@ taken from the track, as from a GNSS input)::
 
     heading = ψ − α − e_f + δ_s(V_f, ψ_r, φ_set) + δ_d(φ_set)
 
-δ_s = atan2(−V_f cos ψ_r, R Ω cos φ_set + V_f sin ψ_r) the speed error the equations settle to
-(:func:`.theory.speed_error_rad`; ψ_r the compass's own corrected reading, as a compass knows no
-other heading: three fixed-point steps from ψ − α), with ``speed_correction``; δ_d = asin((P_d/P_c) tan φ_set) the damping
+δ_s = −asin(V_f cos G / (R Ω cos φ_set)) the speed error the equations settle to, computed from the
+compass's own uncorrected reading G = ψ − α − e_f, as a compass knows no other heading
+(:func:`.theory.speed_correction_rad`: exactly the settle point atan2(−V cos C, R Ω cos φ + V sin C)
+of :func:`.theory.speed_error_rad` written in G), with ``speed_correction``; δ_d = asin((P_d/P_c) tan φ_set) the damping
 (latitude) error, with damping in tilt (the Sperry latitude correction: ``latitude_setting_deg``). A
 latitude set wrong by Δφ leaves both corrections' change with latitude as an error
 (:meth:`MarineGyrocompass.predictions` reports it for the site).
