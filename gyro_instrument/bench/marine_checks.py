@@ -204,12 +204,19 @@ def speed_table_check(entries=None, earth_rate=SIDEREAL_RATE_RAD_S) -> dict:
     return out
 
 
+def _compass_effects() -> dict:
+    """Every effect the marine gyrocompass supports, at its defaults (the Earth's rate: the instrument
+    declares what it carries, so no effect is named here)."""
+    from gyro_instrument.instruments import REGISTRY
+    return {name: {} for name in sorted(REGISTRY["marine_gyrocompass"].SUPPORTED_EFFECTS)}
+
+
 def table_compass(lat_deg, damping="azimuth") -> "MarineGyrocompass":
     """A marine gyrocompass (the instrument's defaults: pendulous, Schuler-tuned at 40°) on a pier at
     ``lat_deg`` with ``damping``; its equations are what :func:`equations_settle_rad` sets to rest."""
     from gyro_instrument.scenes import build_instruments, scene_from_data
     data = {"name": "navigat_table", "site": {"latitude_deg": lat_deg}, "duration_s": 60.0, "sample_rate_hz": 1.0,
-            "effects": {"earth_rotation": {}}, "instruments": {"gc": {"type": "marine_gyrocompass", "damping": damping}}}
+            "effects": _compass_effects(), "instruments": {"gc": {"type": "marine_gyrocompass", "damping": damping}}}
     return build_instruments(scene_from_data(data))["gc"]
 
 
@@ -292,7 +299,7 @@ def settling_figures(lat_deg=40.0, initial_deg=20.0, hours=10.0, step_s=30.0) ->
 
     def run(inst, h):
         data = {"name": "settling", "site": {"latitude_deg": lat_deg}, "duration_s": h * 3600.0,
-                "sample_rate_hz": 1.0 / step_s, "effects": {"earth_rotation": {}},
+                "sample_rate_hz": 1.0 / step_s, "effects": _compass_effects(),
                 "instruments": {"gc": {"type": "marine_gyrocompass", **inst}}}
         gc = build_instruments(scene_from_data(data))["gc"]
         t = np.arange(0.0, h * 3600.0 + step_s / 2, step_s)
