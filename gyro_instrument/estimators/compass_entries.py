@@ -59,7 +59,9 @@ class TrackError(Record):
                                     "compass's speed and latitude corrections less the settled offset of the "
                                     "equations (speed error atan2(−V_N, RΩcos φ + V_E), damping error), deg")
     measured_minus_predicted_deg: float = doc("the settle-point error less predicted_mean_deg, deg")
-    measured_minus_predicted_sigma_deg: float = doc("its standard error (the settle point's), deg")
+    measured_minus_predicted_sigma_deg: float = doc("its standard error, deg: the settle point's from the "
+                                                    "noise, or the settled readings' 20-min block means' scatter "
+                                                    "/ √B when the check 'stationary' finds them wandering")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -71,7 +73,9 @@ class CompassBlock(Record):
                                      "within 0.7°), s from the record's start; null: not settled")
     settle_point_error_deg: float | None = doc("mean heading error (reading − true course) of every reading after "
                                                "settling, deg; null when not settled")
-    settle_point_error_sigma_deg: float | None = doc("its standard error σ_n/√N, deg")
+    settle_point_error_sigma_deg: float | None = doc("its standard error from the noise, σ_n/√N, deg (of this "
+                                                     "record's mean: a compass still wandering is flagged by the "
+                                                     "check 'stationary')")
     settle_point_samples: int = doc("readings averaged")
     iso_settle_point_error_deg: float | None = doc("ISO 22090-1 §3.11–3.12: the mean of ten readings 20 min apart "
                                                    "after settling, deg; null when the record is too short")

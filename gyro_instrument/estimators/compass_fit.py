@@ -26,7 +26,16 @@ when three readings 30 min apart lie within 0.7° (readings every minute, or eve
 is sparser); the settle-point error is the mean of every reading from then to the end of the record, σ =
 σ_n / √N with σ_n the readings' noise (the larger of the sensor's and the settled readings' scatter
 from their second differences, 1.4826 MAD / √6: a slow curve cancels in them); ISO's ten-reading figure
-is given beside it.
+is given beside it. That σ holds only if the settled readings scatter about one value by their noise
+alone; a compass that is still swinging within the 0.7° band, or whose settle point moves along the
+track, wanders more slowly than the noise shows. The mean is ISO's statistic of this record, and σ_n/√N
+is its uncertainty from the noise (calibrated over seeds against the noise-free record's same mean);
+as an estimate of where the compass settles, the wander adds to it. So the settled readings' means over
+blocks of ISO's reading interval (20 min) are tested against the noise (χ² of the block means about
+their weighted mean, B − 1 degrees of freedom, at least 3 blocks); when the noise alone explains them
+with probability below :data:`WANDER_P`, the check says so and the comparison with the closed-form
+settle point (the track's measured − predicted) takes the block means' scatter / √B as its σ (batch
+means: the blocks taken as independent, so still a lower bound when the wander is slower than a block).
 """
 
 import math
@@ -38,6 +47,9 @@ from gyro_instrument.instruments.marine_gyrocompass import iso
 
 #: A swing whose amplitude is within this many σ of zero is no settling curve (z of a normal: 3).
 AMPLITUDE_Z = 3.0
+#: Significance below which the settled readings' block means are taken to wander (χ² test; a white-noise
+#: record is flagged in 1 % of seeds and its σ then comes from B block means instead).
+WANDER_P = 0.01
 #: Starting frequencies of the fit, as multiples of the predicted undamped one.
 START_FACTORS = (1.0, 0.7, 1.4)
 
@@ -76,6 +88,27 @@ class SettlePoint:
     iso_mean_rad: float | None
     iso_rms_rad: float | None
     reason: str | None
+    #: the χ² test of the settled readings' 20-min block means: (blocks, statistic, p, σ of the mean from the
+    #: block means, rad), None under 3 blocks
+    wander: tuple | None = None
+
+
+def block_wander(t, e, noise_rad) -> "tuple | None":
+    """The settled readings ``e`` (rad) at times ``t`` (s) in blocks of :data:`iso.SP_INTERVAL_S`: (B, χ²
+    of the block means about their weighted mean in units of the noise ``noise_rad``, p of χ²(B − 1),
+    σ of the mean from the block means' scatter / √B, rad); None with fewer than 3 non-empty blocks."""
+    from scipy.stats import chi2
+    edges = t[0] + iso.SP_INTERVAL_S * np.arange(int((t[-1] - t[0]) // iso.SP_INTERVAL_S) + 1)
+    idx = np.searchsorted(t, edges)
+    pairs = [(a, b) for a, b in zip(idx[:-1], idx[1:]) if b > a]
+    if len(pairs) < 3:
+        return None
+    means = np.array([e[a:b].mean() for a, b in pairs])
+    n = np.array([b - a for a, b in pairs], dtype=float)
+    centre = float(np.sum(n * means) / np.sum(n))
+    stat = float(np.sum(n * (means - centre) ** 2)) / noise_rad ** 2
+    B = len(pairs)
+    return B, stat, float(chi2.sf(stat, B - 1)), float(np.std(means, ddof=1) / math.sqrt(B))
 
 
 def settle_point(t, e, sensor_sigma_rad) -> SettlePoint:
@@ -91,7 +124,7 @@ def settle_point(t, e, sensor_sigma_rad) -> SettlePoint:
     iso_pt = iso.settle_point(t, np.degrees(e), ts)
     return SettlePoint(ts, float(e[m].mean()), sig_n / math.sqrt(int(m.sum())), int(m.sum()), sig_n,
                        None if iso_pt is None else math.radians(iso_pt[0]),
-                       None if iso_pt is None else math.radians(iso_pt[1]), None)
+                       None if iso_pt is None else math.radians(iso_pt[1]), None, block_wander(t[m], e[m], sig_n))
 
 
 def _model(p, tau) -> np.ndarray:

@@ -95,6 +95,14 @@ def predicted_error_rad(inst, course, lat, speed) -> np.ndarray:
     return inst.corrections_rad(course, lat, speed) - alpha
 
 
+def _settle_sigma(sp) -> float:
+    """σ of the settled mean as an estimate of where the compass settles, rad: σ_n/√N, or the 20-min block
+    means' scatter / √B when they wander beyond the noise (:func:`.compass_fit.block_wander`)."""
+    if sp.wander is not None and sp.wander[2] < F.WANDER_P:
+        return max(sp.sigma_rad, sp.wander[3])
+    return sp.sigma_rad
+
+
 def _curve(inst, t, e, lat, sigma) -> "SettlingCurve | SettlingCurveNull":
     """The settling curve's record (:func:`.compass_fit.fit_curve`, the theory beside it)."""
     Om, lat_m = inst.model_earth_rate(), float(np.mean(lat))
@@ -144,11 +152,19 @@ def compass_block(obs, rec, checks, sensor) -> "CompassBlock | CompassNull":
         track = TrackError(rms_deg=math.degrees(math.sqrt(float(np.mean(e[m] ** 2)))),
                            max_abs_deg=math.degrees(float(np.max(np.abs(e[m])))), predicted_mean_deg=math.degrees(pred),
                            measured_minus_predicted_deg=math.degrees(sp.mean_rad - pred),
-                           measured_minus_predicted_sigma_deg=math.degrees(sp.sigma_rad))
+                           measured_minus_predicted_sigma_deg=math.degrees(_settle_sigma(sp)))
         checks.append(check_entry(name, "settling", "passed", f"settled at {sp.settled_at_s:.0f} s (ISO 22090-1 "
                                                                "§3.10)", value=sp.settled_at_s))
     else:
         checks.append(check_entry(name, "settling", "flagged", sp.reason))
+    if sp.wander is not None:
+        blocks, stat, p, _ = sp.wander
+        checks.append(check_entry(
+            name, "stationary", "passed" if p >= F.WANDER_P else "flagged",
+            f"settled readings' {blocks} block means of {F.iso.SP_INTERVAL_S / 60:g} min against the noise: chi2 "
+            f"{stat:.3g} on {blocks - 1} degrees of freedom, p = {p:.2g}"
+            + ("" if p >= F.WANDER_P else " (the compass still wanders: measured - predicted takes its sigma from "
+                                          "the block means)"), value=stat, expected=float(blocks - 1)))
     if isinstance(curve, SettlingCurve):
         status = "passed" if curve.sigma_basis == "sensor noise" else "flagged"
         checks.append(check_entry(name, "fit", status, f"settling curve ({curve.model}): residual rms "
