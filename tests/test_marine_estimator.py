@@ -22,6 +22,10 @@ from gyro_instrument.sensors import SensorModel
 #: noise's size and the curve's σ is widened by the residual scatter (conservative: rms z 0.68-0.81 over
 #: 20 seeds; the settled mean's, the noise's alone, 1.08).
 NOISE_RAD = 1e-3
+#: The records' sample rate, Hz: a reading every 10 s (the shipped scene samples at 10 Hz, the heading
+#: rate a navigation stack expects; the settling curve, hours long, is the same at 0.1 Hz and 100 times
+#: cheaper to simulate and fit).
+RATE = "sample_rate_hz=0.1"
 #: Ships of the calibration: both hemispheres, several courses and speeds (``--set`` overrides).
 SHIPS = (("site.latitude_deg=45",),
          ("site.latitude_deg=-30", "motion={speed_kn: 15, course_deg: 120}"),
@@ -32,7 +36,7 @@ SHIPS = (("site.latitude_deg=45",),
 def test_the_kind_is_registered_complete_and_measures_the_compass():
     k = kind("compass")
     assert type(k) is CompassKind and CompassKind.missing() == [] and not k.RATE and k.BLOCK == "compass"
-    scene = load_scene("marine_gyrocompass", ["duration_s=600"])
+    scene = load_scene("marine_gyrocompass", ["duration_s=600", RATE])
     truth = simulate_truth(scene)
     est = estimate_records(scene, truth[1], measure(scene, truth))
     for name in ("sperry", "anschutz"):
@@ -46,12 +50,12 @@ def test_a_short_record_and_a_settled_start_say_why_period_and_damping_are_null(
     exp(−ζ ω0 12 h) ≈ 1e-6, 3.5e-7 rad) swings by less than its noise (1e-4 rad over 1440 samples: an
     amplitude's σ ≈ 1e-4 √(2/1440) = 3.7e-6 rad): it starts settled and its settle point is the scene's
     (damping in azimuth: no latitude error; on a pier no speed error) within its σ."""
-    scene = load_scene("marine_gyrocompass", ["duration_s=600"])
+    scene = load_scene("marine_gyrocompass", ["duration_s=600", RATE])
     truth = simulate_truth(scene)
     c = estimate_records(scene, truth[1], measure(scene, truth))["instruments"]["sperry"]["compass"]
     assert c["settling_curve"]["period_s"] is None and "shorter than one swing" in c["settling_curve"]["reason"]
     assert c["settle_point_error_deg"] is None and "not settled" in c["reason"]
-    scene = load_scene("marine_gyrocompass", ["motion=null", "duration_s=57600"])
+    scene = load_scene("marine_gyrocompass", ["motion=null", "duration_s=57600", RATE])
     truth = simulate_truth(scene)
     rec = measure(scene, truth)["anschutz"]
     keep = rec["t"] >= 43200.0             # a recording begun 12 h after switch-on
@@ -90,7 +94,7 @@ def _z_scores(seeds, ships, first=0) -> dict:
     record) on the simulated heading error; the settled mean's over the same readings."""
     z = {"period": [], "damping": [], "asymptote": [], "settled_mean": []}
     for i, over in enumerate(ships, first):
-        scene = load_scene("marine_gyrocompass", list(over) + [f"sensor.noise_rad={NOISE_RAD}"])
+        scene = load_scene("marine_gyrocompass", list(over) + [f"sensor.noise_rad={NOISE_RAD}", RATE])
         truth = simulate_truth(scene)
         t, insts, sims = truth
         sensor = SensorModel.from_scene(scene)
@@ -140,9 +144,9 @@ def test_a_simulated_table_gives_the_noise_free_estimate(tmp_path):
     (the CSV keeps 17 significant digits: equal to 1e-9 relative)."""
     from gyro_instrument.cli import main
     out = tmp_path / "sail.csv"
-    assert main(["simulate", "marine_gyrocompass", "--out", str(out), "--quiet"]) == 0
+    assert main(["simulate", "marine_gyrocompass", "--set", RATE, "--out", str(out), "--quiet"]) == 0
     from gyro_instrument.estimators.data_io import estimate_data
-    scene = load_scene("marine_gyrocompass", [])
+    scene = load_scene("marine_gyrocompass", [RATE])
     est = estimate_data(scene, str(out))
     assert not any("ship." in n for n in est.get("data_notes", []))
     t, insts, sims = simulate_truth(scene)
@@ -174,7 +178,7 @@ def test_a_compass_still_swinging_is_flagged_and_its_comparison_widened():
     this record), the 'stationary' check is flagged, and the closed-form comparison takes the block means'
     σ: the measured − predicted difference (the residual swing, the Coriolis sway of docs/marine_checks.md)
     is then within 3 σ, where with the noise's σ alone it read 89 σ."""
-    scene = load_scene("marine_gyrocompass")
+    scene = load_scene("marine_gyrocompass", [RATE])
     truth = simulate_truth(scene)
     est = estimate_records(scene, truth[1], measure(scene, truth))
     for name in ("sperry", "anschutz"):
