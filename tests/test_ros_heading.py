@@ -69,41 +69,54 @@ def heading_run(tmp_path_factory):
     stop = threading.Event()
     spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
     spinner.start()
-    udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    udp.bind(("127.0.0.1", 0))
-    udp.settimeout(0.2)
-    sentences, udp_done = [], threading.Event()
-
-    def read_udp():      # while the suite runs: 10 sentences a second of sim time overflow a socket buffer
-        while True:
-            try:
-                sentences.append(udp.recv(4096).decode("ascii"))
-            except socket.timeout:
-                if udp_done.is_set():
-                    return
-    reader = threading.Thread(target=read_udp)
-    reader.start()
     bag = str(tmp_path_factory.mktemp("heading") / "h.mcap")
     try:
-        result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag,
-                                  RunOptions(nmea_udp=f"127.0.0.1:{udp.getsockname()[1]}"))
-        udp_done.set()
-        reader.join()
+        with NmeaListener() as nmea:
+            result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag, RunOptions(nmea_udp=nmea.address))
         t0 = time.monotonic()
         while not got and time.monotonic() - t0 < 10:
             time.sleep(0.05)
         time.sleep(0.2)
     finally:
-        udp_done.set()
-        reader.join()
         stop.set()
         spinner.join()
-        udp.close()
         node.destroy_node()
         rclpy.shutdown(context=ctx)
+    sentences = nmea.sentences
     recorded = [deserialize_message(data, Imu) for topic, _, _, data in read_messages(bag)
                 if topic == "/gyro_horizontal/heading"]
     return result, stats, recorded, sentences, bag, list(got)
+
+
+class NmeaListener:
+    """A UDP socket on loopback and a thread collecting its sentences while a suite runs (the suite sends
+    10 sentences a second of sim time, faster than real time: read as they come, with a 4 MB buffer, or
+    they overflow it): ``with NmeaListener() as nmea: run_suite(..., RunOptions(nmea_udp=nmea.address))``,
+    then ``nmea.sentences`` (str, in arrival order)."""
+
+    def __enter__(self) -> "NmeaListener":
+        self.udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.udp.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
+        self.udp.bind(("127.0.0.1", 0))
+        self.udp.settimeout(0.2)
+        self.address = f"127.0.0.1:{self.udp.getsockname()[1]}"
+        self.sentences, self._done = [], threading.Event()
+        self._reader = threading.Thread(target=self._read)
+        self._reader.start()
+        return self
+
+    def _read(self) -> None:
+        while True:
+            try:
+                self.sentences.append(self.udp.recv(4096).decode("ascii"))
+            except socket.timeout:
+                if self._done.is_set():
+                    return
+
+    def __exit__(self, *exc) -> None:
+        self._done.set()
+        self._reader.join()
+        self.udp.close()
 
 
 def stamp_s(msg) -> float:

@@ -22,7 +22,6 @@ contents/003.htm).
 
 import json
 import math
-import socket
 import threading
 import time
 
@@ -42,6 +41,7 @@ from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import read_messages
 from gyro_instrument.ros.suite import RunOptions, run_suite
 from gyro_instrument.scenes import load_scene
+from test_ros_heading import NmeaListener
 
 pytestmark = pytest.mark.ros
 
@@ -93,36 +93,19 @@ def sailing(tmp_path_factory):
     stop = threading.Event()
     spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
     spinner.start()
-    udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    udp.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
-    udp.bind(("127.0.0.1", 0))
-    udp.settimeout(0.2)
-    sentences, udp_done = [], threading.Event()
-
-    def read_udp():
-        while True:
-            try:
-                sentences.append(udp.recv(4096).decode("ascii"))
-            except socket.timeout:
-                if udp_done.is_set():
-                    return
-    reader = threading.Thread(target=read_udp)
-    reader.start()
     bag = str(tmp_path_factory.mktemp("marine") / "sailing.mcap")
     try:
-        run_suite("marine_gyrocompass", SAILING, SAILING_S, bag, RunOptions(nmea_udp=f"127.0.0.1:{udp.getsockname()[1]}"))
+        with NmeaListener() as nmea:
+            run_suite("marine_gyrocompass", SAILING, SAILING_S, bag, RunOptions(nmea_udp=nmea.address))
         t0 = time.monotonic()
         while (not live.get("imu") or not live.get("diag")) and time.monotonic() - t0 < 10:
             time.sleep(0.05)
     finally:
-        udp_done.set()
-        reader.join()
         stop.set()
         spinner.join()
-        udp.close()
         node.destroy_node()
         rclpy.shutdown(context=ctx)
-    return _read(bag), sentences, live, bag
+    return _read(bag), nmea.sentences, live, bag
 
 
 def _read(bag):
