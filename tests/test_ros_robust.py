@@ -281,7 +281,10 @@ def test_a_second_clock_owner_is_refused_and_a_namespaced_one_prints_the_remap(c
     a, b = start("gyrocompass_sim", *common), start("pendulum_sim", *common)
     try:
         assert spin_until(node, lambda: len(ticks) >= 20, 30)
-        c = start_unbuffered("pendulum_sim", *common, "-r", "__node:=pendulum_sim2")
+        # the late one waits 10 s: enough for discovery to show it the owner's ticks or names (with 3 s a
+        # quiet CI saw neither in 1 of 4 runs, and it started a second clock)
+        late = [x if x != "wait_timeout_s:=3" else "wait_timeout_s:=10" for x in common]
+        c = start_unbuffered("pendulum_sim", *late, "-r", "__node:=pendulum_sim2")
         # until the late owner decided (its start-up and its 3 s wait take longer on a loaded machine;
         # the first owner must still be up then)
         head_c = read_until(c, "publish_clock refused", 40)
