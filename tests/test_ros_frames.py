@@ -13,7 +13,6 @@ duration (240 s, its comment); datetime's reading of the epoch; the frame ids ev
 """
 
 import math
-import threading
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -28,6 +27,7 @@ from scipy.spatial.transform import Rotation
 from gyro_instrument.core.errors import SceneError
 from gyro_instrument.recording.frames import check_frame_prefix, parse_stamp_epoch
 from gyro_instrument.ros.suite import RunOptions, run_suite
+from test_ros_heading import spinning, wait_until
 
 pytestmark = pytest.mark.ros
 
@@ -39,37 +39,22 @@ SWING_S = 240.0                  # gyrotheodolite.yaml: 8 min full period with t
 MOUNT_DEG = 359.75               # gyrotheodolite.yaml: the scale's zero 0.25 deg west of north
 
 
-def _spin_in_thread(ex, stop):
-    return threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
-
-
 @pytest.fixture(scope="module")
 def gyro_run(tmp_path_factory):
     from geometry_msgs.msg import TransformStamped
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    node = rclpy.create_node("frames_listener", context=ctx)
     live = []
     qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    node.create_subscription(TransformStamped, "/static_transforms", live.append, qos)
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(node)
-    stop = threading.Event()
-    spinner = _spin_in_thread(ex, stop)
-    spinner.start()
+
+    def listener(ctx):
+        node = rclpy.create_node("frames_listener", context=ctx)
+        node.create_subscription(TransformStamped, "/static_transforms", live.append, qos)
+        return node
     bag = str(tmp_path_factory.mktemp("frames") / "g.mcap")
-    try:
+    with spinning(listener):
         result, stats = run_suite("gyrotheodolite", [], DURATION_S, bag, RunOptions(
             ros_args=["-p", f"frame_prefix:={PREFIX}", "-p", f"stamp_epoch:={EPOCH_TEXT}"]))
-        t0 = time.monotonic()
-        while len(live) < 1 and time.monotonic() - t0 < 10:
-            time.sleep(0.05)
-    finally:
-        stop.set()
-        spinner.join()
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
+        wait_until(lambda: live)
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
     msgs = []

@@ -17,6 +17,7 @@ mount azimuth; Imu.msg's covariance conventions. Tolerances: the headings are wi
 heading within half its last decimal plus 4 σ of the value.
 """
 
+import contextlib
 import math
 import socket
 import threading
@@ -57,35 +58,56 @@ def miss_deg(a, b) -> float:
 
 @pytest.fixture(scope="module")
 def heading_run(tmp_path_factory):
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    node = rclpy.create_node("heading_listener", context=ctx)
     got = []
     qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    node.create_subscription(Imu, "/gyro_horizontal/heading", got.append, qos)
+
+    def listener(ctx):
+        node = rclpy.create_node("heading_listener", context=ctx)
+        node.create_subscription(Imu, "/gyro_horizontal/heading", got.append, qos)
+        return node
+    bag = str(tmp_path_factory.mktemp("heading") / "h.mcap")
+    with spinning(listener):
+        with NmeaListener() as nmea:
+            result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag, RunOptions(nmea_udp=nmea.address))
+        wait_until(lambda: got)
+        time.sleep(0.2)
+    sentences = nmea.sentences
+    recorded = [deserialize_message(data, Imu) for topic, _, _, data in read_messages(bag)
+                if topic == "/gyro_horizontal/heading"]
+    return result, stats, recorded, sentences, bag, list(got)
+
+
+@contextlib.contextmanager
+def spinning(make_node):
+    """A listener beside a suite run: an rclpy context of its own, the node ``make_node(ctx)`` spun in a
+    thread while the body runs; stopped, destroyed and shut down after (yields the node)."""
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    node = make_node(ctx)
     ex = SingleThreadedExecutor(context=ctx)
     ex.add_node(node)
     stop = threading.Event()
     spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
     spinner.start()
-    bag = str(tmp_path_factory.mktemp("heading") / "h.mcap")
     try:
-        with NmeaListener() as nmea:
-            result, stats = run_suite("quet_paris", SCENE, DURATION_S, bag, RunOptions(nmea_udp=nmea.address))
-        t0 = time.monotonic()
-        while not got and time.monotonic() - t0 < 10:
-            time.sleep(0.05)
-        time.sleep(0.2)
+        yield node
     finally:
         stop.set()
         spinner.join()
         node.destroy_node()
         rclpy.shutdown(context=ctx)
-    sentences = nmea.sentences
-    recorded = [deserialize_message(data, Imu) for topic, _, _, data in read_messages(bag)
-                if topic == "/gyro_horizontal/heading"]
-    return result, stats, recorded, sentences, bag, list(got)
+
+
+def wait_until(condition, timeout_s=10.0) -> bool:
+    """Poll ``condition()`` every 50 ms until true or ``timeout_s`` passed (the listener's thread fills it
+    after the run returns: its last messages are still in flight); returns whether it came true."""
+    t0 = time.monotonic()
+    while not condition():
+        if time.monotonic() - t0 >= timeout_s:
+            return False
+        time.sleep(0.05)
+    return True
 
 
 class NmeaListener:

@@ -22,15 +22,12 @@ contents/003.htm).
 
 import json
 import math
-import threading
-import time
 
 import numpy as np
 import pynmea2
 import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from scipy.spatial.transform import Rotation
@@ -41,7 +38,7 @@ from gyro_instrument.recording.bag_scan import scan_bag
 from gyro_instrument.recording.mcap_io import read_messages
 from gyro_instrument.ros.suite import RunOptions, run_suite
 from gyro_instrument.scenes import load_scene
-from test_ros_heading import NmeaListener
+from test_ros_heading import NmeaListener, spinning, wait_until
 
 pytestmark = pytest.mark.ros
 
@@ -84,27 +81,12 @@ def _listen(ctx, got):
 
 @pytest.fixture(scope="module")
 def sailing(tmp_path_factory):
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
     live = {}
-    node = _listen(ctx, live)
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(node)
-    stop = threading.Event()
-    spinner = threading.Thread(target=lambda: [ex.spin_once(timeout_sec=0.01) for _ in iter(stop.is_set, True)])
-    spinner.start()
     bag = str(tmp_path_factory.mktemp("marine") / "sailing.mcap")
-    try:
+    with spinning(lambda ctx: _listen(ctx, live)):
         with NmeaListener() as nmea:
             run_suite("marine_gyrocompass", SAILING, SAILING_S, bag, RunOptions(nmea_udp=nmea.address))
-        t0 = time.monotonic()
-        while (not live.get("imu") or not live.get("diag")) and time.monotonic() - t0 < 10:
-            time.sleep(0.05)
-    finally:
-        stop.set()
-        spinner.join()
-        node.destroy_node()
-        rclpy.shutdown(context=ctx)
+        wait_until(lambda: live.get("imu") and live.get("diag"))
     return _read(bag), nmea.sentences, live, bag
 
 
