@@ -188,3 +188,25 @@ def test_a_compass_still_swinging_is_flagged_and_its_comparison_widened():
         tr = c["track"]
         assert tr["measured_minus_predicted_sigma_deg"] > 20 * c["settle_point_error_sigma_deg"]
         assert abs(tr["measured_minus_predicted_deg"]) < 3 * tr["measured_minus_predicted_sigma_deg"]
+
+
+def test_a_settled_stretch_too_short_to_test_takes_its_scatter():
+    """A hand-written scene (no effects block but earth_rotation set; southern hemisphere, course 210°,
+    damped in azimuth) settles about 56 min before its 4 h end: under three 20-min blocks, so the
+    stationarity cannot be tested; the check says so (flagged) and the closed-form comparison takes the
+    settled readings' own scatter (~0.1°) as its σ, not the noise's σ/√N (3e-4°, which made the 0.006°
+    difference 20 σ)."""
+    data = {"name": "hand_gc", "site": {"latitude_deg": -33.9}, "duration_s": 14400, "sample_rate_hz": 0.1,
+            "effects": {name: {} for name in sorted(load_scene("marine_gyrocompass").effects)},
+            "instruments": {"gc": {"type": "marine_gyrocompass", "damping": "azimuth"}},
+            "motion": {"speed_kn": 15, "course_deg": 210}}
+    from gyro_instrument.scenes import scene_from_data
+    scene = scene_from_data(data)
+    truth = simulate_truth(scene)
+    est = estimate_records(scene, truth[1], measure(scene, truth))
+    check = [x for x in est["checks"] if x["check"] == "stationary" and x["instrument"] == "gc"]
+    assert check and check[0]["status"] == "flagged" and "not tested" in check[0]["detail"]
+    c = est["instruments"]["gc"]["compass"]
+    tr = c["track"]
+    assert tr["measured_minus_predicted_sigma_deg"] > 0.05 > 30 * c["settle_point_error_sigma_deg"]
+    assert abs(tr["measured_minus_predicted_deg"]) < 3 * tr["measured_minus_predicted_sigma_deg"]

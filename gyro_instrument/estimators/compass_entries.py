@@ -61,7 +61,8 @@ class TrackError(Record):
     measured_minus_predicted_deg: float = doc("the settle-point error less predicted_mean_deg, deg")
     measured_minus_predicted_sigma_deg: float = doc("its standard error, deg: the settle point's from the "
                                                     "noise, or the settled readings' 20-min block means' scatter "
-                                                    "/ √B when the check 'stationary' finds them wandering")
+                                                    "/ √B when the check 'stationary' finds them wandering, "
+                                                    "their own scatter when they span under three blocks")
 
 
 @dataclass(frozen=True, kw_only=True)

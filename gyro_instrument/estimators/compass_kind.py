@@ -95,10 +95,14 @@ def predicted_error_rad(inst, course, lat, speed) -> np.ndarray:
     return inst.corrections_rad(course, lat, speed) - alpha
 
 
-def _settle_sigma(sp) -> float:
+def _settle_sigma(sp, scatter_rad) -> float:
     """σ of the settled mean as an estimate of where the compass settles, rad: σ_n/√N, or the 20-min block
-    means' scatter / √B when they wander beyond the noise (:func:`.compass_fit.block_wander`)."""
-    if sp.wander is not None and sp.wander[2] < F.WANDER_P:
+    means' scatter / √B when they wander beyond the noise (:func:`.compass_fit.block_wander`); when the
+    settled stretch is under three blocks (no test possible), the settled readings' own scatter
+    ``scatter_rad`` (one correlated stretch: no √N reduction)."""
+    if sp.wander is None:
+        return max(sp.sigma_rad, scatter_rad)
+    if sp.wander[2] < F.WANDER_P:
         return max(sp.sigma_rad, sp.wander[3])
     return sp.sigma_rad
 
@@ -152,11 +156,14 @@ def compass_block(obs, rec, checks, sensor) -> "CompassBlock | CompassNull":
         track = TrackError(rms_deg=math.degrees(math.sqrt(float(np.mean(e[m] ** 2)))),
                            max_abs_deg=math.degrees(float(np.max(np.abs(e[m])))), predicted_mean_deg=math.degrees(pred),
                            measured_minus_predicted_deg=math.degrees(sp.mean_rad - pred),
-                           measured_minus_predicted_sigma_deg=math.degrees(_settle_sigma(sp)))
+                           measured_minus_predicted_sigma_deg=math.degrees(_settle_sigma(sp, float(np.std(e[m])))))
         checks.append(check_entry(name, "settling", "passed", f"settled at {sp.settled_at_s:.0f} s (ISO 22090-1 "
                                                                "§3.10)", value=sp.settled_at_s))
     else:
         checks.append(check_entry(name, "settling", "flagged", sp.reason))
+    if sp.settled_at_s is not None and sp.wander is None:
+        checks.append(check_entry(name, "stationary", "flagged", "settled readings span under three 20-min blocks: "
+                                  "not tested; measured - predicted takes their scatter as its sigma"))
     if sp.wander is not None:
         blocks, stat, p, _ = sp.wander
         checks.append(check_entry(
