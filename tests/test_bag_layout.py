@@ -214,3 +214,51 @@ def test_run_records_a_split_rosbag2_directory_that_replays_to_the_live_estimate
     part = replay_bag(str(d / "quet_1.mcap"))
     assert any("one part of a split bag" in n for n in part["replay_notes"])
     assert to_jsonable(part)["scene"] == "quet_paris"
+
+
+#: run in a private mount namespace whose DIR is a 96 KiB tmpfs: a bag directory opened with one
+#: topic (its first metadata.yaml is one page), then 14 more topics, then messages until the disk
+#: is full; PAYLOAD varies where in a page the disk runs out
+_FILL_SMALL_DISK = r'''
+import sys
+from gyro_instrument.recording.bag_layout import BagDirectoryWriter
+from gyro_instrument.recording.mcap_io import DiskFull
+disk, payload = sys.argv[1], int(sys.argv[2])
+w = BagDirectoryWriter(disk + "/bag", chunk_size=2048)
+w.add_topic("/clock", "rosgraph_msgs/msg/Clock")
+for k in range(14):
+    w.add_topic(f"/instrument_{k:02d}/a_long_enough_topic_name/joint_states", "sensor_msgs/msg/JointState")
+i = 0
+try:
+    while True:
+        w.write(f"/instrument_{i % 14:02d}/a_long_enough_topic_name/joint_states", 10**18 + i * 10**7,
+                bytes(payload))
+        i += 1
+        if i % 7 == 0:
+            w.commit()
+except DiskFull as exc:
+    print("full", i, exc.needed)
+'''
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or shutil.which("unshare") is None, reason="needs root and unshare -m")
+@pytest.mark.parametrize("payload", [1, 97, 333, 1000, 2500])
+def test_a_full_disk_leaves_a_metadata_yaml_that_lists_what_the_files_hold(tmp_path, payload):
+    # The failure seen in CI: metadata.yaml rewritten in place on a full disk after it had grown past
+    # its first page (topics added since) was cut at the page, without 'files'. The room kept after it
+    # (fallocate, KEEP_SIZE) makes the rewrite need no new space. Payloads 1 to 2500 bytes move the
+    # point where the disk runs out across a page (4 KiB) and across chunks (2 KiB).
+    import subprocess
+    import sys
+    disk, kept = tmp_path / "disk", tmp_path / "kept"
+    disk.mkdir()
+    r = subprocess.run(["unshare", "-m", "sh", "-c", f"mount -t tmpfs -o size=96k tmpfs {disk} && "
+                        f"{sys.executable} -c '{_FILL_SMALL_DISK}' {disk} {payload}; rc=$?; cp -a {disk} {kept}; "
+                        "exit $rc"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith("full "), r.stdout + r.stderr
+    bag = kept / "bag"
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert len(info["topics_with_message_count"]) == 15, info
+    listed = sum(f["message_count"] for f in info["files"])
+    got, count = _rosbags_messages(bag)                 # rosbags reads what metadata.yaml lists
+    assert listed == info["message_count"] == count == len(got) > 0, (listed, info["message_count"], count)

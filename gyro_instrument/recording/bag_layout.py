@@ -287,8 +287,11 @@ class BagDirectoryWriter:
         """Register a topic in the current file and every later one."""
         from gyro_instrument.recording.mcap_io import qos_yaml
         qos = qos or qos_yaml()
+        new = topic not in self._topics
         self._topics.setdefault(topic, (type_name, qos))
         self.counts.setdefault(topic, 0)
+        if new:
+            self._keep_metadata_room()
         return self._cur.add_topic(topic, type_name, qos)
 
     def write(self, topic, log_time_ns, data, publish_time_ns=None) -> None:
@@ -382,24 +385,82 @@ class BagDirectoryWriter:
         }
 
     def write_metadata(self, in_place=False) -> None:
-        """Write ``metadata.yaml`` atomically (temporary file, then rename); on a full disk the
-        previous one stays (the temporary file is removed) unless ``in_place``: then it is rewritten
-        in place (its own blocks freed first), so that it says what the files hold."""
+        """Write ``metadata.yaml`` atomically (temporary file, then rename), with room kept for the
+        next rewrite (:func:`reserve_space`); on a full disk the previous one stays (the temporary
+        file is removed) unless ``in_place``: then it is rewritten over its own bytes and the room
+        kept after them, so that it says what the files hold. When even that room is too small
+        (a file system without ``fallocate``) the previous one is left whole rather than cut."""
         target = os.path.join(self.path, METADATA)
         tmp = target + ".partial"
-        text = yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, sort_keys=False)
+        text = yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()},
+                              sort_keys=False).encode("utf-8")
         try:
-            with open(tmp, "w", encoding="utf-8") as fh:
+            with open(tmp, "wb") as fh:
                 fh.write(text)
+                fh.flush()
+                reserve_space(fh.fileno(), _metadata_room(len(text)))
             os.replace(tmp, target)
         except OSError:
             if os.path.exists(tmp):
                 os.unlink(tmp)
             if not in_place:
                 raise
-            with open(target, "w", encoding="utf-8") as fh:
-                fh.write(text)
+            fd = os.open(target, os.O_WRONLY)
+            try:
+                if len(text) > os.fstat(fd).st_blocks * 512:
+                    raise OSError(28, "metadata.yaml has no room kept for its rewrite")
+                view, at = memoryview(text), 0
+                while view:
+                    k = os.pwrite(fd, view, at)
+                    view, at = view[k:], at + k
+                os.ftruncate(fd, at)
+            finally:
+                os.close(fd)
 
+    def _keep_metadata_room(self) -> None:
+        """Make the room kept after ``metadata.yaml`` cover the text it would have now (called
+        when a topic is added: the text grows most then)."""
+        target = os.path.join(self.path, METADATA)
+        try:
+            text = yaml.safe_dump({"rosbag2_bagfile_information": self.bag_information()}, sort_keys=False)
+            fd = os.open(target, os.O_WRONLY)
+        except OSError:
+            return
+        try:
+            reserve_space(fd, _metadata_room(len(text.encode("utf-8"))))
+        finally:
+            os.close(fd)
+
+
+def _metadata_room(n_bytes) -> int:
+    """Bytes kept for ``metadata.yaml``: twice its text (the file list at most doubles between two
+    rewrites, :data:`METADATA_EVERY_SPLIT`) and 16 KiB for topics and longer counts."""
+    return 2 * int(n_bytes) + (16 << 10)
+
+
+def reserve_space(fd, n_bytes) -> bool:
+    """Allocate the first ``n_bytes`` of the file ``fd`` without changing its size (Linux
+    ``fallocate(2)`` with ``FALLOC_FL_KEEP_SIZE``), so that a later rewrite of up to that many bytes
+    over it needs no new space. False, and nothing done, where the call is missing or refused
+    (another OS, a file system without it, a disk already full)."""
+    global _fallocate
+    if _fallocate is None:
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            f = libc.fallocate
+            f.argtypes = (ctypes.c_int, ctypes.c_int, ctypes.c_longlong, ctypes.c_longlong)
+            f.restype = ctypes.c_int
+            _fallocate = f
+        except (OSError, AttributeError):
+            _fallocate = False
+    if not _fallocate:
+        return False
+    return _fallocate(int(fd), _FALLOC_FL_KEEP_SIZE, 0, int(n_bytes)) == 0
+
+
+_FALLOC_FL_KEEP_SIZE = 1
+_fallocate = None
 
 def _type_hash(type_name):
     from gyro_instrument.recording.definitions import type_hash
@@ -409,6 +470,6 @@ def _type_hash(type_name):
         return ""
 
 
-__all__ = ["FORMATS", "METADATA", "MIN_BAG_DURATION_S", "MIN_BAG_SIZE", "BagDirectoryWriter", "BagSetScan",
+__all__ = ["FORMATS", "METADATA", "MIN_BAG_DURATION_S", "MIN_BAG_SIZE", "BagDirectoryWriter", "BagSetScan", "reserve_space",
            "bag_files", "bag_format", "bag_inputs", "check_bag_output", "check_split_limits", "open_bag_writer",
            "restart_path", "scan_path", "split_order"]
