@@ -14,7 +14,8 @@ setup(
     version="0.1.0",
     packages=find_packages(exclude=["tests", "tests.*"]),
     # the scenes, and the estimate's JSON Schema (tools/gen_estimate_docs.py writes it from the typed records)
-    package_data={"gyro_instrument.scenes": ["*.yaml"], "gyro_instrument.estimators": ["estimate.schema.json"]},
+    package_data={"gyro_instrument.scenes": ["*.yaml"], "gyro_instrument.estimators": ["estimate.schema.json"],
+                  "gyro_instrument.ros": ["fastdds_profile.xml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

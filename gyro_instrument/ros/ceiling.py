@@ -5,7 +5,8 @@ Two processes, as two nodes run with ``ros2 run``: one publishes ``count`` pre-s
 ``sensor_msgs/JointState`` messages of the size the simulators publish (three joints, raw CDR,
 RELIABLE / KEEP_ALL, waiting and retrying when the writer's history is full, as the simulators do),
 the other takes them with the cheapest loop rclpy offers (one wait, then every waiting message
-taken with ``take_message``, :func:`gyro_instrument.ros.nodes.base.drain`). The rate is messages
+taken with ``take_message``, :func:`gyro_instrument.ros.nodes.base.drain`), both with the nodes' Fast DDS
+profile (:mod:`gyro_instrument.ros.dds_profile`). The rate is messages
 received per second of wall time from the first to the last received. Run on loopback
 (``tools/loopback``): ``python -m gyro_instrument.ros.ceiling [count]`` prints one JSON line.
 """
@@ -82,6 +83,8 @@ def _subscriber(count) -> dict:
 def measure(count=60000) -> dict:
     """Publish ``count`` messages from a child process to this process's subscriber; the JSON dict
     of :func:`_subscriber` (``messages_per_s``: rclpy's ceiling for one publisher and one subscriber)."""
+    from gyro_instrument.ros.dds_profile import use_package_profile
+    use_package_profile()              # the nodes' Fast DDS timing, in both processes, so that they compare
     env = dict(os.environ)
     child = subprocess.Popen([sys.executable, "-c", f"from gyro_instrument.ros.ceiling import _publisher; "
                               f"_publisher({int(count)})"], env=env)

@@ -136,8 +136,9 @@ def timed_launch(scene="quet_paris", duration_s=600.0) -> dict:
         res = launch(scene, bag, duration_s=duration_s, real_time_factor=0.0, timeout_s=600, log_dir=tmp)
         wall = time.monotonic() - t0
         logs = res["logs"]
-        owner = next((n for n, text in logs.items() if "sim time starts" in text), None)
-        start = _log_time(logs[owner], "sim time starts") if owner else None
+        # the owner's own line ("]: sim time starts"), not a follower's "... before sim time starts"
+        owner = next((n for n, text in logs.items() if "]: sim time starts" in text), None)
+        start = _log_time(logs[owner], "]: sim time starts") if owner else None
         end = _log_time(logs.get("recorder", ""), "every expected message recorded")
         samples = _log_time(logs.get("estimator", ""), "every expected sample received")
         counts = {}

@@ -13,6 +13,7 @@ from gyro_instrument.instruments import REGISTRY, simulator_kinds
 from gyro_instrument.recording.topics import (CLOCK, CLOCK_TYPE, ESTIMATOR_TOPICS, IMU_TYPE, VISUAL_PERIOD_S, heading_frame,
                                               heading_topic, publications)
 from gyro_instrument.ros import params as P
+from gyro_instrument.ros.dds_profile import use_package_profile
 from gyro_instrument.ros.log_dir import ensure_log_dir
 
 #: the nodes that are not simulators (a simulator's help is derived from the instruments it hosts)
@@ -149,6 +150,7 @@ def _run(name, make, args=None, on_exit=None):
     if _wants_help(name, args):
         return 0
     extra = ensure_log_dir()           # a read-only or unset HOME: a writable log directory first
+    use_package_profile()              # the package's Fast DDS timing, unless the user chose a profile
     if extra:
         args = list(sys.argv if args is None else args) + extra
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)

@@ -34,6 +34,7 @@ from gyro_instrument.core.scene import DEFAULT_WINDOW_S, EPOCH_NS
 from gyro_instrument.instruments import simulator_kinds
 from gyro_instrument.recording.nmea import resolve_udp_target
 from gyro_instrument.ros.lockstep import DeliveryError, LockStep  # noqa: F401  (re-exported)
+from gyro_instrument.ros.dds_profile import use_package_profile
 from gyro_instrument.ros.log_dir import ensure_log_dir
 from gyro_instrument.ros.nodes import RELIABLE_1000, EstimatorNode, RecorderNode
 from gyro_instrument.ros.nodes.compass import COMPASS_NODE, simulator_node
@@ -172,6 +173,7 @@ def run_suite(scene, overrides=(), duration_s=None, bag=None, options=RunOptions
     context = rclpy.Context()
     stop, handlers = _install_stop_handlers()
     args = ["gyro-instrument"] + (["--ros-args", *opts.ros_args] if opts.ros_args else []) + ensure_log_dir()
+    use_package_profile()                                 # before rclpy.init: Fast DDS reads it once per process
     rclpy.init(context=context, args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     ns = {"namespace": opts.namespace} if opts.namespace else {}
     nodes = []

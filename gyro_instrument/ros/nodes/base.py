@@ -22,10 +22,12 @@ from gyro_instrument.scenes import build_instruments
 
 RELIABLE_ALL = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 RELIABLE_1000 = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-#: a clock follower's subscription: only the latest tick matters (the follower publishes every sample
-#: up to it; the estimator notes sim time), so older ticks are replaced, never queued for Python to
-#: take one by one; RELIABLE, so the latest is never lost (issue 37 item 6)
-LATEST_CLOCK = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE)
+#: a clock follower's subscription (a following simulator, the estimator): RELIABLE / KEEP_ALL, every
+#: tick queued until taken (the drain takes a whole queue at once and the follower publishes once up
+#: to the last). KEEP_LAST 1 was used until 2026-12: with Fast DDS 2.14 such a reader stopped
+#: receiving mid-run (never past a batch's last tick) in about 1 of 5 launches at real-time factor 0,
+#: on shared memory and on UDP alike, and the run never ended (issue 37 item 6, docs/ros.md)
+FOLLOW_CLOCK = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 #: the estimator's results: latched (the last estimate kept for subscribers that ask for
 #: TRANSIENT_LOCAL; a VOLATILE subscriber, the recorder's, still matches and gets new ones)
 LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,

@@ -40,7 +40,7 @@ from gyro_instrument.recording.topics import (CLOCK, DIAGNOSTICS, estimator_topi
                                               joint_names, joint_topic, live_kinds)
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import ERROR, LATCHED, LATEST_CLOCK, OK, RELIABLE_ALL, STEADY, WARN, SceneNode
+from gyro_instrument.ros.nodes.base import ERROR, LATCHED, FOLLOW_CLOCK, OK, RELIABLE_ALL, STEADY, WARN, SceneNode
 
 
 class EstimatorNode(SceneNode):
@@ -97,7 +97,7 @@ class EstimatorNode(SceneNode):
                     RELIABLE_ALL, raw=True)
                 self.subs[sub.topic_name] = sub
         # sim time from the clock: the stamp of an estimate that used no sample
-        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
+        self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, FOLLOW_CLOCK, raw=True)
         for topic, type_name in estimator_topics(self.insts).items():
             self.pubs[topic] = self.create_publisher(m.message_class(type_name), topic, LATCHED)
         self._prepare_heading()

@@ -23,7 +23,7 @@ from gyro_instrument.recording.sim_stream import SimulatorStream
 from gyro_instrument.recording.topics import CLOCK, resolve
 from gyro_instrument.ros import messages as m
 from gyro_instrument.ros import params as P
-from gyro_instrument.ros.nodes.base import (AnyOf, ERROR, FLOW_BATCH, LATEST_CLOCK, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY,
+from gyro_instrument.ros.nodes.base import (AnyOf, ERROR, FLOW_BATCH, FOLLOW_CLOCK, OK, PUBLISH_ALL, RELIABLE_ALL, STEADY,
                                             WARN, SceneNode, acked)
 
 
@@ -404,7 +404,7 @@ class SimulatorNode(SceneNode):
             self._rtf = None
             self.timer = self.create_timer(0.002, self._run, clock=STEADY)
         else:
-            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, LATEST_CLOCK, raw=True)
+            self.clock_sub = self.create_subscription(m.Clock, CLOCK, self._on_clock, FOLLOW_CLOCK, raw=True)
 
     def _wall_epoch(self):
         """The clock owner with ``stamp_epoch`` = wall: sim time 0 is now (real-time factor 1; at any
