@@ -67,8 +67,8 @@ class _CpuWatch:
 
 def _window_table(watch, logs) -> list:
     """Markdown lines: each node's CPU in the timed window, beside the window's wall time."""
-    owner = next((n for n, text in logs.items() if "sim time starts" in text), None)
-    start = L._log_time(logs[owner], "sim time starts") if owner else None
+    owner = next((n for n, text in logs.items() if "]: sim time starts" in text), None)
+    start = L._log_time(logs[owner], "]: sim time starts") if owner else None
     end = L._log_time(logs.get("recorder", ""), "every expected message recorded")
     if start is None or end is None:
         return ["(the timed window was not found in the logs)", ""]
