@@ -46,6 +46,10 @@ def test_colcon_layout(colcon_install):
         assert (colcon_install / "share/gyro_instrument" / doc).exists(), doc
     for exe in EXECUTABLES:
         assert os.access(colcon_install / "lib/gyro_instrument" / exe, os.X_OK), exe
+    # the Fast DDS profile every node chooses before rclpy.init is installed beside the module that
+    # names it (ros/dds_profile.py: a missing file would silently leave Fast DDS's 3 s heartbeat)
+    site = next(colcon_install.glob("lib/python3*/site-packages"))
+    assert (site / "gyro_instrument/ros/fastdds_profile.xml").is_file()
 
 
 def _node_env(install):
