@@ -47,3 +47,22 @@ def test_bench_scheduler_that_does_not_answer_exits_2(capsys, tmp_path):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no Dask scheduler answered" in err[0]
     assert not (tmp_path / "b").exists()
+
+
+def _prefixes(address):
+    from dask.distributed import Client
+    with Client(address, set_as_default=False) as client:
+        return set(client.run_on_scheduler(lambda dask_scheduler: list(dask_scheduler.task_prefixes)))
+
+
+def test_bench_scene_scheduler_runs_its_studies_on_the_cluster(scheduler, tmp_path):
+    # `bench --scene S --scheduler ADDRESS` once ran both studies on a local process pool and left the
+    # cluster idle: the observation-time study's seeds and systematic floors and the planner's seeds
+    # now reach the scheduler (by their task functions' names), and the files are written
+    before = _prefixes(scheduler)
+    assert "systematic_floor_rows" not in before
+    out = tmp_path / "scene_bench"
+    assert core_main(["bench", "--quick", "--scene", "quet_paris", "--out", str(out), "--scheduler", scheduler]) == 0
+    assert {"seed_sweep", "systematic_floor_rows"} <= _prefixes(scheduler)
+    for name in ("observation_time.csv", "systematic_floors.csv", "planner.csv", "summary.md"):
+        assert (out / name).exists(), name

@@ -129,8 +129,11 @@ def test_separate_suites_in_two_namespaces_each_own_one_clock(tmp_path):
     def go(ship):
         d = tmp_path / ship
         d.mkdir()
-        results[ship] = launch("foucault_pantheon", str(d / "b.mcap"), duration_s=10.0, namespace=f"/{ship}",
-                               timeout_s=120)
+        try:
+            results[ship] = launch("foucault_pantheon", str(d / "b.mcap"), duration_s=10.0, namespace=f"/{ship}",
+                                   timeout_s=120)
+        except TimeoutError as exc:        # the nodes' logs say why (launch stopped them first)
+            results[ship] = {"logs": {p.stem: p.read_text() for p in d.glob("*.log")}, "timeout": str(exc)}
     threads = [threading.Thread(target=go, args=(s,)) for s in ("ship1", "ship2")]
     for t in threads:
         t.start()

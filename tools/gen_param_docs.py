@@ -57,10 +57,12 @@ One node owns `clock` in a namespace (`/clock` in the root namespace): the simul
 with `publish_clock:=true` (or the player). Every other simulator follows it: it publishes each
 sample when the owner's clock reaches the sample's time, so separate simulators share one time
 line. Before sim time starts a simulator waits (at most `wait_timeout_s`, logged) until the
-nodes in `wait_for` subscribe to its topics (the recorder: every topic; the estimator: the
+nodes in `wait_for` subscribe to its topics (the recorder: every topic it records, its subscriptions
+unchanged for 0.3 s as the graph shows them one by one; the estimator: the
 joint states of the instruments it reads, the estimable ones and a gyroscope's rotor-off swing;
 any other name: one of its topics) and every subscription the graph knows of is matched; the clock owner also waits for the scene's other
-simulators, which subscribe to the clock once their own subscribers are matched. Publishers
+simulators, which subscribe to the clock once their own subscribers are matched, and an owner listens for another owner's ticks until its
+watch has matched every other publisher of the clock (0.3 s more) before it decides. Publishers
 are RELIABLE / KEEP_ALL when run alone, so at real-time factor 0 a slow subscriber delays the
 data but loses none.
 

@@ -4,6 +4,7 @@ study (the work-precision and speed targets of :mod:`.work_precision`, the real-
 :mod:`.realtime`, the streaming rows of :mod:`.streaming`, the effect costs of :mod:`.effect_cost`)
 and writes the CSVs, plots and summary."""
 
+import contextlib
 import math
 import os
 import time
@@ -229,12 +230,14 @@ def _planner_lines(pl):
     return lines
 
 
-def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print) -> str:
+def run_scene_bench(out_dir, scene, overrides=(), quick=False, progress=print, executor=None) -> str:
     """``bench --scene``: the observation-time study (with its systematic floors, the scene's own
-    effects) and the planner's accuracy on any scene; CSVs, plot and summary.md. Returns the text."""
+    effects) and the planner's accuracy on any scene; CSVs, plot and summary.md. Returns the text.
+    ``executor``: where both studies' seeds run (``bench --scene --scheduler``: a Dask client's
+    executor); default one process pool for both."""
     os.makedirs(out_dir, exist_ok=True)
     name = load_scene(scene, list(overrides)).name
-    with process_executor() as executor:          # one pool for both studies
+    with (contextlib.nullcontext(executor) if executor is not None else process_executor()) as executor:
         progress(f"observation time ({name})")
         ot, floors = observation_time((1, 2, 5) if quick else (1, 2, 5, 10, 20, 60), 8 if quick else 40,
                                       executor=executor, scene=scene, overrides=overrides)
@@ -296,7 +299,7 @@ def run_bench(out_dir, quick=False, progress=print, scene=None, overrides=(), ex
     for all of them, started after the timed speed studies, e.g. a Dask client's executor for
     ``bench --scheduler``."""
     if scene is not None:
-        return run_scene_bench(out_dir, scene, overrides, quick, progress)
+        return run_scene_bench(out_dir, scene, overrides, quick, progress, executor=executor)
     from gyro_instrument.bench.plots import write_plots
     os.makedirs(out_dir, exist_ok=True)
     progress("work-precision (Foucault pendulum, plane gyroscope)")

@@ -268,7 +268,8 @@ def _add_study_commands(sub):
                         "with the scene's own effects) and the planner's accuracy on this scene (name or YAML path)",
                      set_help="override a value of the --scene (as for 'estimate')", dest="scene")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the sweeps (observation time, site sweep, effect cost) on the Dask cluster whose "
+                   help="run the sweeps (observation time, site sweep, effect cost; with --scene, its "
+                        "observation-time study and planner accuracy) on the Dask cluster whose "
                         "scheduler is at ADDRESS (tcp://HOST:8786; its workers need gyro_instrument installed) "
                         "instead of local processes; needs the 'cluster' extra (pip install "
                         "'gyro_instrument[cluster]')")

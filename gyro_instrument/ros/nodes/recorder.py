@@ -176,7 +176,8 @@ class RecorderNode(RecorderControl, SceneNode):
         self.rank = {}
         self._topic_types = {}
         self._known_qos = {}
-        for topic in wanted:
+        classes = {topic: m.message_class(types[topic]) for topic in wanted}   # imports first, then the
+        for topic in wanted:                                                   # subscriptions close together
             name = self.resolve_topic_name(topic)         # namespace and remapping applied
             self._topic_types[name] = types[topic]
             # what this package's publisher of the topic offers (history and depth are not discovered)
@@ -193,7 +194,7 @@ class RecorderNode(RecorderControl, SceneNode):
             # what the scene publishes: every sample on clock and the instruments' topics, and at
             # least one estimate on each estimator topic
             self.expected[name] = (n_markers if topic in sparse else n) if name in self.sample_topics else 1
-            self.subs[name] = self.create_subscription(m.message_class(types[topic]), topic,
+            self.subs[name] = self.create_subscription(classes[topic], topic,
                                                        lambda data, tp=name: self._on_raw(tp, data),
                                                        RELIABLE_ALL, raw=True)
 

@@ -384,6 +384,8 @@ class SimulatorNode(SceneNode):
                 return
             self.get_logger().warning(f"wait_timeout_s = {self.value('wait_timeout_s'):g} s passed without "
                                       f"{', '.join(missing + unmatched)}: starting anyway (those may miss samples)")
+        if self.clock_pub is not None and not self.clock_watch_settled():
+            return
         self._begin()
 
     def _begin(self):
