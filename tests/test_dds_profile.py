@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from gyro_instrument.ros.dds_profile import CWD_PROFILE, PROFILE, PROFILE_VARIABLES, use_package_profile
+from gyro_instrument.ros.dds_profile import CWD_PROFILE, OPT_OUT, PROFILE, PROFILE_VARIABLES, use_package_profile
 
 NS = {"p": "http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"}
 
@@ -32,13 +32,28 @@ def test_set_when_the_user_chose_none(tmp_path):
     assert use_package_profile(env, cwd=str(tmp_path)) is None          # already set: left as it is
 
 
-@pytest.mark.parametrize("var", PROFILE_VARIABLES)
 @pytest.mark.parametrize("value", ["/etc/my_profile.xml", ""])
-def test_a_profile_the_user_chose_wins(tmp_path, var, value):
-    # either variable, even empty (Fast DDS's own defaults), is the user's choice
-    env = {var: value}
+def test_a_profile_the_user_chose_wins(tmp_path, value):
+    # FASTRTPS_DEFAULT_PROFILES_FILE, even empty (Fast DDS's own defaults), is the user's choice
+    env = {PROFILE_VARIABLES[0]: value}
     assert use_package_profile(env, cwd=str(tmp_path)) is None
-    assert env == {var: value}
+    assert env == {PROFILE_VARIABLES[0]: value}
+
+
+def test_fast_dds_3s_variable_alone_is_given_the_name_fast_dds_2_reads(tmp_path):
+    # Fast DDS 2.14 (Jazzy) ignores FASTDDS_DEFAULT_PROFILES_FILE: the user's file is copied to the
+    # name it reads, and the package's profile is not used
+    env = {PROFILE_VARIABLES[1]: "/etc/my_profile.xml"}
+    assert use_package_profile(env, cwd=str(tmp_path)) is None
+    assert env == {PROFILE_VARIABLES[1]: "/etc/my_profile.xml", PROFILE_VARIABLES[0]: "/etc/my_profile.xml"}
+
+
+@pytest.mark.parametrize("value", ["0", "off", "False", "no"])
+def test_the_package_variable_opts_out(tmp_path, value):
+    env = {OPT_OUT: value}
+    assert use_package_profile(env, cwd=str(tmp_path)) is None and env == {OPT_OUT: value}
+    env = {OPT_OUT: "1"}
+    assert use_package_profile(env, cwd=str(tmp_path)) == PROFILE
 
 
 def test_a_profile_file_in_the_working_directory_wins(tmp_path):
@@ -55,21 +70,30 @@ def test_another_rmw_is_left_alone(tmp_path):
     assert use_package_profile(env, cwd=str(tmp_path)) == PROFILE
 
 
-_NODE = ("import rclpy; from std_msgs.msg import String; rclpy.init(); n = rclpy.create_node('profile_check'); "
+#: a node that chooses the profile as the package's nodes do (ros/main.py), then starts rclpy
+_NODE = ("from gyro_instrument.ros.dds_profile import use_package_profile; use_package_profile(); "
+         "import rclpy; from std_msgs.msg import String; rclpy.init(); n = rclpy.create_node('profile_check'); "
          "n.create_publisher(String, 'profile_check', 10); n.destroy_node(); rclpy.shutdown(); print('ok')")
+
+
+def _fast_dds_output(tmp_path, **env_vars):
+    env = {k: v for k, v in os.environ.items() if k not in PROFILE_VARIABLES + (OPT_OUT,)}
+    env.update(env_vars)
+    r = subprocess.run([sys.executable, "-c", _NODE], capture_output=True, text=True, env=env, timeout=60,
+                       cwd=str(tmp_path))
+    assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "ok", r.stdout + r.stderr  # Fast DDS logs on stdout
+    return r.stdout + r.stderr
 
 
 @pytest.mark.ros
 def test_fast_dds_reads_the_profile_without_an_error(tmp_path):
-    # Fast DDS prints "XMLPARSER Error" for a profile it cannot read and goes on with its defaults;
-    # the negative control (a heartbeat period that is not a number) shows that this check can fail.
+    # Fast DDS prints "XMLPARSER Error" for a profile it cannot read and goes on with its defaults.
+    # The package's profile: no error. Negative controls, so that this check can fail: a broken copy
+    # named by FASTRTPS_DEFAULT_PROFILES_FILE, and by FASTDDS_DEFAULT_PROFILES_FILE alone (Fast DDS
+    # 2.14 reads it only because use_package_profile copies it to the name it reads).
     bad = tmp_path / "bad.xml"
     bad.write_text(open(PROFILE).read().replace("<sec>0</sec>", "<sec>zero</sec>"))
-    outs = {}
-    for name, path in (("package", PROFILE), ("broken", str(bad))):
-        env = dict(os.environ, **{PROFILE_VARIABLES[0]: path})
-        r = subprocess.run([sys.executable, "-c", _NODE], capture_output=True, text=True, env=env, timeout=60)
-        assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "ok", r.stdout + r.stderr   # Fast DDS logs on stdout
-        outs[name] = r.stdout + r.stderr
-    assert "XMLPARSER" not in outs["package"], outs["package"]
-    assert "XMLPARSER" in outs["broken"], outs["broken"]
+    assert "XMLPARSER" not in _fast_dds_output(tmp_path)
+    assert "XMLPARSER" in _fast_dds_output(tmp_path, **{PROFILE_VARIABLES[0]: str(bad)})
+    assert "XMLPARSER" in _fast_dds_output(tmp_path, **{PROFILE_VARIABLES[1]: str(bad)})
+    assert "XMLPARSER" not in _fast_dds_output(tmp_path, **{OPT_OUT: "0"})     # Fast DDS's defaults, quietly
